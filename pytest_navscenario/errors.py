@@ -1,0 +1,54 @@
+"""The project's own exceptions: each says what is wrong, where, and how to fix it."""
+from __future__ import annotations
+
+
+class NavScenarioError(Exception):
+    """Base class of every error this package raises on purpose."""
+
+
+class ScenarioError(NavScenarioError):
+    """A scenario file (or mapping) is invalid.
+
+    Carries the file, the 1-based line, the dotted field path and a fix hint so that
+    the message reads ``boxes1.yaml:12: obstacles[0].length: must be > 0, got -1.0 (fix: ...)``.
+    """
+
+    def __init__(self, message: str, *, path: str | None = None, line: int | None = None,
+                 field: str | None = None, hint: str | None = None):
+        self.message = message
+        self.path = path
+        self.line = line
+        self.field = field
+        self.hint = hint
+        super().__init__(self.format())
+
+    def format(self) -> str:
+        where = ""
+        if self.path:
+            where = str(self.path) + (f":{self.line}" if self.line else "") + ": "
+        elif self.line:
+            where = f"line {self.line}: "
+        field = f"{self.field}: " if self.field else ""
+        hint = f" (fix: {self.hint})" if self.hint else ""
+        return f"{where}{field}{self.message}{hint}"
+
+
+class SubjectLoadError(NavScenarioError):
+    """A planner ('subject') spec such as ``pkg.mod:Planner`` cannot be loaded or fails the protocol."""
+
+
+class PlannerProtocolError(NavScenarioError):
+    """A planner broke the protocol during an episode (raised, NaN, wrong type/shape, too slow)."""
+
+    def __init__(self, message: str, *, tick: int | None = None, time: float | None = None,
+                 planner_traceback: str | None = None):
+        self.message = message
+        self.tick = tick
+        self.time = time
+        self.planner_traceback = planner_traceback
+        where = f" at tick {tick} (t={time:.2f} s)" if tick is not None and time is not None else ""
+        super().__init__(f"{message}{where}")
+
+
+class SimulationDivergedError(NavScenarioError):
+    """MuJoCo produced NaN/inf state or warnings: the physics cannot be trusted."""

@@ -1,0 +1,214 @@
+"""Scenario model: frozen dataclasses mirroring the YAML format (version 1).
+
+Fields hold exactly the values written in YAML, in YAML units, so that
+``load(dump(s)) == s`` holds bit for bit:
+
+* lengths and positions in metres, times in seconds, speeds in m/s;
+* every angle (yaw, field of view, yaw tolerance) in **degrees**, angular rates in deg/s
+  and deg/s^2. The simulation and the planner protocol work in radians; convert with
+  the ``*_rad`` helpers, never by hand.
+
+Loading, validation and dumping live in ``loader.py``; this module has no I/O.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Literal, Mapping, Union
+
+SCHEMA_VERSION = 1
+
+
+@dataclass(frozen=True)
+class Pose:
+    """A planar pose: position in metres, yaw in degrees (counter-clockwise from +x)."""
+    x: float
+    y: float
+    yaw: float = 0.0
+
+    @property
+    def yaw_rad(self) -> float:
+        return math.radians(self.yaw)
+
+
+@dataclass(frozen=True)
+class BoxObstacle:
+    """A static box centred on (x, y): ``length`` along its own x axis, rotated by ``yaw`` degrees."""
+    name: str
+    x: float
+    y: float
+    length: float
+    width: float
+    yaw: float = 0.0
+    height: float = 1.0
+    kind: Literal["box"] = field(default="box", init=False)
+
+    @property
+    def yaw_rad(self) -> float:
+        return math.radians(self.yaw)
+
+
+@dataclass(frozen=True)
+class CylinderObstacle:
+    """A static upright cylinder centred on (x, y)."""
+    name: str
+    x: float
+    y: float
+    radius: float
+    height: float = 1.0
+    kind: Literal["cylinder"] = field(default="cylinder", init=False)
+
+
+Obstacle = Union[BoxObstacle, CylinderObstacle]
+
+
+@dataclass(frozen=True)
+class Footprint:
+    """The robot's outline for collisions and distances: a box (length along heading) or a circle."""
+    shape: Literal["box", "circle"] = "box"
+    length: float = 0.9
+    width: float = 0.5
+    radius: float = 0.3
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Velocity and acceleration limits, enforced by the simulated actuators."""
+    max_speed: float = 1.0          # m/s, forward/backward
+    max_lateral_speed: float = 0.5  # m/s, sideways (omnidirectional drive only)
+    max_yaw_rate: float = 90.0      # deg/s
+    max_accel: float = 2.0          # m/s^2
+    max_yaw_accel: float = 180.0    # deg/s^2
+
+
+@dataclass(frozen=True)
+class Lidar:
+    """A planar lidar at the robot centre, ray-cast once per control tick."""
+    beams: int = 72
+    fov: float = 360.0              # degrees, centred on the heading
+    range_min: float = 0.05         # m
+    range_max: float = 8.0          # m; no return reads as range_max
+    noise_sigma: float = 0.0        # m, Gaussian noise on each range
+    dropout: float = 0.0            # probability a beam reads as no return
+
+    @property
+    def fov_rad(self) -> float:
+        return math.radians(self.fov)
+
+
+@dataclass(frozen=True)
+class Safety:
+    """The collision safety layer: halts the robot when its current velocity, held for
+    ``horizon`` seconds, would sweep the footprint (grown by ``margin``) into an obstacle."""
+    enabled: bool = True
+    horizon: float = 0.5            # s
+    margin: float = 0.05            # m
+
+
+@dataclass(frozen=True)
+class Robot:
+    footprint: Footprint = Footprint()
+    drive: Literal["omni", "diff"] = "omni"
+    limits: Limits = Limits()
+    lidar: Lidar = Lidar()
+    safety: Safety = Safety()
+
+
+@dataclass(frozen=True)
+class GoalTolerance:
+    position: float = 0.3           # m
+    yaw: float | None = None        # degrees; None = heading at the goal is not checked
+
+
+@dataclass(frozen=True)
+class Mission:
+    """Drive from ``start`` through ``waypoints`` (in order) to ``goal`` before ``timeout``."""
+    start: Pose
+    goal: Pose
+    waypoints: tuple[Pose, ...] = ()
+    goal_tolerance: GoalTolerance = GoalTolerance()
+    waypoint_tolerance: float = 0.5  # m: a waypoint counts as passed within this distance
+    timeout: float = 30.0            # s
+
+
+@dataclass(frozen=True)
+class Simulation:
+    timestep: float = 0.01          # s, physics step
+    control_rate: float = 10.0      # Hz, planner ticks; must divide 1/timestep into whole steps
+    seed: int = 0                   # noise seed of the episode (the run's base seed is mixed in)
+
+
+@dataclass(frozen=True)
+class Mark:
+    """A pytest mark from YAML: ``slow``, ``{xfail: {reason: ...}}``, ``{skip: reason}``."""
+    name: str
+    args: tuple[Any, ...] = ()
+    kwargs: Mapping[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Reference:
+    """A recorded trajectory to compare the simulated run with (from a bag or a CSV).
+
+    ``file`` is relative to the scenario file; ``points`` are (t, x, y) rows given inline.
+    """
+    file: str | None = None
+    points: tuple[tuple[float, float, float], ...] = ()
+
+
+@dataclass(frozen=True)
+class Scenario:
+    mission: Mission
+    obstacles: tuple[Obstacle, ...] = ()
+    robot: Robot = Robot()
+    simulation: Simulation = Simulation()
+    version: int = SCHEMA_VERSION
+    name: str = ""                  # defaults to the file stem
+    family: str = ""                # defaults to the parent folder name
+    description: str = ""
+    marks: tuple[Mark, ...] = ()
+    reference: Reference | None = None
+    search: Mapping[str, Any] | None = None      # search-space overrides (search.py validates)
+    provenance: Mapping[str, Any] | None = None  # written by freeze.py: where a frozen failure came from
+    # Where it was loaded from (not part of the content, not dumped): for errors and relative paths.
+    source: str | None = field(default=None, compare=False, repr=False)
+
+    def obstacle(self, name: str) -> Obstacle:
+        for obs in self.obstacles:
+            if obs.name == name:
+                return obs
+        raise KeyError(name)
+
+
+_NOT_CONTENT = {"name", "family", "description", "marks", "provenance", "source", "search"}
+
+
+def content_hash(scenario: Scenario) -> str:
+    """A stable 16-hex-digit hash of what the robot experiences (robot, mission, obstacles,
+    simulation, reference), ignoring names, marks, provenance and search settings.
+
+    Used to pair scenarios across result files and to name frozen failures, so the same
+    layout found twice gets the same name.
+    """
+    import dataclasses
+    import hashlib
+    import json
+
+    def plain(value: Any) -> Any:
+        if dataclasses.is_dataclass(value):
+            return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)
+                    if f.name not in _NOT_CONTENT}
+        if isinstance(value, (list, tuple)):
+            return [plain(v) for v in value]
+        if isinstance(value, Mapping):
+            return {str(k): plain(v) for k, v in value.items()}
+        if isinstance(value, float):
+            return repr(value)  # exact, and distinguishes 1 from 1.0 only through the loader
+        return value
+
+    body = plain(scenario)
+    # obstacle names are labels, not content
+    for obs in body.get("obstacles", []):
+        obs.pop("name", None)
+    text = json.dumps(body, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
