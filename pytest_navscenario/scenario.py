@@ -202,8 +202,8 @@ def content_hash(scenario: Scenario) -> str:
             return [plain(v) for v in value]
         if isinstance(value, Mapping):
             return {str(k): plain(v) for k, v in value.items()}
-        if isinstance(value, float):
-            return repr(value)  # exact, and distinguishes 1 from 1.0 only through the loader
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            return repr(float(value))  # exact; 1 and 1.0 hash alike
         return value
 
     body = plain(scenario)

@@ -1,0 +1,1 @@
+"""pytest hooks for this feature (to be filled in)."""
