@@ -116,3 +116,27 @@ class EpisodeResult:
     @property
     def passed(self) -> bool:
         return self.outcome.passed
+
+
+_TRAJ_ARRAYS = ("t", "pose", "velocity", "tick_t", "command", "ranges", "angles")
+
+
+def trajectory_to_dict(traj: Trajectory) -> dict[str, Any]:
+    """Plain lists (JSON / xdist-serialisable). Inverse: trajectory_from_dict."""
+    out: dict[str, Any] = {name: np.asarray(getattr(traj, name)).tolist() for name in _TRAJ_ARRAYS}
+    out["waypoint_times"] = list(traj.waypoint_times)
+    return out
+
+
+def trajectory_from_dict(data: dict[str, Any]) -> Trajectory:
+    beams = len(data.get("angles", []))
+    arrays = {
+        "t": np.asarray(data["t"], dtype=float),
+        "pose": np.asarray(data["pose"], dtype=float).reshape(-1, 3),
+        "velocity": np.asarray(data["velocity"], dtype=float).reshape(-1, 3),
+        "tick_t": np.asarray(data["tick_t"], dtype=float),
+        "command": np.asarray(data["command"], dtype=float).reshape(-1, 3),
+        "ranges": np.asarray(data["ranges"], dtype=np.float32).reshape(-1, beams),
+        "angles": np.asarray(data["angles"], dtype=float),
+    }
+    return Trajectory(**arrays, waypoint_times=tuple(data.get("waypoint_times", ())))
