@@ -69,11 +69,15 @@ DEFAULT_SUBJECT = "dwa"
 
 
 def load_subject(spec: str) -> PlannerFactory:
-    """Resolve ``package.module:Attribute`` (or a built-in name such as ``dwa``) to a factory.
+    """Resolve ``package.module:Attribute``, a built-in name such as ``dwa``, or
+    ``exec:PROGRAM [ARGS]`` (an external planner, see exec_subject.py) to a planner factory.
 
     Raises SubjectLoadError with what is wrong and how to fix it.
     """
     spec = spec.strip()
+    if spec.startswith("exec:"):
+        from .exec_subject import exec_factory
+        return exec_factory(spec[len("exec:"):].strip())
     target = BUILTIN_SUBJECTS.get(spec, spec)
     if ":" not in target:
         raise SubjectLoadError(
