@@ -1,0 +1,40 @@
+"""``navscenario compare A.jsonl B.jsonl``: planner A (baseline) against planner B (candidate).
+
+Exit status: 0, or 1 with ``--fail-on-regression`` when B broke a scenario A passed; 2 when a
+file cannot be read (the error names the file and line).
+"""
+from __future__ import annotations
+
+import argparse
+
+from .results import atomic_write_text
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("a", metavar="A.jsonl", help="baseline results file (pytest --nav-results=A.jsonl)")
+    p.add_argument("b", metavar="B.jsonl", help="candidate results file, same suite, other subject/version")
+    p.add_argument("--junit", metavar="OUT.xml",
+                   help="write the comparison as JUnit XML: one test case per scenario, failing where B broke what A passed")
+    p.add_argument("--plot", metavar="OUT.png",
+                   help="write the two-sided bar chart (success up, safety-stop down, per family, A beside B)")
+    p.add_argument("--fail-on-regression", action="store_true",
+                   help="exit with status 1 when B fails a scenario that A passed (a CI gate)")
+    p.add_argument("--max-listed", type=int, default=50, metavar="N",
+                   help="list at most N scenarios per list (default 50)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from .compare import compare_files, format_comparison, to_junit_xml
+
+    cmp = compare_files(args.a, args.b)
+    print(format_comparison(cmp, max_listed=args.max_listed))
+    if args.junit:
+        atomic_write_text(args.junit, to_junit_xml(cmp))
+        print(f"JUnit XML written to {args.junit}")
+    if args.plot:
+        from .plots import save_bars
+        save_bars(cmp, args.plot)
+        print(f"bar chart written to {args.plot}")
+    if args.fail_on_regression and cmp.has_regressions:
+        return 1
+    return 0

@@ -1,0 +1,139 @@
+"""compare.py and ``navscenario compare`` on hand-made results files."""
+from __future__ import annotations
+
+import json
+import xml.etree.ElementTree as ET
+
+import pytest
+
+from pytest_navscenario.cli import main
+from pytest_navscenario.compare import compare_files, compare_records, format_comparison
+from pytest_navscenario.results import ResultsFileError, write_results
+
+
+def rec(nodeid, outcome, *, family=None, subject="dwa", h=None, repeat=0, seed=7, message=""):
+    name = nodeid.split("::")[-1]
+    return {
+        "format": "navscenario-results", "format_version": 1, "tool_version": "0.1.0",
+        "nodeid": nodeid, "path": nodeid.split("::")[0], "scenario": name,
+        "family": family or nodeid.split("/")[1], "scenario_hash": h or f"h-{name}",
+        "subject": subject, "subject_version": None, "seed": seed, "repeat": repeat,
+        "outcome": outcome, "passed": outcome == "success", "message": message or outcome,
+        "metrics": {"min_clearance": 0.2}, "wall_time": 0.01,
+    }
+
+
+def suite(outcomes: dict[str, str], **kw):
+    return [rec(n, o, **kw) for n, o in outcomes.items()]
+
+
+BASE = {
+    "scenarios/boxes/b1.yaml::b1": "success",
+    "scenarios/boxes/b2.yaml::b2": "success",
+    "scenarios/boxes/b3.yaml::b3": "collision",
+    "scenarios/corridor/c1.yaml::c1": "safety-stop",
+    "scenarios/corridor/c2.yaml::c2": "timeout",
+}
+
+
+@pytest.fixture
+def files(tmp_path):
+    def make(a_records, b_records):
+        a, b = tmp_path / "a.jsonl", tmp_path / "b.jsonl"
+        write_results(a, a_records)
+        write_results(b, b_records)
+        return a, b
+    return make
+
+
+def test_improvement_and_regression_per_family(files, capsys):
+    changed = dict(BASE)
+    changed["scenarios/boxes/b2.yaml::b2"] = "safety-stop"     # broke
+    changed["scenarios/boxes/b3.yaml::b3"] = "success"         # fixed
+    changed["scenarios/corridor/c1.yaml::c1"] = "success"      # fixed
+    changed["scenarios/corridor/c2.yaml::c2"] = "success"      # fixed
+    a, b = files(suite(BASE, subject="dwa"), suite(changed, subject="mypkg.nav:Planner"))
+    cmp = compare_files(a, b)
+    assert [p.nodeid for p in cmp.broke] == ["scenarios/boxes/b2.yaml::b2"]
+    assert [p.nodeid for p in cmp.fixed] == ["scenarios/boxes/b3.yaml::b3", "scenarios/corridor/c1.yaml::c1",
+                                             "scenarios/corridor/c2.yaml::c2"]
+    boxes, corridor = cmp.families
+    assert (boxes.family, boxes.n, boxes.broke, boxes.fixed) == ("boxes", 3, 1, 1)
+    assert boxes.a["success"].count == 2 and boxes.b["success"].count == 2
+    assert boxes.b["safety-stop"].count == 1 and boxes.a["collision"].count == 1
+    assert corridor.a["success"].rate == 0 and corridor.b["success"].rate == 1
+    assert corridor.success_change == pytest.approx(1.0)
+    assert cmp.overall.n == 5 and cmp.overall.mcnemar_p == pytest.approx(0.625)  # b=1, c=3
+    lo, hi = corridor.b["success"].low, corridor.b["success"].high
+    assert lo == pytest.approx(0.3424, abs=1e-4) and hi == 1.0                   # Wilson 2/2
+
+    assert main(["compare", str(a), str(b), "--fail-on-regression"]) == 1
+    out = capsys.readouterr().out
+    assert "B broke (regressions: A passed, B failed) (1):" in out
+    assert "reproduce: pytest scenarios/boxes/b2.yaml::b2 --nav-subject=mypkg.nav:Planner" in out
+    assert "B fixed (A failed, B passed) (3):" in out
+    assert "result: 1 regression(s), 3 fix(es)" in out
+    assert main(["compare", str(a), str(b)]) == 0   # without the gate: report only
+
+
+def test_identical_runs(files, capsys):
+    a, b = files(suite(BASE), suite(BASE))
+    cmp = compare_files(a, b)
+    assert not cmp.broke and not cmp.fixed and not cmp.only_a and not cmp.not_comparable
+    assert all(f.mcnemar_p == 1.0 and f.success_change == 0 for f in cmp.families)
+    assert main(["compare", str(a), str(b), "--fail-on-regression"]) == 0
+    assert "result: 0 regression(s), 0 fix(es)" in capsys.readouterr().out
+
+
+def test_disjoint_sets_and_changed_scenario_are_reported_not_paired(files, capsys):
+    a_recs = suite(BASE)
+    b_recs = [rec("scenarios/boxes/new.yaml::new", "collision")]
+    b_recs.append(rec("scenarios/boxes/b1.yaml::b1", "collision", h="other-layout"))
+    a, b = files(a_recs, b_recs)
+    cmp = compare_files(a, b)
+    assert cmp.pairs == [] and cmp.broke == []
+    assert [u.nodeid for u in cmp.not_comparable] == ["scenarios/boxes/b1.yaml::b1"]
+    assert "scenario changed between the runs" in cmp.not_comparable[0].reason
+    assert len(cmp.only_a) == 4 and [u.nodeid for u in cmp.only_b] == ["scenarios/boxes/new.yaml::new"]
+    assert main(["compare", str(a), str(b), "--fail-on-regression"]) == 0
+    out = capsys.readouterr().out
+    assert "not comparable (1):" in out and "only in A" in out and "only in B" in out
+    assert "could be paired" in out and "nothing to compare" in out
+
+
+def test_repeats_are_paired_by_index(files):
+    a_recs = [rec("scenarios/boxes/b1.yaml::b1", "success", repeat=r, seed=r) for r in range(3)]
+    b_recs = [rec("scenarios/boxes/b1.yaml::b1", o, repeat=r, seed=r, subject="new")
+              for r, o in enumerate(["success", "collision", "success"])]
+    cmp = compare_records(a_recs, b_recs)
+    assert cmp.overall.n == 3
+    assert [(p.nodeid, p.repeat) for p in cmp.broke] == [("scenarios/boxes/b1.yaml::b1", 1)]
+    assert "(repeat 1)" in format_comparison(cmp) and "episode seed 1" in format_comparison(cmp)
+    with pytest.raises(ResultsFileError, match="two records for"):
+        compare_records(a_recs + a_recs[:1], b_recs)
+
+
+def test_other_format_version_is_one_clear_line(files, tmp_path, capsys):
+    a, b = files(suite(BASE), suite(BASE))
+    old = rec("scenarios/boxes/b1.yaml::b1", "success")
+    old["format_version"] = 0
+    b.write_text(json.dumps(old) + "\n")
+    assert main(["compare", str(a), str(b)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"{b}:1: results format version 0" in err[0]
+    assert main(["compare", str(a), str(tmp_path / "missing.jsonl")]) == 2
+    assert "no such results file" in capsys.readouterr().err
+
+
+def test_junit_one_case_per_scenario_failing_on_regressions(files, tmp_path):
+    changed = dict(BASE, **{"scenarios/boxes/b1.yaml::b1": "collision"})
+    b_recs = suite(changed, subject="new") + [rec("scenarios/boxes/extra.yaml::extra", "success")]
+    a, b = files(suite(BASE), b_recs)
+    out = tmp_path / "cmp.xml"
+    assert main(["compare", str(a), str(b), "--junit", str(out)]) == 0
+    cases = ET.parse(out).getroot().findall(".//testcase")
+    assert len(cases) == 6
+    failed = [c.get("name") for c in cases if c.find("failure") is not None]
+    skipped = [c.get("name") for c in cases if c.find("skipped") is not None]
+    assert failed == ["scenarios/boxes/b1.yaml::b1"] and skipped == ["scenarios/boxes/extra.yaml::extra"]
+    assert "--nav-subject=new" in ET.tostring(cases[0], encoding="unicode")
