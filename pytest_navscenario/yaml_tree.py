@@ -1,0 +1,302 @@
+"""YAML text -> a small node tree that remembers the line of every value.
+
+Why not ``yaml.safe_load``: it forgets lines, expands alias bombs ("billion laughs") into
+gigabytes, and libyaml's composer recurses in C, so a deeply nested file crashes the process
+(segfault) instead of raising. Here the events of the (C or pure-Python) parser are composed
+*iteratively* into ``YMap``/``YSeq``/``YScalar`` nodes with
+
+* a nesting limit (``max_depth``),
+* the expanded size of each node (aliases counted as often as they are used) checked against
+  ``max_nodes`` as the tree is built, so an alias bomb is refused before anything expands,
+* anchors registered when their node is complete (an alias to its own parent is an error),
+* duplicate keys refused, ``<<`` merge keys applied (explicit keys win), and
+* scalars resolved and constructed exactly as ``yaml.safe_load`` does (YAML 1.1 types).
+
+Every problem raises ``ScenarioError`` with the file and line; nothing else escapes.
+``from_plain`` builds the same tree from Python values (no lines) so one validator serves both.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any, Iterator, Mapping
+
+import yaml
+from yaml.constructor import SafeConstructor
+from yaml.nodes import ScalarNode
+
+from .errors import ScenarioError
+
+try:  # libyaml's parser is ~15x faster; only its parser is used (never its recursive composer)
+    _Loader: type = yaml.CSafeLoader
+except AttributeError:  # pragma: no cover - PyYAML without libyaml
+    _Loader = yaml.SafeLoader
+
+_MAP_TAGS = (None, "!", "tag:yaml.org,2002:map")
+_SEQ_TAGS = (None, "!", "tag:yaml.org,2002:seq")
+_MERGE_TAG = "tag:yaml.org,2002:merge"
+
+
+class YNode:
+    """Base of the tree nodes: ``line`` is 1-based (None for values not read from a file)."""
+    __slots__ = ("line", "size")
+    line: int | None
+    size: int
+
+
+class YScalar(YNode):
+    """A scalar: its safe_load value, and whether it was written plain (unquoted, untagged)."""
+    __slots__ = ("value", "plain")
+
+    def __init__(self, value: Any, line: int | None, plain: bool = False):
+        self.value, self.line, self.plain, self.size = value, line, plain, 1
+
+
+class YSeq(YNode):
+    __slots__ = ("items",)
+
+    def __init__(self, line: int | None):
+        self.items: list[YNode] = []
+        self.line, self.size = line, 1
+
+
+class YMap(YNode):
+    """A mapping: ``items`` maps each key to (key line, value node), in file order."""
+    __slots__ = ("items", "merges")
+
+    def __init__(self, line: int | None):
+        self.items: dict[Any, tuple[int | None, YNode]] = {}
+        self.merges: list[YNode] = []
+        self.line, self.size = line, 1
+
+
+def describe(node: YNode) -> str:
+    """A short human description of a node's value for 'expected X, got Y' messages."""
+    if isinstance(node, YMap):
+        return "a mapping"
+    if isinstance(node, YSeq):
+        return "a list"
+    value = node.value
+    if value is None:
+        return "null (an empty value)"
+    if isinstance(value, bool):
+        return f"{str(value).lower()} (a boolean)"
+    if isinstance(value, str):
+        shown = value if len(value) <= 40 else value[:37] + "..."
+        return f"{shown!r} (a string)"
+    if isinstance(value, (int, float)):
+        return repr(value) if not isinstance(value, float) or math.isfinite(value) else (
+            ".nan" if math.isnan(value) else (".inf" if value > 0 else "-.inf"))
+    return f"a {type(value).__name__} value"
+
+
+def parse_yaml(text: str, source: str | None, *, max_depth: int, max_nodes: int) -> YNode | None:
+    """Compose ``text`` (one YAML document) into a tree; None for an empty document."""
+    try:
+        loader = _Loader(text)
+    except UnicodeError as exc:  # lone surrogates in a str cannot be encoded for the parser
+        raise ScenarioError(f"the text is not valid Unicode ({exc.reason})", path=source,
+                            line=text.count("\n", 0, getattr(exc, "start", 0)) + 1,
+                            hint="save the scenario as UTF-8 text") from None
+    try:
+        return _Composer(loader, source, max_depth, max_nodes).compose()
+    except UnicodeError as exc:
+        raise ScenarioError(f"the text is not valid Unicode ({exc.reason})", path=source,
+                            hint="save the scenario as UTF-8 text") from None
+    except yaml.YAMLError as exc:
+        raise _yaml_error(exc, source, text) from None
+    except RecursionError:  # pragma: no cover - the composer is iterative; belt and braces
+        raise ScenarioError("the YAML nests too deeply", path=source,
+                            hint=f"keep nesting under {max_depth} levels") from None
+    finally:
+        dispose = getattr(loader, "dispose", None)
+        if dispose is not None:
+            dispose()
+
+
+def _yaml_error(exc: yaml.YAMLError, source: str | None, text: str) -> ScenarioError:
+    if isinstance(exc, yaml.reader.ReaderError):  # a control character or bad byte
+        position = max(0, min(int(exc.position), len(text)))
+        char = exc.character if isinstance(exc.character, int) else ord(str(exc.character)[:1] or "?")
+        return ScenarioError(f"character #x{char:04x} is not allowed in YAML ({exc.reason})", path=source,
+                             line=text.count("\n", 0, position) + 1,
+                             hint="is this a binary file? a scenario is UTF-8 text without control characters")
+    mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
+    problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+    context = getattr(exc, "context", None)
+    text = f"invalid YAML: {problem}" + (f" ({context})" if context else "")
+    line = None
+    if mark is not None:
+        line = mark.line + 1
+        text += f" at column {mark.column + 1}"
+    return ScenarioError(text, path=source, line=line,
+                         hint="check indentation, colons and quotes on that line (or the one before)")
+
+
+class _Composer:
+    """Iterative event -> node composer with depth, size, anchor and duplicate-key checks."""
+
+    def __init__(self, loader: Any, source: str | None, max_depth: int, max_nodes: int):
+        self.loader, self.source = loader, source
+        self.max_depth, self.max_nodes = max_depth, max_nodes
+        self.anchors: dict[str, YNode] = {}
+        # stack entries: [node, anchor, pending key (value, line) or None]
+        self.stack: list[list[Any]] = []
+
+    def error(self, message: str, line: int | None, hint: str | None = None) -> ScenarioError:
+        return ScenarioError(message, path=self.source, line=line, hint=hint)
+
+    def events(self) -> Iterator[Any]:
+        loader = self.loader
+        while loader.check_event():
+            yield loader.get_event()
+
+    def compose(self) -> YNode | None:
+        self.root: YNode | None = None
+        documents = 0
+        for event in self.events():
+            kind = type(event)
+            line = event.start_mark.line + 1 if event.start_mark is not None else None
+            if kind is yaml.ScalarEvent:
+                self.attach(self.scalar(event, line), event.anchor, line)
+            elif kind is yaml.MappingStartEvent or kind is yaml.SequenceStartEvent:
+                is_map = kind is yaml.MappingStartEvent
+                if event.tag not in (_MAP_TAGS if is_map else _SEQ_TAGS):
+                    raise self.error(f"unsupported YAML tag {event.tag!r}", line,
+                                     "scenario files use plain mappings and lists; remove the tag")
+                if len(self.stack) >= self.max_depth:
+                    raise self.error(f"the YAML nests more than {self.max_depth} levels deep", line,
+                                     "a scenario needs only a few levels; this file is not a scenario")
+                self.stack.append([YMap(line) if is_map else YSeq(line), event.anchor, None])
+            elif kind is yaml.MappingEndEvent or kind is yaml.SequenceEndEvent:
+                node, anchor, _ = self.stack.pop()
+                if isinstance(node, YMap) and node.merges:
+                    self.merge(node)
+                self.attach(node, anchor, line)
+            elif kind is yaml.AliasEvent:
+                target = self.anchors.get(event.anchor)
+                if target is None:
+                    raise self.error(f"alias *{event.anchor} has no finished anchor &{event.anchor} before it",
+                                     line, "define the anchor first; an alias cannot refer to its own parent")
+                self.attach(target, None, line)
+            elif kind is yaml.DocumentStartEvent:
+                documents += 1
+                if documents > 1:
+                    raise self.error("the file holds more than one YAML document", line,
+                                     "a scenario file holds exactly one document; remove the extra '---'")
+        return self.root
+
+    def scalar(self, event: Any, line: int) -> YScalar:
+        tag = event.tag
+        plain = False
+        if tag is None or tag == "!":
+            tag = self.loader.resolve(ScalarNode, event.value, event.implicit)
+            plain = not event.style and tag == "tag:yaml.org,2002:str"
+        if tag == _MERGE_TAG:
+            return YScalar(_MERGE, line)
+        construct = SafeConstructor.yaml_constructors.get(tag)
+        if construct is None:
+            raise self.error(f"unsupported YAML tag {tag!r}", line,
+                             "scenario files hold plain values; remove the tag")
+        node = ScalarNode(tag, event.value, event.start_mark, event.end_mark, style=event.style)
+        try:
+            value = construct(self.loader, node)
+        except Exception as exc:  # bad !!int/!!binary/!!timestamp text, digit-count limits, ...
+            raise self.error(f"cannot read value {event.value[:40]!r} as {tag.rsplit(':', 1)[-1]}: {exc}",
+                             line, "write a plain number or string") from None
+        return YScalar(value, line, plain)
+
+    def attach(self, node: YNode, anchor: str | None, line: int) -> None:
+        if anchor is not None:
+            self.anchors[anchor] = node
+        if not self.stack:
+            self.root = node
+            return
+        top = self.stack[-1]
+        parent = top[0]
+        parent.size += node.size
+        if parent.size > self.max_nodes:
+            raise self.error(f"the YAML expands to more than {self.max_nodes} values (an alias counts "
+                             f"as often as it is used: a YAML alias bomb?)", line,
+                             "scenario files need far fewer values; do not build aliases of aliases")
+        if isinstance(parent, YSeq):
+            parent.items.append(node)
+            return
+        if top[2] is None:  # a key
+            if not isinstance(node, YScalar):
+                raise self.error("a mapping key must be a plain value, not a list or mapping", line,
+                                 "write 'key: value' with a plain key")
+            top[2] = (node.value, line)
+            return
+        key, key_line = top[2]
+        top[2] = None
+        if key is _MERGE:
+            parent.merges.append(node)
+            return
+        try:
+            previous = parent.items.get(key)
+        except TypeError:  # unhashable key value (e.g. !!binary is hashable; be safe anyway)
+            raise self.error(f"unusable mapping key {key!r}", key_line) from None
+        if previous is not None:
+            raise self.error(f"key {key!r} is given twice (first on line {previous[0]})", key_line,
+                             "remove one of them")
+        parent.items[key] = (key_line, node)
+
+    def merge(self, node: YMap) -> None:
+        """Apply ``<<: *anchor`` (or a list of them): explicit keys win, then earlier merges."""
+        sources: list[YNode] = []
+        for merged in node.merges:
+            sources.extend(merged.items if isinstance(merged, YSeq) else [merged])
+        for source in sources:
+            if not isinstance(source, YMap):
+                raise self.error("'<<' (merge) needs a mapping or a list of mappings", node.line,
+                                 "write '<<: *anchor' where &anchor names a mapping")
+            for key, item in source.items.items():
+                if key not in node.items:
+                    node.items[key] = item
+        node.merges = []
+
+
+class _MergeKey:
+    def __repr__(self) -> str:
+        return "'<<'"
+
+
+_MERGE = _MergeKey()
+
+
+def from_plain(value: Any, *, max_depth: int, max_nodes: int, source: str | None = None) -> YNode:
+    """The tree of a Python value (from ``scenario_from_dict``): no lines, same limits."""
+    budget = [max_nodes]
+
+    def build(obj: Any, depth: int) -> YNode:
+        budget[0] -= 1
+        if budget[0] < 0:
+            raise ScenarioError(f"the mapping holds more than {max_nodes} values", path=source,
+                                hint="scenarios need far fewer values")
+        if depth > max_depth:
+            raise ScenarioError(f"the mapping nests more than {max_depth} levels deep", path=source,
+                                hint="a scenario needs only a few levels")
+        if isinstance(obj, Mapping):
+            node = YMap(None)
+            for key, item in obj.items():
+                node.items[key] = (None, build(item, depth + 1))
+            return node
+        if isinstance(obj, (list, tuple)):
+            seq = YSeq(None)
+            seq.items = [build(item, depth + 1) for item in obj]
+            return seq
+        return YScalar(obj, None)
+
+    return build(value, 0)
+
+
+def to_plain(node: YNode) -> Any:
+    """The plain Python value of a node (dicts, lists, scalars) as safe_load would give it.
+
+    The tree's sizes were checked while composing, so this expansion is bounded.
+    """
+    if isinstance(node, YScalar):
+        return node.value
+    if isinstance(node, YSeq):
+        return [to_plain(item) for item in node.items]
+    return {key: to_plain(item) for key, (_, item) in node.items.items()}
