@@ -1,0 +1,128 @@
+"""Command-line options and their ini twins, and their parsing into one checked ``Settings``.
+
+Precedence: command line, then the ini file (pytest.ini / pyproject.toml / tox.ini / setup.cfg),
+then the default. Relative paths given on the command line are relative to the current folder;
+relative paths from the ini file are relative to the rootdir. A bad value raises
+pytest.UsageError saying which option and how to fix it.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+DEFAULT_GLOB = ["*.yaml", "*.yml"]
+DEFAULT_SCENARIO_PATHS = ["scenarios"]
+DEFAULT_ARTIFACTS = "nav-artifacts"
+
+# (option, ini name, help); used for --help, the ini registration and the README table.
+OPTIONS = (
+    ("--nav-subject", "nav_subject",
+     "planner under test: 'package.module:Attribute' (a class or zero-argument factory) or a "
+     "built-in name (dwa, potential-field). Default: the built-in 'dwa'."),
+    ("--nav-seed", "nav_seed",
+     "base seed (integer >= 0) mixed into each scenario's own noise seed; 0 (default) runs each "
+     "scenario with its own seed. Shown in the header."),
+    ("--nav-results", "nav_results",
+     "write every episode's outcome and metrics to this JSON Lines file (for navscenario compare)."),
+    ("--nav-artifacts", "nav_artifacts",
+     "folder for failing items' artifacts (scenario as run + trajectory CSV), one subfolder per "
+     "item; 'none' disables. Default: nav-artifacts under the rootdir."),
+    ("--nav-summary", "nav_summary",
+     "print the per-family outcome table at the end: yes (default) or no."),
+)
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    group = parser.getgroup("navscenario", "navigation scenarios (pytest-navscenario)")
+    helps = {ini: text for _, ini, text in OPTIONS}
+    for opt, ini, text in OPTIONS:
+        group.addoption(opt, dest=ini, default=None, metavar=ini.split("_", 1)[1].upper(),
+                        help=text + f" [ini: {ini}]")
+    parser.addini("nav_subject", helps["nav_subject"], default="")
+    parser.addini("nav_seed", helps["nav_seed"], default="0")
+    parser.addini("nav_results", helps["nav_results"], default="")
+    parser.addini("nav_artifacts", helps["nav_artifacts"], default=DEFAULT_ARTIFACTS)
+    parser.addini("nav_summary", helps["nav_summary"], default="yes")
+    parser.addini("nav_scenario_glob",
+                  "file name patterns of scenario files (space separated); files matching them are "
+                  "collected when they are a YAML mapping with 'version' and 'mission' keys "
+                  "(default: *.yaml *.yml)", type="args", default=DEFAULT_GLOB)
+    parser.addini("nav_scenario_paths",
+                  "folders (relative to the rootdir) where seed scenarios are looked up by name, "
+                  "e.g. by --navsearch (default: scenarios)", type="linelist",
+                  default=DEFAULT_SCENARIO_PATHS)
+
+
+@dataclass(frozen=True)
+class Settings:
+    subject_spec: str | None          # None: not configured (hook or built-in default decide)
+    seed: int
+    results: Path | None
+    artifacts: Path | None
+    summary: bool
+    globs: tuple[str, ...]
+    scenario_paths: tuple[Path, ...]
+
+
+def _value(config: pytest.Config, name: str) -> tuple[str, str, Path]:
+    """(raw value, where it came from, base folder for relative paths)."""
+    cli = config.getoption(name)
+    if cli is not None:
+        return str(cli), f"--{name.replace('_', '-')}", Path(config.invocation_params.dir)
+    return str(config.getini(name)), f"ini option {name}", Path(config.rootpath)
+
+
+def _path(raw: str, base: Path) -> Path:
+    path = Path(os.path.expanduser(raw))
+    return path if path.is_absolute() else base / path
+
+
+def read_settings(config: pytest.Config) -> Settings:
+    """Parse and check every option; pytest.UsageError on a bad value."""
+    subject, _, _ = _value(config, "nav_subject")
+    subject = subject.strip() or None
+
+    raw, where, _ = _value(config, "nav_seed")
+    try:
+        seed = int(raw.strip())
+    except ValueError:
+        raise pytest.UsageError(f"{where}: seed must be a whole number >= 0, got {raw!r} "
+                                f"(e.g. --nav-seed=0, the default)") from None
+    if seed < 0 or seed >= 2**63:
+        raise pytest.UsageError(f"{where}: seed must be between 0 and 2**63-1, got {seed}")
+
+    raw, where, base = _value(config, "nav_results")
+    results = _path(raw.strip(), base) if raw.strip() else None
+    if results is not None and results.is_dir():
+        raise pytest.UsageError(f"{where}: {raw!r} is a folder; give a file name such as results.jsonl")
+
+    raw, where, base = _value(config, "nav_artifacts")
+    raw = raw.strip()
+    if raw.lower() in ("none", "no", "off", ""):
+        artifacts = None
+    else:
+        artifacts = _path(raw, base)
+        if artifacts.exists() and not artifacts.is_dir():
+            raise pytest.UsageError(f"{where}: {raw!r} exists and is not a folder; give a folder "
+                                    f"(created if missing) or 'none' to disable artifacts")
+
+    raw, where, _ = _value(config, "nav_summary")
+    flag = raw.strip().lower()
+    if flag in ("yes", "true", "on", "1"):
+        summary = True
+    elif flag in ("no", "false", "off", "0"):
+        summary = False
+    else:
+        raise pytest.UsageError(f"{where}: expected yes or no, got {raw!r}")
+
+    globs = tuple(g for g in config.getini("nav_scenario_glob") if g.strip())
+    if not globs:
+        raise pytest.UsageError("ini option nav_scenario_glob is empty; give file name patterns "
+                                "such as '*.yaml *.yml'")
+    paths = tuple(_path(p.strip(), Path(config.rootpath))
+                  for p in config.getini("nav_scenario_paths") if p.strip())
+    return Settings(subject_spec=subject, seed=seed, results=results, artifacts=artifacts,
+                    summary=summary, globs=globs, scenario_paths=paths)
