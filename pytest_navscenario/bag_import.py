@@ -1,0 +1,651 @@
+"""``navscenario from-bag``: a seed scenario from a real robot's bag.
+
+Reads ROS 1 bags, rosbag2 sqlite3 and MCAP (also old ROS 2 bags with no embedded message
+definitions) with ``rosbags``. Odometry and laser topics are found by type (override with
+``--odom-topic`` / ``--scan-topic``). The scenario's world frame is the odometry frame:
+
+* start and goal: the first and last odometry pose in the time window;
+* the driven path: decimated waypoints, or a reference trajectory (CSV ``t,x,y`` beside the
+  seed, ``reference.file`` relative to it);
+* obstacles: every scan projected with the laser's mount transform (``/tf_static``, else
+  ``--laser-pose``, else estimated from the scans themselves), accumulated in the odometry
+  frame on a grid, clustered, and fitted as cylinders (round clusters) and oriented boxes
+  (straight segments). Box walls are placed behind the observed surface, away from the
+  viewpoints that saw it, so the free space the robot drove through stays free.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from .errors import NavScenarioError
+from .scenario import (BoxObstacle, CylinderObstacle, Footprint, GoalTolerance, Lidar, Limits,
+                       Mission, Obstacle, Pose, Reference, Robot, Scenario)
+
+ODOM_TYPES = ("nav_msgs/msg/Odometry",)
+SCAN_TYPES = ("sensor_msgs/msg/LaserScan",)
+TF_STATIC_TYPES = ("tf2_msgs/msg/TFMessage",)
+
+
+class BagImportError(NavScenarioError):
+    """A bag cannot be turned into a seed: not a bag, damaged, missing odometry, bad option."""
+
+
+# ------------------------------------------------------------------ reading
+
+@dataclass
+class BagData:
+    """What the importer needs from a bag, as plain arrays (times in s since the bag's start)."""
+    path: Path
+    odom_topic: str
+    odom_frame: str
+    base_frame: str
+    odom: np.ndarray                  # (n, 4) t, x, y, yaw (rad)
+    scan_topic: str | None = None
+    scan_frame: str = ""
+    scan_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    scan_ranges: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), np.float32))
+    scan_angles: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    range_min: float = 0.0
+    range_max: float = math.inf
+    static_tf: dict[str, tuple[str, float, float, float]] = field(default_factory=dict)  # child -> (parent, x, y, yaw)
+    notes: list[str] = field(default_factory=list)
+
+
+def _yaw(q: Any) -> float:
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+
+
+def _stamp(header: Any, bag_ns: int) -> int:
+    ns = int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
+    return ns if ns > 0 else bag_ns
+
+
+def _pick(path: Path, connections: list, wanted: str | None, types: Sequence[str], what: str,
+          option: str, preferred: Sequence[str], required: bool):
+    """The topic to read: the one named by the user, else the one of the right type."""
+    topics = sorted({(c.topic, c.msgtype) for c in connections})
+    listing = ", ".join(f"{t} ({m})" for t, m in topics) or "none"
+    if wanted:
+        match = [c for c in connections if c.topic == wanted]
+        if not match:
+            raise BagImportError(f"{path}: no topic {wanted!r} in the bag (topics: {listing}); "
+                                 f"fix {option}")
+        if match[0].msgtype not in types:
+            raise BagImportError(f"{path}: topic {wanted} is {match[0].msgtype}, not {' or '.join(types)}; "
+                                 f"fix {option}")
+        return wanted
+    candidates = sorted({c.topic for c in connections if c.msgtype in types})
+    if not candidates:
+        if required:
+            raise BagImportError(f"{path}: no {what} ({' or '.join(types)}) in the bag (topics: {listing}); "
+                                 f"record odometry, or name a topic with {option}")
+        return None
+    for name in preferred:
+        if name in candidates:
+            return name
+    if len(candidates) > 1:
+        raise BagImportError(f"{path}: several {what} topics ({', '.join(candidates)}); choose one with {option}")
+    return candidates[0]
+
+
+def read_bag(path: str | Path, *, odom_topic: str | None = None, scan_topic: str | None = None,
+             start: float | None = None, end: float | None = None) -> BagData:
+    """Read odometry, laser scans and static transforms; ``start``/``end`` are seconds since
+    the bag's first message. Raises BagImportError naming the file and what is missing."""
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    path = Path(path)
+    if not path.exists():
+        raise BagImportError(f"{path}: no such bag file or folder")
+    try:
+        reader = AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
+        reader.open()
+    except Exception as exc:  # rosbags raises several unrelated types for a bad file
+        raise BagImportError(f"{path}: not a readable ROS 1 / rosbag2 bag ({_reason(exc)})") from None
+    try:
+        return _read(reader, path, odom_topic, scan_topic, start, end)
+    except NavScenarioError:
+        raise
+    except Exception as exc:
+        raise BagImportError(f"{path}: bag is damaged or truncated ({_reason(exc)})") from None
+    finally:
+        try:
+            reader.close()
+        except Exception:
+            pass
+
+
+def _reason(exc: Exception) -> str:
+    text = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+def _read(reader: Any, path: Path, odom_topic, scan_topic, start, end) -> BagData:
+    conns = list(reader.connections)
+    odom_name = _pick(path, conns, odom_topic, ODOM_TYPES, "odometry", "--odom-topic", ("/odom",), True)
+    scan_name = _pick(path, conns, scan_topic, SCAN_TYPES, "laser scan", "--scan-topic", ("/scan",), False)
+    wanted = [c for c in conns if c.topic in (odom_name, scan_name) or
+              (c.topic == "/tf_static" and c.msgtype in TF_STATIC_TYPES)]
+    t0 = reader.start_time
+    lo = None if start is None else t0 + int(start * 1e9)
+    hi = None if end is None else t0 + int(end * 1e9)
+    odom, scans, static_tf = [], [], {}
+    odom_frame = base_frame = scan_frame = ""
+    scan_meta = None
+    for conn, bag_ns, raw in reader.messages(connections=wanted):
+        msg = reader.deserialize(raw, conn.msgtype)
+        if conn.topic == "/tf_static":
+            for tf in msg.transforms:
+                tr, rot = tf.transform.translation, tf.transform.rotation
+                static_tf[tf.child_frame_id.lstrip("/")] = (tf.header.frame_id.lstrip("/"), tr.x, tr.y, _yaw(rot))
+            continue
+        stamp = _stamp(msg.header, bag_ns)
+        if conn.topic == odom_name:
+            p = msg.pose.pose
+            odom.append((stamp, p.position.x, p.position.y, _yaw(p.orientation)))
+            odom_frame = odom_frame or msg.header.frame_id.lstrip("/")
+            base_frame = base_frame or msg.child_frame_id.lstrip("/")
+        else:
+            ranges = np.asarray(msg.ranges, dtype=np.float32)
+            meta = (len(ranges), float(msg.angle_min), float(msg.angle_increment))
+            if scan_meta is None:
+                scan_meta = meta + (float(msg.range_min), float(msg.range_max))
+                scan_frame = msg.header.frame_id.lstrip("/")
+            elif meta != scan_meta[:3]:
+                continue  # a scan with another geometry: rare, skipped and counted below
+            scans.append((stamp, ranges))
+    if not odom:
+        raise BagImportError(f"{path}: topic {odom_name} has no messages; record odometry or choose "
+                             f"another topic with --odom-topic")
+    odom_arr = np.array(odom, dtype=float)
+    order = np.argsort(odom_arr[:, 0], kind="stable")
+    odom_arr = odom_arr[order]
+    origin = float(t0)
+    odom_arr[:, 0] = (odom_arr[:, 0] - origin) * 1e-9
+    data = BagData(path=path, odom_topic=odom_name, odom_frame=odom_frame or "odom",
+                   base_frame=base_frame or "base_link", odom=odom_arr, static_tf=static_tf)
+    if lo is not None or hi is not None:
+        keep = np.ones(len(odom_arr), bool)
+        if lo is not None:
+            keep &= odom_arr[:, 0] >= start
+        if hi is not None:
+            keep &= odom_arr[:, 0] <= end
+        if keep.sum() < 2:
+            span = f"{odom_arr[0, 0]:.1f}..{odom_arr[-1, 0]:.1f} s"
+            raise BagImportError(f"{path}: fewer than 2 odometry messages between --start {start} and "
+                                 f"--end {end} (odometry covers {span} after the bag's start)")
+        data.odom = odom_arr[keep]
+    if scan_name is None:
+        data.notes.append(f"no laser scan topic in {path.name}: the seed has the trajectory only, no obstacles")
+        return data
+    if scans:
+        st = (np.array([s[0] for s in scans], dtype=float) - origin) * 1e-9
+        inside = (st >= data.odom[0, 0]) & (st <= data.odom[-1, 0])
+        n, amin, ainc, rmin, rmax = scan_meta
+        data.scan_topic = scan_name
+        data.scan_frame = scan_frame
+        data.scan_t = st[inside]
+        data.scan_ranges = np.stack([s[1] for s, k in zip(scans, inside) if k]) if inside.any() \
+            else np.zeros((0, n), np.float32)
+        data.scan_angles = amin + ainc * np.arange(n)
+        data.range_min, data.range_max = rmin, rmax
+    if len(data.scan_t) == 0:
+        data.notes.append(f"topic {scan_name} has no scans within the odometry's time window: "
+                          f"the seed has the trajectory only, no obstacles")
+        data.scan_topic = None
+    return data
+
+
+# ------------------------------------------------------------------ geometry
+
+def laser_mount(data: BagData) -> tuple[float, float, float] | None:
+    """The laser's pose (x, y, yaw rad) in the odometry child frame from /tf_static, or None."""
+    frame, x, y, yaw = data.scan_frame, 0.0, 0.0, 0.0
+    for _ in range(32):
+        if frame == data.base_frame:
+            return (x, y, yaw)
+        if frame not in data.static_tf:
+            break
+        parent, px, py, pyaw = data.static_tf[frame]
+        c, s = math.cos(pyaw), math.sin(pyaw)
+        x, y, yaw = px + c * x - s * y, py + s * x + c * y, pyaw + yaw
+        frame = parent
+    if frame == data.base_frame:
+        return (x, y, yaw)
+    return None
+
+
+def _poses_at(data: BagData, t: np.ndarray) -> np.ndarray:
+    od = data.odom
+    yaw = np.unwrap(od[:, 3])
+    return np.stack([np.interp(t, od[:, 0], od[:, 1]), np.interp(t, od[:, 0], od[:, 2]),
+                     np.interp(t, od[:, 0], yaw)], axis=1)
+
+
+def project_scans(data: BagData, mount: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """Every valid return as a point in the odometry frame, and the laser position it was seen from."""
+    poses = _poses_at(data, data.scan_t)
+    rng = data.scan_ranges.astype(float)
+    valid = np.isfinite(rng) & (rng > data.range_min) & (rng < data.range_max * 0.99)
+    rng = np.where(valid, rng, 0.0)
+    mx, my, myaw = mount
+    ang = data.scan_angles[None, :] + myaw
+    lx = mx + rng * np.cos(ang)
+    ly = my + rng * np.sin(ang)
+    c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
+    wx = poses[:, 0:1] + c * lx - s * ly
+    wy = poses[:, 1:2] + s * lx + c * ly
+    ox = poses[:, 0] + np.cos(poses[:, 2]) * mx - np.sin(poses[:, 2]) * my
+    oy = poses[:, 1] + np.sin(poses[:, 2]) * mx + np.cos(poses[:, 2]) * my
+    origin = np.broadcast_to(np.stack([ox, oy], 1)[:, None, :], wx.shape + (2,))
+    return np.stack([wx[valid], wy[valid]], 1), origin[valid]
+
+
+def _sharpness(points: np.ndarray, res: float) -> int:
+    cells = np.floor(points / res).astype(np.int64)
+    return len(np.unique(cells[:, 0] * 1_000_003 + cells[:, 1]))
+
+
+def estimate_mount(data: BagData, res: float = 0.02) -> tuple[float, float, float]:
+    """The laser's forward offset that makes the accumulated map sharpest (fewest occupied cells).
+
+    Used when the bag has no /tf_static and no --laser-pose is given: a laser mounted behind the
+    base frame (TurtleBot3 Waffle: -0.064 m) otherwise smears round obstacles into rings.
+    """
+    best = None
+    sub = slice(None, None, max(1, len(data.scan_t) // 150))  # 150 scans suffice to compare
+    part = BagData(path=data.path, odom_topic=data.odom_topic, odom_frame=data.odom_frame,
+                   base_frame=data.base_frame, odom=data.odom, scan_t=data.scan_t[sub],
+                   scan_ranges=data.scan_ranges[sub], scan_angles=data.scan_angles,
+                   range_min=data.range_min, range_max=data.range_max)
+    for dx in np.round(np.arange(-0.16, 0.1601, 0.016), 3):
+        pts, _ = project_scans(part, (float(dx), 0.0, 0.0))
+        score = _sharpness(pts, res)
+        if best is None or score < best[0]:
+            best = (score, float(dx))
+    return (best[1], 0.0, 0.0)
+
+
+@dataclass
+class Cluster:
+    points: np.ndarray    # (k, 2) per-cell mean of the returns
+    viewpoint: np.ndarray  # (2,) mean laser position that saw them
+
+
+def occupied_clusters(points: np.ndarray, origins: np.ndarray, *, res: float = 0.05,
+                      min_hits: int = 3, min_cells: int = 3) -> tuple[list[Cluster], int]:
+    """Grid the returns, keep cells hit ``min_hits`` times, group 8-connected cells.
+
+    Returns the clusters and the number of small clusters (< ``min_cells``) dropped as noise.
+    """
+    if len(points) == 0:
+        return [], 0
+    cells = np.floor(points / res).astype(np.int64)
+    keys, inverse, counts = np.unique(cells, axis=0, return_inverse=True, return_counts=True)
+    inverse = inverse.reshape(-1)
+    sums = np.zeros((len(keys), 4))
+    np.add.at(sums, inverse, np.concatenate([points, origins], axis=1))
+    means = sums / counts[:, None]
+    keep = counts >= min_hits
+    keys, means = keys[keep], means[keep]
+    index = {(int(a), int(b)): i for i, (a, b) in enumerate(keys)}
+    label = -np.ones(len(keys), dtype=np.int64)
+    clusters, dropped = [], 0
+    for seed in range(len(keys)):
+        if label[seed] >= 0:
+            continue
+        label[seed] = seed
+        stack, members = [seed], []
+        while stack:
+            i = stack.pop()
+            members.append(i)
+            a, b = keys[i]
+            for da in (-1, 0, 1):
+                for db in (-1, 0, 1):
+                    j = index.get((int(a + da), int(b + db)))
+                    if j is not None and label[j] < 0:
+                        label[j] = seed
+                        stack.append(j)
+        if len(members) < min_cells:
+            dropped += 1
+            continue
+        m = means[np.sort(members)]
+        clusters.append(Cluster(points=m[:, :2], viewpoint=m[:, 2:].mean(axis=0)))
+    return clusters, dropped
+
+
+def _groups(points: np.ndarray, radius: float) -> list[np.ndarray]:
+    """Index arrays of the groups of points chained by neighbours closer than ``radius``."""
+    if len(points) == 0:
+        return []
+    cells = np.floor(points / radius).astype(np.int64)
+    buckets: dict[tuple[int, int], list[int]] = {}
+    for i, (a, b) in enumerate(cells):
+        buckets.setdefault((int(a), int(b)), []).append(i)
+    label = -np.ones(len(points), dtype=np.int64)
+    groups = []
+    for seed in range(len(points)):
+        if label[seed] >= 0:
+            continue
+        label[seed] = seed
+        stack, members = [seed], []
+        while stack:
+            i = stack.pop()
+            members.append(i)
+            a, b = cells[i]
+            for da in (-1, 0, 1):
+                for db in (-1, 0, 1):
+                    for j in buckets.get((int(a + da), int(b + db)), ()):
+                        if label[j] < 0 and np.hypot(*(points[j] - points[i])) <= radius:
+                            label[j] = seed
+                            stack.append(j)
+        groups.append(np.sort(np.array(members)))
+    return groups
+
+
+def fit_circle(points: np.ndarray) -> tuple[float, float, float, float]:
+    """Least-squares (Kasa) circle: centre x, y, radius and the RMS radial residual."""
+    a = np.c_[2.0 * points, np.ones(len(points))]
+    b = (points ** 2).sum(axis=1)
+    (cx, cy, c), *_ = np.linalg.lstsq(a, b, rcond=None)
+    r = math.sqrt(max(c + cx * cx + cy * cy, 0.0))
+    resid = np.hypot(points[:, 0] - cx, points[:, 1] - cy) - r
+    return float(cx), float(cy), r, float(np.sqrt(np.mean(resid ** 2)))
+
+
+@dataclass(frozen=True)
+class FitSettings:
+    res: float = 0.05             # m, grid cell
+    max_radius: float = 0.6       # m, largest round obstacle fitted as a cylinder
+    circle_rms: float = 0.025     # m, max RMS residual of a cylinder fit
+    line_tol: float = 0.06        # m, max distance of a point from a wall line
+    gap: float = 0.3              # m, a wall line breaks at gaps wider than this
+    min_segment: float = 0.2      # m, shorter wall pieces are left to the box fallback
+    wall_width: float = 0.15      # m, thickness of a wall box (only its near face is seen)
+
+
+def _round(points: np.ndarray, s: FitSettings) -> tuple[float, float, float] | None:
+    if len(points) < 5:
+        return None
+    cx, cy, r, rms = fit_circle(points)
+    if not (0.02 <= r <= s.max_radius) or rms > max(s.circle_rms, 0.1 * r):
+        return None
+    # the returns must wrap around the centre, not be a nearly straight piece of wall
+    cov = np.cov((points - points.mean(axis=0)).T)
+    ev = np.linalg.eigvalsh(cov)
+    if ev[0] < 0.05 * ev[1]:
+        return None
+    return cx, cy, r
+
+
+def _box_from_points(name: str, points: np.ndarray, viewpoint: np.ndarray, s: FitSettings,
+                     direction: np.ndarray | None = None) -> BoxObstacle:
+    """An oriented box around ``points``; a thin piece is thickened away from ``viewpoint``."""
+    centre = points.mean(axis=0)
+    if direction is None:
+        if len(points) >= 2:
+            _, vecs = np.linalg.eigh(np.cov((points - centre).T))
+            direction = vecs[:, 1]
+        else:
+            direction = np.array([1.0, 0.0])
+    d = direction / np.linalg.norm(direction)
+    n = np.array([-d[1], d[0]])
+    along = (points - centre) @ d
+    across = (points - centre) @ n
+    lo_a, hi_a = along.min() - s.res / 2, along.max() + s.res / 2
+    lo_n, hi_n = across.min() - s.res / 2, across.max() + s.res / 2
+    if hi_n - lo_n < s.wall_width:
+        side = float((viewpoint - centre) @ n)   # the viewer's side stays where it was
+        if side >= 0:
+            lo_n = hi_n - s.wall_width
+        else:
+            hi_n = lo_n + s.wall_width
+    mid = centre + d * (lo_a + hi_a) / 2 + n * (lo_n + hi_n) / 2
+    yaw = math.degrees(math.atan2(d[1], d[0]))
+    yaw = (yaw + 90.0) % 180.0 - 90.0  # a box is symmetric: keep yaw in [-90, 90)
+    return BoxObstacle(name=name, x=_r(mid[0]), y=_r(mid[1]), length=_r(hi_a - lo_a),
+                       width=_r(hi_n - lo_n), yaw=_r(yaw, 2))
+
+
+def _r(v: float, nd: int = 3) -> float:
+    return float(round(float(v), nd)) + 0.0
+
+
+def _lines(points: np.ndarray, s: FitSettings) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Split points into straight runs (Hough peak, PCA refine, split at gaps): (points, direction)."""
+    out = []
+    rest = points
+    thetas = np.radians(np.arange(0.0, 180.0, 1.0))
+    cs, sn = np.cos(thetas), np.sin(thetas)
+    for _ in range(64):
+        if len(rest) < 4:
+            break
+        rho = rest[:, 0:1] * cs + rest[:, 1:2] * sn           # (k, 180)
+        bins = np.round(rho / s.line_tol).astype(np.int64)
+        best = (0, 0, 0)
+        for j in range(len(thetas)):
+            vals, cnt = np.unique(bins[:, j], return_counts=True)
+            k = int(cnt.argmax())
+            if cnt[k] > best[0]:
+                best = (int(cnt[k]), j, int(vals[k]))
+        count, j, b = best
+        if count < 4:
+            break
+        inl = np.abs(rho[:, j] - b * s.line_tol) <= s.line_tol
+        pts = rest[inl]
+        centre = pts.mean(axis=0)
+        _, vecs = np.linalg.eigh(np.cov((pts - centre).T))
+        d = vecs[:, 1]
+        nrm = np.array([-d[1], d[0]])
+        inl = np.abs((rest - centre) @ nrm) <= s.line_tol
+        pts = rest[inl]
+        along = (pts - centre) @ d
+        order = np.argsort(along)
+        pts, along = pts[order], along[order]
+        breaks = np.nonzero(np.diff(along) > s.gap)[0] + 1
+        used = np.zeros(len(pts), bool)
+        for run_idx in np.split(np.arange(len(pts)), breaks):
+            run = pts[run_idx]
+            if len(run) >= 4 and along[run_idx[-1]] - along[run_idx[0]] >= s.min_segment:
+                out.append((run, d))
+                used[run_idx] = True
+        if not used.any():
+            break
+        keep = np.ones(len(rest), bool)
+        keep[np.nonzero(inl)[0][order[used]]] = False
+        rest = rest[keep]
+    out.append((rest, None))  # leftovers, possibly empty
+    return out
+
+
+def fit_obstacles(clusters: list[Cluster], s: FitSettings = FitSettings()) -> list[Obstacle]:
+    """Cylinders for round clusters, oriented boxes for straight runs and small leftovers."""
+    obstacles: list[Obstacle] = []
+    n_cyl = n_box = 0
+    for cl in sorted(clusters, key=lambda c: (round(float(c.points[:, 0].mean()), 3),
+                                               round(float(c.points[:, 1].mean()), 3))):
+        circle = _round(cl.points, s)
+        if circle is not None:
+            n_cyl += 1
+            obstacles.append(CylinderObstacle(name=f"pillar{n_cyl}", x=_r(circle[0]), y=_r(circle[1]),
+                                              radius=_r(circle[2])))
+            continue
+        for pts, direction in _lines(cl.points, s):
+            # leftovers of the line search (corners, stubs) are boxed per local group
+            groups = [pts] if direction is not None else [pts[g] for g in _groups(pts, 1.5 * s.res)]
+            for grp in groups:
+                if len(grp) < 3:
+                    continue
+                n_box += 1
+                obstacles.append(_box_from_points(f"wall{n_box}", grp, cl.viewpoint, s, direction))
+    return obstacles
+
+
+# ------------------------------------------------------------------ scenario
+
+def _peak_rates(od: np.ndarray, window: float = 0.5) -> tuple[float, float]:
+    """98th-percentile speed (m/s) and yaw rate (rad/s) over ``window``-second steps (odometry
+    jitter makes per-message differences useless for limits)."""
+    if len(od) < 2 or od[-1, 0] - od[0, 0] <= 0:
+        return 0.0, 0.0
+    t = np.arange(od[0, 0], od[-1, 0], window / 5)
+    if len(t) < 6:
+        return 0.0, 0.0
+    x, y = np.interp(t, od[:, 0], od[:, 1]), np.interp(t, od[:, 0], od[:, 2])
+    yaw = np.interp(t, od[:, 0], np.unwrap(od[:, 3]))
+    speed = np.hypot(x[5:] - x[:-5], y[5:] - y[:-5]) / window
+    rate = np.abs(yaw[5:] - yaw[:-5]) / window
+    return float(np.percentile(speed, 98)), float(np.percentile(rate, 98))
+
+
+@dataclass
+class BagSeed:
+    """The importer's result: the scenario, the driven path (t, x, y) and what to tell the user."""
+    scenario: Scenario
+    path: np.ndarray
+    notes: list[str]
+    mount: tuple[float, float, float] | None = None
+
+
+def decimate_path(xy: np.ndarray, tolerance: float = 0.15, min_spacing: float = 0.5) -> np.ndarray:
+    """Waypoints that follow the driven path within ``tolerance`` (Douglas-Peucker), no two
+    closer than ``min_spacing``; excludes the first and last point (start and goal)."""
+    from shapely.geometry import LineString
+    if len(xy) < 3:
+        return np.zeros((0, 2))
+    simple = np.asarray(LineString(xy).simplify(tolerance, preserve_topology=False).coords)
+    pts = [simple[0]]
+    for p in simple[1:-1]:
+        if np.hypot(*(p - pts[-1])) >= min_spacing:
+            pts.append(p)
+    inner = np.asarray(pts[1:])
+    if len(inner) and np.hypot(*(inner[-1] - simple[-1])) < min_spacing:
+        inner = inner[:-1]
+    return inner.reshape(-1, 2)
+
+
+def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_topic: str | None = None,
+                      start: float | None = None, end: float | None = None,
+                      laser_pose: tuple[float, float, float] | None = None,
+                      path_as: str = "waypoints", reference_file: str | None = None,
+                      name: str = "", settings: FitSettings = FitSettings()) -> BagSeed:
+    """Build a seed scenario from a bag (see the module docstring). ``laser_pose`` is x, y (m),
+    yaw (degrees) of the laser in the robot's base frame; ``reference_file`` is the CSV name
+    written into ``scenario.reference`` when ``path_as == "reference"``."""
+    if path_as not in ("waypoints", "reference"):
+        raise BagImportError(f"--path-as must be 'waypoints' or 'reference', got {path_as!r}")
+    data = read_bag(path, odom_topic=odom_topic, scan_topic=scan_topic, start=start, end=end)
+    notes = list(data.notes)
+    od = data.odom
+    obstacles: list[Obstacle] = []
+    mount = None
+    if data.scan_topic is not None:
+        if laser_pose is not None:
+            mount = (laser_pose[0], laser_pose[1], math.radians(laser_pose[2]))
+            how = "from --laser-pose"
+        else:
+            mount = laser_mount(data)
+            how = "from /tf_static"
+            if mount is None:
+                mount = estimate_mount(data)
+                how = (f"estimated from the scans (no /tf_static transform {data.base_frame} -> "
+                       f"{data.scan_frame}; pass --laser-pose x,y,yaw to set it)")
+        notes.append(f"laser {data.scan_frame} at x={mount[0]:.3f} y={mount[1]:.3f} "
+                     f"yaw={math.degrees(mount[2]):.1f} deg in {data.base_frame}, {how}")
+        pts, origins = project_scans(data, mount)
+        clusters, dropped = occupied_clusters(pts, origins, res=settings.res)
+        obstacles = fit_obstacles(clusters, settings)
+        n_cyl = sum(isinstance(o, CylinderObstacle) for o in obstacles)
+        notes.append(f"{len(data.scan_t)} scans, {len(pts)} returns -> {len(clusters)} clusters -> "
+                     f"{n_cyl} cylinders, {len(obstacles) - n_cyl} boxes"
+                     + (f" ({dropped} specks of < 3 cells ignored as noise)" if dropped else ""))
+    start_pose = Pose(_r(od[0, 1]), _r(od[0, 2]), _r(math.degrees(od[0, 3]), 2))
+    goal_pose = Pose(_r(od[-1, 1]), _r(od[-1, 2]), _r(math.degrees(od[-1, 3]), 2))
+    seg = np.hypot(*np.diff(od[:, 1:3], axis=0).T)
+    length = float(seg.sum())
+    duration = float(od[-1, 0] - od[0, 0])
+    speed, yaw_rate = _peak_rates(od)
+    path_rows = np.stack([od[:, 0] - od[0, 0], od[:, 1], od[:, 2]], axis=1)
+    waypoints: tuple[Pose, ...] = ()
+    reference = None
+    if path_as == "waypoints":
+        wps = decimate_path(od[:, 1:3])
+        waypoints = tuple(Pose(_r(x), _r(y)) for x, y in wps)
+    else:
+        reference = Reference(file=reference_file or "reference.csv")
+    limits = Limits(max_speed=_r(max(0.2, math.ceil(speed * 1.2 * 20) / 20), 2),
+                    max_yaw_rate=_r(max(30.0, math.ceil(math.degrees(yaw_rate) * 1.2 / 5) * 5), 1))
+    lidar = Lidar(beams=min(len(data.scan_angles), 360) if data.scan_topic else 72,
+                  range_max=_r(data.range_max if data.scan_topic and math.isfinite(data.range_max) else 8.0, 2),
+                  range_min=_r(data.range_min if data.scan_topic else 0.05, 3))
+    robot = Robot(footprint=Footprint(shape="circle", radius=0.15), drive="diff", limits=limits, lidar=lidar)
+    timeout = _r(max(30.0, math.ceil(max(duration, length / max(limits.max_speed, 0.1)) * 2.0 + 10.0)), 1)
+    scenario = Scenario(
+        mission=Mission(start=start_pose, goal=goal_pose, waypoints=waypoints,
+                        goal_tolerance=GoalTolerance(position=0.3), timeout=timeout),
+        obstacles=tuple(obstacles), robot=robot, reference=reference, name=name,
+        description=(f"Seed from {Path(path).name}: {data.odom_topic} ({length:.1f} m in {duration:.1f} s)"
+                     + (f", obstacles from {data.scan_topic}" if data.scan_topic else ", no obstacles (no scans)")
+                     + f"; frame {data.odom_frame}."),
+    )
+    notes.append(f"path {length:.1f} m in {duration:.1f} s: "
+                 + (f"{len(waypoints)} waypoints" if path_as == "waypoints" else f"reference trajectory of {len(od)} poses"))
+    return BagSeed(scenario=scenario, path=path_rows, notes=notes, mount=mount)
+
+
+# ------------------------------------------------------------------ CLI
+
+def _triple(text: str) -> tuple[float, float, float]:
+    try:
+        parts = [float(v) for v in text.split(",")]
+    except ValueError:
+        parts = []
+    if len(parts) != 3 or not all(math.isfinite(v) for v in parts):
+        raise argparse.ArgumentTypeError(f"expected x,y,yaw (metres, metres, degrees), got {text!r}")
+    return parts[0], parts[1], parts[2]
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("bag", help="ROS 1 .bag file, rosbag2 folder, or .mcap/.db3 file")
+    p.add_argument("-o", "--output", required=True, help="seed scenario YAML to write (must not look like an existing one unless --force)")
+    p.add_argument("--start", type=float, default=None, help="window start, seconds after the bag's first message")
+    p.add_argument("--end", type=float, default=None, help="window end, seconds after the bag's first message")
+    p.add_argument("--odom-topic", default=None, help="nav_msgs/Odometry topic (default: found by type)")
+    p.add_argument("--scan-topic", default=None, help="sensor_msgs/LaserScan topic (default: found by type)")
+    p.add_argument("--laser-pose", type=_triple, default=None, metavar="X,Y,YAW",
+                   help="laser pose in the odometry child frame (m, m, degrees); default /tf_static, "
+                        "else estimated from the scans")
+    p.add_argument("--path-as", choices=("waypoints", "reference"), default="waypoints",
+                   help="driven path as decimated waypoints (default) or a reference trajectory CSV beside the seed")
+    p.add_argument("--name", default="", help="scenario name (default: the output file's stem)")
+    p.add_argument("--force", action="store_true", help="overwrite an existing output file")
+
+
+def run(args: argparse.Namespace) -> int:
+    from .world_import import write_seed
+    out = Path(args.output)
+    csv_name = f"{out.stem}.reference.csv"
+    seed = scenario_from_bag(args.bag, odom_topic=args.odom_topic, scan_topic=args.scan_topic,
+                             start=args.start, end=args.end, laser_pose=args.laser_pose,
+                             path_as=args.path_as, reference_file=csv_name, name=args.name)
+    extra = {}
+    if args.path_as == "reference":
+        extra[csv_name] = reference_csv(seed.path)
+    write_seed(seed.scenario, out, extra_files=extra, force=args.force)
+    for note in seed.notes:
+        print(f"navscenario from-bag: {note}")
+    print(f"navscenario from-bag: wrote {out}" + (f" and {out.parent / csv_name}" if extra else ""))
+    return 0
+
+
+def reference_csv(rows: np.ndarray) -> str:
+    """The reference trajectory file: a ``t,x,y`` header and one row per odometry message."""
+    lines = ["t,x,y"] + [f"{t:.3f},{x:.4f},{y:.4f}" for t, x, y in rows]
+    return "\n".join(lines) + "\n"
