@@ -37,12 +37,12 @@ SUPPORTED_VERSIONS = (SCHEMA_VERSION,)
 
 #: Limits that keep hostile or absurd files from hanging or crashing a run (documented in the README).
 SCENARIO_LIMITS: Mapping[str, float] = MappingProxyType({
-    "max_file_bytes": 10_000_000,       # a scenario file larger than this is refused unread
+    "max_file_bytes": 5_000_000,       # a scenario file larger than this is refused unread
     "max_depth": 64,                    # YAML nesting levels
-    "max_nodes": 1_000_000,             # YAML values after expanding aliases (alias bombs)
+    "max_nodes": 500_000,               # YAML values after expanding aliases (alias bombs)
     "max_obstacles": 5_000,
     "max_waypoints": 1_000,
-    "max_reference_points": 100_000,
+    "max_reference_points": 50_000,
     "max_abs_value": 1e6,               # any coordinate, size, time or angle (m, s, deg)
     "max_lidar_beams": 10_000,
     "max_episode_steps": 10_000_000,    # timeout / timestep
@@ -518,28 +518,32 @@ def check_scenario(scenario: Scenario, *, _ctx: _Ctx | None = None) -> None:
 
 
 def _check_clear(scenario: Scenario, ctx: _Ctx) -> None:
-    import shapely
+    """Start and goal footprints and waypoints must not touch an obstacle (names the first one)."""
     from shapely.geometry import Point
 
-    from .geometry import footprint_polygon, obstacle_polygon
+    from .geometry import footprint_polygon, footprint_radius, obstacle_polygon
 
-    polygons = [obstacle_polygon(o) for o in scenario.obstacles]
-    tree = shapely.STRtree(polygons)
     mission = scenario.mission
     fp = scenario.robot.footprint
-    checks = [("start", mission.start, footprint_polygon(fp, mission.start.x, mission.start.y, mission.start.yaw_rad),
-               "the robot's footprint at the start"),
-              ("goal", mission.goal, footprint_polygon(fp, mission.goal.x, mission.goal.y, mission.goal.yaw_rad),
-               "the robot's footprint at the goal")]
-    checks += [(f"waypoints[{i}]", wp, Point(wp.x, wp.y), f"waypoint {i}") for i, wp in enumerate(mission.waypoints)]
-    for key, pose, shape, what in checks:
-        hits = tree.query(shape, predicate="intersects")
-        if len(hits):
-            obs = scenario.obstacles[int(min(hits))]
-            field = f"mission.{key}"
-            raise ctx.fail(f"{what} ({pose.x:g}, {pose.y:g}) overlaps obstacle {obs.name!r}", field,
-                           ctx.lines.get(field, ctx.lines.get("mission")),
-                           f"move the {key.split('[')[0].rstrip('s')} or obstacle {obs.name!r} so they are clear")
+    checks = [("start", mission.start, footprint_radius(fp), "the robot's footprint at the start"),
+              ("goal", mission.goal, footprint_radius(fp), "the robot's footprint at the goal")]
+    checks += [(f"waypoints[{i}]", wp, 0.0, f"waypoint {i}") for i, wp in enumerate(mission.waypoints)]
+    # Cheap bounding-circle test first, so thousands of obstacles cost microseconds, not polygons.
+    bounds = [(o.x, o.y, math.hypot(o.length, o.width) / 2.0 if isinstance(o, BoxObstacle) else o.radius)
+              for o in scenario.obstacles]
+    for key, pose, reach, what in checks:
+        near = [i for i, (x, y, r) in enumerate(bounds) if math.hypot(x - pose.x, y - pose.y) <= r + reach + 1e-9]
+        if not near:
+            continue
+        shape = (footprint_polygon(fp, pose.x, pose.y, pose.yaw_rad) if reach else Point(pose.x, pose.y))
+        for i in near:
+            obs = scenario.obstacles[i]
+            if shape.intersects(obstacle_polygon(obs)):
+                field = f"mission.{key}"
+                what_moves = "start" if key == "start" else "goal" if key == "goal" else "waypoint"
+                raise ctx.fail(f"{what} ({pose.x:g}, {pose.y:g}) overlaps obstacle {obs.name!r}", field,
+                               ctx.lines.get(field, ctx.lines.get("mission")),
+                               f"move the {what_moves} or obstacle {obs.name!r} so they are clear")
 
 
 # --------------------------------------------------------------------------- public API

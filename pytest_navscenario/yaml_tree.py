@@ -18,7 +18,7 @@ Every problem raises ``ScenarioError`` with the file and line; nothing else esca
 from __future__ import annotations
 
 import math
-from typing import Any, Iterator, Mapping
+from typing import Any, Mapping
 
 import yaml
 from yaml.constructor import SafeConstructor
@@ -34,6 +34,7 @@ except AttributeError:  # pragma: no cover - PyYAML without libyaml
 _MAP_TAGS = (None, "!", "tag:yaml.org,2002:map")
 _SEQ_TAGS = (None, "!", "tag:yaml.org,2002:seq")
 _MERGE_TAG = "tag:yaml.org,2002:merge"
+_STR_TAG = "tag:yaml.org,2002:str"
 
 
 class YNode:
@@ -139,27 +140,30 @@ class _Composer:
         self.loader, self.source = loader, source
         self.max_depth, self.max_nodes = max_depth, max_nodes
         self.anchors: dict[str, YNode] = {}
+        self.cache: dict[Any, tuple[Any, bool]] = {}
         # stack entries: [node, anchor, pending key (value, line) or None]
         self.stack: list[list[Any]] = []
 
     def error(self, message: str, line: int | None, hint: str | None = None) -> ScenarioError:
         return ScenarioError(message, path=self.source, line=line, hint=hint)
 
-    def events(self) -> Iterator[Any]:
-        loader = self.loader
-        while loader.check_event():
-            yield loader.get_event()
-
     def compose(self) -> YNode | None:
         self.root: YNode | None = None
         documents = 0
-        for event in self.events():
+        get_event = self.loader.get_event
+        scalar_event, alias_event = yaml.ScalarEvent, yaml.AliasEvent
+        map_start, seq_start = yaml.MappingStartEvent, yaml.SequenceStartEvent
+        map_end, seq_end = yaml.MappingEndEvent, yaml.SequenceEndEvent
+        while True:
+            event = get_event()
             kind = type(event)
+            if kind is yaml.StreamEndEvent or event is None:
+                break
             line = event.start_mark.line + 1 if event.start_mark is not None else None
-            if kind is yaml.ScalarEvent:
+            if kind is scalar_event:
                 self.attach(self.scalar(event, line), event.anchor, line)
-            elif kind is yaml.MappingStartEvent or kind is yaml.SequenceStartEvent:
-                is_map = kind is yaml.MappingStartEvent
+            elif kind is map_start or kind is seq_start:
+                is_map = kind is map_start
                 if event.tag not in (_MAP_TAGS if is_map else _SEQ_TAGS):
                     raise self.error(f"unsupported YAML tag {event.tag!r}", line,
                                      "scenario files use plain mappings and lists; remove the tag")
@@ -167,12 +171,12 @@ class _Composer:
                     raise self.error(f"the YAML nests more than {self.max_depth} levels deep", line,
                                      "a scenario needs only a few levels; this file is not a scenario")
                 self.stack.append([YMap(line) if is_map else YSeq(line), event.anchor, None])
-            elif kind is yaml.MappingEndEvent or kind is yaml.SequenceEndEvent:
+            elif kind is map_end or kind is seq_end:
                 node, anchor, _ = self.stack.pop()
                 if isinstance(node, YMap) and node.merges:
                     self.merge(node)
                 self.attach(node, anchor, line)
-            elif kind is yaml.AliasEvent:
+            elif kind is alias_event:
                 target = self.anchors.get(event.anchor)
                 if target is None:
                     raise self.error(f"alias *{event.anchor} has no finished anchor &{event.anchor} before it",
@@ -187,12 +191,23 @@ class _Composer:
 
     def scalar(self, event: Any, line: int) -> YScalar:
         tag = event.tag
-        plain = False
-        if tag is None or tag == "!":
-            tag = self.loader.resolve(ScalarNode, event.value, event.implicit)
-            plain = not event.style and tag == "tag:yaml.org,2002:str"
-        if tag == _MERGE_TAG:
-            return YScalar(_MERGE, line)
+        if tag is None or tag == "!":  # implicit: resolve as safe_load does (cached: keys repeat a lot)
+            key = (event.value, event.implicit, not event.style)
+            cached = self.cache.get(key)
+            if cached is None:
+                tag = self.loader.resolve(ScalarNode, event.value, event.implicit)
+                if tag == _MERGE_TAG:
+                    cached = (_MERGE, False)
+                else:
+                    cached = (self.construct(tag, event, line), not event.style and tag == _STR_TAG)
+                if len(self.cache) < 10_000:
+                    self.cache[key] = cached
+            return YScalar(cached[0], line, cached[1])
+        return YScalar(self.construct(tag, event, line), line, False)
+
+    def construct(self, tag: str, event: Any, line: int) -> Any:
+        if tag == _STR_TAG:
+            return event.value
         construct = SafeConstructor.yaml_constructors.get(tag)
         if construct is None:
             raise self.error(f"unsupported YAML tag {tag!r}", line,
@@ -203,7 +218,7 @@ class _Composer:
         except Exception as exc:  # bad !!int/!!binary/!!timestamp text, digit-count limits, ...
             raise self.error(f"cannot read value {event.value[:40]!r} as {tag.rsplit(':', 1)[-1]}: {exc}",
                              line, "write a plain number or string") from None
-        return YScalar(value, line, plain)
+        return value
 
     def attach(self, node: YNode, anchor: str | None, line: int) -> None:
         if anchor is not None:
