@@ -1,0 +1,148 @@
+"""plots.py: each picture is produced, has the expected size and is not blank.
+
+The episodes here are built by hand (a known trajectory through a known layout), so the tests
+check the drawing alone and run in well under a second each; the pictures from real MuJoCo
+episodes are made by benchmarks/make_pictures.py and checked by looking at them.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from pytest_navscenario.result import Collision, EpisodeResult, Metrics, Outcome, SafetyStop, Trajectory
+from pytest_navscenario.scenario import BoxObstacle, CylinderObstacle, Mission, Pose, Scenario
+
+
+def make_episode(outcome: str = "collision", *, subject: str = "dwa", bend: float = 0.6,
+                 name: str = "boxes1", family: str = "seeds") -> EpisodeResult:
+    """A 10 m run through a 2 m gap between two boxes, bending by ``bend`` m, 8 s long."""
+    scenario = Scenario(
+        mission=Mission(start=Pose(0, 0, 90), goal=Pose(0, 10, 90), waypoints=(Pose(0.5, 3),)),
+        obstacles=(BoxObstacle("box_left", -1.5, 5, 1, 1), BoxObstacle("box_right", 1.5, 5, 1, 1),
+                   CylinderObstacle("pillar", 0.8, 7.5, 0.3)),
+        name=name, family=family)
+    t = np.linspace(0.0, 8.0, 801)
+    y = 10 * t / 8 * (1.0 if outcome == "success" else 0.9)
+    x = bend * np.sin(t / 8 * 2 * math.pi)
+    pose = np.stack([x, y, np.full_like(t, math.pi / 2)], axis=1)
+    vel = np.zeros((len(t), 3))
+    vel[1:, 0] = np.hypot(np.diff(x), np.diff(y)) / np.diff(t) * (1 - 0.5 * np.sin(t[1:]) ** 2)
+    traj = Trajectory(t=t, pose=pose, velocity=vel, tick_t=t[::10], command=vel[::10],
+                      ranges=np.zeros((81, 8), np.float32), angles=np.linspace(0, 6, 8))
+    i = 400
+    metrics = Metrics(
+        min_clearance=0.84, min_clearance_obstacle="box_right", min_clearance_time=float(t[i]),
+        min_clearance_x=float(x[i]), min_clearance_y=float(y[i]), min_obstacle_gap=2.0,
+        min_gap_obstacles="box_left|box_right", path_length=10.3, shortest_path_length=10.0,
+        path_efficiency=0.97, max_deviation=0.6, mean_deviation=0.35, duration=8.0, mean_speed=1.2,
+        goal_position_error=0.5, goal_yaw_error=0.0, smoothness=0.1, angular_smoothness=0.1)
+    events: dict = {}
+    message = "success in 8.0 s"
+    if outcome == "collision":
+        events["collision"] = Collision(time=8.0, obstacle="pillar", x=float(x[-1]), y=float(y[-1]), depth=0.01)
+        message = "collision with 'pillar' at t=8.00 s (depth 10 mm)"
+    elif outcome == "safety-stop":
+        events["safety_stop"] = SafetyStop(time=7.9, obstacle="pillar", speed=0.8)
+        message = "safety stop at t=7.90 s: predicted to hit 'pillar' at 0.80 m/s"
+    return EpisodeResult(scenario=scenario, outcome=Outcome(outcome), metrics=metrics, trajectory=traj,
+                         seed=0, subject=subject, message=message, **events)
+
+
+def read_png(path):
+    from matplotlib.image import imread
+    return imread(str(path))
+
+
+def assert_picture(path, min_size=(300, 300)):
+    img = read_png(path)
+    h, w = img.shape[:2]
+    assert w >= min_size[0] and h >= min_size[1], (w, h)
+    # not blank: many distinct colours and real variance across the image
+    assert float(img[..., :3].std()) > 0.05
+    assert len(np.unique((img[..., :3] * 255).astype(np.uint8).reshape(-1, 3), axis=0)) > 50
+    return img
+
+
+def test_trajectory_plot_size_and_content(tmp_path):
+    from pytest_navscenario.plots import _figsize, save_figure, trajectory_figure
+
+    result = make_episode("collision")
+    fig = trajectory_figure(result)
+    img = assert_picture(save_figure(fig, tmp_path / "sub" / "traj.png"))
+    w_in, h_in = _figsize([result], 1)
+    assert img.shape[:2] == (round(h_in * 100), round(w_in * 100))
+    # the picture shows what the issue asks for
+    ax = fig.axes[0]
+    texts = [t.get_text() for t in ax.texts]
+    assert {"box_left", "box_right", "pillar"} <= set(texts)
+    assert any(t.startswith("min clearance 0.84 m") for t in texts)
+    assert "gap 2.00 m" in texts
+    assert "COLLISION" in ax.get_title() and "pillar" in ax.get_title()
+    assert ax.get_aspect() == 1.0 and ax.xaxis.get_gridlines()[0].get_visible()
+    assert any(a.get_label() == "speed (m/s)" or a.get_xlabel() == "speed (m/s)" for a in fig.axes[1:])
+    outlines = [c for c in ax.collections if c.get_label().startswith("footprint every")]
+    assert len(outlines[0].get_paths()) == 17   # an outline to scale every 0.5 s of the 8 s run
+    assert outlines[0].get_paths()[0].get_extents().height == pytest.approx(0.9)  # 0.9 m long, heading +y
+
+
+def test_plot_without_trajectory_still_shows_the_layout(tmp_path):
+    """Results rebuilt without a trajectory (not requested) still plot the scene and markers."""
+    from pytest_navscenario.payload import _empty_trajectory
+    from pytest_navscenario.plots import save_trajectory
+
+    result = make_episode("timeout")
+    result.trajectory = _empty_trajectory()
+    assert_picture(save_trajectory(result, tmp_path / "t.png"))
+
+
+def test_side_by_side_comparison(tmp_path):
+    from pytest_navscenario.plots import comparison_figure, save_figure
+
+    a = make_episode("collision", subject="dwa")
+    b = make_episode("success", subject="potential-field", bend=-0.3)
+    fig = comparison_figure(a, b)
+    img = assert_picture(save_figure(fig, tmp_path / "cmp.png"), min_size=(800, 500))
+    assert img.shape[1] > img.shape[0]
+    titles = [ax.get_title() for ax in fig.axes[:2]]
+    assert titles[0].startswith("A: boxes1") and "COLLISION" in titles[0]
+    assert titles[1].startswith("B: boxes1") and "SUCCESS" in titles[1]
+    assert fig.axes[0].get_xlim() == fig.axes[1].get_xlim()
+
+
+def test_bar_chart_from_a_comparison(tmp_path):
+    from pytest_navscenario.compare import compare_records
+    from pytest_navscenario.plots import bars_figure, save_figure
+    from test_compare import BASE, suite
+
+    changed = dict(BASE, **{"scenarios/boxes/b2.yaml::b2": "safety-stop",
+                            "scenarios/corridor/c1.yaml::c1": "success"})
+    cmp = compare_records(suite(BASE), suite(changed, subject="new"))
+    fig = bars_figure(cmp)
+    assert_picture(save_figure(fig, tmp_path / "bars.png"), min_size=(500, 400))
+    ax = fig.axes[0]
+    heights = sorted(round(p.get_height()) for p in ax.patches)
+    # per family (boxes, corridor, all) x (A, B) x (success up, safety-stop down)
+    assert len(ax.patches) == 12
+    assert heights[0] == -50 and heights[-1] == 67   # corridor A safety-stop, boxes success
+    assert [t.get_text().split("\n")[0] for t in ax.get_xticklabels()] == ["boxes", "corridor", "(all)"]
+
+
+def test_cli_plot_option(tmp_path, capsys):
+    from pytest_navscenario.cli import main
+    from pytest_navscenario.results import write_results
+    from test_compare import BASE, suite
+
+    write_results(tmp_path / "a.jsonl", suite(BASE))
+    write_results(tmp_path / "b.jsonl", suite(BASE, subject="new"))
+    assert main(["compare", str(tmp_path / "a.jsonl"), str(tmp_path / "b.jsonl"),
+                 "--plot", str(tmp_path / "bars.png")]) == 0
+    assert_picture(tmp_path / "bars.png")
+    assert "bar chart written to" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("raw, step", [(0.3, 0.5), (1.0, 1.0), (1.2, 2.0), (3.1, 5.0), (0.0, 1.0)])
+def test_nice_grid_steps(raw, step):
+    from pytest_navscenario.plots import _nice_step
+    assert _nice_step(raw) == step
