@@ -54,7 +54,7 @@ def compute_metrics(scenario: Scenario, trajectory: Trajectory, *,
         clear_x, clear_y = _position_at(t, xy, clear_t)
     gap, gap_a, gap_b = min_obstacle_gap(scenario)
 
-    path_length = float(np.hypot(*np.diff(xy, axis=0).T).sum()) if len(xy) > 1 else 0.0
+    path_length = float(np.sqrt(np.diff(xy[:, 0]) ** 2 + np.diff(xy[:, 1]) ** 2).sum()) if len(xy) > 1 else 0.0
     sp = shortest_path(scenario)
     shortest = sp.length if sp is not None else NAN
     efficiency = shortest / path_length if path_length > MOVED else NAN
@@ -89,41 +89,84 @@ def min_clearance(scenario: Scenario, t: np.ndarray, pose: np.ndarray
                   ) -> tuple[float, str, float, float, float]:
     """``(distance, obstacle, time, x, y)`` of the closest approach of the footprint to any
     obstacle over the poses; the earliest one on ties; ``(inf, "", nan, nan, nan)`` with no
-    obstacles or no poses."""
+    obstacles or no poses.
+
+    Exact at every pose but cheap: the distance of the robot centre to an obstacle bounds the
+    footprint's (within the footprint's outer and inner radius). A pass over every
+    ``COARSE_STRIDE``-th pose, widened by how far the robot moves around it, keeps the windows
+    that may hold the minimum; a full-rate centre pass inside them keeps the poses that may;
+    only those get the exact box-to-box distance.
+    """
     shapes = obstacle_shapes(scenario.obstacles)
     pose = np.asarray(pose, dtype=float).reshape(-1, 3)
-    if not len(shapes) or not len(pose):
+    n, k = len(pose), len(shapes)
+    if not k or not n:
         return math.inf, "", NAN, NAN, NAN
     hl, hw, rho = footprint_core(scenario.robot.footprint)
-    px, py = pose[:, 0:1], pose[:, 1:2]
-    # distance of the robot centre to each obstacle: bounds the footprint's distance
-    centre = point_box_distance(px, py, shapes.x, shapes.y, shapes.cos, shapes.sin,
-                                shapes.hl, shapes.hw) - shapes.rho          # (n, k)
-    lower = centre - (math.hypot(hl, hw) + rho)     # the footprint reaches at most this far
-    upper = np.maximum(centre - (min(hl, hw) + rho), 0.0)   # ... and at least this far
-    ii, kk = np.nonzero(lower <= upper.min() + 1e-12)
-    yaw = pose[ii, 2]
-    exact = box_box_distance(pose[ii, 0], pose[ii, 1], np.cos(yaw), np.sin(yaw), hl, hw,
+    r_out, r_in = math.hypot(hl, hw) + rho, min(hl, hw) + rho
+    ox, oy, oc, os_, ohl, ohw, orho = (a[:, None] for a in (
+        shapes.x, shapes.y, shapes.cos, shapes.sin, shapes.hl, shapes.hw, shapes.rho))
+    x, y = pose[:, 0], pose[:, 1]
+    # 1. every S-th pose; window w = poses [w*S, (w+1)*S), which stay within reach[w] of pose w*S
+    stride = COARSE_STRIDE
+    nw = -(-n // stride)
+    rep = np.arange(n) // stride * stride
+    away = np.sqrt((x - x[rep]) ** 2 + (y - y[rep]) ** 2)
+    reach = np.maximum.reduceat(away, np.arange(0, n, stride))
+    centre = _centre_distance(x[::stride], y[::stride], ox, oy, oc, os_, ohl, ohw, orho)  # (k, nw)
+    bound = np.maximum(centre - r_in, 0.0).min()
+    kw, ww = np.nonzero(centre - reach - r_out <= bound + 1e-12)
+    # 2. every pose of the kept windows
+    idx = (ww[:, None] * stride + np.arange(stride)).ravel()
+    kk = np.repeat(kw, stride)
+    inside = idx < n
+    idx, kk = idx[inside], kk[inside]
+    centre = _centre_distance(x[idx], y[idx], shapes.x[kk], shapes.y[kk], shapes.cos[kk], shapes.sin[kk],
+                              shapes.hl[kk], shapes.hw[kk], shapes.rho[kk])
+    bound = min(bound, np.maximum(centre - r_in, 0.0).min())
+    keep = centre - r_out <= bound + 1e-12
+    idx, kk = idx[keep], kk[keep]
+    order = np.lexsort((kk, idx))   # time first: the first minimum is the earliest
+    idx, kk = idx[order], kk[order]
+    # 3. exact footprint-obstacle distance
+    yaw = pose[idx, 2]
+    exact = box_box_distance(x[idx], y[idx], np.cos(yaw), np.sin(yaw), hl, hw,
                              shapes.x[kk], shapes.y[kk], shapes.cos[kk], shapes.sin[kk],
                              shapes.hl[kk], shapes.hw[kk])
     exact = np.maximum(exact - rho - shapes.rho[kk], 0.0)
-    best = int(np.argmin(exact))        # candidates are in time order: first minimum = earliest
-    i, k = int(ii[best]), int(kk[best])
-    return float(exact[best]), shapes.names[k], float(t[i]), float(pose[i, 0]), float(pose[i, 1])
+    best = int(np.argmin(exact))
+    i, j = int(idx[best]), int(kk[best])
+    return float(exact[best]), shapes.names[j], float(t[i]), float(x[i]), float(y[i])
+
+
+COARSE_STRIDE = 10  # poses per window of the coarse clearance pass
+
+
+def _centre_distance(px, py, bx, by, bc, bs, bhl, bhw, brho):
+    """Distance from points to rounded boxes (negative inside a cylinder); broadcasts."""
+    dx = px - bx
+    dy = py - by
+    u = np.maximum(np.abs(dx * bc + dy * bs) - bhl, 0.0)
+    v = np.maximum(np.abs(dy * bc - dx * bs) - bhw, 0.0)
+    return np.sqrt(u * u + v * v) - brho
 
 
 def polyline_distance(points: np.ndarray, line: np.ndarray) -> np.ndarray:
     """Distance of each of the (n, 2) points to the polyline through the (m, 2) vertices."""
     points = np.asarray(points, dtype=float).reshape(-1, 2)
     line = np.asarray(line, dtype=float).reshape(-1, 2)
+    px, py = points[:, 0], points[:, 1]
     if len(line) == 1:
-        return np.hypot(*(points - line[0]).T)
-    a, d = line[:-1], np.diff(line, axis=0)                       # (s, 2)
-    seg2 = np.maximum((d * d).sum(1), 1e-300)
-    rel = points[:, None, :] - a[None]                            # (n, s, 2)
-    u = np.clip((rel * d).sum(2) / seg2, 0.0, 1.0)
-    off = rel - u[..., None] * d
-    return np.sqrt((off * off).sum(2).min(1))
+        return np.sqrt((px - line[0, 0]) ** 2 + (py - line[0, 1]) ** 2)
+    ax, ay = line[:-1, 0:1], line[:-1, 1:2]                       # (s, 1)
+    dx, dy = np.diff(line[:, 0])[:, None], np.diff(line[:, 1])[:, None]
+    inv = 1.0 / np.maximum(dx * dx + dy * dy, 1e-300)
+    rx = px - ax                                                  # (s, n)
+    ry = py - ay
+    u = np.clip((rx * dx + ry * dy) * inv, 0.0, 1.0)
+    rx -= u * dx
+    ry -= u * dy
+    return np.sqrt((rx * rx + ry * ry).min(axis=0))
 
 
 def wrap_angle(a: float) -> float:
@@ -138,18 +181,22 @@ def smoothness(t: np.ndarray, pose: np.ndarray, velocity: np.ndarray) -> tuple[f
     t = np.asarray(t, dtype=float)
     if len(t) < 2:
         return NAN, NAN
-    keep = np.concatenate([[True], np.diff(t) > 0])
-    t, pose, velocity = t[keep], pose[keep], velocity[keep]
-    c, s = np.cos(pose[:, 2]), np.sin(pose[:, 2])
-    vw = np.column_stack([c * velocity[:, 0] - s * velocity[:, 1], s * velocity[:, 0] + c * velocity[:, 1]])
+    if not (np.diff(t) > 0).all():
+        keep = np.concatenate([[True], np.diff(t) > 0])
+        t, pose, velocity = t[keep], pose[keep], velocity[keep]
+    yaw = pose[:, 2]
+    c, s = np.cos(yaw), np.sin(yaw)
+    vx, vy, wz = velocity[:, 0], velocity[:, 1], velocity[:, 2]
+    wx = c * vx - s * vy                                  # world-frame velocity
+    wy = s * vx + c * vy
     dt = np.diff(t)
-    ang = float(np.abs(np.diff(velocity[:, 2]) / dt).mean()) if len(dt) else NAN
+    ang = float(np.abs(np.diff(wz) / dt).mean()) if len(dt) else NAN
     if len(t) < 3:
         return NAN, ang
-    acc = np.diff(vw, axis=0) / dt[:, None]
-    tm = 0.5 * (t[1:] + t[:-1])
-    jerk = np.diff(acc, axis=0) / np.diff(tm)[:, None]
-    return float(np.hypot(jerk[:, 0], jerk[:, 1]).mean()), ang
+    ax, ay = np.diff(wx) / dt, np.diff(wy) / dt
+    dtm = 0.5 * (t[2:] - t[:-2])                          # spacing of the acceleration samples
+    jx, jy = np.diff(ax) / dtm, np.diff(ay) / dtm
+    return float(np.sqrt(jx * jx + jy * jy).mean()), ang
 
 
 # --------------------------------------------------------------------------------------------

@@ -23,7 +23,7 @@ corner it wraps than the true optimum. Gaps narrower than ``robot width + 2 x to
 rounded corner may be judged closed.
 
 Algorithm: reduced visibility graph (only edges tangent to the convex grown polygons at their
-ends) + Dijkstra, vectorised with numpy. Results are cached on the exact inputs (footprint,
+ends) + A*, vectorised with numpy. Results are cached on the exact inputs (footprint,
 start, waypoints, goal, obstacles): hashing those frozen dataclasses costs ~3 us where
 ``content_hash`` costs ~0.3 ms, and the answer does not depend on anything else.
 """
@@ -187,30 +187,79 @@ def inflation_radius(footprint: Footprint) -> float:
 def inflated_polygon(obs: Obstacle, r: float, tol: float = INFLATION_TOLERANCE) -> np.ndarray:
     """Counter-clockwise vertices ((m, 2) array) of a convex polygon containing ``obs`` grown
     by ``r``: exact on straight sides, round parts circumscribed within ``tol``."""
-    if isinstance(obs, CylinderObstacle):
-        big = obs.radius + r
-        n = int(np.clip(math.ceil(math.pi / math.acos(big / (big + tol))), 8, 64))
-        ang = (np.arange(n) + 0.5) * (2 * math.pi / n)
-        rad = big / math.cos(math.pi / n)
-        return np.column_stack([obs.x + rad * np.cos(ang), obs.y + rad * np.sin(ang)])
-    hl, hw = obs.length / 2.0, obs.width / 2.0
-    if r <= 0:
-        local = np.array([(hl, -hw), (hl, hw), (-hl, hw), (-hl, -hw)])
-    else:
-        q = int(np.clip(math.ceil((math.pi / 2) / (2 * math.acos(r / (r + tol)))), 1, 8))
+    grown = _grow((obs,), r, tol)
+    return grown.verts[0, : grown.sizes[0]].copy()
+
+
+@dataclass(frozen=True)
+class _Grown:
+    """Grown obstacles as padded arrays: polygon j has ``sizes[j]`` vertices ``verts[j]``
+    (padding repeats the last one), edge i of it is the half-plane normals[j, i] . p <= offsets[j, i],
+    ``prev``/``after`` the neighbouring vertices, and a bounding circle (centre, radius)."""
+    verts: np.ndarray
+    prev: np.ndarray
+    after: np.ndarray
+    normals: np.ndarray
+    offsets: np.ndarray
+    sizes: np.ndarray
+    centre: np.ndarray
+    radius: np.ndarray
+
+
+def _grow(obstacles: Sequence[Obstacle], r: float, tol: float = INFLATION_TOLERANCE) -> _Grown:
+    groups = []  # (verts (g, m, 2), normals (g, m, 2), offsets (g, m), centre (g, 2), radius (g,))
+    boxes = [o for o in obstacles if isinstance(o, BoxObstacle)]
+    if boxes:
+        q = 1 if r <= 0 else int(np.clip(math.ceil((math.pi / 2) / (2 * math.acos(r / (r + tol)))), 1, 8))
         step = (math.pi / 2) / q
-        rad = r / math.cos(step / 2)
-        pts = []
-        for k, (cx, cy) in enumerate(((hl, -hw), (hl, hw), (-hl, hw), (-hl, -hw))):
-            start = -math.pi / 2 + k * math.pi / 2
-            for j in range(q):
-                a = start + (j + 0.5) * step
-                pts.append((cx + rad * math.cos(a), cy + rad * math.sin(a)))
-        local = np.array(pts)
-    yaw = math.radians(obs.yaw)
-    c, s = math.cos(yaw), math.sin(yaw)
-    return np.column_stack([obs.x + c * local[:, 0] - s * local[:, 1],
-                            obs.y + s * local[:, 0] + c * local[:, 1]])
+        i = np.arange(4 * q)
+        corner = np.array([(1.0, -1.0), (1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0)])[i // q]    # (m, 2)
+        vang = -math.pi / 2 + (i + 0.5) * step
+        nang = -math.pi / 2 + (i + 1) * step
+        arc = (max(r, 0.0) / math.cos(step / 2)) * np.column_stack([np.cos(vang), np.sin(vang)])
+        lnorm = np.column_stack([np.cos(nang), np.sin(nang)])
+        b = np.array([(o.x, o.y, o.length / 2, o.width / 2, math.radians(o.yaw)) for o in boxes])
+        local = corner[None] * b[:, None, 2:4] + arc[None]                               # (g, m, 2)
+        c, s_ = np.cos(b[:, 4])[:, None], np.sin(b[:, 4])[:, None]
+        verts = np.stack([b[:, 0:1] + c * local[..., 0] - s_ * local[..., 1],
+                          b[:, 1:2] + s_ * local[..., 0] + c * local[..., 1]], axis=-1)
+        normals = np.stack([c * lnorm[:, 0] - s_ * lnorm[:, 1], s_ * lnorm[:, 0] + c * lnorm[:, 1]], axis=-1)
+        offsets = (normals * verts).sum(-1)
+        radius = np.sqrt((local ** 2).sum(-1)).max(1)
+        groups.append((verts, normals, offsets, b[:, :2], radius))
+    cyls = [o for o in obstacles if isinstance(o, CylinderObstacle)]
+    by_count: dict[int, list[CylinderObstacle]] = {}
+    for o in cyls:
+        big = o.radius + r
+        n = int(np.clip(math.ceil(math.pi / math.acos(big / (big + tol))), 8, 64))
+        by_count.setdefault(n, []).append(o)
+    for n, group in by_count.items():
+        cb = np.array([(o.x, o.y, o.radius + r) for o in group])
+        j = np.arange(n)
+        vdir = np.column_stack([np.cos((j + 0.5) * 2 * math.pi / n), np.sin((j + 0.5) * 2 * math.pi / n)])
+        ndir = np.column_stack([np.cos((j + 1.0) * 2 * math.pi / n), np.sin((j + 1.0) * 2 * math.pi / n)])
+        rad = cb[:, 2] / math.cos(math.pi / n)
+        verts = cb[:, None, :2] + rad[:, None, None] * vdir[None]
+        normals = np.broadcast_to(ndir, (len(group), n, 2))
+        offsets = (normals * cb[:, None, :2]).sum(-1) + cb[:, 2:3]
+        groups.append((verts, normals, offsets, cb[:, :2], rad))
+    mmax = max(g[0].shape[1] for g in groups)
+
+    def pad(a: np.ndarray) -> np.ndarray:
+        extra = mmax - a.shape[1]
+        return a if extra == 0 else np.concatenate([a, np.repeat(a[:, -1:], extra, axis=1)], axis=1)
+
+    verts = np.concatenate([pad(g[0]) for g in groups])
+    return _Grown(
+        verts=verts,
+        prev=np.concatenate([pad(np.roll(g[0], 1, axis=1)) for g in groups]),
+        after=np.concatenate([pad(np.roll(g[0], -1, axis=1)) for g in groups]),
+        normals=np.concatenate([pad(g[1]) for g in groups]),
+        offsets=np.concatenate([pad(g[2]) for g in groups]),
+        sizes=np.concatenate([np.full(len(g[0]), g[0].shape[1]) for g in groups]),
+        centre=np.concatenate([g[3] for g in groups]),
+        radius=np.concatenate([g[4] for g in groups]),
+    )
 
 
 def shortest_path(scenario: Scenario) -> ShortestPath | None:
@@ -225,8 +274,7 @@ def shortest_path(scenario: Scenario) -> ShortestPath | None:
     except KeyError:
         pass
     stops = np.array([key[1], *key[2], key[3]], dtype=float)
-    polys = [inflated_polygon(o, inflation_radius(scenario.robot.footprint)) for o in scenario.obstacles]
-    result = _plan(stops, polys)
+    result = _plan(stops, scenario.obstacles, inflation_radius(scenario.robot.footprint))
     _remember(_PATH_CACHE, key, result)
     return result
 
@@ -243,106 +291,92 @@ def clear_caches() -> None:
     _SHAPES_CACHE.clear()
 
 
-def _plan(stops: np.ndarray, polys: list[np.ndarray]) -> ShortestPath | None:
-    if not polys:
+def _plan(stops: np.ndarray, obstacles: Sequence[Obstacle], r: float) -> ShortestPath | None:
+    if not obstacles:
         return _make_path(stops)
-    k = len(polys)
-    sizes = np.array([len(p) for p in polys])
-    mmax = int(sizes.max())
-    # padded (k, mmax, 2) vertices and half-planes n.x <= d (padding repeats the last row)
-    verts = np.stack([np.concatenate([p, np.repeat(p[-1:], mmax - len(p), 0)]) for p in polys])
-    normals = np.empty_like(verts)
-    offsets = np.empty(verts.shape[:2])
-    for j, p in enumerate(polys):
-        e = np.roll(p, -1, 0) - p
-        nrm = np.column_stack([e[:, 1], -e[:, 0]]) / np.hypot(e[:, 0], e[:, 1])[:, None]
-        pad = mmax - len(p)
-        normals[j] = np.concatenate([nrm, np.repeat(nrm[-1:], pad, 0)])
-        offsets[j] = np.concatenate([(nrm * p).sum(1), np.repeat((nrm[-1] * p[-1]).sum(), pad)])
+    g = _grow(obstacles, r)
+    k, mmax = g.offsets.shape
 
-    def inside(points: np.ndarray) -> np.ndarray:  # (n, k) strictly inside polygon j
-        proj = np.einsum("kmc,nc->nkm", normals, points)
-        return (proj < offsets[None] - 1e-7).all(axis=2)
+    def inside(points: np.ndarray) -> np.ndarray:  # (n, k): strictly inside polygon j
+        proj = np.einsum("kmc,nc->nkm", g.normals, points)
+        return (proj < g.offsets[None] - 1e-7).all(axis=2)
 
     if inside(stops).any():
         return None
-    # nodes: the mission stops, then polygon vertices not buried inside another polygon
-    owner = np.repeat(np.arange(k), sizes)
-    allv = np.concatenate(polys)
-    prev = np.concatenate([np.roll(p, 1, 0) for p in polys])
-    after = np.concatenate([np.roll(p, -1, 0) for p in polys])
+    # nodes: the mission stops, then the polygon vertices not buried inside another polygon
+    valid = np.arange(mmax)[None, :] < g.sizes[:, None]
+    owner = np.broadcast_to(np.arange(k)[:, None], valid.shape)[valid]
+    allv = g.verts[valid]
     buried = inside(allv)
     buried[np.arange(len(allv)), owner] = False
     keep = ~buried.any(axis=1)
     ns = len(stops)
     nodes = np.concatenate([stops, allv[keep]])
-    owner = np.concatenate([np.full(ns, -1), owner[keep]])
-    prev = np.concatenate([stops, prev[keep]])
-    after = np.concatenate([stops, after[keep]])
-    n = len(nodes)
-    i, j = np.triu_indices(n, 1)
+    prev = np.concatenate([stops, g.prev[valid][keep]])
+    after = np.concatenate([stops, g.after[valid][keep]])
+    # reduced visibility graph: at a polygon vertex an edge must be tangent to its polygon
+    # (both neighbours on one side of it); tangent[i, j] for the end at node i
+    x, y = nodes[:, 0], nodes[:, 1]
+    ea, eb = prev - nodes, after - nodes
+    fa = x[None, :] * ea[:, 1:2] - y[None, :] * ea[:, 0:1] - (x * ea[:, 1] - y * ea[:, 0])[:, None]
+    fb = x[None, :] * eb[:, 1:2] - y[None, :] * eb[:, 0:1] - (x * eb[:, 1] - y * eb[:, 0])[:, None]
+    d2 = (x[None, :] - x[:, None]) ** 2 + (y[None, :] - y[:, None]) ** 2
+    scale = np.sqrt((ea * ea).sum(1) * (eb * eb).sum(1))[:, None]
+    tangent = fa * fb >= -1e-12 * scale * d2
+    i, j = np.nonzero(np.triu(tangent & tangent.T, 1))
     p, q = nodes[i], nodes[j]
-    d = q - p
-    # reduced visibility graph: at a polygon vertex the edge must be tangent to its polygon
-    ok = _tangent(d, p, prev[i], after[i]) & _tangent(-d, q, prev[j], after[j])
-    i, j, p, q, d = i[ok], j[ok], p[ok], q[ok], d[ok]
-    free = _segments_free(p, q, d, verts, normals, offsets, sizes)
+    free = _segments_free(p, q, g)
     i, j = i[free], j[free]
-    length = np.hypot(*(nodes[j] - nodes[i]).T)
-    adj: list[list[tuple[int, float]]] = [[] for _ in range(n)]
+    length = np.sqrt(d2[i, j])
+    adj: list[list[tuple[int, float]]] = [[] for _ in range(len(nodes))]
     for a, b, w in zip(i.tolist(), j.tolist(), length.tolist()):
         adj[a].append((b, w))
         adj[b].append((a, w))
     route = [0]
     for leg in range(ns - 1):
-        hops = _dijkstra(adj, leg, leg + 1)
+        hops = _astar(adj, nodes, leg, leg + 1)
         if hops is None:
             return None
         route.extend(hops[1:])
     return _make_path(nodes[route])
 
 
-def _tangent(d, v, a, b) -> np.ndarray:
-    """Does the line through vertex v along d leave both neighbours a, b on one side?
-    (Always true for mission stops, whose neighbours are themselves.)"""
-    c1 = d[:, 0] * (a[:, 1] - v[:, 1]) - d[:, 1] * (a[:, 0] - v[:, 0])
-    c2 = d[:, 0] * (b[:, 1] - v[:, 1]) - d[:, 1] * (b[:, 0] - v[:, 0])
-    scale = np.hypot(d[:, 0], d[:, 1])
-    return c1 * c2 >= -1e-12 * scale * scale
-
-
-def _segments_free(p, q, d, verts, normals, offsets, sizes) -> np.ndarray:
-    """For each segment p->q: does it stay out of the interior of every convex polygon?"""
-    centre = np.array([v[: s].mean(0) for v, s in zip(verts, sizes)])
-    radius = np.array([np.hypot(*(v[: s] - c).T).max() for v, s, c in zip(verts, sizes, centre)])
-    # broad phase: segment to bounding-circle distance
-    seg2 = np.maximum((d * d).sum(1), 1e-300)
-    rel = centre[None, :, :] - p[:, None, :]                              # (e, k, 2)
-    t = np.clip((rel * d[:, None, :]).sum(2) / seg2[:, None], 0.0, 1.0)
-    gap = np.hypot(*(rel - t[..., None] * d[:, None, :]).transpose(2, 0, 1))
-    e, jj = np.nonzero(gap < radius[None, :] - 1e-7)
+def _segments_free(p: np.ndarray, q: np.ndarray, g: _Grown) -> np.ndarray:
+    """For each segment p->q: does it stay out of the interior of every grown polygon?
+    Broad phase on bounding circles, then the separating-axis test (polygon edge normals
+    and the segment's own normal)."""
+    d = q - p
+    seg2 = np.maximum((d * d).sum(1), 1e-300)[:, None]
+    rx = g.centre[None, :, 0] - p[:, 0:1]                                  # (e, k)
+    ry = g.centre[None, :, 1] - p[:, 1:2]
+    t = np.clip((rx * d[:, 0:1] + ry * d[:, 1:2]) / seg2, 0.0, 1.0)
+    gx, gy = rx - t * d[:, 0:1], ry - t * d[:, 1:2]
+    e, jj = np.nonzero(gx * gx + gy * gy < (g.radius[None, :] - 1e-7) ** 2)
     if len(e) == 0:
         return np.ones(len(p), dtype=bool)
-    nrm, off, vv = normals[jj], offsets[jj], verts[jj]                    # (c, m, ...)
+    nrm, off, vv = g.normals[jj], g.offsets[jj], g.verts[jj]              # (c, m, ...)
     pp, qq, dd = p[e], q[e], d[e]
-    sep_poly = (((nrm * pp[:, None, :]).sum(2) >= off - _TOL)
-                & ((nrm * qq[:, None, :]).sum(2) >= off - _TOL)).any(1)
-    side = dd[:, None, 0] * (vv[..., 1] - pp[:, None, 1]) - dd[:, None, 1] * (vv[..., 0] - pp[:, None, 0])
-    slack = _TOL * np.sqrt(seg2[e])[:, None]
+    sep_poly = (((nrm[..., 0] * pp[:, 0:1] + nrm[..., 1] * pp[:, 1:2]) >= off - _TOL)
+                & ((nrm[..., 0] * qq[:, 0:1] + nrm[..., 1] * qq[:, 1:2]) >= off - _TOL)).any(1)
+    side = dd[:, 0:1] * (vv[..., 1] - pp[:, 1:2]) - dd[:, 1:2] * (vv[..., 0] - pp[:, 0:1])
+    slack = _TOL * np.sqrt(seg2[e])
     sep_line = (side >= -slack).all(1) | (side <= slack).all(1)
-    blocked = ~(sep_poly | sep_line)
     free = np.ones(len(p), dtype=bool)
-    free[e[blocked]] = False
+    free[e[~(sep_poly | sep_line)]] = False
     return free
 
 
-def _dijkstra(adj: list[list[tuple[int, float]]], src: int, dst: int) -> list[int] | None:
-    dist = {src: 0.0}
+def _astar(adj: list[list[tuple[int, float]]], nodes: np.ndarray, src: int, dst: int) -> list[int] | None:
+    """Shortest hop sequence src -> dst (A* with the straight-line distance, which is exact
+    Dijkstra order for this consistent heuristic), or None if dst is unreachable."""
+    gx, gy = float(nodes[dst, 0]), float(nodes[dst, 1])
+    xs, ys = nodes[:, 0].tolist(), nodes[:, 1].tolist()
+    cost = {src: 0.0}
     back: dict[int, int] = {}
-    heap = [(0.0, src)]
+    heap = [(math.hypot(xs[src] - gx, ys[src] - gy), 0.0, src)]
     done = set()
     while heap:
-        du, u = heapq.heappop(heap)
+        _, du, u = heapq.heappop(heap)
         if u in done:
             continue
         if u == dst:
@@ -354,10 +388,10 @@ def _dijkstra(adj: list[list[tuple[int, float]]], src: int, dst: int) -> list[in
         done.add(u)
         for v, w in adj[u]:
             nd = du + w
-            if nd < dist.get(v, math.inf):
-                dist[v] = nd
+            if nd < cost.get(v, math.inf):
+                cost[v] = nd
                 back[v] = u
-                heapq.heappush(heap, (nd, v))
+                heapq.heappush(heap, (nd + math.hypot(xs[v] - gx, ys[v] - gy), nd, v))
     return None
 
 
