@@ -22,11 +22,12 @@ from .state import get_state
 _TOP_KEY = re.compile(r"^(version|mission)\s*:", re.MULTILINE)
 
 
-def _fallback_looks_like(text: str) -> bool:
+def _fallback_looks_like(data: str | bytes) -> bool:
+    text = data.decode("utf-8", "replace") if isinstance(data, bytes) else data
     return {m.group(1) for m in _TOP_KEY.finditer(text)} == {"version", "mission"}
 
 
-def looks_like_scenario_text(text: str) -> bool:
+def looks_like_scenario_text(text: str | bytes) -> bool:
     """True if ``text`` is (meant to be) a scenario: the loader's check, or top-level keys."""
     try:
         from .loader import looks_like_scenario
@@ -45,17 +46,12 @@ def collect_file(file_path: Path, parent: pytest.Collector) -> "ScenarioFile | N
     if not any(fnmatch.fnmatch(name, g) for g in globs):
         return None
     try:
-        text = file_path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError):
-        # Unreadable or binary: only a scenario if its name says so; loading reports the reason.
-        return ScenarioFile.from_parent(parent, path=file_path) if _named_like_scenario(name) else None
-    if not looks_like_scenario_text(text):
+        data = file_path.read_bytes()
+    except OSError:
+        return None  # unreadable: pytest cannot use it either; nothing suggests it is a scenario
+    if not looks_like_scenario_text(data):
         return None
     return ScenarioFile.from_parent(parent, path=file_path)
-
-
-def _named_like_scenario(name: str) -> bool:
-    return name.endswith((".scenario.yaml", ".scenario.yml"))
 
 
 def rel_path(config: pytest.Config, path: Path) -> str:
@@ -192,14 +188,16 @@ class ScenarioItem(pytest.Item):
         version = f" {r.subject_version}" if r.subject_version else ""
         lines.append(f"  subject:       {r.subject}{version}, episode seed {r.seed}")
         lines.append(f"  scenario:      {self.rel_path}")
-        artifacts = get_state(self.config).settings.artifacts
-        if artifacts is not None:
-            lines.append(f"  artifacts:     {artifacts} (scenario as run + trajectory)")
+        from .artifacts import item_dir
+        folder = item_dir(self.config, self.nodeid)
+        if folder is not None:
+            lines.append(f"  artifacts:     {folder}")
         lines.append(f"reproduce: {self.reproduce_command()}")
         if r.subject_failure is not None and r.subject_failure.traceback:
             lines.append("planner traceback:")
             lines.append(r.subject_failure.traceback.rstrip())
         return "\n".join(lines)
 
-    def reportinfo(self) -> tuple[Path, int | None, str]:
-        return self.path, None, f"scenario {self.name} ({self.scenario.family or 'no family'})"
+    def reportinfo(self) -> tuple[Path, int, str]:
+        # line 0 (shown as 1): pytest needs a line for skip reports
+        return self.path, 0, f"scenario {self.name} ({self.scenario.family or 'no family'})"
