@@ -369,6 +369,7 @@ class FitSettings:
     gap: float = 0.3              # m, a wall line breaks at gaps wider than this
     min_segment: float = 0.2      # m, shorter wall pieces are left to the box fallback
     wall_width: float = 0.15      # m, thickness of a wall box (only its near face is seen)
+    max_block: float = 2.5        # m, longest side of a cluster fitted as one solid box
 
 
 def _round(points: np.ndarray, s: FitSettings) -> tuple[float, float, float] | None:
@@ -465,8 +466,39 @@ def _lines(points: np.ndarray, s: FitSettings) -> list[tuple[np.ndarray, np.ndar
     return out
 
 
-def fit_obstacles(clusters: list[Cluster], s: FitSettings = FitSettings()) -> list[Obstacle]:
-    """Cylinders for round clusters, oriented boxes for straight runs and small leftovers."""
+def _compact_box(points: np.ndarray, free_xy: np.ndarray | None, s: FitSettings) -> BoxObstacle | None:
+    """One oriented box for a cluster that outlines a solid block seen from two or more sides:
+    its minimum rotated rectangle is small, thick, hugged by the returns and holds no pose the
+    robot drove through (so a corner of walls around the robot is not filled in)."""
+    import shapely
+    from shapely.geometry import MultiPoint
+
+    if len(points) < 6:
+        return None
+    rect = MultiPoint(points).minimum_rotated_rectangle
+    if rect.geom_type != "Polygon":
+        return None
+    xy = np.asarray(rect.exterior.coords)[:4]
+    e1, e2 = xy[1] - xy[0], xy[2] - xy[1]
+    a, b = float(np.hypot(*e1)), float(np.hypot(*e2))
+    if min(a, b) < 3 * s.res or max(a, b) > s.max_block:
+        return None
+    if np.mean(shapely.distance(rect.exterior, shapely.points(points))) > s.res:
+        return None
+    if free_xy is not None and len(free_xy) and shapely.contains_xy(rect, free_xy[:, 0], free_xy[:, 1]).any():
+        return None
+    d = e1 if a >= b else e2
+    yaw = (math.degrees(math.atan2(d[1], d[0])) + 90.0) % 180.0 - 90.0
+    c = xy.mean(axis=0)
+    return BoxObstacle(name="", x=_r(c[0]), y=_r(c[1]), length=_r(max(a, b)), width=_r(min(a, b)), yaw=_r(yaw, 2))
+
+
+def fit_obstacles(clusters: list[Cluster], s: FitSettings = FitSettings(),
+                  free_xy: np.ndarray | None = None) -> list[Obstacle]:
+    """Cylinders for round clusters, one box for a compact block, else oriented boxes for the
+    straight runs and small leftovers. ``free_xy``: positions the robot drove through."""
+    import dataclasses
+
     obstacles: list[Obstacle] = []
     n_cyl = n_box = 0
     for cl in sorted(clusters, key=lambda c: (round(float(c.points[:, 0].mean()), 3),
@@ -477,6 +509,11 @@ def fit_obstacles(clusters: list[Cluster], s: FitSettings = FitSettings()) -> li
             obstacles.append(CylinderObstacle(name=f"pillar{n_cyl}", x=_r(circle[0]), y=_r(circle[1]),
                                               radius=_r(circle[2])))
             continue
+        block = _compact_box(cl.points, free_xy, s)
+        if block is not None:
+            n_box += 1
+            obstacles.append(dataclasses.replace(block, name=f"box{n_box}"))
+            continue
         for pts, direction in _lines(cl.points, s):
             # leftovers of the line search (corners, stubs) are boxed per local group
             groups = [pts] if direction is not None else [pts[g] for g in _groups(pts, 1.5 * s.res)]
@@ -485,7 +522,29 @@ def fit_obstacles(clusters: list[Cluster], s: FitSettings = FitSettings()) -> li
                     continue
                 n_box += 1
                 obstacles.append(_box_from_points(f"wall{n_box}", grp, cl.viewpoint, s, direction))
-    return obstacles
+    kept = _drop_contained(obstacles)
+    counts: dict[str, int] = {}
+    named = []
+    for o in kept:  # number each kind 1, 2, ... again after the drop
+        prefix = o.name.rstrip("0123456789")
+        counts[prefix] = counts.get(prefix, 0) + 1
+        named.append(dataclasses.replace(o, name=f"{prefix}{counts[prefix]}"))
+    return named
+
+
+def _drop_contained(obstacles: list[Obstacle], share: float = 0.5) -> list[Obstacle]:
+    """Leave out a piece that lies mostly (``share`` of its area or more) inside a larger obstacle: the
+    stray returns at a block's corner otherwise become a sliver stuck to the block."""
+    from .geometry import obstacle_polygon
+
+    polys = [obstacle_polygon(o) for o in obstacles]
+    keep = []
+    for i, (o, p) in enumerate(zip(obstacles, polys)):
+        inside = any(j != i and q.area > p.area and p.intersection(q).area >= share * p.area
+                     for j, q in enumerate(polys))
+        if not inside:
+            keep.append(o)
+    return keep
 
 
 # ------------------------------------------------------------------ scenario
@@ -561,7 +620,7 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
                      f"yaw={math.degrees(mount[2]):.1f} deg in {data.base_frame}, {how}")
         pts, origins = project_scans(data, mount)
         clusters, dropped = occupied_clusters(pts, origins, res=settings.res)
-        obstacles = fit_obstacles(clusters, settings)
+        obstacles = fit_obstacles(clusters, settings, free_xy=od[:, 1:3])
         n_cyl = sum(isinstance(o, CylinderObstacle) for o in obstacles)
         notes.append(f"{len(data.scan_t)} scans, {len(pts)} returns -> {len(clusters)} clusters -> "
                      f"{n_cyl} cylinders, {len(obstacles) - n_cyl} boxes"
