@@ -192,8 +192,30 @@ def _mutate_obstacle(obs, d: Mapping[str, float], min_size: float):
 
 
 # -- validation ------------------------------------------------------------------------------
+def _line_of(seed: Scenario, field: str) -> int | None:
+    """1-based line of ``field`` inside the seed file's ``search:`` block (best effort)."""
+    import re
+    from pathlib import Path
+
+    key = field.split("[")[0]
+    try:
+        lines = Path(seed.source).read_text(encoding="utf-8").splitlines() if seed.source else []
+    except (OSError, UnicodeDecodeError):
+        return None
+    in_search = False
+    for no, line in enumerate(lines, 1):
+        if re.match(r"^search\s*:", line):
+            in_search = True
+        elif in_search and re.match(r"^\S", line):
+            in_search = False
+        if in_search and re.search(rf"(^|[\s{{,]){re.escape(key)}\s*:", line):
+            return no
+    return None
+
+
 def _err(seed: Scenario, field: str, message: str, hint: str) -> ScenarioError:
-    return ScenarioError(message, path=seed.source or seed.name or None, field=f"search.{field}", hint=hint)
+    return ScenarioError(message, path=seed.source or seed.name or None, line=_line_of(seed, field),
+                         field=f"search.{field}", hint=hint)
 
 
 def _number(seed, key, v) -> float:
