@@ -9,6 +9,7 @@ Format (set on the *call* report of every scenario item that ran an episode)::
       "source":     "scenarios/boxes1.yaml"        # scenario file, relative to the rootdir
       "events":     {"collision": {...} | None, "safety_stop": {...} | None,
                      "subject_failure": {...} | None}
+      "metrics":    Metrics.as_dict()              # exact (inf/nan kept; the record has null)
       "timings":    {"physics": s, ...}            # the runner's timing breakdown
       "trajectory": result.trajectory_to_dict(...) # ONLY when requested, else None
     }
@@ -70,6 +71,7 @@ def episode_to_payload(result: EpisodeResult, *, nodeid: str, path: str,
             "safety_stop": _event(result.safety_stop),
             "subject_failure": _event(result.subject_failure),
         },
+        "metrics": result.metrics.as_dict(),
         "timings": dict(result.timings),
         "trajectory": trajectory_to_dict(result.trajectory) if with_trajectory else None,
     }
@@ -105,7 +107,7 @@ def episode_from_payload(payload: dict[str, Any]) -> EpisodeResult:
     return EpisodeResult(
         scenario=scenario_from_dict(payload["scenario"], source=payload.get("source")),
         outcome=Outcome(rec["outcome"]),
-        metrics=_metrics(rec["metrics"]),
+        metrics=_metrics(payload.get("metrics") or rec["metrics"]),
         trajectory=trajectory_from_dict(traj) if traj is not None else _empty_trajectory(),
         seed=rec["seed"],
         subject=rec.get("subject", ""),
