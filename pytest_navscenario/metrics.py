@@ -9,8 +9,10 @@ samples unless said otherwise; NaN means "not defined for this episode"):
   computed for the rest (see paths.py). A reported collision overrides it with 0 at the hit.
 * min_obstacle_gap: narrowest obstacle-obstacle gap of the scenario (paths.min_obstacle_gap).
 * path_length: sum of the steps of the centre; shortest_path_length: paths.shortest_path;
-  path_efficiency = shortest / driven; max/mean_deviation: distance of each pose to the
-  shortest-path polyline.
+  path_efficiency = shortest / (driven + final distance to the goal), i.e. the driven path
+  completed by a straight line to the goal point, so that stopping inside the goal tolerance
+  does not score above 1 (1 = optimal; NaN if the robot did not move);
+  max/mean_deviation: distance of each pose to the shortest-path polyline.
 * duration, mean_speed = path_length / duration, goal position error (m) and goal yaw error
   (degrees, wrapped to [0, 180]) of the last pose.
 * smoothness: mean |jerk| (m/s^3) of the planar motion, from the measured velocity turned
@@ -57,19 +59,18 @@ def compute_metrics(scenario: Scenario, trajectory: Trajectory, *,
     path_length = float(np.sqrt(np.diff(xy[:, 0]) ** 2 + np.diff(xy[:, 1]) ** 2).sum()) if len(xy) > 1 else 0.0
     sp = shortest_path(scenario)
     shortest = sp.length if sp is not None else NAN
-    efficiency = shortest / path_length if path_length > MOVED else NAN
+    goal = scenario.mission.goal
+    goal_err = math.hypot(pose[-1, 0] - goal.x, pose[-1, 1] - goal.y) if len(pose) else NAN
+    # driven path completed by a straight line to the goal: a robot that stops inside the goal
+    # tolerance, short of the exact goal point, still scores 1 when it drove optimally
+    efficiency = shortest / (path_length + goal_err) if path_length > MOVED else NAN
     if sp is not None and len(xy):
         dev = polyline_distance(xy, sp.points)
         max_dev, mean_dev = float(dev.max()), float(dev.mean())
     else:
         max_dev = mean_dev = NAN
     duration = float(trajectory.duration)
-    goal = scenario.mission.goal
-    if len(pose):
-        goal_err = math.hypot(pose[-1, 0] - goal.x, pose[-1, 1] - goal.y)
-        yaw_err = abs(math.degrees(wrap_angle(pose[-1, 2] - goal.yaw_rad)))
-    else:
-        goal_err = yaw_err = NAN
+    yaw_err = abs(math.degrees(wrap_angle(pose[-1, 2] - goal.yaw_rad))) if len(pose) else NAN
     jerk, ang_acc = smoothness(t, pose, vel)
     ref_mean, ref_max = reference_deviation(scenario, t, xy)
     return Metrics(

@@ -303,6 +303,8 @@ def _plan(stops: np.ndarray, obstacles: Sequence[Obstacle], r: float) -> Shortes
 
     if inside(stops).any():
         return None
+    if _segments_free(stops[:-1], stops[1:], g).all():    # nothing in the way: straight legs
+        return _make_path(stops)
     # nodes: the mission stops, then the polygon vertices not buried inside another polygon
     valid = np.arange(mmax)[None, :] < g.sizes[:, None]
     owner = np.broadcast_to(np.arange(k)[:, None], valid.shape)[valid]

@@ -118,6 +118,14 @@ def test_path_length_efficiency_and_deviation_of_a_detour():
     assert m.mean_speed == pytest.approx(driven / 10.0)
 
 
+def test_stopping_inside_the_goal_tolerance_is_still_optimal():
+    # the run ends 0.25 m short of the goal: efficiency completes it with a straight line
+    m = compute_metrics(scenario(), straight_north(length=9.75))
+    assert m.path_length == pytest.approx(9.75)
+    assert m.goal_position_error == pytest.approx(0.25)
+    assert m.path_efficiency == pytest.approx(1.0)
+
+
 def test_driving_the_detour_around_a_box_is_optimal():
     s = scenario(BoxObstacle("box", 0, 5, 1, 1))
     sp = shortest_path(s)
