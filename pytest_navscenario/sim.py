@@ -13,10 +13,11 @@ check after every step.
 """
 from __future__ import annotations
 
+import logging
 import math
 import time
 import traceback
-from collections import OrderedDict
+from collections import OrderedDict, deque
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -39,6 +40,20 @@ MODEL_CACHE_SIZE = 64      # compiled models kept (the search and repeats re-run
 STILL = 1e-3               # m/s and rad/s: below this the robot counts as standing still
 
 TWO_PI = 2.0 * math.pi
+
+log = logging.getLogger(__name__)
+_MUJOCO_WARNINGS: deque[str] = deque(maxlen=5)
+
+
+def _on_mujoco_warning(message: str) -> None:
+    """MuJoCo's warning handler: keep the text for SimulationDivergedError and log it, instead of
+    MuJoCo's default of printing and appending to MUJOCO_LOG.TXT in the working directory."""
+    _MUJOCO_WARNINGS.append(str(message).strip())
+    log.warning("MuJoCo: %s", str(message).strip())
+
+
+if mujoco.get_mju_user_warning() is None:   # leave a handler someone else installed alone
+    mujoco.set_mju_user_warning(_on_mujoco_warning)
 
 
 def wrap_angle(a: float) -> float:
@@ -385,7 +400,7 @@ def simulate(scenario: Scenario, planner: Any, seed: int, max_ticks: int | None 
     safety = world.safety
     robot_body = world.robot_body
     warn_count = d.warning.number   # a live view
-    half_dt = dt / 2.0
+    _MUJOCO_WARNINGS.clear()
     deadline = TickDeadline(tick_limit) if tick_limit else None
     step1, step2, multi_ray = mujoco.mj_step1, mujoco.mj_step2, mujoco.mj_multiRay
     perf = time.perf_counter
@@ -525,12 +540,10 @@ def simulate(scenario: Scenario, planner: Any, seed: int, max_ticks: int | None 
                         end = "collision"
                         break
             t_physics += perf() - t4
-            # MuJoCo resets the data (time restarts) on NaN/huge state: either shows divergence
-            if abs(d.time - i * dt) > half_dt or not math.isfinite(
+            # MuJoCo warns (and resets the data or zeroes the control) on NaN/huge values
+            if warn_count.any() or not math.isfinite(
                     qpos[0] + qpos[1] + qpos[2] + qvel[0] + qvel[1] + qvel[2]):
                 raise SimulationDivergedError(_divergence_message(scenario, d, i * dt))
-        if warn_count.any():
-            raise SimulationDivergedError(_divergence_message(scenario, d, i * dt))
     finally:
         if deadline is not None:
             deadline.__exit__(None, None, None)
@@ -586,6 +599,8 @@ def _divergence_message(scenario: Scenario, d: mujoco.MjData, t: float) -> str:
               for k, w in enumerate(d.warning) if w.number]
     state = f"qpos={np.array2string(d.qpos, precision=3)}, qvel={np.array2string(d.qvel, precision=3)}"
     why = ("MuJoCo warnings: " + ", ".join(warned)) if warned else "non-finite state"
-    return (f"simulation diverged in scenario {where} at t={t:.3f} s: {why}; {state}. "
+    if _MUJOCO_WARNINGS:
+        why += f" ({_MUJOCO_WARNINGS[-1]})"
+    return (f"simulation diverged in scenario {where} by t={t:.3f} s: {why}; {state}. "
             f"The physics cannot be trusted: check robot.limits (huge speeds or accelerations) and "
             f"simulation.timestep (try 0.01 s or smaller).")
