@@ -24,6 +24,7 @@ so a crash never leaves a partial bag behind.
 """
 from __future__ import annotations
 
+import functools
 import json
 import math
 import os
@@ -238,7 +239,9 @@ def _markers(result: EpisodeResult) -> list[dict[str, Any]]:
 
 # ---------------------------------------------------------------- writing
 
+@functools.lru_cache(maxsize=2)
 def _typestore(ros1: bool):
+    """The message definitions (cached: rosbags compiles its serialisers per typestore)."""
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
     if not ros1:
         return get_typestore(Stores.ROS2_HUMBLE)

@@ -1,0 +1,66 @@
+"""``--nav-bag``: real pytest runs (plugin autoload off, loaded with -p), real episodes."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+PLUGIN = ["-p", "pytest_navscenario.plugin"]
+SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
+
+
+@pytest.fixture
+def project(pytester, monkeypatch):
+    """Two scenarios: cylinders as shipped (passes) and the same with a 2 s timeout (fails)."""
+    monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
+    import dataclasses
+
+    from pytest_navscenario.loader import dump_scenario, load_scenario
+
+    seed = load_scenario(SCENARIOS / "cylinders.yaml")
+    late = dataclasses.replace(seed, mission=dataclasses.replace(seed.mission, timeout=2.0))
+    folder = pytester.mkdir("scen")
+    (folder / "ok.yaml").write_text(dump_scenario(seed))
+    (folder / "late.yaml").write_text(dump_scenario(late))
+    return pytester
+
+
+def bags_in(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir()) if folder.exists() else []
+
+
+def test_failed_writes_one_bag_per_failed_episode_under_xdist(project):
+    project.makeini("[pytest]\nnav_bag_dir = out/bags\nnav_bag_format = ros1\n")
+    res = project.runpytest_subprocess(*PLUGIN, "-p", "xdist.plugin", "-n", "2", "scen",
+                                       "--nav-bag=failed", "--nav-artifacts=none")
+    res.assert_outcomes(passed=1, failed=1)
+    names = bags_in(project.path / "out" / "bags")
+    assert len(names) == 1 and names[0].startswith("scen_late.yaml") and names[0].endswith(".bag")
+    res.stdout.fnmatch_lines(["navscenario: wrote 1 ros1 bag(s) to *out/bags (--nav-bag=failed)"])
+
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+    with AnyReader([project.path / "out" / "bags" / names[0]],
+                   default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
+        counts = {c.topic: c.msgcount for c in reader.connections}
+    assert counts["/scan"] == 20 and counts["/navscenario/result"] == 1  # 2 s of 10 Hz ticks
+
+
+def test_default_writes_no_bag_and_bad_values_are_usage_errors(project):
+    res = project.runpytest(*PLUGIN, "scen/ok.yaml")
+    res.assert_outcomes(passed=1)
+    assert not (project.path / "nav-bags").exists()
+
+    res = project.runpytest(*PLUGIN, "scen/ok.yaml", "--nav-bag=some")
+    assert res.ret == pytest.ExitCode.USAGE_ERROR
+    res.stderr.fnmatch_lines(["*--nav-bag: expected one of none, failed, all, got 'some'*"])
+    res = project.runpytest(*PLUGIN, "scen/ok.yaml", "--nav-bag=all", "--nav-bag-format=bag")
+    assert res.ret == pytest.ExitCode.USAGE_ERROR
+    res.stderr.fnmatch_lines(["*--nav-bag-format: expected one of mcap, sqlite3, ros1, got 'bag'*"])
+
+
+def test_all_writes_mcap_for_passing_episodes_too(project):
+    res = project.runpytest(*PLUGIN, "scen/ok.yaml", "--nav-bag=all", "--nav-bag-dir=b")
+    res.assert_outcomes(passed=1)
+    (bag,) = (project.path / "b").iterdir()
+    assert len(list(bag.glob("*.mcap"))) == 1 and (bag / "metadata.yaml").exists()
