@@ -92,6 +92,10 @@ class Comparison:
     families: list[FamilyComparison]
     overall: FamilyComparison
     warnings: list[str] = field(default_factory=list)
+    # How to name each side's subject in reproduce commands: the --nav-subject spec when known
+    # (records carry the planner's name, which need not be importable), plus extra options.
+    subject_specs: dict[str, str] = field(default_factory=dict)
+    extra_args: str = ""
 
     @property
     def broke(self) -> list[Pair]:
@@ -110,10 +114,12 @@ class Comparison:
     def reproduce_command(self, pair: Pair, side: str = "b") -> str:
         """The command that re-runs this one scenario with B's (or A's) subject."""
         rec = pair.b if side == "b" else pair.a
-        subject = rec.get("subject") or ""
+        subject = self.subject_specs.get(side, rec.get("subject") or "")
         cmd = f"pytest {shlex.quote(pair.nodeid)}"
         if subject:
-            cmd += f" --nav-subject={shlex.quote(subject)}"
+            cmd += f" {shlex.quote(f'--nav-subject={subject}')}"
+        if self.extra_args:
+            cmd += f" {self.extra_args}"
         if pair.repeat:
             cmd += f"  # repeat {pair.repeat}, episode seed {rec.get('seed')}"
         return cmd

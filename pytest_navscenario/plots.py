@@ -79,14 +79,25 @@ def _pose_at(result: EpisodeResult, time: float) -> np.ndarray | None:
 
 
 def _gap(scenario: Any, metrics: Any) -> tuple[float, str, str]:
+    """The narrowest obstacle gap to mark: the metric's (paths.min_obstacle_gap), unless obstacles
+    touch (gap 0, e.g. walls meeting at a corner), then the narrowest real passage between two
+    obstacles that do not touch."""
     names = (metrics.min_gap_obstacles or "").split("|")
     if len(names) == 2 and math.isfinite(metrics.min_obstacle_gap):
-        return float(metrics.min_obstacle_gap), names[0], names[1]
-    try:
+        gap = (float(metrics.min_obstacle_gap), names[0], names[1])
+    else:
         from .paths import min_obstacle_gap
-        return min_obstacle_gap(scenario)
-    except ImportError:  # pragma: no cover - paths.py is part of the package
-        return math.inf, "", ""
+        gap = min_obstacle_gap(scenario)
+    if gap[0] > 1e-6 or len(scenario.obstacles) < 3:
+        return gap
+    polys = [obstacle_polygon(o) for o in scenario.obstacles]
+    best = (math.inf, "", "")
+    for i in range(len(polys)):
+        for j in range(i + 1, len(polys)):
+            d = polys[i].distance(polys[j])
+            if 1e-6 < d < best[0]:
+                best = (d, scenario.obstacles[i].name, scenario.obstacles[j].name)
+    return best
 
 
 def speed_norm(results: Sequence[EpisodeResult]):
@@ -159,7 +170,7 @@ def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
         ax.add_collection(PolyCollection(rings, closed=True, facecolors="#90caf9", edgecolors="none",
                                          alpha=0.35, zorder=1, label="swept by the footprint"),
                           autolim=False)
-        every = outline_every or max(0.5, duration / 25.0)
+        every = outline_every or _nice_step(max(0.5, duration / 25.0))
         marks = np.searchsorted(t, np.arange(t[0], t[-1] + 1e-9, every))
         marks = np.unique(np.append(np.clip(marks, 0, len(t) - 1), len(t) - 1))
         outlines = [np.asarray(p.exterior.coords) for p in footprint_polygons(fp, pose[marks])]

@@ -1,0 +1,175 @@
+"""report_plugin + html_report end to end: real pytest runs (plugin autoload disabled, loaded with
+-p), real scenario files, real MuJoCo episodes, a hand-made baseline results file.
+
+The project: ``ok`` (a planner that drives straight reaches the goal) and ``crash`` (it drives into
+a wall with the safety layer off; marked xfail in its YAML, so the test run itself passes). The
+baseline says both passed, so ``crash`` is a regression that only the gate can turn into a failed
+session. The runs are started together and shared by the tests.
+"""
+from __future__ import annotations
+
+import json
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from pytest_navscenario.loader import loads_scenario
+from pytest_navscenario.results import write_results
+from pytest_navscenario.scenario import content_hash
+
+PLANNER = '''
+import math
+
+
+class Straight:
+    """Drives straight at the target at full speed, obstacles or not."""
+    name = "straight"
+
+    def reset(self, scenario):
+        self.speed = scenario.robot.limits.max_speed
+
+    def act(self, obs):
+        x, y, yaw = obs.pose
+        tx, ty = obs.target
+        dx, dy = tx - x, ty - y
+        d = math.hypot(dx, dy) or 1.0
+        c, s = math.cos(yaw), math.sin(yaw)
+        v = min(self.speed, d)
+        return (c * dx + s * dy) / d * v, (-s * dx + c * dy) / d * v, 0.0
+'''
+
+CONFTEST = '''
+import sys
+
+
+def pytest_unconfigure(config):
+    if not hasattr(config, "workerinput"):
+        print("MATPLOTLIB-IMPORTED:", "matplotlib" in sys.modules)
+'''
+
+OK = "version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 2, y: 0}, timeout: 10}\n"
+CRASH = ("version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 4, y: 0}, timeout: 10}\n"
+         "robot: {safety: {enabled: false}}\n"
+         "obstacles: [{type: box, name: wall, x: 2, y: 0, length: 0.4, width: 2}]\n"
+         "marks: [{xfail: {reason: known to crash}}]\n")
+SUBJECT = "--nav-subject=straight:Straight"
+COMMON = ["-p", "pytest_navscenario.plugin", "-p", "no:cacheprovider", SUBJECT, "--nav-baseline=base.jsonl"]
+
+RUNS = {
+    # regression gate on, HTML report, default plots (failing items, into the artifacts folders)
+    "gate": ["scenarios", *COMMON, "--nav-html=out/report.html"],
+    # warn only; plots of every item into one folder; on 2 xdist workers (plots made on the controller)
+    "warn": ["scenarios", *COMMON, "--nav-baseline-mode=warn", "--nav-plots=all", "--nav-plots-dir=plots",
+             "-p", "xdist.plugin", "-n", "2"],
+    # a default run where everything passes: no plot, matplotlib never imported
+    "pass": ["scenarios/ok.yaml", "-p", "pytest_navscenario.plugin", "-p", "no:cacheprovider", SUBJECT],
+    # a baseline that is not a results file: one clear usage error before anything runs
+    "bad": ["scenarios", *COMMON[:-1], "--nav-baseline=scenarios/ok.yaml"],
+}
+
+
+def record(root: Path, rel: str, outcome: str) -> dict:
+    name = Path(rel).stem
+    text = (root / rel).read_text() if (root / rel).exists() else OK
+    return {"format": "navscenario-results", "format_version": 1, "tool_version": "0.1.0",
+            "nodeid": f"{rel}::{name}", "path": rel, "scenario": name, "family": "scenarios",
+            "scenario_hash": content_hash(loads_scenario(text)), "subject": "old-planner",
+            "subject_version": "1.0", "seed": 0, "repeat": 0, "outcome": outcome,
+            "passed": outcome == "success", "message": outcome, "metrics": {}, "wall_time": 0.1}
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory: pytest.TempPathFactory):
+    """Start the four runs at once (each in its own copy of the project); {name: (proc, root)}."""
+    procs = {}
+    for name, args in RUNS.items():
+        root = tmp_path_factory.mktemp(f"report-{name}")
+        (root / "straight.py").write_text(PLANNER)
+        (root / "conftest.py").write_text(CONFTEST)
+        (root / "scenarios").mkdir()
+        (root / "scenarios" / "ok.yaml").write_text(OK)
+        (root / "scenarios" / "crash.yaml").write_text(CRASH)
+        base = [record(root, "scenarios/ok.yaml", "success"), record(root, "scenarios/crash.yaml", "success"),
+                record(root, "scenarios/gone.yaml", "success")]
+        write_results(root / "base.jsonl", base)
+        env = dict(os.environ, PYTEST_DISABLE_PLUGIN_AUTOLOAD="1")
+        env["PYTHONPATH"] = os.pathsep.join([str(root), env.get("PYTHONPATH", "")])
+        env.pop("PYTHONDONTWRITEBYTECODE", None)
+        procs[name] = (subprocess.Popen([sys.executable, "-m", "pytest", *args], cwd=root, env=env,
+                                        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True), root)
+    out = {}
+    for name, (proc, root) in procs.items():
+        stdout, _ = proc.communicate(timeout=180)
+        out[name] = (proc.returncode, stdout, root)
+    return out
+
+
+def test_regression_gate_fails_the_session(runs):
+    code, out, _ = runs["gate"]
+    assert code == 1, out
+    assert "1 passed, 1 xfailed" in out                       # the tests themselves pass...
+    assert "FAILED the regression gate: 1 scenario(s) the baseline passed fail now" in out  # ...the gate does not
+    assert "B broke (regressions: A passed, B failed) (1):" in out
+    assert "scenarios/crash.yaml::crash: A success, B collision" in out
+    assert "reproduce: pytest scenarios/crash.yaml::crash --nav-subject=straight:Straight --nav-seed=0" in out
+    assert "only in A (" in out and "scenarios/gone.yaml::gone" in out
+    assert "MATPLOTLIB-IMPORTED: True" in out
+
+
+def test_warn_mode_reports_but_passes_and_plots_every_item_under_xdist(runs):
+    code, out, root = runs["warn"]
+    assert code == 0, out
+    assert "warning: 1 regression(s) against the baseline" in out
+    plots = sorted(p.name for p in (root / "plots").glob("*.png"))
+    assert len(plots) == 2 and plots[0].startswith("scenarios_crash.yaml_crash")
+    assert "navscenario: 2 trajectory plot(s) in" in out
+
+
+def test_default_passing_run_does_not_import_matplotlib(runs):
+    code, out, root = runs["pass"]
+    assert code == 0, out
+    assert "MATPLOTLIB-IMPORTED: False" in out
+    assert not list(root.rglob("*.png"))
+
+
+def test_bad_baseline_is_one_clear_usage_error(runs):
+    code, out, _ = runs["bad"]
+    assert code == 4, out
+    assert re.search(r"--nav-baseline: .*ok\.yaml:1: not JSON .*is this a --nav-results file\?", out), out
+    assert "passed" not in out
+
+
+def test_failure_plot_lands_in_the_items_artifacts_folder(runs):
+    _, _, root = runs["gate"]
+    plots = list((root / "nav-artifacts").glob("scenarios_crash.yaml_crash-*/plots/trajectory.png"))
+    assert len(plots) == 1 and plots[0].stat().st_size > 20_000
+    assert not list((root / "nav-artifacts").glob("scenarios_ok*"))
+
+
+def test_html_report_is_self_contained_with_one_entry_per_failure(runs):
+    _, out, root = runs["gate"]
+    page = (root / "out" / "report.html").read_text()
+    assert "HTML report written to" in out
+    assert page.count('<section class="failure"') == 1
+    assert 'data-outcome="collision"' in page and 'data-family="scenarios"' in page
+    assert page.count("data:image/png;base64,") == 2         # the failure's plot + the bar chart
+    assert not re.search(r"(src|href)=\"(https?:)?//", page)  # nothing fetched from a server
+    assert 'id="comparison"' in page and "B broke (A passed, B failed) (1)" in page
+    assert "<script>" in page and "sortFailures" in page and 'class="sortable"' in page
+    assert page.count("<tr><td>") >= 2                        # runs table: one row per scenario
+
+
+def test_html_escapes_names_and_messages(tmp_path):
+    from pytest_navscenario.html_report import Entry, write_html
+
+    rec = {"nodeid": "s/<b>.yaml::<script>alert(1)</script>", "family": "f&g", "outcome": "timeout",
+           "message": "goal <not> reached", "metrics": {"min_clearance": None, "duration": 3.0},
+           "repeat": 0, "seed": 1, "subject": "x"}
+    page = write_html(tmp_path / "r.html", [Entry(rec), Entry(dict(rec, nodeid="b", outcome="success"))]).read_text()
+    assert "<script>alert" not in page and "&lt;script&gt;alert(1)&lt;/script&gt;" in page
+    assert page.count('<section class="failure"') == 1 and "goal &lt;not&gt; reached" in page
+    assert json.dumps("f&amp;g")[1:-1] in page
