@@ -29,6 +29,7 @@ class RobotParams:
     goal_yaw: float           # rad
     goal_yaw_tolerance: float | None   # rad, None = heading at the goal not checked
     goal_tolerance: float     # m
+    waypoint_tolerance: float  # m
 
     @classmethod
     def from_scenario(cls, scenario: Scenario) -> "RobotParams":
@@ -54,6 +55,7 @@ class RobotParams:
             goal_yaw=mission.goal.yaw_rad,
             goal_yaw_tolerance=None if yaw_tol is None else math.radians(yaw_tol),
             goal_tolerance=float(mission.goal_tolerance.position),
+            waypoint_tolerance=float(mission.waypoint_tolerance),
         )
 
 

@@ -4,22 +4,29 @@ Each tick it samples velocity commands (vx, vy, wz) inside the *dynamic window*,
 robot can reach within one tick from its current command given the acceleration limits; rolls
 each one out as a constant twist over ``horizon`` seconds; measures the clearance between the
 robot's footprint (box or circle) at every rollout pose and the lidar points; drops the
-commands whose rollout comes closer than the safety layer's margin plus a buffer; and picks
-the best of the rest by a weighted sum of progress towards the target, heading, clearance
-and speed. Near the goal of a mission with a yaw tolerance it turns to the goal yaw.
+commands whose rollout comes closer than the safety layer's margin plus a buffer (so the
+safety layer's own sweep stays clear: it slows down near obstacles); and picks the best of
+the rest by a weighted sum of progress towards the target, heading, clearance and speed.
+Near the goal of a mission with a yaw tolerance it turns to the goal yaw.
 
-Speed: the velocity grid and every rollout pose are precomputed at ``reset``; a tick is one
-small matrix product (rollout poses x lidar points) and a handful of array operations.
+Speed: the commands live on a fixed grid (one step = what the acceleration limits allow in one
+tick) whose rollouts are computed once per robot description and shared by every instance; the
+candidates of each dynamic window are gathered once into one contiguous matrix that maps lidar
+points into every rollout pose's frame. A tick is then one small matrix product (rollout poses x
+nearby lidar points, float32) and a handful of array operations.
 """
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 
 import numpy as np
 
 from ..planner import Command, Observation
 from ..scenario import Scenario
 from ._common import RobotParams, require_reset, target_in_robot_frame, wrap_angle
+
+TABLE_CACHE_SIZE = 4    # robot descriptions x settings whose rollout tables are kept
 
 
 def _grid(lo: float, hi: float, step: float) -> np.ndarray:
@@ -40,6 +47,78 @@ def _rollout(vx, vy, wz, t):
     x = vx * s_over_w - vy * c_over_w
     y = vx * c_over_w + vy * s_over_w
     return x, y, th
+
+
+def footprint_distance(px, py, x, y, th, half_length, half_width, radius=0.0):
+    """Distance from points (px, py) to a box (half extents) or circle (``radius``, zero half
+    extents) footprint at pose (x, y, th); 0 inside. Broadcasts over all arguments."""
+    c, s = np.cos(th), np.sin(th)
+    dx, dy = px - x, py - y
+    ex = np.maximum(np.abs(c * dx + s * dy) - half_length, 0.0)
+    ey = np.maximum(np.abs(-s * dx + c * dy) - half_width, 0.0)
+    return np.maximum(np.hypot(ex, ey) - radius, 0.0)
+
+
+class _Table:
+    """Velocity grid and rollouts for one robot + settings, and the dynamic windows seen so far."""
+
+    def __init__(self, p: RobotParams, horizon: float, steps: int, window: int,
+                 reverse_speed: float, cap: float):
+        self.steps = steps
+        self.vx = _grid(-reverse_speed, p.max_speed, p.max_accel * p.tick / window)
+        self.vy = _grid(-p.max_lateral_speed, p.max_lateral_speed, p.max_accel * p.tick / window)
+        self.wz = _grid(-p.max_yaw_rate, p.max_yaw_rate, p.max_yaw_accel * p.tick / window)
+        self.shape = (len(self.vx), len(self.vy), len(self.wz))
+        VX, VY, WZ = (a.ravel() for a in np.meshgrid(self.vx, self.vy, self.wz, indexing="ij"))
+        t = np.linspace(horizon / steps, horizon, steps)
+        self.x, self.y, self.th = _rollout(VX[:, None], VY[:, None], WZ[:, None], t)  # (G, steps)
+        self.vel = VX / max(p.max_speed, 1e-9)
+        if p.circle:
+            self.half, self.radius, self.body = (0.0, 0.0), p.half_length, p.half_length
+        else:
+            self.half, self.radius = (p.half_length, p.half_width), 0.0
+            self.body = math.hypot(p.half_length, p.half_width)
+        self.reach = np.hypot(self.x, self.y).max(axis=1) + self.body + cap     # (G,)
+        self.cap = cap
+        self.windows: dict[tuple[int, int, int], tuple] = {}
+
+    def window(self, idx: tuple[int, int, int], w: int) -> tuple:
+        """Candidates of the dynamic window around grid command ``idx`` (cached): the rows
+        mapping a point [px, py, 1] into each rollout pose's frame, the footprint's half
+        extents per row, rollout positions, end poses, speed scores, reach, grid indices."""
+        cached = self.windows.get(idx)
+        if cached is None:
+            axes = [np.unique(np.clip(np.arange(i - w, i + w + 1), 0, n - 1))
+                    for i, n in zip(idx, self.shape)]
+            I, J, K = (a.ravel() for a in np.meshgrid(*axes, indexing="ij"))
+            g = (I * self.shape[1] + J) * self.shape[2] + K
+            x, y, th = self.x[g], self.y[g], self.th[g]
+            c, s = np.cos(th), np.sin(th)
+            # lx = c px + s py - (c x + s y);  ly = -s px + c py + (s x - c y)
+            A = np.empty((len(g), self.steps, 2, 3), dtype=np.float32)
+            A[:, :, 0, 0], A[:, :, 0, 1], A[:, :, 0, 2] = c, s, -(c * x + s * y)
+            A[:, :, 1, 0], A[:, :, 1, 1], A[:, :, 1, 2] = -s, c, s * x - c * y
+            half = np.tile(np.asarray(self.half, dtype=np.float32), len(g) * self.steps)[:, None]
+            cached = (A.reshape(-1, 3), half, x, y, x[:, -1].copy(), y[:, -1].copy(),
+                      th[:, -1].copy(), self.vel[g], float(self.reach[g].max()),
+                      np.stack([I, J, K], axis=1))
+            self.windows[idx] = cached
+        return cached
+
+
+_TABLES: "OrderedDict[tuple, _Table]" = OrderedDict()
+
+
+def _table(p: RobotParams, *settings) -> _Table:
+    key = (p,) + settings
+    table = _TABLES.get(key)
+    if table is None:
+        table = _TABLES[key] = _Table(p, *settings)
+        while len(_TABLES) > TABLE_CACHE_SIZE:
+            _TABLES.popitem(last=False)
+    else:
+        _TABLES.move_to_end(key)
+    return table
 
 
 class DynamicWindowPlanner:
@@ -76,120 +155,91 @@ class DynamicWindowPlanner:
         self.weights = (float(progress_weight), float(heading_weight),
                         float(clearance_weight), float(velocity_weight))
         self._p: RobotParams | None = None
+        self._idx: tuple[int, int, int] | None = None
+        self._goal_phase = False
 
     # -- episode set-up -------------------------------------------------------------------
     def reset(self, scenario: Scenario) -> None:
-        p = self._p = RobotParams.from_scenario(scenario)
-        w = self.window
-        # Velocity grids: one grid step = the change the accel limits allow per tick / window.
-        self._vx = _grid(-self.reverse_speed, p.max_speed, p.max_accel * p.tick / w)
-        self._vy = _grid(-p.max_lateral_speed, p.max_lateral_speed, p.max_accel * p.tick / w)
-        self._wz = _grid(-p.max_yaw_rate, p.max_yaw_rate, p.max_yaw_accel * p.tick / w)
-        VX, VY, WZ = np.meshgrid(self._vx, self._vy, self._wz, indexing="ij")
-        t = np.linspace(self.horizon / self.steps, self.horizon, self.steps)
-        x, y, th = _rollout(VX[..., None], VY[..., None], WZ[..., None], t)
-        c, s = np.cos(th), np.sin(th)
-        # Rows that map a lidar point [px, py, 1] (robot frame now) into each rollout pose's
-        # frame: lx = c px + s py - (c x + s y);  ly = -s px + c py + (s x - c y).
-        A = np.empty(VX.shape + (self.steps, 2, 3))
-        A[..., 0, 0], A[..., 0, 1], A[..., 0, 2] = c, s, -(c * x + s * y)
-        A[..., 1, 0], A[..., 1, 1], A[..., 1, 2] = -s, c, s * x - c * y
-        self._A = A
-        self._end = np.stack([x[..., -1], y[..., -1], th[..., -1]], axis=-1)   # (nvx, nvy, nwz, 3)
-        self._reach = np.hypot(x, y).max(axis=-1)                                # rollout extent
-        self._vel = VX / max(p.max_speed, 1e-9)
-        if p.circle:
-            self._half = np.zeros(2)
-            self._radius = p.half_length
-        else:
-            self._half = np.array([p.half_length, p.half_width])
-            self._radius = 0.0
-        self._body = math.hypot(p.half_length, p.half_width) if not p.circle else p.half_length
-        self._angles_key = None
+        self._p = p = RobotParams.from_scenario(scenario)
+        self._t = _table(p, self.horizon, self.steps, self.window, self.reverse_speed,
+                         self.clearance_cap)
         self._idx = None          # current command as grid indices, set from the first observation
         self._goal_phase = False
-
-    def _index_of(self, grid: np.ndarray, value: float) -> int:
-        return int(np.argmin(np.abs(grid - value)))
+        self._beams_shape = None
 
     def _beams(self, angles: np.ndarray) -> None:
         """Per-episode lidar geometry: unit vectors, and the inflation that covers the surface
-        between two neighbouring beams (half the beam spacing at the rollouts' reach)."""
-        self._angles_key = (angles.shape, float(angles[0]) if len(angles) else 0.0)
-        self._unit = np.stack([np.cos(angles), np.sin(angles)]).astype(float)
+        between two neighbouring beams (half the beam spacing at the rollouts' reach) plus
+        float32 unit vectors of the beams."""
+        t = self._t
+        self._beams_shape = angles.shape
+        self._unit = np.stack([np.cos(angles), np.sin(angles)]).astype(np.float32)
         spacing = float(np.max(np.diff(angles))) if len(angles) > 1 else 0.0
-        reach = float(self._reach.max()) + self._body
+        reach = float(t.reach.max()) - t.cap
         self._inflation = 0.5 * spacing * reach
-        p = self._p
-        self._min_clear = p.safety_margin + self.clearance_buffer + self._inflation
+        self._min_clear = self._p.safety_margin + self.clearance_buffer + self._inflation
 
     # -- one tick -------------------------------------------------------------------------
     def act(self, obs: Observation) -> Command:
         p = require_reset(self._p, "DynamicWindowPlanner")
-        if self._angles_key is None or self._angles_key[0] != obs.angles.shape:
+        t = self._t
+        if self._beams_shape != obs.angles.shape:
             self._beams(obs.angles)
         if self._idx is None:
             v = obs.velocity
-            self._idx = (self._index_of(self._vx, float(v[0])), self._index_of(self._vy, float(v[1])),
-                         self._index_of(self._wz, float(v[2])))
-        w = self.window
-        i, j, k = self._idx
-        sx = slice(max(i - w, 0), i + w + 1)
-        sy = slice(max(j - w, 0), j + w + 1)
-        sw = slice(max(k - w, 0), k + w + 1)
-        A = self._A[sx, sy, sw]
-        shape = A.shape[:3]
-        n = shape[0] * shape[1] * shape[2]
+            self._idx = tuple(int(np.argmin(np.abs(grid - float(value))))
+                              for grid, value in zip((t.vx, t.vy, t.wz), v))
+        A, half, X, Y, ex, ey, eth, vel, reach, cand = t.window(self._idx, self.window)
+        n = len(cand)
 
-        # Lidar points that can matter: within the window's reach + body + clearance cap.
-        reach = float(self._reach[sx, sy, sw].max()) + self._body + self.clearance_cap
+        # Clearance: footprint at every rollout pose vs the lidar points within reach.
         r = obs.ranges
-        near = np.flatnonzero((r < reach) & (r < p.range_max * 0.999))
+        near = np.flatnonzero(r < min(reach, p.range_max * 0.999))
         if near.size:
-            P = np.empty((3, near.size))
-            rn = r[near]
-            np.multiply(self._unit[:, near], rn, out=P[:2])
-            P[2] = 1.0
-            E = A.reshape(-1, 3) @ P                        # (n * steps * 2, points)
+            P = np.ones((3, near.size), dtype=np.float32)
+            np.multiply(self._unit[:, near], r[near], out=P[:2])
+            E = A @ P                                   # (n * steps * 2, points): local x, y
             np.abs(E, out=E)
-            E = E.reshape(n * self.steps, 2, -1)
-            E -= self._half[None, :, None]
+            E -= half
             np.maximum(E, 0.0, out=E)
             np.square(E, out=E)
-            d2 = (E[:, 0] + E[:, 1]).min(axis=1).reshape(n, self.steps).min(axis=1)
-            clear = np.sqrt(d2) - self._radius - self._inflation
+            E = E.reshape(n, self.steps, 2, -1)
+            d2 = (E[:, :, 0] + E[:, :, 1]).reshape(n, -1).min(axis=1)
+            clear = np.sqrt(d2, dtype=float)
+            clear -= t.radius + self._inflation
         else:
-            clear = np.full(n, np.inf)
+            clear = np.full(n, t.cap)
 
+        # Score: progress towards the target, heading, clearance, speed.
         tx, ty = target_in_robot_frame(obs.pose, obs.target)
-        end = self._end[sx, sy, sw].reshape(n, 3)
-        ex, ey, eth = end[:, 0], end[:, 1], end[:, 2]
         d0 = math.hypot(tx, ty)
-        goal_phase = self._in_goal_phase(obs, d0)
-        dend = np.hypot(tx - ex, ty - ey)
-        if goal_phase:
-            want = wrap_angle(p.goal_yaw - float(obs.pose[2]))
+        # closest approach to the target along the rollout: driving past a near target is fine
+        dmin = np.hypot(tx - X, ty - Y).min(axis=1)
+        if self._in_goal_phase(obs, d0):
+            want = float(wrap_angle(p.goal_yaw - float(obs.pose[2])))
             heading_err = np.abs(wrap_angle(want - eth))
-            progress = -dend / max(p.goal_tolerance, 1e-6)
+            progress = np.hypot(tx - ex, ty - ey) * (-1.0 / max(p.goal_tolerance, 1e-6))
         else:
             heading_err = np.abs(wrap_angle(np.arctan2(ty - ey, tx - ex) - eth))
-            progress = (d0 - dend) / (p.max_speed * self.horizon)
+            # a rollout that reaches the target is not penalised for ending past it
+            reach_tol = 0.5 * (p.waypoint_tolerance if len(obs.waypoints) else p.goal_tolerance)
+            heading_err[dmin < reach_tol] = 0.0
+            progress = (d0 - dmin) * (1.0 / (p.max_speed * self.horizon))
         wp, wh, wc, wv = self.weights
-        score = (wp * progress + wh * (1.0 - heading_err / math.pi)
-                 + wc * np.minimum(clear, self.clearance_cap) / self.clearance_cap
-                 + wv * self._vel[sx, sy, sw].reshape(n))
+        score = progress * wp
+        score += heading_err * (-wh / math.pi)
+        score += clear * (wc / self.clearance_cap)
+        score += vel * wv
         admissible = clear >= self._min_clear
         if admissible.any():
-            best = int(np.argmax(np.where(admissible, score, -np.inf)))
+            score[~admissible] = -np.inf
+            best = int(np.argmax(score))
         else:  # nothing is safe: brake as hard as the window allows (lowest speed, most room)
-            speed = np.abs(self._vx[sx]).repeat(shape[1] * shape[2]) \
-                + np.abs(np.tile(self._vy[sy].repeat(shape[2]), shape[0]))
+            speed = np.abs(t.vx[cand[:, 0]]) + np.abs(t.vy[cand[:, 1]])
             best = int(np.lexsort((-clear, speed))[0])
-        bi, rem = divmod(best, shape[1] * shape[2])
-        bj, bk = divmod(rem, shape[2])
-        self._idx = (sx.start + bi, sy.start + bj, sw.start + bk)
-        return Command(float(self._vx[self._idx[0]]), float(self._vy[self._idx[1]]),
-                       float(self._wz[self._idx[2]]))
+        i, j, k = (int(v) for v in cand[best])
+        self._idx = (i, j, k)
+        return Command(float(t.vx[i]), float(t.vy[j]), float(t.wz[k]))
 
     def _in_goal_phase(self, obs: Observation, dist: float) -> bool:
         """Turning to the goal yaw: the target is the goal, the mission checks the yaw and the

@@ -35,7 +35,7 @@ class PotentialFieldPlanner:
         attraction: magnitude of the attractive force (1.0).
         slow_radius: metres from the target within which attraction fades linearly (0.5).
         repulsion: Khatib's eta, per beam at 5 degree spacing (0.06).
-        influence: d0, metres beyond which a point does not repel (1.5).
+        influence: d0, metres beyond which a point does not repel (1.0).
         speed_gain: m/s per unit of force along the robot's axes (1.0).
         turn_gain: rad/s per radian of bearing error of the force (1.5).
     """
@@ -44,7 +44,7 @@ class PotentialFieldPlanner:
     version = "1.0"
 
     def __init__(self, *, attraction: float = 1.0, slow_radius: float = 0.5,
-                 repulsion: float = 0.06, influence: float = 1.5, speed_gain: float = 1.0,
+                 repulsion: float = 0.06, influence: float = 1.0, speed_gain: float = 1.0,
                  turn_gain: float = 1.5):
         self.attraction = float(attraction)
         self.slow_radius = float(slow_radius)
