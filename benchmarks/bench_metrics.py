@@ -1,0 +1,119 @@
+"""Speed of the oracle's figures: compute_metrics per episode and the shortest-path check.
+
+    env -u PYTHONDONTWRITEBYTECODE python benchmarks/bench_metrics.py [--repeats 200] [--json out.json]
+
+Parts (medians over ``--repeats`` calls; wall time and this thread's CPU time, the latter
+less disturbed by other processes on a shared machine):
+
+1. compute_metrics on each shipped seed's real 10 s trajectory (dynamic-window planner),
+   with the shortest path cached (the usual case: a scenario's repeats and the search's
+   reruns) and uncached (a new layout: path planning included);
+2. compute_metrics on a synthetic 10 s, 10-obstacle episode (1001 poses following the
+   shortest path around ten random boxes), the issue's budget case (~1.5 ms);
+3. paths.shortest_path / path_exists on new random 10-obstacle layouts (the search's
+   validity check), and a cache hit.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from pytest_navscenario import load_scenario, run_scenario  # noqa: E402
+from pytest_navscenario import paths  # noqa: E402
+from pytest_navscenario.metrics import compute_metrics  # noqa: E402
+from pytest_navscenario.result import Trajectory  # noqa: E402
+from pytest_navscenario.scenario import BoxObstacle, Mission, Pose, Scenario  # noqa: E402
+
+
+def timed(fn, repeats: int, before=None) -> dict[str, float]:
+    """Median wall and CPU milliseconds of ``fn()`` (``before()`` runs untimed each time)."""
+    wall, cpu = [], []
+    for _ in range(repeats):
+        if before:
+            before()
+        w0, c0 = time.perf_counter(), time.thread_time()
+        fn()
+        cpu.append(time.thread_time() - c0)
+        wall.append(time.perf_counter() - w0)
+    return {"wall_ms": statistics.median(wall) * 1e3, "cpu_ms": statistics.median(cpu) * 1e3}
+
+
+def random_layout(seed: int, k: int = 10) -> Scenario:
+    rng = np.random.default_rng(seed)
+    obstacles = tuple(BoxObstacle(f"b{i}", rng.uniform(-3, 3), rng.uniform(1.5, 8.5), rng.uniform(0.3, 1.5),
+                                  rng.uniform(0.3, 1.5), rng.uniform(0, 180)) for i in range(k))
+    return Scenario(mission=Mission(start=Pose(0, 0, 90), goal=Pose(0, 10, 90)), obstacles=obstacles)
+
+
+def follow(points: np.ndarray, speed: float = 1.0, dt: float = 0.01) -> Trajectory:
+    seg = np.hypot(*np.diff(points, axis=0).T)
+    cum = np.concatenate([[0.0], np.cumsum(seg)])
+    t = np.arange(int(cum[-1] / (speed * dt)) + 1) * dt
+    x, y = np.interp(t * speed, cum, points[:, 0]), np.interp(t * speed, cum, points[:, 1])
+    yaw = np.unwrap(np.arctan2(np.gradient(y), np.gradient(x)))
+    vel = np.column_stack([np.full_like(t, speed), np.zeros_like(t), np.gradient(yaw, dt)])
+    ticks = t[::10]
+    return Trajectory(t=t, pose=np.column_stack([x, y, yaw]), velocity=vel, tick_t=ticks,
+                      command=np.zeros((len(ticks), 3)), ranges=np.zeros((len(ticks), 72), np.float32),
+                      angles=np.linspace(-np.pi, np.pi, 72, endpoint=False))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=200)
+    ap.add_argument("--json", type=Path, help="also write the figures here")
+    args = ap.parse_args()
+    n = args.repeats
+    out: dict[str, object] = {"repeats": n}
+
+    print("1. compute_metrics on the seeds' real trajectories (dwa)")
+    seeds = {}
+    for path in sorted((ROOT / "scenarios").glob("*.yaml")):
+        s = load_scenario(path)
+        tr = run_scenario(s, "dwa").trajectory
+        cached = timed(lambda: compute_metrics(s, tr), n)
+        uncached = timed(lambda: compute_metrics(s, tr), max(n // 4, 5), before=paths.clear_caches)
+        seeds[s.name] = {"poses": len(tr.t), "obstacles": len(s.obstacles), "cached": cached, "uncached": uncached}
+        print(f"   {s.name:12s} {len(tr.t):5d} poses {len(s.obstacles):2d} obstacles  cached "
+              f"{cached['wall_ms']:.2f} ms (cpu {cached['cpu_ms']:.2f})  uncached {uncached['wall_ms']:.2f} ms "
+              f"(cpu {uncached['cpu_ms']:.2f})")
+    out["seeds"] = seeds
+
+    print("2. compute_metrics, synthetic 10 s episode among 10 boxes")
+    s = random_layout(1)
+    tr = follow(np.asarray(paths.shortest_path(s).points))
+    cached = timed(lambda: compute_metrics(s, tr), n)
+    uncached = timed(lambda: compute_metrics(s, tr), max(n // 4, 5), before=paths.clear_caches)
+    out["synthetic_10_boxes"] = {"poses": len(tr.t), "cached": cached, "uncached": uncached}
+    print(f"   {len(tr.t)} poses: cached {cached['wall_ms']:.2f} ms (cpu {cached['cpu_ms']:.2f}), "
+          f"uncached {uncached['wall_ms']:.2f} ms (cpu {uncached['cpu_ms']:.2f})")
+
+    print("3. shortest_path on new 10-box layouts (the search's validity check)")
+    layouts = [random_layout(seed) for seed in range(100)]
+    wall, cpu = [], []
+    for layout in layouts:
+        paths.clear_caches()
+        w0, c0 = time.perf_counter(), time.thread_time()
+        paths.path_exists(layout)
+        cpu.append(time.thread_time() - c0)
+        wall.append(time.perf_counter() - w0)
+    hit = timed(lambda: paths.path_exists(layouts[0]), n)
+    out["shortest_path_10_boxes"] = {"wall_ms": statistics.median(wall) * 1e3, "cpu_ms": statistics.median(cpu) * 1e3,
+                                     "p90_wall_ms": float(np.percentile(wall, 90) * 1e3), "cache_hit": hit}
+    print(f"   uncached median {statistics.median(wall) * 1e3:.2f} ms (cpu {statistics.median(cpu) * 1e3:.2f}), "
+          f"p90 {np.percentile(wall, 90) * 1e3:.2f} ms; cache hit {hit['wall_ms'] * 1e3:.1f} us")
+    if args.json:
+        args.json.write_text(json.dumps(out, indent=2))
+
+
+if __name__ == "__main__":
+    main()
