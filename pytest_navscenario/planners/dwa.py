@@ -73,6 +73,9 @@ class _Table:
         t = np.linspace(horizon / steps, horizon, steps)
         self.x, self.y, self.th = _rollout(VX[:, None], VY[:, None], WZ[:, None], t)  # (G, steps)
         self.vel = VX / max(p.max_speed, 1e-9)
+        self.turn = np.abs(WZ) / max(p.max_yaw_rate, 1e-9)
+        # yaw reached if the robot braked as hard as it can after the next tick (Fox et al.)
+        self.stop_yaw = WZ * p.tick + np.sign(WZ) * WZ ** 2 / (2.0 * max(p.max_yaw_accel, 1e-9))
         if p.circle:
             self.half, self.radius, self.body = (0.0, 0.0), p.half_length, p.half_length
         else:
@@ -100,8 +103,7 @@ class _Table:
             A[:, :, 1, 0], A[:, :, 1, 1], A[:, :, 1, 2] = -s, c, s * x - c * y
             half = np.tile(np.asarray(self.half, dtype=np.float32), len(g) * self.steps)[:, None]
             cached = (A.reshape(-1, 3), half, x, y, x[:, -1].copy(), y[:, -1].copy(),
-                      th[:, -1].copy(), self.vel[g], float(self.reach[g].max()),
-                      np.stack([I, J, K], axis=1))
+                      th[:, -1].copy(), self.vel[g], self.turn[g], self.stop_yaw[g], float(self.reach[g].max()), np.stack([I, J, K], axis=1))
             self.windows[idx] = cached
         return cached
 
@@ -134,6 +136,7 @@ class DynamicWindowPlanner:
         clearance_cap: clearances above this many metres score the same (0.8).
         progress_weight, heading_weight, clearance_weight, velocity_weight: the score weights
             (1.0, 0.4, 0.4, 0.1).
+        turn_weight: penalty on the yaw rate, so that ties do not make it wobble (0.05).
     """
 
     name = "dwa"
@@ -143,7 +146,7 @@ class DynamicWindowPlanner:
                  reverse_speed: float = 0.2, clearance_buffer: float = 0.05,
                  clearance_cap: float = 0.8, progress_weight: float = 1.0,
                  heading_weight: float = 0.4, clearance_weight: float = 0.4,
-                 velocity_weight: float = 0.1):
+                 velocity_weight: float = 0.1, turn_weight: float = 0.05):
         if horizon <= 0 or steps < 1 or window < 1:
             raise ValueError("DynamicWindowPlanner: horizon must be > 0, steps >= 1, window >= 1")
         self.horizon = float(horizon)
@@ -154,6 +157,7 @@ class DynamicWindowPlanner:
         self.clearance_cap = float(clearance_cap)
         self.weights = (float(progress_weight), float(heading_weight),
                         float(clearance_weight), float(velocity_weight))
+        self.turn_weight = float(turn_weight)
         self._p: RobotParams | None = None
         self._idx: tuple[int, int, int] | None = None
         self._goal_phase = False
@@ -168,9 +172,9 @@ class DynamicWindowPlanner:
         self._beams_shape = None
 
     def _beams(self, angles: np.ndarray) -> None:
-        """Per-episode lidar geometry: unit vectors, and the inflation that covers the surface
-        between two neighbouring beams (half the beam spacing at the rollouts' reach) plus
-        float32 unit vectors of the beams."""
+        """Per-episode lidar geometry: float32 unit vectors of the beams, and the inflation
+        that covers the surface between two neighbouring beams (half the beam spacing at the
+        rollouts' reach)."""
         t = self._t
         self._beams_shape = angles.shape
         self._unit = np.stack([np.cos(angles), np.sin(angles)]).astype(np.float32)
@@ -189,7 +193,7 @@ class DynamicWindowPlanner:
             v = obs.velocity
             self._idx = tuple(int(np.argmin(np.abs(grid - float(value))))
                               for grid, value in zip((t.vx, t.vy, t.wz), v))
-        A, half, X, Y, ex, ey, eth, vel, reach, cand = t.window(self._idx, self.window)
+        A, half, X, Y, ex, ey, eth, vel, turn, stop_yaw, reach, cand = t.window(self._idx, self.window)
         n = len(cand)
 
         # Clearance: footprint at every rollout pose vs the lidar points within reach.
@@ -217,7 +221,7 @@ class DynamicWindowPlanner:
         dmin = np.hypot(tx - X, ty - Y).min(axis=1)
         if self._in_goal_phase(obs, d0):
             want = float(wrap_angle(p.goal_yaw - float(obs.pose[2])))
-            heading_err = np.abs(wrap_angle(want - eth))
+            heading_err = np.abs(wrap_angle(want - stop_yaw))
             progress = np.hypot(tx - ex, ty - ey) * (-1.0 / max(p.goal_tolerance, 1e-6))
         else:
             heading_err = np.abs(wrap_angle(np.arctan2(ty - ey, tx - ex) - eth))
@@ -230,6 +234,7 @@ class DynamicWindowPlanner:
         score += heading_err * (-wh / math.pi)
         score += clear * (wc / self.clearance_cap)
         score += vel * wv
+        score -= turn * self.turn_weight
         admissible = clear >= self._min_clear
         if admissible.any():
             score[~admissible] = -np.inf
