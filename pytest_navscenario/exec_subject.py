@@ -113,9 +113,19 @@ class ExternalProcess:
 
     # -- messaging --------------------------------------------------------------------------
     def request(self, message: dict[str, Any], timeout: float, what: str) -> dict[str, Any]:
-        """Send one message, wait up to ``timeout`` s for one JSON line back."""
+        """Send one message, wait up to ``timeout`` s for one JSON line back.
+
+        Anything that interrupts the exchange (a protocol error, the harness's own tick alarm,
+        Ctrl-C) stops the process, so a late answer can never be read as the next tick's."""
         if not self.alive:
             self.start()
+        try:
+            return self._exchange(message, timeout, what)
+        except BaseException:
+            self.stop(grace=0.2)
+            raise
+
+    def _exchange(self, message: dict[str, Any], timeout: float, what: str) -> dict[str, Any]:
         assert self.proc is not None and self.proc.stdin is not None and self.proc.stdout is not None
         try:
             self.proc.stdin.write((json.dumps(message, separators=(",", ":")) + "\n").encode())
