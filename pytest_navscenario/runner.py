@@ -82,9 +82,9 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
 
     t0 = time.perf_counter()
     instance, spec = make_planner(planner)
-    name, version = subject_identity(instance, spec)
     ep_seed = effective_seed(scenario.simulation.seed, seed)
     facts = simulate(scenario, instance, ep_seed, tick_limit=tick_limit)
+    name, version = subject_identity(instance, spec)  # after reset: a planner may name itself there
     t1 = time.perf_counter()
     outcome, message = oracle.classify(
         scenario, facts.trajectory, collision=facts.collision, safety_stop=facts.safety_stop,
