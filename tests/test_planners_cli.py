@@ -1,0 +1,58 @@
+"""``navscenario run`` and ``navscenario check-planner``, called through cli.main."""
+from __future__ import annotations
+
+import json
+import textwrap
+from pathlib import Path
+
+from pytest_navscenario import cli
+
+SEEDS_DIR = Path(__file__).resolve().parent.parent / "scenarios"
+
+
+def test_run_prints_outcome_message_and_metrics_and_exits_0_on_success(capsys):
+    code = cli.main(["run", str(SEEDS_DIR / "boxes1.yaml"), "--subject", "dwa", "--seed", "0"])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    assert "boxes1" in out and "with dwa 1.0, seed 0" in out
+    assert "outcome: success" in out and "message: success in" in out
+    assert "min_clearance            0.750 m" in out and "path_efficiency" in out
+
+
+def test_run_json_and_exit_1_on_a_failing_outcome(capsys):
+    code = cli.main(["run", str(SEEDS_DIR / "boxes2.yaml"), "-s", "potential-field", "--json"])
+    record = json.loads(capsys.readouterr().out)
+    assert code == 1
+    assert record["outcome"] == "safety-stop" and record["passed"] is False
+    assert "box_near" in record["message"] and record["subject"] == "potential-field"
+    assert 0 < record["metrics"]["min_clearance"] < 1 and record["seed"] == 0
+
+
+def test_run_with_a_bad_file_or_subject_says_what_is_wrong_and_exits_2(tmp_path, capsys):
+    assert cli.main(["run", str(tmp_path / "missing.yaml")]) == 2
+    assert "missing.yaml" in capsys.readouterr().err
+    code = cli.main(["run", str(SEEDS_DIR / "boxes1.yaml"), "--subject", "nope"])
+    err = capsys.readouterr().err
+    assert code == 2 and "subject 'nope'" in err and "potential-field" in err
+
+
+def test_check_planner_passes_builtins_and_fails_a_broken_user_planner(tmp_path, monkeypatch, capsys):
+    assert cli.main(["check-planner", "potential-field", "--ticks", "5"]) == 0
+    assert "check_planner(potential-field): OK after 5 ticks" in capsys.readouterr().out
+
+    (tmp_path / "my_broken_nav.py").write_text(textwrap.dedent("""
+        class Planner:
+            def reset(self, scenario):
+                pass
+            def act(self, obs):
+                return [1.0, 0.0]
+    """))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert cli.main(["check-planner", "my_broken_nav:Planner", "--ticks", "3"]) == 1
+    out = capsys.readouterr().out
+    assert "FAILED" in out and "problem: planner.act returned a list of length 2" in out
+
+    assert cli.main(["check-planner", "my_broken_nav:Planner", "--json",
+                     "--scenario", str(SEEDS_DIR / "corridor.yaml")]) == 1
+    record = json.loads(capsys.readouterr().out)
+    assert record["ok"] is False and len(record["problems"]) == 1
