@@ -9,7 +9,7 @@ How, and what it costs: bounding circles make the common case (nothing within re
 any footprint point can travel over the horizon) about a microsecond of plain Python. Otherwise the
 footprint is sampled along the constant-twist arc every ``SAMPLE_SPACING`` of point motion and its
 exact distance to each nearby obstacle is computed in one vectorised numpy pass (box-box: vertex to
-rectangle both ways, which is exact for the first contact of convex shapes; circles analytically).
+rectangle both ways plus a separating-axis overlap test; circles analytically).
 Sampling can make the layer halt up to ``SAMPLE_SPACING / 2`` early, never late. Same shapes as
 geometry.py (boxes and true circles), without building shapely polygons in the loop.
 """
@@ -108,7 +108,8 @@ class SafetyLayer:
         ox = self.corners[idx, :, 0][None] - X[:, :, None]     # (k, m, 4)
         oy = self.corners[idx, :, 1][None] - Y[:, :, None]
         Cn, Sn = C[:, :, None], S[:, :, None]
-        d = _rect_distance(ox * Cn + oy * Sn, -ox * Sn + oy * Cn, self.hl, self.hw).min(axis=2)
+        rx, ry = ox * Cn + oy * Sn, -ox * Sn + oy * Cn
+        d = _rect_distance(rx, ry, self.hl, self.hw).min(axis=2)
         d = np.maximum(d - self.obs_r[idx], 0.0)
         box = self.is_box[idx]
         if box.any():
@@ -119,9 +120,18 @@ class SafetyLayer:
             dx = wx[:, None, :] - self.centres[bi, 0][None, :, None]              # (k, b, 4)
             dy = wy[:, None, :] - self.centres[bi, 1][None, :, None]
             bc, bs = self.cos[bi][None, :, None], self.sin[bi][None, :, None]
-            d2 = _rect_distance(dx * bc + dy * bs, -dx * bs + dy * bc,
-                                self.half[bi, 0][None, :, None], self.half[bi, 1][None, :, None])
-            d[:, box] = np.minimum(d[:, box], d2.min(axis=2))
+            bx, by = dx * bc + dy * bs, -dx * bs + dy * bc
+            hx, hy = self.half[bi, 0][None, :, None], self.half[bi, 1][None, :, None]
+            d2 = _rect_distance(bx, by, hx, hy)
+            db = np.minimum(d[:, box], d2.min(axis=2))
+            # crossing rectangles (no corner inside the other): separating-axis test, 0 on overlap
+            rxb, ryb = rx[:, box], ry[:, box]
+            overlap = ((rxb.min(axis=2) <= self.hl) & (rxb.max(axis=2) >= -self.hl)
+                       & (ryb.min(axis=2) <= self.hw) & (ryb.max(axis=2) >= -self.hw)
+                       & (bx.min(axis=2) <= hx[..., 0]) & (bx.max(axis=2) >= -hx[..., 0])
+                       & (by.min(axis=2) <= hy[..., 0]) & (by.max(axis=2) >= -hy[..., 0]))
+            db[overlap] = 0.0
+            d[:, box] = db
         return d
 
     def check(self, x: float, y: float, yaw: float, vx: float, vy: float, wz: float) -> str | None:

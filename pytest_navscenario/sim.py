@@ -296,9 +296,9 @@ def validate_command(cmd: Any) -> tuple[float, float, float] | str:
 
 
 def _planner_traceback(exc: BaseException) -> str:
-    """The planner's own traceback: the harness frame (_call_planner) is dropped."""
+    """The planner's own traceback: the harness's frames (simulate, _call_planner) are dropped."""
     tb = exc.__traceback__
-    if tb is not None and tb.tb_frame.f_code is _call_planner.__code__ and tb.tb_next is not None:
+    while tb is not None and tb.tb_next is not None and tb.tb_frame.f_code.co_filename == __file__:
         tb = tb.tb_next
     return "".join(traceback.format_exception(type(exc), exc, tb))
 
