@@ -345,27 +345,37 @@ def _plan(stops: np.ndarray, obstacles: Sequence[Obstacle], r: float) -> Shortes
 
 def _segments_free(p: np.ndarray, q: np.ndarray, g: _Grown) -> np.ndarray:
     """For each segment p->q: does it stay out of the interior of every grown polygon?
-    Broad phase on bounding circles, then the separating-axis test (polygon edge normals
-    and the segment's own normal)."""
+    Broad phase on bounding circles, then the separating-axis test (polygon edge normals and
+    the segment's own normal): first against the circle each segment cuts deepest (which
+    blocks most blocked segments), then the survivors against all their candidates."""
     d = q - p
-    seg2 = np.maximum((d * d).sum(1), 1e-300)[:, None]
+    seg2 = np.maximum((d * d).sum(1), 1e-300)
     rx = g.centre[None, :, 0] - p[:, 0:1]                                  # (e, k)
     ry = g.centre[None, :, 1] - p[:, 1:2]
-    t = np.clip((rx * d[:, 0:1] + ry * d[:, 1:2]) / seg2, 0.0, 1.0)
+    t = np.clip((rx * d[:, 0:1] + ry * d[:, 1:2]) / seg2[:, None], 0.0, 1.0)
     gx, gy = rx - t * d[:, 0:1], ry - t * d[:, 1:2]
-    e, jj = np.nonzero(gx * gx + gy * gy < (g.radius[None, :] - 1e-7) ** 2)
-    if len(e) == 0:
-        return np.ones(len(p), dtype=bool)
+    depth = (g.radius[None, :] - 1e-7) ** 2 - (gx * gx + gy * gy)         # > 0: may be blocked
+    free = np.ones(len(p), dtype=bool)
+    if len(p) > 64 and g.radius.size > 1:
+        first = np.argmax(depth, axis=1)
+        e = np.nonzero(depth[np.arange(len(p)), first] > 0)[0]
+        free[e[_blocked(p[e], q[e], d[e], seg2[e], g, first[e])]] = False
+        depth[~free] = -1.0
+    e, jj = np.nonzero(depth > 0)
+    if len(e):
+        free[e[_blocked(p[e], q[e], d[e], seg2[e], g, jj)]] = False
+    return free
+
+
+def _blocked(pp, qq, dd, seg2, g: _Grown, jj) -> np.ndarray:
+    """Separating-axis test of segments pp->qq against polygons jj: True where they cut the interior."""
     nrm, off, vv = g.normals[jj], g.offsets[jj], g.verts[jj]              # (c, m, ...)
-    pp, qq, dd = p[e], q[e], d[e]
     sep_poly = (((nrm[..., 0] * pp[:, 0:1] + nrm[..., 1] * pp[:, 1:2]) >= off - _TOL)
                 & ((nrm[..., 0] * qq[:, 0:1] + nrm[..., 1] * qq[:, 1:2]) >= off - _TOL)).any(1)
     side = dd[:, 0:1] * (vv[..., 1] - pp[:, 1:2]) - dd[:, 1:2] * (vv[..., 0] - pp[:, 0:1])
-    slack = _TOL * np.sqrt(seg2[e])
+    slack = _TOL * np.sqrt(seg2)[:, None]
     sep_line = (side >= -slack).all(1) | (side <= slack).all(1)
-    free = np.ones(len(p), dtype=bool)
-    free[e[~(sep_poly | sep_line)]] = False
-    return free
+    return ~(sep_poly | sep_line)
 
 
 def _astar(adj: list[list[tuple[int, float]]], nodes: np.ndarray, src: int, dst: int) -> list[int] | None:

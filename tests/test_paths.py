@@ -173,3 +173,20 @@ def test_box_distances_agree_with_shapely():
     gap, a, b = min_obstacle_gap(s)
     assert gap == pytest.approx(expected[0], abs=1e-12)
     assert (a, b) == (f"b{expected[1]}", f"b{expected[2]}")
+
+
+def test_segment_visibility_agrees_with_shapely():
+    # the batched separating-axis test (both rounds: > 64 segments) against shapely's relate
+    rng = np.random.default_rng(8)
+    obstacles = [BoxObstacle(f"b{i}", *rng.uniform(-4, 4, 2), *rng.uniform(0.2, 2, 2), rng.uniform(-180, 180))
+                 for i in range(6)] + [CylinderObstacle(f"c{i}", *rng.uniform(-4, 4, 2), 0.4) for i in range(3)]
+    grown = paths._grow(obstacles, 0.25)
+    polys = [Polygon(paths.inflated_polygon(o, 0.25)) for o in obstacles]
+    vertices = np.concatenate([np.asarray(p.exterior.coords[:-1]) for p in polys])
+    p = np.concatenate([rng.uniform(-5, 5, (150, 2)), vertices[rng.integers(len(vertices), size=100)]])
+    q = np.concatenate([rng.uniform(-5, 5, (150, 2)), vertices[rng.integers(len(vertices), size=100)]])
+    free = paths._segments_free(p, q, grown)
+    expected = [not any(LineString([a, b]).relate_pattern(poly, "T********") for poly in polys)
+                for a, b in zip(p, q)]
+    assert free.tolist() == expected
+    assert 20 < free.sum() < len(free) - 20
