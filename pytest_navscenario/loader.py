@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import numbers
 import os
 import re
 from pathlib import Path
@@ -116,7 +117,7 @@ class _Section:
                            path or None, node.line if node is not None and node.line else line,
                            f"write it as 'key: value' lines with keys from: {', '.join(keys)}")
         self.node = node
-        self.line = node.line if node.line is not None else line
+        self.line = line if line is not None else node.line
         for key, (key_line, _) in node.items.items():
             if key not in keys:
                 raise ctx.fail(f"unknown key {str(key)!r}", _join(path, str(key)), key_line,
@@ -161,14 +162,16 @@ class _Section:
             return default
         field, line = _join(self.path, key), self.line_of(key)
         value = node.value if isinstance(node, YScalar) else None
-        if isinstance(value, float) and math.isfinite(value) and value.is_integer():
+        if isinstance(value, numbers.Real) and not isinstance(value, numbers.Integral) and math.isfinite(value) \
+                and float(value).is_integer():
             value = int(value)
-        if isinstance(value, bool) or not isinstance(value, int):
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
             raise self.ctx.fail(f"expected a whole number, got {describe(node)}", field, line,
                                 f"write a whole number between {low} and {high}")
         if not low <= value <= high:
-            raise self.ctx.fail(f"must be between {low} and {high}, got {value}", field, line)
-        return value
+            raise self.ctx.fail(f"must be between {low} and {high}, got {value}", field, line,
+                                f"write a whole number from {low} to {high}")
+        return int(value)
 
     def string(self, key: str, default: Any, *, nonempty: bool = True) -> str:
         node = self.get(key)
@@ -232,7 +235,7 @@ def _number(ctx: _Ctx, node: YNode, field: str, line: int | None, *, low: float 
     value = node.value if isinstance(node, YScalar) else None
     if isinstance(value, str) and isinstance(node, YScalar) and node.plain and _NUMBER_WORD.fullmatch(value):
         value = float(value)
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise ctx.fail(f"expected a number, got {describe(node)}", field, line,
                        "write a plain number such as 1.5 (no quotes, no units)")
     try:
@@ -249,9 +252,10 @@ def _number(ctx: _Ctx, node: YNode, field: str, line: int | None, *, low: float 
     if low is not None and (number < low or (low_open and number == low)):
         need = f"> {low:g}" if low_open else f">= {low:g}"
         raise ctx.fail(f"must be {need}, got {number!r}", field, line,
-                       "sizes, times and rates must be positive" if low_open else None)
+                       "sizes, times and rates must be positive" if low_open else f"write a value {need}")
     if high is not None and number > high:
-        raise ctx.fail(f"must be <= {high:g}, got {number!r}", field, line)
+        raise ctx.fail(f"must be <= {high:g}, got {number!r}", field, line,
+                       f"write a value from {low:g} to {high:g}" if low is not None else f"write at most {high:g}")
     return number
 
 
@@ -501,6 +505,11 @@ def check_scenario(scenario: Scenario, *, _ctx: _Ctx | None = None) -> None:
     lines = ctx.lines
     sim = scenario.simulation
     steps = _steps_per_tick(sim)
+    if steps > 1e6:
+        raise ctx.fail(f"timestep {sim.timestep!r} s and control_rate {sim.control_rate!r} Hz give "
+                       f"{steps:.3g} physics steps per control tick", "simulation.control_rate",
+                       lines.get("simulation.control_rate", lines.get("simulation")),
+                       "raise the control rate (planner ticks per second)")
     if steps < 1 - 1e-9 or abs(steps - round(steps)) > 1e-6 * max(1.0, steps):
         whole = max(1, round(steps))
         raise ctx.fail(f"timestep {sim.timestep!r} s and control_rate {sim.control_rate!r} Hz give "
