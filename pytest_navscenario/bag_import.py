@@ -280,8 +280,9 @@ class Cluster:
 
 
 def occupied_clusters(points: np.ndarray, origins: np.ndarray, *, res: float = 0.05,
-                      min_hits: int = 3, min_cells: int = 3) -> tuple[list[Cluster], int]:
-    """Grid the returns, keep cells hit ``min_hits`` times, group 8-connected cells.
+                      min_hits: int = 2, link: float = 0.3, min_cells: int = 3) -> tuple[list[Cluster], int]:
+    """Grid the returns, keep cells hit ``min_hits`` times, group cells closer than ``link``
+    (sparse beams leave gaps along a far face; a robot does not fit through ``link`` anyway).
 
     Returns the clusters and the number of small clusters (< ``min_cells``) dropped as noise.
     """
@@ -292,31 +293,13 @@ def occupied_clusters(points: np.ndarray, origins: np.ndarray, *, res: float = 0
     inverse = inverse.reshape(-1)
     sums = np.zeros((len(keys), 4))
     np.add.at(sums, inverse, np.concatenate([points, origins], axis=1))
-    means = sums / counts[:, None]
-    keep = counts >= min_hits
-    keys, means = keys[keep], means[keep]
-    index = {(int(a), int(b)): i for i, (a, b) in enumerate(keys)}
-    label = -np.ones(len(keys), dtype=np.int64)
+    means = (sums / counts[:, None])[counts >= min_hits]
     clusters, dropped = [], 0
-    for seed in range(len(keys)):
-        if label[seed] >= 0:
-            continue
-        label[seed] = seed
-        stack, members = [seed], []
-        while stack:
-            i = stack.pop()
-            members.append(i)
-            a, b = keys[i]
-            for da in (-1, 0, 1):
-                for db in (-1, 0, 1):
-                    j = index.get((int(a + da), int(b + db)))
-                    if j is not None and label[j] < 0:
-                        label[j] = seed
-                        stack.append(j)
+    for members in _groups(means[:, :2], link):
         if len(members) < min_cells:
             dropped += 1
             continue
-        m = means[np.sort(members)]
+        m = means[members]
         clusters.append(Cluster(points=m[:, :2], viewpoint=m[:, 2:].mean(axis=0)))
     return clusters, dropped
 
@@ -370,6 +353,7 @@ class FitSettings:
     min_segment: float = 0.2      # m, shorter wall pieces are left to the box fallback
     wall_width: float = 0.15      # m, thickness of a wall box (only its near face is seen)
     max_block: float = 2.5        # m, longest side of a cluster fitted as one solid box
+    link: float = 0.3             # m, returns closer than this belong to one obstacle
 
 
 def _round(points: np.ndarray, s: FitSettings) -> tuple[float, float, float] | None:
@@ -619,7 +603,7 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
         notes.append(f"laser {data.scan_frame} at x={mount[0]:.3f} y={mount[1]:.3f} "
                      f"yaw={math.degrees(mount[2]):.1f} deg in {data.base_frame}, {how}")
         pts, origins = project_scans(data, mount)
-        clusters, dropped = occupied_clusters(pts, origins, res=settings.res)
+        clusters, dropped = occupied_clusters(pts, origins, res=settings.res, link=settings.link)
         obstacles = fit_obstacles(clusters, settings, free_xy=od[:, 1:3])
         n_cyl = sum(isinstance(o, CylinderObstacle) for o in obstacles)
         notes.append(f"{len(data.scan_t)} scans, {len(pts)} returns -> {len(clusters)} clusters -> "

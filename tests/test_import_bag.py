@@ -1,0 +1,140 @@
+"""``navscenario from-bag`` on the real TurtleBot3 bag (tests/data, BSD-3-Clause, see LICENSES)
+and on bags written here: pillars, walls, path, a seed the built-in DWA drives, topics by type,
+time windows, reference trajectories, bags without scans, old ROS 2 bags without type definitions."""
+from __future__ import annotations
+
+import math
+import sqlite3
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pytest_navscenario.bag_import import decimate_path, scenario_from_bag
+from pytest_navscenario.cli import main
+from pytest_navscenario.loader import load_scenario
+from pytest_navscenario.scenario import BoxObstacle, CylinderObstacle
+
+DATA = Path(__file__).resolve().parent / "data"
+TB3 = DATA / "fuse_turtlebot3.bag"
+SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
+
+
+@pytest.fixture(scope="module")
+def tb3():
+    t0 = time.perf_counter()
+    seed = scenario_from_bag(TB3)
+    seed.seconds = time.perf_counter() - t0
+    return seed
+
+
+def test_turtlebot3_gives_nine_pillars_on_a_1_1_m_grid(tb3):
+    pillars = [o for o in tb3.scenario.obstacles if isinstance(o, CylinderObstacle)]
+    assert len(pillars) == 9
+    grid = sorted((round(p.x / 1.1), round(p.y / 1.1)) for p in pillars)
+    assert grid == [(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)]
+    for p in pillars:  # turtlebot3_world's pillars: r = 0.15 m
+        assert math.hypot(p.x - 1.1 * round(p.x / 1.1), p.y - 1.1 * round(p.y / 1.1)) < 0.03
+        assert p.radius == pytest.approx(0.15, abs=0.02)
+
+
+def test_turtlebot3_walls_enclose_the_loop(tb3):
+    walls = [o for o in tb3.scenario.obstacles if isinstance(o, BoxObstacle)]
+    long_walls = [w for w in walls if w.length > 1.5]
+    assert len(long_walls) >= 6  # the hexagon's six long sides
+    radii = [math.hypot(w.x, w.y) for w in long_walls]
+    assert min(radii) > 2.0 and max(radii) < 3.0
+    # the laser was estimated 0.064 m behind the base (a TurtleBot3 Waffle), the note says how
+    assert tb3.mount == pytest.approx((-0.064, 0.0, 0.0), abs=0.02)
+    assert any("estimated from the scans" in n and "--laser-pose" in n for n in tb3.notes)
+
+
+def test_turtlebot3_path_and_speed(tb3):
+    m = tb3.scenario.mission
+    assert (m.start.x, m.start.y) == pytest.approx((-1.93, 0.015), abs=0.01)  # odometry, not the origin
+    assert len(m.waypoints) >= 10
+    driven = np.hypot(*np.diff(tb3.path[:, 1:], axis=0).T).sum()
+    assert driven == pytest.approx(24.8, abs=0.1)
+    assert tb3.seconds < 5.0, f"import took {tb3.seconds:.2f} s (budget 5 s)"
+
+
+def test_turtlebot3_seed_is_driven_by_dwa(tb3, tmp_path):
+    from pytest_navscenario.runner import run_scenario
+    out = tmp_path / "tb3.yaml"
+    assert main(["from-bag", str(TB3), "-o", str(out)]) == 0
+    seed = load_scenario(out)
+    assert seed.obstacles == tb3.scenario.obstacles
+    result = run_scenario(seed, "dwa")
+    assert result.outcome.value == "success", result.message
+    assert len(result.trajectory.waypoint_times) == len(seed.mission.waypoints)
+
+
+def test_window_laser_pose_and_reference_csv(tmp_path, capsys):
+    out = tmp_path / "part.yaml"
+    rc = main(["from-bag", str(TB3), "-o", str(out), "--start", "10", "--end", "40",
+               "--laser-pose=-0.064,0,0", "--path-as", "reference"])
+    assert rc == 0
+    text = capsys.readouterr().out
+    assert "from --laser-pose" in text and "part.reference.csv" in text
+    seed = load_scenario(out)
+    assert seed.mission.waypoints == () and seed.reference.file == "part.reference.csv"
+    rows = np.loadtxt(tmp_path / "part.reference.csv", delimiter=",", skiprows=1)
+    assert (tmp_path / "part.reference.csv").read_text().startswith("t,x,y\n")
+    assert rows[0, 0] == 0.0 and rows[-1, 0] == pytest.approx(30.0, abs=0.1)
+    assert (seed.mission.start.x, seed.mission.start.y) == pytest.approx(tuple(rows[0, 1:]), abs=1e-3)
+    assert (seed.mission.goal.x, seed.mission.goal.y) == pytest.approx(tuple(rows[-1, 1:]), abs=1e-3)
+    assert sum(isinstance(o, CylinderObstacle) for o in seed.obstacles) == 9
+
+
+def test_decimate_path_follows_the_path():
+    t = np.linspace(0, 2 * math.pi, 400)
+    xy = np.stack([2 * np.cos(t), 2 * np.sin(t)], 1)
+    wps = decimate_path(xy, tolerance=0.1, min_spacing=0.5)
+    assert 6 <= len(wps) <= 30
+    assert np.allclose(np.hypot(wps[:, 0], wps[:, 1]), 2.0, atol=0.11)
+    assert np.hypot(*(wps[0] - xy[0])) >= 0.5 and np.hypot(*(wps[-1] - xy[-1])) >= 0.5
+
+
+@pytest.fixture(scope="module")
+def boxes_bag(tmp_path_factory):
+    """A rosbag2 sqlite3 bag of a real DWA episode on boxes2, then made 'old': its message
+    definitions deleted (ROS 2 bags before Iron embed none)."""
+    from pytest_navscenario.bags import write_episode_bag
+    from pytest_navscenario.runner import run_scenario
+    result = run_scenario(load_scenario(SCENARIOS / "boxes2.yaml"), "dwa")
+    path = write_episode_bag(result, tmp_path_factory.mktemp("old") / "ep", fmt="sqlite3")
+    db = sqlite3.connect(path / "ep.db3")
+    db.execute("DELETE FROM message_definitions")
+    db.commit()
+    db.close()
+    return path, result
+
+
+def test_old_ros2_bag_without_type_definitions(boxes_bag):
+    path, result = boxes_bag
+    seed = scenario_from_bag(path)
+    assert len(seed.scenario.obstacles) == len(result.scenario.obstacles)
+    assert any("from /tf_static" in n for n in seed.notes)
+
+
+def test_bag_without_scans_gives_trajectory_only(tmp_path, capsys):
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    from pytest_navscenario.bags import build
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    bag = tmp_path / "odom_only"
+    with Writer(bag, version=9, storage_plugin=StoragePlugin.MCAP) as w:
+        conn = w.add_connection("/robot/odom", "nav_msgs/msg/Odometry", typestore=ts)
+        for i in range(50):
+            msg = build(ts, "nav_msgs/msg/Odometry", {
+                "header": {"stamp": {"sec": 100 + i // 10, "nanosec": (i % 10) * 100_000_000}, "frame_id": "odom"},
+                "pose": {"pose": {"position": {"x": 5.0 + 0.1 * i, "y": -2.0}, "orientation": {"w": 1.0}}}})
+            w.write(conn, (100 * 10 + i) * 100_000_000, ts.serialize_cdr(msg, "nav_msgs/msg/Odometry"))
+    out = tmp_path / "s.yaml"
+    assert main(["from-bag", str(bag), "-o", str(out)]) == 0
+    assert "no laser scan topic" in capsys.readouterr().out
+    seed = load_scenario(out)
+    assert seed.obstacles == ()
+    assert (seed.mission.start.x, seed.mission.goal.x) == pytest.approx((5.0, 9.9))
