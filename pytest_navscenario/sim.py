@@ -268,6 +268,14 @@ def _describe(value: Any) -> str:
 def validate_command(cmd: Any) -> tuple[float, float, float] | str:
     """(vx, vy, wz) as floats, or a plain-words message saying what is wrong with ``cmd``."""
     expected = "expected a Command(vx, vy, wz) or a sequence of 3 finite floats"
+    if (type(cmd) is Command or type(cmd) is tuple) and len(cmd) == 3:   # the common case, fast
+        try:
+            vx, vy, wz = float(cmd[0]), float(cmd[1]), float(cmd[2])
+        except (TypeError, ValueError):
+            pass
+        else:
+            if math.isfinite(vx + vy + wz):
+                return vx, vy, wz
     if type(cmd) is Command or type(cmd) is tuple:
         items = cmd
     elif isinstance(cmd, np.ndarray):

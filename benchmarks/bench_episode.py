@@ -1,0 +1,108 @@
+"""Episode speed: median wall time of one episode per shipped seed x built-in planner, and the
+bare-loop floor (the same model, the same number of physics steps and ray casts, nothing else).
+
+    python benchmarks/bench_episode.py [--repeats 21] [--scenarios scenarios/*.yaml]
+
+Columns: ``episode`` = sim.simulate (the control loop), ``run_scenario`` = + oracle and metrics,
+``floor`` = mj_step2/mj_step1 + one mj_multiRay per tick for as many ticks, ``planner`` = the
+planner's own code, ``harness`` = episode - physics - rays - planner (safety layer, observation,
+validation, recording) as a share of the episode. Medians over ``--repeats`` runs, after a warm-up
+run (model compiled and cached, as in a search or a suite). Times are CPU time of this process
+(time.process_time), which stays meaningful on a machine shared with other jobs; ``wall`` is the
+episode's wall-clock median for comparison. Phase shares come from the episode's own perf_counter
+timings.
+"""
+from __future__ import annotations
+
+import argparse
+import glob
+import os
+import statistics
+import sys
+import time
+
+import mujoco
+import numpy as np
+
+from pytest_navscenario.loader import load_scenario
+from pytest_navscenario.runner import make_planner, run_scenario
+from pytest_navscenario.sim import LIDAR_HEIGHT, compiled_world, lidar_angles, simulate, steps_per_tick
+
+PLANNERS = ("dwa", "potential-field")
+
+
+def bare_floor(scenario, ticks: int) -> float:
+    """Seconds for ``ticks`` control ticks of pure MuJoCo: one multi-ray, then the physics steps."""
+    world = compiled_world(scenario)
+    m = world.model
+    d = world.take_data()
+    try:
+        mission = scenario.mission
+        d.qpos[:] = (mission.start.x, mission.start.y, mission.start.yaw_rad)
+        d.ctrl[:] = (0.5, 0.0, 0.0)
+        mujoco.mj_step1(m, d)
+        angles = lidar_angles(scenario)
+        n = len(angles)
+        vec = np.zeros((n, 3))
+        vec[:, 0], vec[:, 1] = np.cos(angles), np.sin(angles)
+        vec = vec.reshape(-1)
+        pnt = np.array([mission.start.x, mission.start.y, LIDAR_HEIGHT])
+        geom, dist = np.empty(n, np.int32), np.empty(n)
+        spt = steps_per_tick(scenario)
+        rmax = scenario.robot.lidar.range_max
+        step1, step2, ray = mujoco.mj_step1, mujoco.mj_step2, mujoco.mj_multiRay
+        t0 = time.process_time()
+        for _ in range(ticks):
+            ray(m, d, pnt, vec, None, 1, world.robot_body, geom, dist, None, n, rmax)
+            for _ in range(spt):
+                step2(m, d)
+                step1(m, d)
+        return time.process_time() - t0
+    finally:
+        world.give_back(d)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=21)
+    ap.add_argument("--scenarios", nargs="*", default=sorted(glob.glob(
+        os.path.join(os.path.dirname(__file__), "..", "scenarios", "*.yaml"))))
+    args = ap.parse_args(argv)
+
+    print(f"python {sys.version.split()[0]}, mujoco {mujoco.__version__}, {os.cpu_count()} cores, "
+          f"load average {os.getloadavg()[0]:.1f}, median of {args.repeats} runs")
+    head = (f"{'scenario':12s} {'planner':16s} {'outcome':11s} {'sim s':>6s} {'ticks':>5s} "
+            f"{'episode':>8s} {'wall':>8s} {'run_scen':>8s} {'floor':>7s} {'physics':>7s} {'rays':>5s} "
+            f"{'planner':>7s} {'safety':>6s} {'harness':>7s}")
+    print(head)
+    print("-" * len(head))
+    for path in args.scenarios:
+        sc = load_scenario(path)
+        for spec in PLANNERS:
+            res = run_scenario(sc, spec)            # warm-up: compile + cache the model
+            ticks = len(res.trajectory.tick_t)
+            eps, walls, runs, floors, parts = [], [], [], [], {k: [] for k in
+                                                    ("physics", "rays", "planner", "safety", "harness")}
+            for _ in range(args.repeats):
+                planner, _ = make_planner(spec)
+                t0, w0 = time.process_time(), time.perf_counter()
+                facts = simulate(sc, planner, sc.simulation.seed)
+                eps.append(time.process_time() - t0)
+                walls.append(time.perf_counter() - w0)
+                for k in parts:
+                    parts[k].append(facts.timings[k] / facts.timings["total"])
+                t0 = time.process_time()
+                run_scenario(sc, spec)
+                runs.append(time.process_time() - t0)
+                floors.append(bare_floor(sc, ticks))
+            share = {k: statistics.median(v) * 100 for k, v in parts.items()}
+            print(f"{sc.name:12s} {spec:16s} {res.outcome.value:11s} {res.trajectory.duration:6.1f} "
+                  f"{ticks:5d} {statistics.median(eps) * 1e3:6.2f}ms {statistics.median(walls) * 1e3:6.2f}ms "
+                  f"{statistics.median(runs) * 1e3:6.2f}ms {statistics.median(floors) * 1e3:5.2f}ms "
+                  f"{share['physics']:6.0f}% {share['rays']:4.0f}% {share['planner']:6.0f}% "
+                  f"{share['safety']:5.1f}% {share['harness']:6.1f}%")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
