@@ -238,14 +238,15 @@ def _number(ctx: _Ctx, node: YNode, field: str, line: int | None, *, low: float 
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise ctx.fail(f"expected a number, got {describe(node)}", field, line,
                        "write a plain number such as 1.5 (no quotes, no units)")
-    try:
-        number = float(value)
-    except OverflowError:
-        number = math.inf if value > 0 else -math.inf
+    bound = SCENARIO_LIMITS["max_abs_value"]
+    if isinstance(value, numbers.Integral) and abs(value) > bound:  # also ints too big for a float
+        shown = str(value) if len(str(value)) < 30 else f"a {len(str(abs(value)))}-digit number"
+        raise ctx.fail(f"{shown} is beyond the supported magnitude of {bound:g}", field, line,
+                       "scenario values are metres, seconds and degrees of a ground robot; check the value")
+    number = float(value)
     if not math.isfinite(number):
         raise ctx.fail(f"must be a finite number, got {describe(YScalar(number, line))}", field, line,
                        "write an ordinary number")
-    bound = SCENARIO_LIMITS["max_abs_value"]
     if abs(number) > bound:
         raise ctx.fail(f"{number!r} is beyond the supported magnitude of {bound:g}", field, line,
                        "scenario values are metres, seconds and degrees of a ground robot; check the value")
