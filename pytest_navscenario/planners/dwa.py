@@ -137,6 +137,8 @@ class DynamicWindowPlanner:
         progress_weight, heading_weight, clearance_weight, velocity_weight: the score weights
             (1.0, 0.4, 0.4, 0.1).
         turn_weight: penalty on the yaw rate, so that ties do not make it wobble (0.05).
+        lookahead: metres of the straight lane to the target checked for a blockage; when it
+            is blocked the planner aims along the closest free lane instead (3.0; 0 = off).
     """
 
     name = "dwa"
@@ -146,7 +148,8 @@ class DynamicWindowPlanner:
                  reverse_speed: float = 0.2, clearance_buffer: float = 0.05,
                  clearance_cap: float = 0.8, progress_weight: float = 1.0,
                  heading_weight: float = 0.4, clearance_weight: float = 0.4,
-                 velocity_weight: float = 0.1, turn_weight: float = 0.05):
+                 velocity_weight: float = 0.1, turn_weight: float = 0.05,
+                 lookahead: float = 3.0):
         if horizon <= 0 or steps < 1 or window < 1:
             raise ValueError("DynamicWindowPlanner: horizon must be > 0, steps >= 1, window >= 1")
         self.horizon = float(horizon)
@@ -158,6 +161,7 @@ class DynamicWindowPlanner:
         self.weights = (float(progress_weight), float(heading_weight),
                         float(clearance_weight), float(velocity_weight))
         self.turn_weight = float(turn_weight)
+        self.lookahead = float(lookahead)
         self._p: RobotParams | None = None
         self._idx: tuple[int, int, int] | None = None
         self._goal_phase = False
@@ -170,6 +174,7 @@ class DynamicWindowPlanner:
         self._idx = None          # current command as grid indices, set from the first observation
         self._goal_phase = False
         self._beams_shape = None
+        self._side = 0.0          # side (+1 left, -1 right) of the last detour around a blockage
 
     def _beams(self, angles: np.ndarray) -> None:
         """Per-episode lidar geometry: float32 unit vectors of the beams, and the inflation
@@ -182,6 +187,11 @@ class DynamicWindowPlanner:
         reach = float(t.reach.max()) - t.cap
         self._inflation = 0.5 * spacing * reach
         self._min_clear = self._p.safety_margin + self.clearance_buffer + self._inflation
+        # detour lanes: every beam direction is a candidate direction
+        self._beam_angles = np.asarray(angles, dtype=float)
+        diff = self._beam_angles[None, :] - self._beam_angles[:, None]   # [direction, beam]
+        self._cos_diff, self._sin_diff = np.cos(diff), np.sin(diff)
+        self._lane = self._t.half[1] + self._t.radius + self._min_clear
 
     # -- one tick -------------------------------------------------------------------------
     def act(self, obs: Observation) -> Command:
@@ -216,6 +226,8 @@ class DynamicWindowPlanner:
 
         # Score: progress towards the target, heading, clearance, speed.
         tx, ty = target_in_robot_frame(obs.pose, obs.target)
+        if self.lookahead > 0 and near.size:
+            tx, ty = self._subgoal(tx, ty, r, near)
         d0 = math.hypot(tx, ty)
         # closest approach to the target along the rollout: driving past a near target is fine
         dmin = np.hypot(tx - X, ty - Y).min(axis=1)
@@ -245,6 +257,38 @@ class DynamicWindowPlanner:
         i, j, k = (int(v) for v in cand[best])
         self._idx = (i, j, k)
         return Command(float(t.vx[i]), float(t.vy[j]), float(t.wz[k]))
+
+    def _subgoal(self, tx: float, ty: float, r: np.ndarray, near: np.ndarray) -> tuple[float, float]:
+        """The target, or a detour point when lidar points block the straight lane to it.
+
+        Lidar-only DWA falls into the local minimum in front of an obstacle that sits on the
+        straight line (every rollout that makes progress is inadmissible). Like the vector
+        field histogram, look for the free lane (robot half width + clearance wide, as long as
+        the distance to the target, at most ``lookahead``) whose direction is closest to the
+        target's, keeping to the side chosen before, and aim along it instead.
+        """
+        d0 = math.hypot(tx, ty)
+        length = min(d0, self.lookahead)
+        rn = r[near]
+        bearing = math.atan2(ty, tx)
+        rel = self._beam_angles[near] - bearing
+        along = np.cos(rel) * rn
+        lateral = np.abs(np.sin(rel) * rn)
+        if not np.any((lateral < self._lane) & (along > 0.0) & (along < length)):
+            self._side = 0.0
+            return tx, ty
+        along = self._cos_diff[:, near] * rn                 # (directions, points)
+        lateral = np.abs(self._sin_diff[:, near] * rn)
+        blocked = ((lateral < self._lane) & (along > 0.0) & (along < length)).any(axis=1)
+        if blocked.all():
+            return tx, ty
+        offset = wrap_angle(self._beam_angles - bearing)
+        cost = np.abs(offset) + np.where(offset * self._side < 0.0, 0.5, 0.0)
+        cost[blocked] = np.inf
+        j = int(np.argmin(cost))
+        self._side = 1.0 if offset[j] > 0.0 else -1.0
+        phi = float(self._beam_angles[j])
+        return length * math.cos(phi), length * math.sin(phi)
 
     def _in_goal_phase(self, obs: Observation, dist: float) -> bool:
         """Turning to the goal yaw: the target is the goal, the mission checks the yaw and the
