@@ -677,19 +677,25 @@ def resolve_path(scenario: Scenario, relative: str | os.PathLike) -> Path:
 
 
 def looks_like_scenario(text_or_mapping: str | bytes | Mapping[str, Any]) -> bool:
-    """Cheap test whether a YAML text or mapping is a scenario: top-level 'version' and 'mission'."""
+    """Cheap test (no YAML parsing) whether a text or mapping is meant to be a scenario: a top-level
+    ``version`` key and a ``mission`` key, or a near miss such as ``mision`` or ``obstacles``, so a
+    scenario with a typo is collected and reported instead of silently skipped."""
     if isinstance(text_or_mapping, Mapping):
-        return "version" in text_or_mapping and "mission" in text_or_mapping
-    text = text_or_mapping
-    if isinstance(text, (bytes, bytearray)):
-        text = bytes(text).decode("utf-8", errors="replace")
-    if not isinstance(text, str):
+        keys = {str(k) for k in text_or_mapping}
+    else:
+        text = text_or_mapping
+        if isinstance(text, (bytes, bytearray)):
+            text = bytes(text[:1_000_000]).decode("utf-8", errors="replace")
+        if not isinstance(text, str):
+            return False
+        keys = set(_TOP_KEY.findall(text))
+    if "version" not in keys:
         return False
-    return bool(_TOP_VERSION.search(text)) and bool(_TOP_MISSION.search(text))
+    return bool(keys & {"mission", "obstacles", "robot"}) or bool(
+        difflib.get_close_matches("mission", [k.lower() for k in keys], n=1, cutoff=0.75))
 
 
-_TOP_VERSION = re.compile(r"^(?:---\s*\n)?version\s*:", re.M)
-_TOP_MISSION = re.compile(r"^mission\s*:", re.M)
+_TOP_KEY = re.compile(r"^(?:---[ \t]*\n)?[\"']?([A-Za-z_][\w-]*)[\"']?[ \t]*:", re.M)
 
 
 # --------------------------------------------------------------------------- dumping

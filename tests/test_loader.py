@@ -132,6 +132,9 @@ def test_looks_like_scenario():
     assert not looks_like_scenario("name: ci\non: push\njobs: {}\n")
     assert not looks_like_scenario({"version": 1})
     assert not looks_like_scenario("  version: 1\n  mission: {}\n")  # nested, not top level
+    assert not looks_like_scenario("version: '3'\nservices: {}\n")  # docker-compose and friends
+    # a scenario with a typo is still recognised, so the collector reports it instead of skipping it
+    assert looks_like_scenario("version: 1\nmision:\n  start: {x: 0, y: 0}\n")
 
 
 # ------------------------------------------------------------------ bad input: file, line, field, fix
