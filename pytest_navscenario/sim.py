@@ -213,7 +213,7 @@ def _cache_key(scenario: Scenario) -> Any:
     # content hash ignores names, but contacts must map to the right name).
     robot = scenario.robot
     return (robot.footprint, robot.limits, robot.safety, scenario.obstacles,
-            scenario.simulation.timestep, scenario.name)
+            scenario.simulation.timestep)
 
 
 def compiled_world(scenario: Scenario) -> World:
@@ -465,8 +465,9 @@ def simulate(scenario: Scenario, planner: Any, seed: int, max_ticks: int | None 
             rot[0, 1], rot[1, 0] = s, -s
             np.dot(local_dirs, rot, out=vec)
             pnt[0], pnt[1] = x, y
-            multi_ray(m, d, pnt, vec_flat, None, 1, robot_body, ray_geom, ray_dist, None,
-                      beams, range_max)
+            if beams:
+                multi_ray(m, d, pnt, vec_flat, None, 1, robot_body, ray_geom, ray_dist, None,
+                          beams, range_max)
             np.putmask(ray_dist, ray_geom < 0, range_max)   # no return reads as range_max
             if sigma > 0.0:
                 ray_dist += rng.normal(0.0, sigma, beams)
