@@ -30,6 +30,7 @@ from .scenario import (BoxObstacle, CylinderObstacle, Footprint, GoalTolerance, 
 ODOM_TYPES = ("nav_msgs/msg/Odometry",)
 SCAN_TYPES = ("sensor_msgs/msg/LaserScan",)
 TF_STATIC_TYPES = ("tf2_msgs/msg/TFMessage",)
+PATH_AS = ("waypoints", "reference", "both")
 
 
 class BagImportError(NavScenarioError):
@@ -581,9 +582,10 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
                       name: str = "", settings: FitSettings = FitSettings()) -> BagSeed:
     """Build a seed scenario from a bag (see the module docstring). ``laser_pose`` is x, y (m),
     yaw (degrees) of the laser in the robot's base frame; ``reference_file`` is the CSV name
-    written into ``scenario.reference`` when ``path_as == "reference"``."""
-    if path_as not in ("waypoints", "reference"):
-        raise BagImportError(f"--path-as must be 'waypoints' or 'reference', got {path_as!r}")
+    written into ``scenario.reference`` when ``path_as`` is ``"reference"`` or ``"both"``
+    (waypoints to drive the loop and the reference to measure how closely the run replays it)."""
+    if path_as not in PATH_AS:
+        raise BagImportError(f"--path-as must be one of {', '.join(PATH_AS)}, got {path_as!r}")
     data = read_bag(path, odom_topic=odom_topic, scan_topic=scan_topic, start=start, end=end)
     notes = list(data.notes)
     od = data.odom
@@ -618,11 +620,12 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
     path_rows = np.stack([od[:, 0] - od[0, 0], od[:, 1], od[:, 2]], axis=1)
     waypoints: tuple[Pose, ...] = ()
     reference = None
-    if path_as == "waypoints":
+    if path_as in ("waypoints", "both"):
         wps = decimate_path(od[:, 1:3])
         waypoints = tuple(Pose(_r(x), _r(y)) for x, y in wps)
-    else:
+    if path_as in ("reference", "both"):
         reference = Reference(file=reference_file or "reference.csv")
+    # 20 % above the real peak speed, rounded up to 0.05 m/s: headroom for the planner
     limits = Limits(max_speed=_r(max(0.2, math.ceil(speed * 1.2 * 20) / 20), 2),
                     max_yaw_rate=_r(max(30.0, math.ceil(math.degrees(yaw_rate) * 1.2 / 5) * 5), 1))
     lidar = Lidar(beams=min(len(data.scan_angles), 360) if data.scan_topic else 72,
@@ -639,7 +642,8 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
                      + f"; frame {data.odom_frame}."),
     )
     notes.append(f"path {length:.1f} m in {duration:.1f} s: "
-                 + (f"{len(waypoints)} waypoints" if path_as == "waypoints" else f"reference trajectory of {len(od)} poses"))
+                 + ", ".join(([f"{len(waypoints)} waypoints"] if path_as != "reference" else [])
+                             + ([f"reference trajectory of {len(od)} poses"] if path_as != "waypoints" else [])))
     return BagSeed(scenario=scenario, path=path_rows, notes=notes, mount=mount)
 
 
@@ -657,16 +661,17 @@ def _triple(text: str) -> tuple[float, float, float]:
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("bag", help="ROS 1 .bag file, rosbag2 folder, or .mcap/.db3 file")
-    p.add_argument("-o", "--output", required=True, help="seed scenario YAML to write (must not look like an existing one unless --force)")
+    p.add_argument("-o", "--output", required=True, help="seed scenario YAML to write (an existing file is kept unless --force)")
     p.add_argument("--start", type=float, default=None, help="window start, seconds after the bag's first message")
     p.add_argument("--end", type=float, default=None, help="window end, seconds after the bag's first message")
     p.add_argument("--odom-topic", default=None, help="nav_msgs/Odometry topic (default: found by type)")
     p.add_argument("--scan-topic", default=None, help="sensor_msgs/LaserScan topic (default: found by type)")
     p.add_argument("--laser-pose", type=_triple, default=None, metavar="X,Y,YAW",
-                   help="laser pose in the odometry child frame (m, m, degrees); default /tf_static, "
-                        "else estimated from the scans")
-    p.add_argument("--path-as", choices=("waypoints", "reference"), default="waypoints",
-                   help="driven path as decimated waypoints (default) or a reference trajectory CSV beside the seed")
+                   help="laser pose in the odometry child frame (m, m, degrees; write --laser-pose=-0.064,0,0 "
+                        "for a negative first value); default /tf_static, else estimated from the scans")
+    p.add_argument("--path-as", choices=PATH_AS, default="waypoints",
+                   help="driven path as decimated waypoints (default), a reference trajectory (CSV t,x,y beside "
+                        "the seed, for the reference deviation metrics) or both")
     p.add_argument("--name", default="", help="scenario name (default: the output file's stem)")
     p.add_argument("--force", action="store_true", help="overwrite an existing output file")
 
@@ -679,7 +684,7 @@ def run(args: argparse.Namespace) -> int:
                              start=args.start, end=args.end, laser_pose=args.laser_pose,
                              path_as=args.path_as, reference_file=csv_name, name=args.name)
     extra = {}
-    if args.path_as == "reference":
+    if args.path_as != "waypoints":
         extra[csv_name] = reference_csv(seed.path)
     write_seed(seed.scenario, out, extra_files=extra, force=args.force)
     for note in seed.notes:

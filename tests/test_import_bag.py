@@ -62,12 +62,16 @@ def test_turtlebot3_path_and_speed(tb3):
 def test_turtlebot3_seed_is_driven_by_dwa(tb3, tmp_path):
     from pytest_navscenario.runner import run_scenario
     out = tmp_path / "tb3.yaml"
-    assert main(["from-bag", str(TB3), "-o", str(out)]) == 0
+    assert main(["from-bag", str(TB3), "-o", str(out), "--path-as", "both"]) == 0
     seed = load_scenario(out)
     assert seed.obstacles == tb3.scenario.obstacles
+    assert seed.mission.waypoints == tb3.scenario.mission.waypoints
+    assert seed.reference.file == "tb3.reference.csv"
     result = run_scenario(seed, "dwa")
     assert result.outcome.value == "success", result.message
     assert len(result.trajectory.waypoint_times) == len(seed.mission.waypoints)
+    # the reference (the real run) is compared with the simulated one: finite, metres
+    assert 0 < result.metrics.reference_mean_deviation <= result.metrics.reference_max_deviation < 10
 
 
 def test_window_laser_pose_and_reference_csv(tmp_path, capsys):
