@@ -172,3 +172,13 @@ def test_the_same_planner_object_can_run_several_episodes_and_gives_the_same_bit
     again = run_scenario(seeds["cylinders"], planner)
     assert np.array_equal(first.trajectory.pose, again.trajectory.pose)
     assert first.outcome is Outcome.SUCCESS
+
+
+def test_dwa_detours_around_a_box_centred_on_the_line_instead_of_stalling_in_front_of_it(seeds):
+    s = seeds["boxes2"]
+    centred = dataclasses.replace(s, obstacles=(dataclasses.replace(s.obstacles[0], x=0.0),) + s.obstacles[1:])
+    stalled = run_scenario(centred, DynamicWindowPlanner(lookahead=0.0))   # plain DWA: local minimum
+    assert stalled.outcome is Outcome.TIMEOUT and stalled.trajectory.pose[-1, 1] < 3.5
+    detour = run_scenario(centred, DynamicWindowPlanner())
+    assert detour.outcome is Outcome.SUCCESS, detour.message
+    assert detour.metrics.min_clearance > 0.2
