@@ -17,16 +17,18 @@ from __future__ import annotations
 import dataclasses
 import os
 from pathlib import Path
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 import pytest
 
 from .state import get_state
-from .subject import Subject
+
+if TYPE_CHECKING:
+    from .subject import Subject
 
 
 @pytest.fixture
-def nav_subject(request: pytest.FixtureRequest) -> Subject:
+def nav_subject(request: pytest.FixtureRequest) -> "Subject":
     """The session's subject under test (``.spec``, ``.label``, ``.factory``, ``.new()``)."""
     return get_state(request.config).subject
 

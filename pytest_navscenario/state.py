@@ -2,12 +2,13 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pytest
 
-from .options import Settings
-from .subject import Subject
+if TYPE_CHECKING:  # kept out of plugin load: subject.py needs the planner module (numpy)
+    from .options import Settings
+    from .subject import Subject
 
 
 @dataclass
