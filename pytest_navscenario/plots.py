@@ -37,11 +37,11 @@ A_COLOUR, B_COLOUR = "#7f9fbf", "#1f4e79"
 SPEED_CMAP = "viridis"
 
 
-def _figure(width: float, height: float) -> "Figure":
+def _figure(width: float, height: float, constrained: bool = True) -> "Figure":
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(width, height), dpi=100, layout="constrained")
+    fig = Figure(figsize=(width, height), dpi=100, layout="constrained" if constrained else None)
     FigureCanvasAgg(fig)
     return fig
 
@@ -172,7 +172,7 @@ def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
                           autolim=False)
         every = outline_every or _nice_step(max(0.5, duration / 25.0))
         marks = np.searchsorted(t, np.arange(t[0], t[-1] + 1e-9, every))
-        marks = np.unique(np.append(np.clip(marks, 0, len(t) - 1), len(t) - 1))
+        marks = _spread(pose, np.unique(np.append(np.clip(marks, 0, len(t) - 1), len(t) - 1)), 0.25)
         outlines = [np.asarray(p.exterior.coords) for p in footprint_polygons(fp, pose[marks])]
         ax.add_collection(PolyCollection(outlines, closed=True, facecolors="none", edgecolors="#1565c0",
                                          linewidths=0.6, alpha=0.55, zorder=4,
@@ -189,8 +189,12 @@ def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
         mapping = lc
         # time labels along the path
         tick = _nice_step(duration / 6.0)
-        for tt in np.arange(tick, t[-1], tick):
-            i = int(np.searchsorted(t, tt))
+        ticks = np.arange(tick, t[-1], tick)
+        idx = np.clip(np.searchsorted(t, ticks), 0, len(t) - 1)
+        keep = set(_spread(pose, idx, 0.4).tolist())
+        for tt, i in zip(ticks, idx):
+            if i not in keep:  # the robot stood still: one label is enough
+                continue
             ax.plot(*pose[i, :2], "o", ms=2.5, color="black", zorder=7)
             ax.annotate(f"{tt:g}s", pose[i, :2], xytext=(4, -8), textcoords="offset points",
                         fontsize=6, color="#212121", zorder=8)
@@ -286,47 +290,101 @@ def _nice_step(raw: float) -> float:
     return 10 ** (exp + 1)
 
 
-def episode_title(result: EpisodeResult, prefix: str = "") -> str:
+def _spread(pose: np.ndarray, idx: np.ndarray, min_move: float) -> np.ndarray:
+    """Keep the indices whose pose moved at least ``min_move`` m (or turned 30 degrees) since the
+    last kept one, and the last: a robot that stands still gets one outline, not a pile."""
+    if len(idx) == 0:
+        return idx
+    kept = [int(idx[0])]
+    for i in idx[1:]:
+        last = pose[kept[-1]]
+        turn = abs((pose[i, 2] - last[2] + math.pi) % (2 * math.pi) - math.pi)
+        if math.hypot(pose[i, 0] - last[0], pose[i, 1] - last[1]) >= min_move or turn >= math.radians(30):
+            kept.append(int(i))
+    if kept[-1] != int(idx[-1]) and len(idx) > 1:
+        kept.append(int(idx[-1]))
+    return np.asarray(kept)
+
+
+def episode_title(result: EpisodeResult, prefix: str = "", width: int = 60) -> str:
+    """Name, outcome and subject, then the outcome's message wrapped to ``width`` characters."""
+    import textwrap
+
     s = result.scenario
-    name = s.name + (f" [{s.family}]" if s.family else "")
+    name = s.name + (f" [{s.family}]" if s.family and s.family != s.name else "")
     subject = result.subject + (f" {result.subject_version}" if result.subject_version else "")
-    line2 = result.message if len(result.message) <= 90 else result.message[:87] + "..."
-    return f"{prefix}{name}: {result.outcome.value.upper()} ({subject})\n{line2}"
+    message = textwrap.shorten(result.message, 2 * width, placeholder="...")
+    wrapped = textwrap.fill(message, width) if message else ""
+    return f"{prefix}{name}: {result.outcome.value.upper()} ({subject})" + (f"\n{wrapped}" if wrapped else "")
+
+
+# Fixed layout in inches (no constrained layout: it re-measures every text and costs ~40 % of a plot).
+_LEFT, _GAP, _RIGHT, _TOP, _BOTTOM = 0.75, 0.35, 2.1, 0.85, 1.25
+_CBAR_H, _CBAR_Y = 0.14, 0.42
 
 
 def _figsize(results: Sequence[EpisodeResult], panels: int) -> tuple[float, float]:
-    """Size the figure to the map's aspect ratio (panels side by side, legend on the right)."""
+    """Figure size (inches) for ``panels`` maps side by side, each with the maps' aspect ratio."""
+    pw, ph = _panel_size(results)
+    return _LEFT + panels * pw + (panels - 1) * _GAP + _RIGHT, _BOTTOM + ph + _TOP
+
+
+def _panel_size(results: Sequence[EpisodeResult]) -> tuple[float, float]:
     boxes = [_extent(r) for r in results]
     w = max(b[1] for b in boxes) - min(b[0] for b in boxes)
     h = max(b[3] for b in boxes) - min(b[2] for b in boxes)
-    panel_h = 6.0
-    panel_w = float(np.clip(panel_h * w / max(h, 1e-6), 3.5, 9.0))
-    return round(panels * panel_w + 2.0, 1), panel_h + 1.8
+    aspect = w / max(h, 1e-6)
+    ph = 6.0
+    pw = float(np.clip(ph * aspect, 2.6, 9.0))
+    ph = float(np.clip(pw / aspect, 2.6, 7.0))
+    return round(pw, 2), round(ph, 2)
+
+
+def _map_figure(results: Sequence[EpisodeResult]) -> tuple["Figure", list["Axes"], "Axes"]:
+    """A figure with one map panel per result (shared axes), and an axes for the speed colour bar."""
+    n = len(results)
+    pw, ph = _panel_size(results)
+    fw, fh = _figsize(results, n)
+    fig = _figure(fw, fh, constrained=False)
+    axes: list[Axes] = []
+    for k in range(n):
+        rect = ((_LEFT + k * (pw + _GAP)) / fw, _BOTTOM / fh, pw / fw, ph / fh)
+        ax = fig.add_axes(rect, sharex=axes[0] if axes else None, sharey=axes[0] if axes else None)
+        if k:
+            ax.tick_params(labelleft=False)
+        axes.append(ax)
+    span = n * pw + (n - 1) * _GAP
+    cw = min(span, 5.0)
+    cax = fig.add_axes(((_LEFT + (span - cw) / 2) / fw, _CBAR_Y / fh, cw / fw, _CBAR_H / fh))
+    return fig, axes, cax
 
 
 def _figure_legend(fig: "Figure", axes: Sequence["Axes"]) -> None:
-    """One legend for all panels, outside the maps so it never hides the goal or an obstacle."""
+    """One legend for all panels, right of the maps so it never hides the goal or an obstacle."""
     seen: dict[str, Any] = {}
     for ax in axes:
         for handle, label in zip(*ax.get_legend_handles_labels()):
             seen.setdefault(label, handle)
     if seen:
-        fig.legend(list(seen.values()), list(seen), loc="outside right upper", fontsize=7, frameon=False)
+        fw, fh = fig.get_size_inches()
+        fig.legend(list(seen.values()), list(seen), loc="upper left", fontsize=7, frameon=False,
+                   bbox_to_anchor=((fw - _RIGHT + 0.1) / fw, 1 - _TOP / fh))
 
 
-def _colorbar(fig: "Figure", mapping: Any, axes: Any) -> None:
-    fig.colorbar(mapping, ax=axes, location="bottom", shrink=0.7, aspect=40, pad=0.02,
-                 label="speed (m/s)")
+def _colorbar(fig: "Figure", mapping: Any, cax: "Axes") -> None:
+    if mapping is None:
+        cax.set_visible(False)
+        return
+    fig.colorbar(mapping, cax=cax, orientation="horizontal", label="speed (m/s)")
 
 
 def trajectory_figure(result: EpisodeResult, *, outline_every: float | None = None) -> "Figure":
     """One episode: the figure (see the module docstring for what it shows)."""
-    fig = _figure(*_figsize([result], 1))
-    ax = fig.add_subplot()
-    mapping = draw_episode(ax, result, outline_every=outline_every)
+    fig, (ax,), cax = _map_figure([result])
+    width = max(30, int((_panel_size([result])[0] + 1.0) / 0.075))  # title may overhang the map a bit
+    mapping = draw_episode(ax, result, outline_every=outline_every, title=episode_title(result, width=width))
     _figure_legend(fig, [ax])
-    if mapping is not None:
-        _colorbar(fig, mapping, ax)
+    _colorbar(fig, mapping, cax)
     return fig
 
 
@@ -337,15 +395,17 @@ def save_trajectory(result: EpisodeResult, path: str | os.PathLike, **kwargs: An
 
 def comparison_figure(a: EpisodeResult, b: EpisodeResult, labels: tuple[str, str] = ("A", "B")) -> "Figure":
     """The same scenario under A and B side by side, same axes and the same speed colours."""
-    fig = _figure(*_figsize([a, b], 2))
-    axes = fig.subplots(1, 2, sharex=True, sharey=True)
+    fig, axes, cax = _map_figure([a, b])
     norm = speed_norm([a, b])
     mapping = None
+    every = _nice_step(max(0.5, max(a.trajectory.duration, b.trajectory.duration) / 25.0))
+    width = max(30, int(_panel_size([a, b])[0] / 0.075))  # characters per title line, one panel
     for ax, res, label in zip(axes, (a, b), labels):
-        mapping = draw_episode(ax, res, norm=norm, title=episode_title(res, prefix=f"{label}: ")) or mapping
-    _figure_legend(fig, list(axes))
-    if mapping is not None:
-        _colorbar(fig, mapping, list(axes))
+        mapping = draw_episode(ax, res, norm=norm, outline_every=every,
+                               title=episode_title(res, prefix=f"{label}: ", width=width)) or mapping
+    axes[1].set_ylabel("")
+    _figure_legend(fig, axes)
+    _colorbar(fig, mapping, cax)
     return fig
 
 
