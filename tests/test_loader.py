@@ -300,3 +300,15 @@ def test_round_trip_of_generated_scenarios_is_exact(s):
     assert dump_scenario(back) == text
     for a, b in zip(back.obstacles, s.obstacles):  # exact bits, not just ==
         assert math.copysign(1, a.x) == math.copysign(1, b.x) and a.x.hex() == float(b.x).hex()
+
+
+def test_readme_example_loads_and_round_trips():
+    """The complete example in the README's format section is a valid scenario."""
+    from pathlib import Path
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    section = readme.split("<!-- section:scenario-format -->", 1)[1].split("<!-- /section:scenario-format -->")[0]
+    example = section.split("```yaml\n", 1)[1].split("```", 1)[0]
+    s = loads_scenario(example, "README.md")
+    assert s.name == "boxes1" and [o.name for o in s.obstacles] == ["left", "cyl1"]
+    assert s.mission.goal_tolerance.yaw == 15.0 and s.marks[1].kwargs == {"reason": "known bug #12"}
+    assert loads_scenario(dump_scenario(s)) == s
