@@ -111,6 +111,22 @@ def main() -> None:
                                      "p90_wall_ms": float(np.percentile(wall, 90) * 1e3), "cache_hit": hit}
     print(f"   uncached median {statistics.median(wall) * 1e3:.2f} ms (cpu {statistics.median(cpu) * 1e3:.2f}), "
           f"p90 {np.percentile(wall, 90) * 1e3:.2f} ms; cache hit {hit['wall_ms'] * 1e3:.1f} us")
+    print("4. shortest_path scaling: k boxes on a 30 x 30 m map, corner to corner (median of 3 layouts)")
+    scaling = {}
+    for k in (10, 20, 50, 100):
+        cpu = []
+        for seed in range(3):
+            rng = np.random.default_rng(1000 * k + seed)
+            obstacles = tuple(BoxObstacle(f"b{i}", rng.uniform(-15, 15), rng.uniform(1, 29), rng.uniform(0.3, 1.5),
+                                          rng.uniform(0.3, 1.5), rng.uniform(0, 180)) for i in range(k))
+            big = Scenario(mission=Mission(start=Pose(-16, 0, 90), goal=Pose(16, 30, 90)), obstacles=obstacles)
+            paths.clear_caches()
+            c0 = time.thread_time()
+            paths.shortest_path(big)
+            cpu.append(time.thread_time() - c0)
+        scaling[k] = statistics.median(cpu) * 1e3
+        print(f"   {k:3d} boxes: {scaling[k]:.1f} ms cpu")
+    out["shortest_path_scaling_cpu_ms"] = scaling
     if args.json:
         args.json.write_text(json.dumps(out, indent=2))
 
