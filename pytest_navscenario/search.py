@@ -98,6 +98,7 @@ class SearchReport:
     sims_used: int = 0
     shrink_sims: int = 0
     discarded: dict[str, int] = field(default_factory=dict)   # reason -> count
+    skipped: int = 0              # mutants too close to a known failure, redrawn without simulating
     candidates: list[Candidate] = field(default_factory=list)  # search + shrink sims, in order
     failures: list[Failure] = field(default_factory=list)
     interrupted: bool = False
@@ -211,6 +212,10 @@ def is_duplicate(space: SearchSpace, cand: Candidate, kept: Sequence[Candidate])
                and space.normalised_distance(k.offsets, cand.offsets) < DISTINCT_DISTANCE for k in kept)
 
 
+def is_near_failure(space: SearchSpace, offsets: Sequence[float], failures: Sequence[Failure]) -> bool:
+    return any(space.normalised_distance(f.found.offsets, offsets) < DISTINCT_DISTANCE for f in failures)
+
+
 # -- strategies -------------------------------------------------------------------------------
 def _evolve(space: SearchSpace, sim: _Simulator, budget: int, seed_value: int, on_result) -> None:
     from hypothesis import HealthCheck, Phase, Verbosity, given, reject, settings, target
@@ -239,18 +244,26 @@ def _evolve(space: SearchSpace, sim: _Simulator, budget: int, seed_value: int, o
         warmup = used <= max(2, min(10, budget // 10))
         if warmup or not archive.members or rnd.random() >= EXPLOIT:
             return tuple(rnd.uniform(p.lo, p.hi) for p in space.params), "explore"
-        scale = rnd.choice(MUTATION_SCALES)
-        elite = archive.members[pick % len(archive.members)]
-        offsets = list(elite.offsets)
+        failures = [f.found for f in sim.report.failures]
+        if failures and rnd.random() < 0.5:
+            parent = rnd.choice(failures)      # around a known failure: look for its neighbours
+        else:
+            parent = archive.members[pick % len(archive.members)]
+        offsets = list(parent.offsets)
         # k = 0: every parameter moves; 1: one obstacle's (or pose's); 2-3: that many parameters
         if k == 0:
-            idx = range(n)
+            idx = list(range(n))
         elif k == 1:
             idx = rnd.choice(groups)
         else:
             idx = sorted({rnd.randrange(n) for _ in range(k)})
+        scale = rnd.choice(MUTATION_SCALES[1:] if parent.failed else MUTATION_SCALES)
         for i in idx:
             offsets[i] += rnd.gauss(0.0, 1.0) * scale * space.params[i].width
+        if parent.failed:  # a failure's child must be a new failure, not the same one again
+            i = rnd.choice(idx)
+            jump = rnd.uniform(DISTINCT_DISTANCE, 3 * DISTINCT_DISTANCE) * space.params[i].width
+            offsets[i] = parent.offsets[i] + (jump if rnd.random() < 0.5 else -jump)
         return space.clip(offsets), "mutate"
 
     def body(data):
@@ -266,8 +279,12 @@ def _evolve(space: SearchSpace, sim: _Simulator, budget: int, seed_value: int, o
             invalid_run[0] += 1
             if invalid_run[0] > MAX_INVALID_FACTOR * max(budget, 1):
                 sim.report.stop_reason = (f"gave up after {invalid_run[0]} invalid candidates in a row: "
-                                          "the search bounds are too wide for this seed")
+                                          "the search bounds are too wide for this seed, or every nearby layout fails already")
                 raise _Stop()
+            reject()
+        if origin == "mutate" and is_near_failure(space, offsets, sim.report.failures):
+            sim.report.skipped += 1   # would most likely repeat a known failure: not worth a simulation
+            invalid_run[0] += 1
             reject()
         invalid_run[0] = 0
         cand = sim.simulate(offsets, scenario, "search", origin)
