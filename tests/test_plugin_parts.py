@@ -123,7 +123,7 @@ def test_readme_example_command_runs_the_users_planner(tmp_path):
     proc = subprocess.run(
         [sys.executable, "-m", "pytest", "-p", "pytest_navscenario.plugin", "examples/scenarios",
          "--nav-subject=examples.mynav:Planner", f"--nav-results={tmp_path / 'r.jsonl'}",
-         "--nav-artifacts=none", "-p", "no:cacheprovider", "-m", "not obstacles or obstacles"],
+         f"--nav-artifacts={tmp_path / 'art'}", "-p", "no:cacheprovider"],
         cwd=ROOT, env=env, capture_output=True, text=True, timeout=120)
     assert "2 passed, 1 xfailed" in proc.stdout, proc.stdout + proc.stderr
     assert {r["subject"] for r in read_results(tmp_path / "r.jsonl")} == {"mynav"}
