@@ -71,6 +71,10 @@ REFERENCE_KEYS = ("file", "points")
 DRIVES = ("omni", "diff")
 SHAPES = ("box", "circle")
 OBSTACLE_TYPES = ("box", "cylinder")
+_KEY_HOMES = (("", TOP_KEYS), ("robot", ROBOT_KEYS), ("robot.footprint", FOOTPRINT_KEYS),
+              ("robot.limits", LIMITS_KEYS), ("robot.lidar", LIDAR_KEYS), ("robot.safety", SAFETY_KEYS),
+              ("mission", MISSION_KEYS), ("mission.goal_tolerance", TOLERANCE_KEYS), ("simulation", SIMULATION_KEYS),
+              ("obstacles[]", BOX_KEYS + CYLINDER_KEYS), ("reference", REFERENCE_KEYS))
 _ALIASES = {  # common synonyms -> the spelling the format uses (for the hint)
     "omnidirectional": "omni", "holonomic": "omni", "differential": "diff", "diff-drive": "diff",
     "rectangle": "box", "rect": "box", "cuboid": "box", "square": "box", "cyl": "cylinder",
@@ -102,6 +106,16 @@ def _did_you_mean(word: Any, options: tuple[str, ...]) -> str:
     return "use one of: " + ", ".join(options)
 
 
+def _unknown_key_hint(key: Any, keys: tuple[str, ...], path: str) -> str:
+    """Did-you-mean among this section's keys, else where the key belongs if it is known elsewhere."""
+    text = str(key)
+    if not difflib.get_close_matches(text.lower(), keys, n=1, cutoff=0.6):
+        homes = [home for home, section_keys in _KEY_HOMES if text in section_keys and home != path]
+        if homes:
+            return f"'{text}' belongs under '{homes[0]}'" + (f" (or '{homes[1]}')" if len(homes) > 1 else "")
+    return _did_you_mean(key, keys)
+
+
 def _join(path: str, key: str) -> str:
     return f"{path}.{key}" if path else key
 
@@ -121,7 +135,7 @@ class _Section:
         for key, (key_line, _) in node.items.items():
             if key not in keys:
                 raise ctx.fail(f"unknown key {str(key)!r}", _join(path, str(key)), key_line,
-                               _did_you_mean(key, keys))
+                               _unknown_key_hint(key, keys, path))
 
     def has(self, key: str) -> bool:
         return key in self.node.items
@@ -175,7 +189,7 @@ class _Section:
 
     def string(self, key: str, default: Any, *, nonempty: bool = True) -> str:
         node = self.get(key)
-        if node is None:
+        if node is None or (isinstance(node, YScalar) and node.value is None):  # 'description:' = absent
             return default
         field, line = _join(self.path, key), self.line_of(key)
         value = node.value if isinstance(node, YScalar) else None
@@ -714,9 +728,8 @@ def _plain(value: Any) -> Any:
         return {(_plain(k) if not isinstance(k, str) else k): _plain(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
         return [_plain(v) for v in value]
-    item = getattr(value, "item", None)
-    if item is not None and type(value).__module__ == "numpy":
-        return item()
+    if type(value).__module__ == "numpy" and hasattr(value, "tolist"):  # numpy scalars and arrays
+        return _plain(value.tolist())
     return value
 
 

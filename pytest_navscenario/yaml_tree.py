@@ -124,13 +124,16 @@ def _yaml_error(exc: yaml.YAMLError, source: str | None, text: str) -> ScenarioE
     mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
     problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
     context = getattr(exc, "context", None)
-    text = f"invalid YAML: {problem}" + (f" ({context})" if context else "")
+    message = f"invalid YAML: {problem}" + (f" ({context})" if context else "")
     line = None
     if mark is not None:
         line = mark.line + 1
-        text += f" at column {mark.column + 1}"
-    return ScenarioError(text, path=source, line=line,
-                         hint="check indentation, colons and quotes on that line (or the one before)")
+        message += f" at column {mark.column + 1}"
+    hint = "check indentation, colons and quotes on that line (or the one before)"
+    lines = text.splitlines()
+    if mark is not None and mark.line < len(lines) and "\t" in lines[mark.line][:mark.column + 1]:
+        hint = "YAML does not allow tabs for indentation; indent with spaces"
+    return ScenarioError(message, path=source, line=line, hint=hint)
 
 
 class _Composer:

@@ -81,6 +81,7 @@ def test_name_and_family_in_yaml_win_over_file_defaults(tmp_path):
     s = load_scenario(path)
     assert (s.name, s.family) == ("mine", "fam")
     assert loads_scenario(GOOD, name="n", family="f").name == "n"
+    assert loads_scenario(GOOD + "name:\n", name="n").name == "n"  # an empty value counts as absent
 
 
 def test_dump_round_trip_is_exact_and_dump_is_stable(good_file, tmp_path):
@@ -108,9 +109,10 @@ def test_dump_key_order_and_plain_types():
 def test_dump_accepts_numpy_numbers_from_generated_scenarios():
     s = Scenario(mission=Mission(start=Pose(np.float64(0.1), np.float64(0.2)), goal=Pose(0, 10)),
                  obstacles=(BoxObstacle("b", np.float64(3.0), np.float32(4.5), 1.0, 1.0),),
-                 provenance={"clearance": np.float64(0.125), "seed": np.int64(7)})
+                 provenance={"clearance": np.float64(0.125), "seed": np.int64(7), "offsets": np.array([0.5, 1.0])})
     back = loads_scenario(dump_scenario(s))
-    assert back == s and type(back.mission.start.x) is float and back.provenance["seed"] == 7
+    assert type(back.mission.start.x) is float and back.obstacles == s.obstacles
+    assert back.provenance == {"clearance": 0.125, "seed": 7, "offsets": [0.5, 1.0]}
 
 
 def test_from_dict_and_to_dict_are_inverse():
@@ -210,6 +212,8 @@ BAD = [
                                     "obstacles: {a: 1}\n"), 5, "obstacles", ["expected a list of obstacles"]),
     ("python-tag", BASE + "search: !!python/object/apply:os.system ['true']\n", 7, None, ["unsupported YAML tag"]),
     ("two-documents", BASE + "---\nversion: 1\n", 7, None, ["more than one YAML document"]),
+    ("tab", BASE + "robot:\n\tdrive: omni\n", 8, None, ["invalid YAML", "tabs for indentation"]),
+    ("misplaced-key", BASE + "robot:\n  beams: 36\n", 8, "robot.beams", ["belongs under 'robot.lidar'"]),
 ]
 
 
