@@ -44,7 +44,7 @@ CACHE_SIZE = 4096            # scenarios remembered by shortest_path / min_obsta
 _TOL = 1e-9                  # m: touching counts as free (a path may graze a grown obstacle)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ShortestPath:
     """A collision-free path for the footprint's centre: total ``length`` (m) and its
     vertices ``points`` ((k, 2) read-only array, start first, goal last)."""
@@ -57,7 +57,7 @@ class ShortestPath:
 # A box obstacle has rho = 0, a cylinder hl = hw = 0 and rho = its radius; the same for the robot.
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Shapes:
     """Obstacles (or any set of rounded boxes) as parallel numpy arrays."""
     names: tuple[str, ...]
@@ -191,7 +191,7 @@ def inflated_polygon(obs: Obstacle, r: float, tol: float = INFLATION_TOLERANCE) 
     return grown.verts[0, : grown.sizes[0]].copy()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class _Grown:
     """Grown obstacles as padded arrays: polygon j has ``sizes[j]`` vertices ``verts[j]``
     (padding repeats the last one), edge i of it is the half-plane normals[j, i] . p <= offsets[j, i],
