@@ -431,7 +431,7 @@ def simulate(scenario: Scenario, planner: Any, seed: int, max_ticks: int | None 
         else:
             t0 = perf()
             try:
-                _call_planner(planner.reset, scenario, deadline)
+                _call_planner(planner.reset, scenario, None)   # the tick limit is for act only
             except (Exception, PlannerTimeout) as exc:
                 failure = SubjectFailure(f"planner.reset raised {type(exc).__name__}: {exc}", 0, 0.0,
                                          _planner_traceback(exc))

@@ -11,7 +11,8 @@ from pytest_navscenario.errors import SimulationDivergedError
 from pytest_navscenario.planner import Command
 from pytest_navscenario.scenario import (BoxObstacle, CylinderObstacle, Footprint, GoalTolerance, Lidar,
                                          Limits, Mission, Pose, Robot, Safety, Scenario, Simulation)
-from pytest_navscenario.sim import lidar_angles, model_xml, simulate, steps_per_tick, validate_command
+from pytest_navscenario.sim import (clear_model_cache, lidar_angles, model_xml, simulate, steps_per_tick,
+                                    validate_command)
 
 
 # ------------------------------------------------------------------ tiny test planners
@@ -248,7 +249,8 @@ def test_same_inputs_give_bit_identical_trajectories():
     obstacles = [BoxObstacle("b", 0.6, 5.0, 1.0, 1.0), CylinderObstacle("c", -1.5, 7.0, 0.5)]
     lidar = Lidar(noise_sigma=0.02, dropout=0.05)
     sc = scenario(obstacles, lidar=lidar, safety=False, seed=3)
-    first = simulate(sc, GoTo(gain=1.5), seed=11)
+    clear_model_cache()
+    first = simulate(sc, GoTo(gain=1.5), seed=11)                            # a new MjData
     simulate(scenario([WALL], safety=False, name="other"), GoTo(), seed=1)  # reuse of pooled data
     again = simulate(sc, GoTo(gain=1.5), seed=11)
     for name in ("t", "pose", "velocity", "tick_t", "command", "ranges"):
@@ -337,3 +339,9 @@ def test_model_xml_names_obstacles_and_steps_per_tick():
     xml = model_xml(sc)
     assert 'name="wall"' in xml and 'name="pole"' in xml and "<include" not in xml
     assert steps_per_tick(sc) == 10
+
+
+def test_starting_inside_an_obstacle_is_a_collision_at_t0():
+    res = simulate(scenario([BoxObstacle("under", 0.0, 0.0, 1.0, 1.0)]), GoTo(), seed=0)
+    assert res.end == "collision" and res.collision.time == 0.0 and res.collision.obstacle == "under"
+    assert res.ticks == 0 and len(res.trajectory.t) == 1
