@@ -71,30 +71,52 @@ _PRIMITIVE_DTYPES = {
 }
 
 
+_PLANS: dict[tuple[int, str], tuple[frozenset, list]] = {}
+_DEFAULTS: dict[tuple[int, str], Any] = {}
+
+
+def _plan(ts: Any, msgtype: str) -> tuple[frozenset, list]:
+    """Per message type, once: (field names, [(name, nodetype, spec), ...])."""
+    key = (id(ts), msgtype)
+    plan = _PLANS.get(key)
+    if plan is None:
+        _, fields = ts.fielddefs[msgtype]
+        plan = (frozenset(n for n, _ in fields), [(n, int(nt), spec) for n, (nt, spec) in fields])
+        _PLANS[key] = plan
+    return plan
+
+
 def build(typestore: Any, msgtype: str, values: dict[str, Any] | None = None) -> Any:
     """A message of ``msgtype`` from a (nested) dict; fields not given get their zero value.
 
     Works for both the ROS 1 and the ROS 2 typestore, whose definitions differ (Header.seq,
-    Marker texture fields), so callers describe messages once.
+    Marker texture fields), so callers describe messages once. Zero-valued sub-messages are
+    shared between messages (they are only serialised, never changed).
     """
-    values = values or {}
-    cls = typestore.types[msgtype]
-    _, fields = typestore.fielddefs[msgtype]
+    if not values:
+        key = (id(typestore), msgtype)
+        msg = _DEFAULTS.get(key)
+        if msg is None:
+            msg = _DEFAULTS[key] = _build(typestore, msgtype, {})
+        return msg
+    return _build(typestore, msgtype, values)
+
+
+def _build(ts: Any, msgtype: str, values: dict[str, Any]) -> Any:
+    names, fields = _plan(ts, msgtype)
+    if not names.issuperset(values):
+        raise KeyError(f"{msgtype} has no field(s) {sorted(set(values) - names)}")
     kwargs = {}
-    for name, (nodetype, spec) in fields:
-        given = values.get(name)
-        kwargs[name] = _field_value(typestore, int(nodetype), spec, given)
-    unknown = set(values) - {name for name, _ in fields}
-    if unknown:
-        raise KeyError(f"{msgtype} has no field(s) {sorted(unknown)}")
-    return cls(**kwargs)
+    for name, nodetype, spec in fields:
+        kwargs[name] = _field_value(ts, nodetype, spec, values.get(name))
+    return ts.types[msgtype](**kwargs)
 
 
 def _field_value(ts: Any, nodetype: int, spec: Any, given: Any) -> Any:
     if nodetype == 1:  # BASE
-        base = spec[0]
         if given is not None:
             return given
+        base = spec[0]
         return "" if base == "string" else (False if base == "bool" else
                                            (0.0 if base.startswith("float") else 0))
     if nodetype == 2:  # NAME (nested message)
