@@ -48,6 +48,10 @@ def compute_metrics(scenario: Scenario, trajectory: Trajectory, *,
     t = np.asarray(trajectory.t, dtype=float)
     pose = np.asarray(trajectory.pose, dtype=float).reshape(-1, 3)
     vel = np.asarray(trajectory.velocity, dtype=float).reshape(-1, 3)
+    if not len(t) == len(pose) == len(vel):
+        raise ValueError(
+            f"trajectory arrays disagree: t has {len(t)} samples, pose {len(pose)}, velocity {len(vel)} "
+            f"(scenario {scenario.name or scenario.source or '?'}); every physics-rate array needs one row per time stamp")
     xy = pose[:, :2]
 
     clear, clear_name, clear_t, clear_x, clear_y = min_clearance(scenario, t, pose)

@@ -225,3 +225,10 @@ def test_metrics_are_deterministic():
     first, second = compute_metrics(s, tr).as_dict(), compute_metrics(s, tr).as_dict()
     assert repr(first) == repr(second)
     assert first["min_gap_obstacles"] == "a|b"
+
+
+def test_mismatched_trajectory_arrays_are_named():
+    tr = straight_north()
+    tr.velocity = tr.velocity[:-5]
+    with pytest.raises(ValueError, match=r"t has 1001 samples, pose 1001, velocity 996"):
+        compute_metrics(scenario(), tr)
