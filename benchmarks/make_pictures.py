@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import statistics
 import sys
 import time
 from pathlib import Path
@@ -79,6 +80,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--variants", type=int, default=12)
     parser.add_argument("--out", default=str(ROOT / "examples" / "pictures"))
     parser.add_argument("--new-suite", action="store_true", help="write the suite again")
+    parser.add_argument("--repeats", type=int, default=7, help="renders per picture for the timing")
     args = parser.parse_args(argv)
 
     from pytest_navscenario.compare import compare_records, format_comparison
@@ -136,6 +138,18 @@ def main(argv: list[str] | None = None) -> int:
         nodeid, res = suite[0][0], results["b"][suite[0][0]]
     save_trajectory(res, out / "trajectory.png")
     print(f"trajectory.png: {nodeid} ({res.subject}): {res.outcome}: {res.message}")
+
+    # cost of one picture (what --nav-plots adds per plotted item): CPU-time medians
+    from pytest_navscenario.plots import bars_figure, comparison_figure, png_bytes, trajectory_figure
+    for label, make in (("trajectory plot", lambda: trajectory_figure(res)),
+                        ("side-by-side plot", lambda: comparison_figure(results["a"][pick], results["b"][pick])),
+                        ("bar chart", lambda: bars_figure(cmp))):
+        times = []
+        for _ in range(args.repeats):
+            t = time.process_time()
+            png_bytes(make())
+            times.append(time.process_time() - t)
+        print(f"{label}: median {1000 * statistics.median(times):.0f} ms CPU (figure + PNG, {args.repeats} runs)")
     return 0
 
 

@@ -232,24 +232,25 @@ SHORT = {"success": "success", "safety-stop": "safety-stop", "timeout": "timeout
 def format_comparison(cmp: Comparison, *, max_listed: int = 50) -> str:
     """The comparison as plain text (for the terminal and the CLI)."""
     lines = [f"A = {cmp.a_name}: {cmp.a_subject}", f"B = {cmp.b_name}: {cmp.b_subject}",
-             f"{len(cmp.pairs)} paired scenario runs (paired by nodeid and repeat index); rates are "
-             f"over these pairs, 95 % Wilson intervals; p = exact McNemar test on success"]
+             f"{len(cmp.pairs)} paired scenario runs (same nodeid and repeat index); rates over these pairs",
+             "with 95 % Wilson intervals; change = B - A success; p = exact McNemar test on success"]
     outcomes = [o for o in RATE_OUTCOMES
                 if o != "subject-error" or cmp.overall.a[o].count or cmp.overall.b[o].count]
-    header = f"{'family':<16} {'n':>4}  {'':2}" + "".join(f" {SHORT[o]:>18}" for o in outcomes) \
+    fw = max([14] + [len(f.family) for f in cmp.families])
+    header = f"{'family':<{fw}} {'n':>4}  {'':2}" + "".join(f" {SHORT[o]:>15}" for o in outcomes) \
         + f" {'change':>8} {'broke':>5} {'fixed':>5} {'p':>6}"
     lines += ["", header]
     rows = cmp.families + ([cmp.overall] if len(cmp.families) != 1 else [])
     for fam in rows:
         for side in ("a", "b"):
             rates = getattr(fam, side)
-            cells = "".join(f" {_pct(rates[o]):>18}" for o in outcomes)
+            cells = "".join(f" {_pct(rates[o]):>15}" for o in outcomes)
             if side == "a":
-                lines.append(f"{fam.family[:16]:<16} {fam.n:>4}  A " + cells)
+                lines.append(f"{fam.family:<{fw}} {fam.n:>4}  A " + cells)
             else:
                 change = fam.success_change
                 ch = "   -" if fam.n == 0 else f"{100 * change:+7.1f}pp"
-                lines.append(f"{'':<16} {'':>4}  B " + cells
+                lines.append(f"{'':<{fw}} {'':>4}  B " + cells
                              + f" {ch:>8} {fam.broke:>5} {fam.fixed:>5} {_p(fam.mcnemar_p):>6}")
     broke, fixed = cmp.broke, cmp.fixed
 
