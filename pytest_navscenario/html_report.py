@@ -182,6 +182,17 @@ def _failure(e: Entry) -> str:
             f"</section>")
 
 
+def _passing_plots(entries: Sequence[Entry]) -> str:
+    """Plots of passing runs (with --nav-plots=all), folded away below the failures."""
+    if not entries:
+        return ""
+    items = "".join(
+        f'<section class="passed"><h3>{_badge(e.record["outcome"])} <code>{_e(e.record["nodeid"])}</code></h3>'
+        f'<div class="plot">{_img(e.plot_png, e.record["nodeid"])}</div></section>' for e in entries)
+    return (f"<h2>Passing runs with a plot ({len(entries)})</h2>"
+            f"<details><summary>show the plots</summary>{items}</details>")
+
+
 CSS = """
 body{font:14px/1.4 system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:1.5em auto;max-width:1280px;padding:0 1em;color:#212121}
 h1{font-size:1.5em}h2{border-bottom:1px solid #ddd;padding-bottom:.2em;margin-top:1.6em}
@@ -240,6 +251,7 @@ def build_html(entries: Sequence[Entry], *, title: str = "navscenario report",
          '<button onclick="sortFailures(\'outcome\')">outcome</button>'
          '<button onclick="sortFailures(\'nodeid\')">scenario</button></p>') if failures else "<p>None.</p>",
         "<div id=\"failures\">", "".join(_failure(e) for e in failures), "</div>",
+        _passing_plots([e for e in entries if not e.failed and e.plot_png]),
         f"<script>{JS}</script></body></html>",
     ]
     return "\n".join(p for p in parts if p)

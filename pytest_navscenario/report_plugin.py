@@ -273,7 +273,7 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
     if state.comparison is not None:
         from .compare import format_comparison
         tr.write_sep("=", f"navscenario comparison with the baseline {state.settings.baseline}")
-        for line in format_comparison(state.comparison).splitlines():
+        for line in format_comparison(state.comparison, max_listed=20).splitlines():
             tr.write_line(line)
         n = len(state.comparison.broke)
         if n and state.settings.mode == "fail":

@@ -169,7 +169,9 @@ def test_html_escapes_names_and_messages(tmp_path):
     rec = {"nodeid": "s/<b>.yaml::<script>alert(1)</script>", "family": "f&g", "outcome": "timeout",
            "message": "goal <not> reached", "metrics": {"min_clearance": None, "duration": 3.0},
            "repeat": 0, "seed": 1, "subject": "x"}
-    page = write_html(tmp_path / "r.html", [Entry(rec), Entry(dict(rec, nodeid="b", outcome="success"))]).read_text()
+    passing = [Entry(dict(rec, nodeid="b", outcome="success")), Entry(dict(rec, nodeid="c", outcome="success"), b"png")]
+    page = write_html(tmp_path / "r.html", [Entry(rec), *passing]).read_text()
     assert "<script>alert" not in page and "&lt;script&gt;alert(1)&lt;/script&gt;" in page
     assert page.count('<section class="failure"') == 1 and "goal &lt;not&gt; reached" in page
+    assert page.count('<section class="passed"') == 1   # only passing runs that have a plot
     assert json.dumps("f&amp;g")[1:-1] in page
