@@ -9,9 +9,12 @@ samples unless said otherwise; NaN means "not defined for this episode"):
   computed for the rest (see paths.py). A reported collision overrides it with 0 at the hit.
 * min_obstacle_gap: narrowest obstacle-obstacle gap of the scenario (paths.min_obstacle_gap).
 * path_length: sum of the steps of the centre; shortest_path_length: paths.shortest_path;
-  path_efficiency = shortest / (driven + final distance to the goal), i.e. the driven path
-  completed by a straight line to the goal point, so that stopping inside the goal tolerance
-  does not score above 1 (1 = optimal; NaN if the robot did not move);
+  path_efficiency = shortest / (driven + still to go), where "still to go" is the straight
+  distance to the goal point when the run ended inside the goal tolerance (stopping short of
+  the exact point costs nothing), else the shortest collision-free path from the last position
+  through the waypoints not yet passed to the goal (1 = optimal; below 1 for detours and for
+  runs that ended early; NaN if the robot did not move; above 1 only if the robot cut closer
+  to obstacles than half its width, or ended where the footprint cannot stand);
   max/mean_deviation: distance of each pose to the shortest-path polyline.
 * duration, mean_speed = path_length / duration, goal position error (m) and goal yaw error
   (degrees, wrapped to [0, 180]) of the last pose.
@@ -34,7 +37,7 @@ import numpy as np
 
 from .errors import ScenarioError
 from .paths import (box_box_distance, footprint_core, min_obstacle_gap, obstacle_shapes,
-                    point_box_distance, shortest_path)
+                    path_through, point_box_distance, shortest_path)
 from .result import Collision, Metrics, Trajectory
 from .scenario import Scenario
 
@@ -65,9 +68,8 @@ def compute_metrics(scenario: Scenario, trajectory: Trajectory, *,
     shortest = sp.length if sp is not None else NAN
     goal = scenario.mission.goal
     goal_err = math.hypot(pose[-1, 0] - goal.x, pose[-1, 1] - goal.y) if len(pose) else NAN
-    # driven path completed by a straight line to the goal: a robot that stops inside the goal
-    # tolerance, short of the exact goal point, still scores 1 when it drove optimally
-    efficiency = shortest / (path_length + goal_err) if path_length > MOVED else NAN
+    efficiency = (shortest / (path_length + remaining_length(scenario, trajectory, xy))
+                  if path_length > MOVED else NAN)
     if sp is not None and len(xy):
         dev = polyline_distance(xy, sp.points)
         max_dev, mean_dev = float(dev.max()), float(dev.mean())
@@ -88,6 +90,24 @@ def compute_metrics(scenario: Scenario, trajectory: Trajectory, *,
         smoothness=jerk, angular_smoothness=ang_acc,
         reference_mean_deviation=ref_mean, reference_max_deviation=ref_max,
     )
+
+
+def remaining_length(scenario: Scenario, trajectory: Trajectory, xy: np.ndarray) -> float:
+    """How far the robot still had to go from its last position: straight to the goal point when
+    it stopped inside the goal tolerance after every waypoint (so stopping short of the exact
+    point costs nothing); otherwise the shortest collision-free path from there through the
+    waypoints not yet passed to the goal, or straight lines if its last position is boxed in."""
+    if not len(xy):
+        return NAN
+    m = scenario.mission
+    passed = min(len(trajectory.waypoint_times), len(m.waypoints))
+    stops = [(float(xy[-1, 0]), float(xy[-1, 1])), *((w.x, w.y) for w in m.waypoints[passed:]),
+             (m.goal.x, m.goal.y)]
+    straight = float(sum(math.dist(a, b) for a, b in zip(stops, stops[1:])))
+    if passed == len(m.waypoints) and straight <= m.goal_tolerance.position:
+        return straight
+    completion = path_through(scenario, stops)
+    return completion.length if completion is not None else straight
 
 
 def min_clearance(scenario: Scenario, t: np.ndarray, pose: np.ndarray

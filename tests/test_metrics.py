@@ -8,7 +8,7 @@ import shapely
 from pytest_navscenario.errors import ScenarioError
 from pytest_navscenario.geometry import footprint_polygons, obstacle_polygons
 from pytest_navscenario.metrics import compute_metrics, min_clearance
-from pytest_navscenario.paths import shortest_path
+from pytest_navscenario.paths import path_through, shortest_path
 from pytest_navscenario.result import Collision, Trajectory
 from pytest_navscenario.scenario import (BoxObstacle, CylinderObstacle, Footprint, Mission, Pose,
                                          Reference, Robot, Scenario)
@@ -124,6 +124,15 @@ def test_stopping_inside_the_goal_tolerance_is_still_optimal():
     assert m.path_length == pytest.approx(9.75)
     assert m.goal_position_error == pytest.approx(0.25)
     assert m.path_efficiency == pytest.approx(1.0)
+
+
+def test_a_run_that_stops_in_front_of_a_box_is_charged_the_detour_still_to_go():
+    s = scenario(BoxObstacle("box", 0, 5, 1, 1))
+    m = compute_metrics(s, straight_north(length=3.5))
+    to_go = path_through(s, [(0.0, 3.5), (0.0, 10.0)]).length
+    assert to_go > 6.5 + 0.1                     # around the box, not through it
+    assert m.path_efficiency == pytest.approx(m.shortest_path_length / (3.5 + to_go))
+    assert m.path_efficiency < 1.0
 
 
 def test_driving_the_detour_around_a_box_is_optimal():
