@@ -50,6 +50,7 @@ SCENARIO_LIMITS: Mapping[str, float] = MappingProxyType({
     "max_name_length": 200,
 })
 
+_LIST_LIMITS = {"obstacles": (int(SCENARIO_LIMITS["max_obstacles"]), "obstacles")}  # refused while parsing
 _REQUIRED = object()
 _NUMBER_WORD = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)[eE][-+]?\d+")  # 1e-3: a string in YAML 1.1
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
@@ -631,7 +632,7 @@ def loads_scenario(text: str | bytes, source: str | os.PathLike | None = None, *
                             f"{SCENARIO_LIMITS['max_file_bytes']:g}", path=src, hint="this is not a scenario file")
     ctx = _Ctx(src)
     root = parse_yaml(text, src, max_depth=int(SCENARIO_LIMITS["max_depth"]),
-                      max_nodes=int(SCENARIO_LIMITS["max_nodes"]))
+                      max_nodes=int(SCENARIO_LIMITS["max_nodes"]), list_limits=_LIST_LIMITS)
     return _build(root, ctx, name, family)
 
 

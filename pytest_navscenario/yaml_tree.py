@@ -90,8 +90,13 @@ def describe(node: YNode) -> str:
     return f"a {type(value).__name__} value"
 
 
-def parse_yaml(text: str, source: str | None, *, max_depth: int, max_nodes: int) -> YNode | None:
-    """Compose ``text`` (one YAML document) into a tree; None for an empty document."""
+def parse_yaml(text: str, source: str | None, *, max_depth: int, max_nodes: int,
+               list_limits: Mapping[str, tuple[int, str]] | None = None) -> YNode | None:
+    """Compose ``text`` (one YAML document) into a tree; None for an empty document.
+
+    ``list_limits`` maps a top-level key to (maximum items, what they are): a longer list there is
+    refused as soon as it passes the limit, without composing the rest of a huge file.
+    """
     try:
         loader = _Loader(text)
     except UnicodeError as exc:  # lone surrogates in a str cannot be encoded for the parser
@@ -99,7 +104,7 @@ def parse_yaml(text: str, source: str | None, *, max_depth: int, max_nodes: int)
                             line=text.count("\n", 0, getattr(exc, "start", 0)) + 1,
                             hint="save the scenario as UTF-8 text") from None
     try:
-        return _Composer(loader, source, max_depth, max_nodes).compose()
+        return _Composer(loader, source, max_depth, max_nodes, list_limits or {}).compose()
     except UnicodeError as exc:
         raise ScenarioError(f"the text is not valid Unicode ({exc.reason})", path=source,
                             hint="save the scenario as UTF-8 text") from None
@@ -139,12 +144,14 @@ def _yaml_error(exc: yaml.YAMLError, source: str | None, text: str) -> ScenarioE
 class _Composer:
     """Iterative event -> node composer with depth, size, anchor and duplicate-key checks."""
 
-    def __init__(self, loader: Any, source: str | None, max_depth: int, max_nodes: int):
+    def __init__(self, loader: Any, source: str | None, max_depth: int, max_nodes: int,
+                 list_limits: Mapping[str, tuple[int, str]]):
         self.loader, self.source = loader, source
+        self.list_limits = list_limits
         self.max_depth, self.max_nodes = max_depth, max_nodes
         self.anchors: dict[str, YNode] = {}
         self.cache: dict[Any, tuple[Any, bool]] = {}
-        # stack entries: [node, anchor, pending key (value, line) or None]
+        # stack entries: [node, anchor, pending key (value, line) or None, list limit or None]
         self.stack: list[list[Any]] = []
 
     def error(self, message: str, line: int | None, hint: str | None = None) -> ScenarioError:
@@ -173,9 +180,13 @@ class _Composer:
                 if len(self.stack) >= self.max_depth:
                     raise self.error(f"the YAML nests more than {self.max_depth} levels deep", line,
                                      "a scenario needs only a few levels; this file is not a scenario")
-                self.stack.append([YMap(line) if is_map else YSeq(line), event.anchor, None])
+                self.stack.append([YMap(line) if is_map else YSeq(line), event.anchor, None, None])
+                if not is_map and len(self.stack) == 2 and self.stack[0][2] is not None:
+                    key, key_line = self.stack[0][2]
+                    if isinstance(key, str) and key in self.list_limits:
+                        self.stack[-1][3] = (key, key_line, *self.list_limits[key])
             elif kind is map_end or kind is seq_end:
-                node, anchor, _ = self.stack.pop()
+                node, anchor, _, _ = self.stack.pop()
                 if isinstance(node, YMap) and node.merges:
                     self.merge(node)
                 self.attach(node, anchor, line)
@@ -238,6 +249,10 @@ class _Composer:
                              "scenario files need far fewer values; do not build aliases of aliases")
         if isinstance(parent, YSeq):
             parent.items.append(node)
+            if top[3] is not None and len(parent.items) > top[3][2]:
+                key, key_line, limit, what = top[3]
+                raise ScenarioError(f"more than {limit} {what}, the limit", path=self.source, line=key_line,
+                                    field=key, hint="split the scenario, or thin it out (see SCENARIO_LIMITS)")
             return
         if top[2] is None:  # a key
             if not isinstance(node, YScalar):

@@ -149,7 +149,7 @@ def obstacle_lines(n: int) -> str:
 def test_too_many_obstacles_is_a_clear_error(tmp_path):
     limit = int(SCENARIO_LIMITS["max_obstacles"])
     err = load_text(tmp_path, VALID + obstacle_lines(20_000))
-    assert f"20001 obstacles is more than the limit of {limit}" in str(err) and err.line == 5
+    assert f"obstacles: more than {limit} obstacles, the limit" in str(err) and err.line == 5
 
 
 def test_obstacles_up_to_the_limit_load(tmp_path):
