@@ -85,27 +85,50 @@ class _Table:
         self.cap = cap
         self.windows: dict[tuple[int, int, int], tuple] = {}
 
-    def window(self, idx: tuple[int, int, int], w: int) -> tuple:
-        """Candidates of the dynamic window around grid command ``idx`` (cached): the rows
-        mapping a point [px, py, 1] into each rollout pose's frame, the footprint's half
-        extents per row, rollout positions, end poses, speed scores, reach, grid indices."""
-        cached = self.windows.get(idx)
-        if cached is None:
+    def window(self, idx: tuple[int, int, int], w: int, weights: tuple) -> "_Window":
+        """The candidates of the dynamic window around grid command ``idx`` (cached)."""
+        win = self.windows.get(idx)
+        if win is None:
             axes = [np.unique(np.clip(np.arange(i - w, i + w + 1), 0, n - 1))
                     for i, n in zip(idx, self.shape)]
             I, J, K = (a.ravel() for a in np.meshgrid(*axes, indexing="ij"))
-            g = (I * self.shape[1] + J) * self.shape[2] + K
-            x, y, th = self.x[g], self.y[g], self.th[g]
-            c, s = np.cos(th), np.sin(th)
-            # lx = c px + s py - (c x + s y);  ly = -s px + c py + (s x - c y)
-            A = np.empty((len(g), self.steps, 2, 3), dtype=np.float32)
-            A[:, :, 0, 0], A[:, :, 0, 1], A[:, :, 0, 2] = c, s, -(c * x + s * y)
-            A[:, :, 1, 0], A[:, :, 1, 1], A[:, :, 1, 2] = -s, c, s * x - c * y
-            half = np.tile(np.asarray(self.half, dtype=np.float32), len(g) * self.steps)[:, None]
-            cached = (A.reshape(-1, 3), half, x, y, x[:, -1].copy(), y[:, -1].copy(),
-                      th[:, -1].copy(), self.vel[g], self.turn[g], self.stop_yaw[g], float(self.reach[g].max()), np.stack([I, J, K], axis=1))
-            self.windows[idx] = cached
-        return cached
+            win = self.windows[idx] = _Window(self, I, J, K, weights)
+        return win
+
+
+class _Window:
+    """Everything a tick needs about the candidates of one dynamic window, precomputed so
+    that a tick costs a few dozen numpy calls on small arrays."""
+
+    __slots__ = ("n", "rot", "off", "half", "score_rows", "static", "stop_yaw", "reach", "cand",
+                 "speed")
+
+    def __init__(self, table: _Table, I, J, K, weights: tuple):
+        g = (I * table.shape[1] + J) * table.shape[2] + K
+        steps = table.steps
+        x, y, th = table.x[g], table.y[g], table.th[g]                   # (n, steps)
+        c, s = np.cos(th), np.sin(th)
+        self.n = n = len(g)
+        # a lidar point p (robot frame now) in each rollout pose's frame: rot @ p + off
+        rot = np.empty((n, steps, 2, 2), dtype=np.float32)
+        rot[:, :, 0, 0], rot[:, :, 0, 1], rot[:, :, 1, 0], rot[:, :, 1, 1] = c, s, -s, c
+        off = np.empty((n, steps, 2), dtype=np.float32)
+        off[:, :, 0], off[:, :, 1] = -(c * x + s * y), s * x - c * y
+        self.rot, self.off = rot.reshape(-1, 2), off.reshape(-1, 1)
+        self.half = np.tile(np.asarray(table.half, dtype=np.float32), n * steps)[:, None]
+        # rows that give, times [tx, ty, 1]: |target - rollout pose_k|^2 - |target|^2 (n*steps
+        # rows), the same for the end pose (n), and (target - end) . end heading (n)
+        ex, ey, eth = x[:, -1], y[:, -1], th[:, -1]
+        rows = [np.stack([-2 * x, -2 * y, x * x + y * y], axis=-1).reshape(-1, 3),
+                np.stack([-2 * ex, -2 * ey, ex * ex + ey * ey], axis=-1),
+                np.stack([np.cos(eth), np.sin(eth), -(ex * np.cos(eth) + ey * np.sin(eth))], axis=-1)]
+        self.score_rows = np.ascontiguousarray(np.concatenate(rows))
+        _, _, _, wv, wt = weights
+        self.static = table.vel[g] * wv - table.turn[g] * wt
+        self.stop_yaw = table.stop_yaw[g]
+        self.reach = float(table.reach[g].max())
+        self.cand = np.stack([I, J, K], axis=1)
+        self.speed = np.abs(table.vx[I]) + np.abs(table.vy[J])
 
 
 _TABLES: "OrderedDict[tuple, _Table]" = OrderedDict()
@@ -161,6 +184,7 @@ class DynamicWindowPlanner:
         self.weights = (float(progress_weight), float(heading_weight),
                         float(clearance_weight), float(velocity_weight))
         self.turn_weight = float(turn_weight)
+        self._weights = self.weights + (self.turn_weight,)
         self.lookahead = float(lookahead)
         self._p: RobotParams | None = None
         self._idx: tuple[int, int, int] | None = None
@@ -189,8 +213,9 @@ class DynamicWindowPlanner:
         self._min_clear = self._p.safety_margin + self.clearance_buffer + self._inflation
         # detour lanes: every beam direction is a candidate direction
         self._beam_angles = np.asarray(angles, dtype=float)
-        diff = self._beam_angles[None, :] - self._beam_angles[:, None]   # [direction, beam]
-        self._cos_diff, self._sin_diff = np.cos(diff), np.sin(diff)
+        c, s = np.cos(self._beam_angles), np.sin(self._beam_angles)
+        self._dirs = np.stack([c, s], axis=1).astype(np.float32)          # (directions, 2)
+        self._dirs_normal = np.stack([-s, c], axis=1).astype(np.float32)
         self._lane = self._t.half[1] + self._t.radius + self._min_clear
 
     # -- one tick -------------------------------------------------------------------------
@@ -203,62 +228,66 @@ class DynamicWindowPlanner:
             v = obs.velocity
             self._idx = tuple(int(np.argmin(np.abs(grid - float(value))))
                               for grid, value in zip((t.vx, t.vy, t.wz), v))
-        A, half, X, Y, ex, ey, eth, vel, turn, stop_yaw, reach, cand = t.window(self._idx, self.window)
-        n = len(cand)
+        win = t.window(self._idx, self.window, self._weights)
+        n, steps = win.n, self.steps
 
         # Clearance: footprint at every rollout pose vs the lidar points within reach.
         r = obs.ranges
-        near = np.flatnonzero(r < min(reach, p.range_max * 0.999))
+        near = np.flatnonzero(r < min(win.reach, p.range_max * 0.999))
+        points = None
         if near.size:
-            P = np.ones((3, near.size), dtype=np.float32)
-            np.multiply(self._unit[:, near], r[near], out=P[:2])
-            E = A @ P                                   # (n * steps * 2, points): local x, y
+            points = self._unit[:, near] * r[near]          # (2, m) float32, robot frame
+            E = win.rot @ points                            # (n * steps * 2, m): local x, y
+            E += win.off
             np.abs(E, out=E)
-            E -= half
+            E -= win.half
             np.maximum(E, 0.0, out=E)
             np.square(E, out=E)
-            E = E.reshape(n, self.steps, 2, -1)
-            d2 = (E[:, :, 0] + E[:, :, 1]).reshape(n, -1).min(axis=1)
-            clear = np.sqrt(d2, dtype=float)
+            E = E.reshape(n, steps, 2, -1)
+            clear = np.sqrt((E[:, :, 0] + E[:, :, 1]).reshape(n, -1).min(axis=1), dtype=float)
             clear -= t.radius + self._inflation
+            np.minimum(clear, t.cap, out=clear)
         else:
             clear = np.full(n, t.cap)
 
-        # Score: progress towards the target, heading, clearance, speed.
+        # Score: progress towards the target, heading, clearance, speed, turning.
         tx, ty = target_in_robot_frame(obs.pose, obs.target)
-        if self.lookahead > 0 and near.size:
-            tx, ty = self._subgoal(tx, ty, r, near)
-        d0 = math.hypot(tx, ty)
-        # closest approach to the target along the rollout: driving past a near target is fine
-        dmin = np.hypot(tx - X, ty - Y).min(axis=1)
+        if points is not None and self.lookahead > 0:
+            tx, ty = self._subgoal(tx, ty, points)
+        d0sq = tx * tx + ty * ty
+        d0 = math.sqrt(d0sq)
+        q = win.score_rows @ np.array((tx, ty, 1.0))
+        wp, wh, wc = self._weights[:3]
         if self._in_goal_phase(obs, d0):
             want = float(wrap_angle(p.goal_yaw - float(obs.pose[2])))
-            heading_err = np.abs(wrap_angle(want - stop_yaw))
-            progress = np.hypot(tx - ex, ty - ey) * (-1.0 / max(p.goal_tolerance, 1e-6))
+            heading_err = np.abs(wrap_angle(want - win.stop_yaw))
+            dend = np.sqrt(np.maximum(q[n * steps:n * steps + n] + d0sq, 0.0))
+            score = dend * (-wp / max(p.goal_tolerance, 1e-6))
+            score -= heading_err * (wh / math.pi)
         else:
-            heading_err = np.abs(wrap_angle(np.arctan2(ty - ey, tx - ex) - eth))
+            # closest approach along the rollout: driving past a near target is fine
+            dmin = np.sqrt(np.maximum(q[:n * steps].reshape(n, steps).min(axis=1) + d0sq, 0.0))
+            dend = np.sqrt(np.maximum(q[n * steps:n * steps + n] + d0sq, 1e-12))
+            cos_err = q[n * steps + n:] / dend              # cos of the end heading error
             # a rollout that reaches the target is not penalised for ending past it
             reach_tol = 0.5 * (p.waypoint_tolerance if len(obs.waypoints) else p.goal_tolerance)
-            heading_err[dmin < reach_tol] = 0.0
-            progress = (d0 - dmin) * (1.0 / (p.max_speed * self.horizon))
-        wp, wh, wc, wv = self.weights
-        score = progress * wp
-        score += heading_err * (-wh / math.pi)
-        score += clear * (wc / self.clearance_cap)
-        score += vel * wv
-        score -= turn * self.turn_weight
-        admissible = clear >= self._min_clear
-        if admissible.any():
-            score[~admissible] = -np.inf
+            cos_err[dmin < reach_tol] = 1.0
+            np.clip(cos_err, -1.0, 1.0, out=cos_err)
+            score = (d0 - dmin) * (wp / (p.max_speed * self.horizon))
+            score -= np.arccos(cos_err) * (wh / math.pi)   # linear in the angle, as in Fox et al.
+        score += clear * (wc / t.cap)
+        score += win.static
+        safe = clear >= self._min_clear
+        if safe.any():
+            score[~safe] = -np.inf
             best = int(np.argmax(score))
         else:  # nothing is safe: brake as hard as the window allows (lowest speed, most room)
-            speed = np.abs(t.vx[cand[:, 0]]) + np.abs(t.vy[cand[:, 1]])
-            best = int(np.lexsort((-clear, speed))[0])
-        i, j, k = (int(v) for v in cand[best])
+            best = int(np.lexsort((-clear, win.speed))[0])
+        i, j, k = (int(v) for v in win.cand[best])
         self._idx = (i, j, k)
         return Command(float(t.vx[i]), float(t.vy[j]), float(t.wz[k]))
 
-    def _subgoal(self, tx: float, ty: float, r: np.ndarray, near: np.ndarray) -> tuple[float, float]:
+    def _subgoal(self, tx: float, ty: float, points: np.ndarray) -> tuple[float, float]:
         """The target, or a detour point when lidar points block the straight lane to it.
 
         Lidar-only DWA falls into the local minimum in front of an obstacle that sits on the
@@ -269,20 +298,18 @@ class DynamicWindowPlanner:
         """
         d0 = math.hypot(tx, ty)
         length = min(d0, self.lookahead)
-        rn = r[near]
-        bearing = math.atan2(ty, tx)
-        rel = self._beam_angles[near] - bearing
-        along = np.cos(rel) * rn
-        lateral = np.abs(np.sin(rel) * rn)
-        if not np.any((lateral < self._lane) & (along > 0.0) & (along < length)):
+        cb, sb = tx / max(d0, 1e-9), ty / max(d0, 1e-9)
+        lane = np.array(((cb, sb), (-sb, cb)), dtype=np.float32) @ points   # along, lateral
+        if not np.any((np.abs(lane[1]) < self._lane) & (np.abs(lane[0] - length / 2) < length / 2)):
             self._side = 0.0
             return tx, ty
-        along = self._cos_diff[:, near] * rn                 # (directions, points)
-        lateral = np.abs(self._sin_diff[:, near] * rn)
-        blocked = ((lateral < self._lane) & (along > 0.0) & (along < length)).any(axis=1)
+        # blocked: check the lane along every beam direction
+        along = self._dirs @ points                          # (directions, m)
+        lateral = np.abs(self._dirs_normal @ points)
+        blocked = ((lateral < self._lane) & (np.abs(along - length / 2) < length / 2)).any(axis=1)
         if blocked.all():
             return tx, ty
-        offset = wrap_angle(self._beam_angles - bearing)
+        offset = wrap_angle(self._beam_angles - math.atan2(ty, tx))
         cost = np.abs(offset) + np.where(offset * self._side < 0.0, 0.5, 0.0)
         cost[blocked] = np.inf
         j = int(np.argmin(cost))
