@@ -65,6 +65,14 @@ def test_clearance_of_a_circle_footprint_to_a_cylinder():
     assert m.min_clearance_obstacle == "pillar"
 
 
+def test_clearance_of_a_box_footprint_to_a_cylinder():
+    # the robot's side (x = 0.25) faces the cylinder's edge (x = 1 - 0.2) when level with it
+    s = scenario(CylinderObstacle("pillar", 1.0, 5.0, 0.2))
+    m = compute_metrics(s, straight_north())
+    assert m.min_clearance == pytest.approx(0.55, abs=1e-12)
+    assert m.min_clearance_time == pytest.approx(5.0, abs=1e-9)
+
+
 def test_clearance_is_zero_on_contact_and_a_collision_overrides_it():
     s = scenario(BoxObstacle("in_the_way", 0.3, 5.0, 1.0, 1.0))
     m = compute_metrics(s, straight_north())
