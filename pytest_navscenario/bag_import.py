@@ -109,7 +109,8 @@ def read_bag(path: str | Path, *, odom_topic: str | None = None, scan_topic: str
         reader = AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
         reader.open()
     except Exception as exc:  # rosbags raises several unrelated types for a bad file
-        raise BagImportError(f"{path}: not a readable ROS 1 / rosbag2 bag ({_reason(exc)})") from None
+        what = "a damaged or truncated bag" if _has_bag_magic(path) else "not a readable ROS 1 / rosbag2 bag"
+        raise BagImportError(f"{path}: {what} ({_reason(exc)})") from None
     try:
         return _read(reader, path, odom_topic, scan_topic, start, end)
     except NavScenarioError:
@@ -121,6 +122,22 @@ def read_bag(path: str | Path, *, odom_topic: str | None = None, scan_topic: str
             reader.close()
         except Exception:
             pass
+
+
+_MAGICS = (b"#ROSBAG V2.0", b"\x89MCAP", b"SQLite format 3")
+
+
+def _has_bag_magic(path: Path) -> bool:
+    """Whether the file (or the storage file in a rosbag2 folder) starts like a bag."""
+    files = [path] if path.is_file() else sorted(path.glob("*.mcap")) + sorted(path.glob("*.db3"))
+    for f in files[:1]:
+        try:
+            with open(f, "rb") as fh:
+                head = fh.read(16)
+        except OSError:
+            return False
+        return head.startswith(_MAGICS)
+    return False
 
 
 def _reason(exc: Exception) -> str:
