@@ -6,6 +6,7 @@ file cannot be read (the error names the file and line).
 from __future__ import annotations
 
 import argparse
+import sys
 
 from .results import atomic_write_text
 
@@ -21,6 +22,17 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="exit with status 1 when B fails a scenario that A passed (a CI gate)")
     p.add_argument("--max-listed", type=int, default=50, metavar="N",
                    help="list at most N scenarios per list (default 50)")
+    p.add_argument("--side-by-side", metavar="DIR",
+                   help="re-run the scenarios B broke (then those it fixed) with both subjects and write "
+                        "one side-by-side trajectory plot per scenario into DIR")
+    p.add_argument("--max-plots", type=int, default=10, metavar="N",
+                   help="at most N side-by-side plots (default 10)")
+    p.add_argument("--a-subject", metavar="SPEC",
+                   help="subject to re-run A with (default: the subject named in A's records)")
+    p.add_argument("--b-subject", metavar="SPEC",
+                   help="subject to re-run B with (default: the subject named in B's records)")
+    p.add_argument("--root", default=".", metavar="DIR",
+                   help="folder the records' scenario paths are relative to (the pytest rootdir; default .)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -35,6 +47,13 @@ def run(args: argparse.Namespace) -> int:
         from .plots import save_bars
         save_bars(cmp, args.plot)
         print(f"bar chart written to {args.plot}")
+    if args.side_by_side:
+        from .compare import rerun_side_by_side
+        written, problems = rerun_side_by_side(cmp, args.side_by_side, root=args.root, limit=args.max_plots,
+                                               a_subject=args.a_subject, b_subject=args.b_subject)
+        for line in problems:
+            print(f"side-by-side: {line}", file=sys.stderr)
+        print(f"{len(written)} side-by-side plot(s) written to {args.side_by_side}")
     if args.fail_on_regression and cmp.has_regressions:
         return 1
     return 0

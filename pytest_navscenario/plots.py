@@ -315,7 +315,8 @@ def episode_title(result: EpisodeResult, prefix: str = "", width: int = 60) -> s
     subject = result.subject + (f" {result.subject_version}" if result.subject_version else "")
     message = textwrap.shorten(result.message, 2 * width, placeholder="...")
     wrapped = textwrap.fill(message, width) if message else ""
-    return f"{prefix}{name}: {result.outcome.value.upper()} ({subject})" + (f"\n{wrapped}" if wrapped else "")
+    head = textwrap.fill(f"{prefix}{name}: {result.outcome.value.upper()} ({subject})", width)
+    return head + (f"\n{wrapped}" if wrapped else "")
 
 
 # Fixed layout in inches (no constrained layout: it re-measures every text and costs ~40 % of a plot).
@@ -398,7 +399,8 @@ def comparison_figure(a: EpisodeResult, b: EpisodeResult, labels: tuple[str, str
     fig, axes, cax = _map_figure([a, b])
     norm = speed_norm([a, b])
     mapping = None
-    every = _nice_step(max(0.5, max(a.trajectory.duration, b.trajectory.duration) / 25.0))
+    # outlines as dense as the shorter run needs (where a robot stood still they are thinned anyway)
+    every = _nice_step(max(0.5, min(a.trajectory.duration or 1e9, b.trajectory.duration or 1e9, 100.0) / 25.0))
     width = max(30, int(_panel_size([a, b])[0] / 0.075))  # characters per title line, one panel
     for ax, res, label in zip(axes, (a, b), labels):
         mapping = draw_episode(ax, res, norm=norm, outline_every=every,

@@ -137,3 +137,33 @@ def test_junit_one_case_per_scenario_failing_on_regressions(files, tmp_path):
     skipped = [c.get("name") for c in cases if c.find("skipped") is not None]
     assert failed == ["scenarios/boxes/b1.yaml::b1"] and skipped == ["scenarios/boxes/extra.yaml::extra"]
     assert "--nav-subject=new" in ET.tostring(cases[0], encoding="unicode")
+
+
+def test_side_by_side_reruns_regressions_with_both_subjects(tmp_path, capsys):
+    """--side-by-side re-runs what B broke with both subjects (real MuJoCo episodes), writes one
+    plot per scenario, says when a re-run disagrees with the file, and refuses a changed file."""
+    from matplotlib.image import imread
+
+    from pytest_navscenario.loader import loads_scenario
+    from pytest_navscenario.scenario import content_hash
+
+    text = "version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 1.5, y: 0}, timeout: 5}\n"
+    (tmp_path / "s").mkdir()
+    (tmp_path / "s" / "short.yaml").write_text(text)
+    (tmp_path / "s" / "moved.yaml").write_text(text.replace("x: 1.5", "x: 1.0"))
+    h = content_hash(loads_scenario(text))  # moved.yaml was edited after the run: its hash differs now
+    a_recs = [dict(rec("s/short.yaml::short", "success", h=h, subject="dwa"), path="s/short.yaml"),
+              dict(rec("s/moved.yaml::moved", "success", h=h, subject="dwa"), path="s/moved.yaml")]
+    b_recs = [dict(r, outcome="collision", subject="potential-field") for r in a_recs]
+    a, b = tmp_path / "a.jsonl", tmp_path / "b.jsonl"
+    write_results(a, a_recs)
+    write_results(b, b_recs)
+    out = tmp_path / "sbs"
+    assert main(["compare", str(a), str(b), "--side-by-side", str(out), "--root", str(tmp_path)]) == 0
+    captured = capsys.readouterr()
+    pngs = list(out.glob("*.png"))
+    assert len(pngs) == 1 and pngs[0].name.startswith("s_short.yaml_short")
+    assert imread(str(pngs[0])).shape[1] > 600
+    assert "1 side-by-side plot(s) written" in captured.out
+    assert "s/short.yaml::short: B re-run gave success, the results file says collision" in captured.err
+    assert "moved.yaml changed since the run" in captured.err
