@@ -165,8 +165,10 @@ class _Simulator:
                 culprit = res.safety_stop.obstacle
             else:
                 culprit = res.metrics.min_clearance_obstacle
-            if not self.report.subject or self.report.subject == "?":
-                self.report.subject, self.report.subject_version = res.subject or "?", res.subject_version
+            if self.report.subject in ("", "?"):
+                self.report.subject = res.subject or "?"
+            if self.report.subject_version is None and res.subject_version:
+                self.report.subject_version = res.subject_version
             cand = Candidate(self.counts[phase], phase, origin, tuple(offsets), res.outcome.value,
                              float(res.metrics.min_clearance), culprit, res.message,
                              res.metrics.as_dict(), content_hash(scenario), time.perf_counter() - t0, scenario)

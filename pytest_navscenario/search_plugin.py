@@ -54,6 +54,18 @@ def pytest_addoption(parser: pytest.Parser) -> None:
                       default=[] if dest == "navsearch" else "")
 
 
+_CONFIGS: list[pytest.Config] = []   # the running session's config (a stack: pytester nests runs)
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    _CONFIGS.append(config)
+
+
+def pytest_unconfigure(config: pytest.Config) -> None:
+    if config in _CONFIGS:
+        _CONFIGS.remove(config)
+
+
 # -- settings ------------------------------------------------------------------------------------
 @dataclass
 class SearchSettings:
@@ -347,8 +359,7 @@ def pytest_runtest_logreport(report: pytest.TestReport) -> None:
     payload = getattr(report, "navsearch", None)
     if payload is None or report.when != "call":
         return
-    from .plugin import _config_of
-    config = _config_of(report)
+    config = _CONFIGS[-1] if _CONFIGS else None
     if config is None or hasattr(config, "workerinput"):
         return
     state = config.stash.get(STATE_KEY, None)
@@ -388,7 +399,8 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
             tr.write_line(line)
     for name in state.jobs:
         if name not in ran:
-            tr.write_line(f"{name}: did not run (session interrupted before this search)")
+            tr.write_line(f"{name}: no result (the search item failed, see above, or the session "
+                          f"stopped before it)")
     if state.settings.junit is not None and state.junit_items:
         tr.write_line(f"JUnit file of the generated suite: {state.settings.junit}")
 

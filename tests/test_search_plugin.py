@@ -1,0 +1,137 @@
+"""``pytest --navsearch``: real pytest runs (pytester) with the plugin loaded explicitly.
+
+The subject is a straight-line driver that ignores obstacles (see STRAIGHT below), so the
+``crate`` seed has failures a small shift away and searches stay a few simulations long.
+"""
+from __future__ import annotations
+
+import json
+import re
+import xml.etree.ElementTree as ET
+
+import pytest
+
+from test_search import SEED_YAML
+
+STRAIGHT = '''
+import math
+
+class Straight:
+    name = "straight"
+    version = "1.0"
+
+    def reset(self, scenario):
+        pass
+
+    def act(self, obs):
+        x, y, yaw = obs.pose
+        dx, dy = obs.target[0] - x, obs.target[1] - y
+        dist = math.hypot(dx, dy) or 1.0
+        c, s = math.cos(yaw), math.sin(yaw)
+        return ((c * dx + s * dy) / dist, (-s * dx + c * dy) / dist, 0.0)
+
+CALLS = [0]
+
+def interrupted_after_five():
+    """A subject whose sixth episode is interrupted as if by Ctrl-C."""
+    CALLS[0] += 1
+    if CALLS[0] > 5:
+        raise KeyboardInterrupt
+    return Straight()
+'''
+
+SUBJECT = "--nav-subject=straight_planner:Straight"
+
+
+@pytest.fixture
+def project(pytester, monkeypatch):
+    monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
+    pytester.makepyfile(straight_planner=STRAIGHT)
+    pytester.syspathinsert()
+    (pytester.path / "scenarios").mkdir()
+    (pytester.path / "scenarios" / "crate.yaml").write_text(SEED_YAML.replace("name: crate\n", ""))
+    twin = SEED_YAML.replace("name: crate\n", "").replace("x: 1.2", "x: -1.2").replace("[-1.5, 0.5]", "[-0.5, 1.5]")
+    (pytester.path / "scenarios" / "crate2.yaml").write_text(twin)
+    pytester.makeini("[pytest]\nnav_scenario_paths = scenarios\npythonpath = .\n")  # pythonpath: for xdist workers
+    return pytester
+
+
+def run(pytester, *args):
+    return pytester.runpytest_inprocess("-p", "pytest_navscenario.plugin", SUBJECT, *args)
+
+
+def test_search_freezes_failures_that_fail_again_when_collected(project):
+    out = project.path / "scenarios" / "regressions"
+    result = run(project, "--navsearch", "crate", "--budget", "6", "--navsearch-seed", "3",
+                 "--navsearch-shrink-budget", "10", "--navsearch-junit", "suite.xml")
+    assert result.ret == 0, result.stdout.str()
+    result.stdout.fnmatch_lines(["*navsearch summary*",
+                                 "crate vs straight_planner:Straight 1.0 (evolve, search seed 3): 6/6 sims*"])
+    frozen = sorted((out / "crate").glob("crate-*.yaml"))
+    assert frozen, result.stdout.str()
+    log = [json.loads(line) for line in (out / "crate" / "search-log.jsonl").read_text().splitlines()]
+    assert sum(r["phase"] == "search" for r in log) == 6 and all("params" in r and "outcome" in r for r in log)
+    cases = ET.parse(project.path / "suite.xml").getroot().iter("testcase")
+    assert sum(1 for _ in cases) == 6
+
+    from pytest_navscenario.loader import load_scenario
+    prov = load_scenario(frozen[0]).provenance
+    assert prov["seed"] == "crate" and prov["search_seed"] == 3 and prov["budget"] == 6
+    assert prov["subject"] == "straight_planner:Straight" and prov["subject_version"] == "1.0"
+    assert prov["outcome"] in ("collision", "safety-stop") and "date" in prov
+
+    # the next plain run re-executes the frozen failures: same outcome
+    again = run(project, "scenarios/regressions")
+    again.assert_outcomes(failed=len(frozen))
+    for path in frozen:
+        again.stdout.fnmatch_lines([f"*{load_scenario(path).provenance['outcome']}*"])
+
+    # the same search again finds the same failures: kept, not duplicated
+    third = run(project, "--navsearch", "crate", "--budget", "6", "--navsearch-seed", "3",
+                "--navsearch-shrink-budget", "10")
+    assert third.ret == 0
+    assert sorted((out / "crate").glob("crate-*.yaml")) == frozen
+    third.stdout.fnmatch_lines(["*kept scenarios/regressions/crate/crate-*.yaml*(already frozen)"])
+
+
+def test_two_searches_on_two_workers(project):
+    result = run(project, "-n", "2", "-p", "xdist.plugin", "--navsearch", "crate", "--navsearch", "crate2",
+                 "--budget", "4", "--navsearch-shrink-budget", "0", "--navsearch-out", "found")
+    assert result.ret == 0, result.stdout.str()
+    result.assert_outcomes(passed=2)
+    result.stdout.fnmatch_lines_random(["crate vs * 4/4 sims*", "crate2 vs * 4/4 sims*"])
+    for name in ("crate", "crate2"):
+        assert (project.path / "found" / name / "search-log.jsonl").is_file()
+
+
+def test_ctrl_c_keeps_what_was_found(project):
+    result = project.runpytest_inprocess(
+        "-p", "pytest_navscenario.plugin", "--nav-subject=straight_planner:interrupted_after_five",
+        "--navsearch", "crate", "--budget", "50", "--navsearch-seed", "3")
+    out = result.stdout.str()
+    assert "CUT SHORT: interrupted (Ctrl-C)" in out and "Interrupted: navsearch crate was cut short" in out, out
+    sims = int(re.search(r"\): (\d+)/50 sims", out).group(1))  # the summary line
+    assert 0 < sims < 50
+    log = (project.path / "scenarios" / "regressions" / "crate" / "search-log.jsonl").read_text().splitlines()
+    assert len(log) == sims
+    failures = [r for r in map(json.loads, log) if r["outcome"] != "success"]
+    frozen = list((project.path / "scenarios" / "regressions" / "crate").glob("crate-*.yaml"))
+    assert bool(frozen) == bool(failures)
+    assert not list((project.path / "scenarios" / "regressions" / "crate").glob(".*tmp"))
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--navsearch", "crat"], "no seed scenario named 'crat' in "),
+    (["--navsearch", "crat"], "Available: bad, crate, crate2. Give one of these names"),
+    (["--navsearch", "crate", "--budget", "0"], "--budget: the budget (simulations per search) must be >= 1, got 0"),
+    (["--navsearch", "crate", "--budget", "-3"], "must be >= 1, got -3"),
+    (["--navsearch", "bad"], "bad.yaml:10: search.obstacle_dx: inverted bounds [0.5, -0.5] (lo > hi) (fix: write [-0.5, 0.5])"),
+    (["--navsearch", "crate", "--navsearch-strategy", "anneal"], "unknown strategy 'anneal'; use one of evolve, random"),
+])
+def test_bad_input_is_a_usage_error(project, args, message):
+    (project.path / "scenarios" / "bad.yaml").write_text(
+        SEED_YAML.replace("name: crate\n", "").replace("[-1.5, 0.5]", "[0.5, -0.5]"))
+    result = run(project, *args)
+    assert result.ret == pytest.ExitCode.USAGE_ERROR
+    err = result.stderr.str()
+    assert err.startswith("ERROR: ") and message in err, err
