@@ -182,3 +182,10 @@ def test_dwa_detours_around_a_box_centred_on_the_line_instead_of_stalling_in_fro
     detour = run_scenario(centred, DynamicWindowPlanner())
     assert detour.outcome is Outcome.SUCCESS, detour.message
     assert detour.metrics.min_clearance > 0.2
+
+
+def test_dwa_shares_precomputed_rollouts_only_between_identical_settings(seeds):
+    a, b, c = DynamicWindowPlanner(), DynamicWindowPlanner(), DynamicWindowPlanner(turn_weight=0.5)
+    for planner in (a, b, c):
+        planner.reset(seeds["boxes1"])
+    assert a._t is b._t and a._t is not c._t

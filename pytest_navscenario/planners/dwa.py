@@ -63,8 +63,8 @@ class _Table:
     """Velocity grid and rollouts for one robot + settings, and the dynamic windows seen so far."""
 
     def __init__(self, p: RobotParams, horizon: float, steps: int, window: int,
-                 reverse_speed: float, cap: float):
-        self.steps = steps
+                 reverse_speed: float, cap: float, weights: tuple):
+        self.steps, self.w, self.weights = steps, window, weights
         self.vx = _grid(-reverse_speed, p.max_speed, p.max_accel * p.tick / window)
         self.vy = _grid(-p.max_lateral_speed, p.max_lateral_speed, p.max_accel * p.tick / window)
         self.wz = _grid(-p.max_yaw_rate, p.max_yaw_rate, p.max_yaw_accel * p.tick / window)
@@ -83,16 +83,17 @@ class _Table:
             self.body = math.hypot(p.half_length, p.half_width)
         self.reach = np.hypot(self.x, self.y).max(axis=1) + self.body + cap     # (G,)
         self.cap = cap
-        self.windows: dict[tuple[int, int, int], tuple] = {}
+        self.windows: dict[tuple[int, int, int], _Window] = {}
 
-    def window(self, idx: tuple[int, int, int], w: int, weights: tuple) -> "_Window":
+    def window(self, idx: tuple[int, int, int]) -> "_Window":
         """The candidates of the dynamic window around grid command ``idx`` (cached)."""
         win = self.windows.get(idx)
         if win is None:
+            w = self.w
             axes = [np.unique(np.clip(np.arange(i - w, i + w + 1), 0, n - 1))
                     for i, n in zip(idx, self.shape)]
             I, J, K = (a.ravel() for a in np.meshgrid(*axes, indexing="ij"))
-            win = self.windows[idx] = _Window(self, I, J, K, weights)
+            win = self.windows[idx] = _Window(self, I, J, K)
         return win
 
 
@@ -103,7 +104,7 @@ class _Window:
     __slots__ = ("n", "rot", "off", "half", "score_rows", "static", "stop_yaw", "reach", "cand",
                  "speed")
 
-    def __init__(self, table: _Table, I, J, K, weights: tuple):
+    def __init__(self, table: _Table, I, J, K):
         g = (I * table.shape[1] + J) * table.shape[2] + K
         steps = table.steps
         x, y, th = table.x[g], table.y[g], table.th[g]                   # (n, steps)
@@ -123,7 +124,7 @@ class _Window:
                 np.stack([-2 * ex, -2 * ey, ex * ex + ey * ey], axis=-1),
                 np.stack([np.cos(eth), np.sin(eth), -(ex * np.cos(eth) + ey * np.sin(eth))], axis=-1)]
         self.score_rows = np.ascontiguousarray(np.concatenate(rows))
-        _, _, _, wv, wt = weights
+        _, _, _, wv, wt = table.weights
         self.static = table.vel[g] * wv - table.turn[g] * wt
         self.stop_yaw = table.stop_yaw[g]
         self.reach = float(table.reach[g].max())
@@ -194,7 +195,7 @@ class DynamicWindowPlanner:
     def reset(self, scenario: Scenario) -> None:
         self._p = p = RobotParams.from_scenario(scenario)
         self._t = _table(p, self.horizon, self.steps, self.window, self.reverse_speed,
-                         self.clearance_cap)
+                         self.clearance_cap, self._weights)
         self._idx = None          # current command as grid indices, set from the first observation
         self._goal_phase = False
         self._beams_shape = None
@@ -228,7 +229,7 @@ class DynamicWindowPlanner:
             v = obs.velocity
             self._idx = tuple(int(np.argmin(np.abs(grid - float(value))))
                               for grid, value in zip((t.vx, t.vy, t.wz), v))
-        win = t.window(self._idx, self.window, self._weights)
+        win = t.window(self._idx)
         n, steps = win.n, self.steps
 
         # Clearance: footprint at every rollout pose vs the lidar points within reach.
