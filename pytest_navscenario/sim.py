@@ -408,6 +408,7 @@ def simulate(scenario: Scenario, planner: Any, seed: int, max_ticks: int | None 
     safety = world.safety
     robot_body = world.robot_body
     warn_count = d.warning.number   # a live view
+    own_handler = mujoco.get_mju_user_warning() is _on_mujoco_warning
     _MUJOCO_WARNINGS.clear()
     deadline = TickDeadline(tick_limit) if tick_limit else None
     step, step1, step2, multi_ray = mujoco.mj_step, mujoco.mj_step1, mujoco.mj_step2, mujoco.mj_multiRay
@@ -444,7 +445,10 @@ def simulate(scenario: Scenario, planner: Any, seed: int, max_ticks: int | None 
 
         while not end:
             t = i * dt
-            x, y, yaw_raw = float(qpos[0]), float(qpos[1]), float(qpos[2])
+            x, y, yaw_raw = qpos.tolist()
+            wvx, wvy, wz = qvel.tolist()
+            if not math.isfinite(x + y + yaw_raw + wvx + wvy + wz):
+                raise SimulationDivergedError(_divergence_message(scenario, d, t))
             # waypoints (in order), then the goal
             while wp_index < n_wp and math.hypot(x - wps[wp_index, 0], y - wps[wp_index, 1]) <= wp_tol:
                 wp_times.append(t)
@@ -481,7 +485,6 @@ def simulate(scenario: Scenario, planner: Any, seed: int, max_ticks: int | None 
             t_rays += t1 - t0
 
             # measured velocity, robot frame
-            wvx, wvy, wz = float(qvel[0]), float(qvel[1]), float(qvel[2])
             vx, vy = c * wvx + s * wvy, -s * wvx + c * wvy
             tick_t[tick] = t
 
@@ -562,9 +565,9 @@ def simulate(scenario: Scenario, planner: Any, seed: int, max_ticks: int | None 
             if collision is not None:
                 end = "collision"
                 break
-            # MuJoCo warns (and resets the data or zeroes the control) on NaN/huge values
-            if warn_count.any() or not math.isfinite(
-                    qpos[0] + qpos[1] + qpos[2] + qvel[0] + qvel[1] + qvel[2]):
+            # MuJoCo warns (and resets the data or zeroes the control) on NaN/huge values; our
+            # handler records the first warning of each kind per episode (a cheap test)
+            if _MUJOCO_WARNINGS if own_handler else warn_count.any():
                 raise SimulationDivergedError(_divergence_message(scenario, d, i * dt))
     finally:
         if deadline is not None:
