@@ -4,9 +4,12 @@ bare-loop floor (the same model, the same number of physics steps and ray casts,
     python benchmarks/bench_episode.py [--repeats 21] [--scenarios scenarios/*.yaml]
 
 Columns: ``episode`` = sim.simulate (the control loop), ``run_scenario`` = + oracle and metrics,
-``floor`` = mj_step2/mj_step1 + one mj_multiRay per tick for as many ticks, ``planner`` = the
-planner's own code, ``harness`` = episode - physics - rays - planner (safety layer, observation,
-validation, recording) as a share of the episode. Medians over ``--repeats`` runs, after a warm-up
+``replay`` = the same episode with a trivial planner that replays the recorded commands (same
+path, same physics, same safety-layer work: the loop without the planner's cost), ``floor`` =
+bare MuJoCo, mj_step + one mj_multiRay per tick for as many ticks and nothing else; then the
+shares of the episode: ``physics`` (stepping with per-step contact check and recording), ``rays``,
+``planner`` (the planner's own code), ``safety`` and ``harness`` = everything but physics, rays and
+the planner (safety layer included: observation, validation, limits, goal checks). Medians over ``--repeats`` runs, after a warm-up
 run (model compiled and cached, as in a search or a suite). Times are CPU time of this process
 (time.process_time), which stays meaningful on a machine shared with other jobs; ``wall`` is the
 episode's wall-clock median for comparison. Phase shares come from the episode's own perf_counter
@@ -31,8 +34,21 @@ from pytest_navscenario.sim import LIDAR_HEIGHT, compiled_world, lidar_angles, s
 PLANNERS = ("dwa", "potential-field")
 
 
+class Replay:
+    """The trivial planner: answers each tick with the command the real planner's run applied."""
+
+    def __init__(self, commands):
+        self.commands = [tuple(c) for c in commands.tolist()]
+
+    def reset(self, scenario):
+        pass
+
+    def act(self, obs):
+        return self.commands[obs.tick]
+
+
 def bare_floor(scenario, ticks: int) -> float:
-    """Seconds for ``ticks`` control ticks of pure MuJoCo: one multi-ray, then the physics steps."""
+    """CPU seconds for ``ticks`` control ticks of pure MuJoCo: one multi-ray, then spt mj_steps."""
     world = compiled_world(scenario)
     m = world.model
     d = world.take_data()
@@ -50,13 +66,12 @@ def bare_floor(scenario, ticks: int) -> float:
         geom, dist = np.empty(n, np.int32), np.empty(n)
         spt = steps_per_tick(scenario)
         rmax = scenario.robot.lidar.range_max
-        step1, step2, ray = mujoco.mj_step1, mujoco.mj_step2, mujoco.mj_multiRay
+        step, ray = mujoco.mj_step, mujoco.mj_multiRay
         t0 = time.process_time()
         for _ in range(ticks):
             ray(m, d, pnt, vec, None, 1, world.robot_body, geom, dist, None, n, rmax)
             for _ in range(spt):
-                step2(m, d)
-                step1(m, d)
+                step(m, d)
         return time.process_time() - t0
     finally:
         world.give_back(d)
@@ -72,7 +87,7 @@ def main(argv=None) -> int:
     print(f"python {sys.version.split()[0]}, mujoco {mujoco.__version__}, {os.cpu_count()} cores, "
           f"load average {os.getloadavg()[0]:.1f}, median of {args.repeats} runs")
     head = (f"{'scenario':12s} {'planner':16s} {'outcome':11s} {'sim s':>6s} {'ticks':>5s} "
-            f"{'episode':>8s} {'wall':>8s} {'run_scen':>8s} {'floor':>7s} {'physics':>7s} {'rays':>5s} "
+            f"{'episode':>8s} {'wall':>8s} {'run_scen':>8s} {'replay':>8s} {'floor':>7s} {'physics':>7s} {'rays':>5s} "
             f"{'planner':>7s} {'safety':>6s} {'harness':>7s}")
     print(head)
     print("-" * len(head))
@@ -81,7 +96,7 @@ def main(argv=None) -> int:
         for spec in PLANNERS:
             res = run_scenario(sc, spec)            # warm-up: compile + cache the model
             ticks = len(res.trajectory.tick_t)
-            eps, walls, runs, floors, parts = [], [], [], [], {k: [] for k in
+            eps, walls, runs, replays, floors, parts = [], [], [], [], [], {k: [] for k in
                                                     ("physics", "rays", "planner", "safety", "harness")}
             for _ in range(args.repeats):
                 planner, _ = make_planner(spec)
@@ -94,11 +109,16 @@ def main(argv=None) -> int:
                 t0 = time.process_time()
                 run_scenario(sc, spec)
                 runs.append(time.process_time() - t0)
+                t0 = time.process_time()
+                again = simulate(sc, Replay(facts.trajectory.command), sc.simulation.seed)
+                replays.append(time.process_time() - t0)
+                assert again.trajectory.pose.tobytes() == facts.trajectory.pose.tobytes(), "replay differs"
                 floors.append(bare_floor(sc, ticks))
             share = {k: statistics.median(v) * 100 for k, v in parts.items()}
             print(f"{sc.name:12s} {spec:16s} {res.outcome.value:11s} {res.trajectory.duration:6.1f} "
                   f"{ticks:5d} {statistics.median(eps) * 1e3:6.2f}ms {statistics.median(walls) * 1e3:6.2f}ms "
-                  f"{statistics.median(runs) * 1e3:6.2f}ms {statistics.median(floors) * 1e3:5.2f}ms "
+                  f"{statistics.median(runs) * 1e3:6.2f}ms {statistics.median(replays) * 1e3:6.2f}ms "
+                  f"{statistics.median(floors) * 1e3:5.2f}ms "
                   f"{share['physics']:6.0f}% {share['rays']:4.0f}% {share['planner']:6.0f}% "
                   f"{share['safety']:5.1f}% {share['harness']:6.1f}%")
     return 0
