@@ -104,6 +104,7 @@ class SearchReport:
     interrupted: bool = False
     stop_reason: str = ""
     wall_time: float = 0.0
+    episode_seed: int | None = None   # the run's base seed (--nav-seed) every episode used
 
     @property
     def discarded_total(self) -> int:
@@ -417,7 +418,7 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
                             path=seed.source or seed.name)
     report = SearchReport(seed_name=seed.name, seed_source=seed.source, subject=subject or "?",
                           subject_version=None, strategy=strategy, seed_value=seed_value, budget=budget,
-                          shrink_budget=shrink_budget, params=[p.name for p in space.params])
+                          shrink_budget=shrink_budget, params=[p.name for p in space.params], episode_seed=episode_seed)
     sim = _Simulator(space, subject_factory, report, progress, stop, episode_seed)
     kept: list[Candidate] = []
 

@@ -315,8 +315,9 @@ def report_to_payload(report: Any) -> dict[str, Any]:
         "subject_version": report.subject_version, "strategy": report.strategy,
         "seed_value": report.seed_value, "budget": report.budget, "shrink_budget": report.shrink_budget,
         "params": report.params, "sims_used": report.sims_used, "shrink_sims": report.shrink_sims,
-        "discarded": dict(report.discarded), "interrupted": report.interrupted,
+        "discarded": dict(report.discarded), "skipped": report.skipped, "interrupted": report.interrupted,
         "stop_reason": report.stop_reason, "wall_time": report.wall_time,
+        "episode_seed": report.episode_seed,
         "candidates": [cand(c) for c in report.candidates],
         "failures": [{"found": index[id(f.found)], "shrunk": index[id(f.shrunk)],
                       "shrink_sims": f.shrink_sims, "note": f.note} for f in report.failures],
@@ -336,8 +337,10 @@ def payload_to_report(data: dict[str, Any], space: Any) -> Any:
                                c["message"], metrics, c["scenario_hash"], c["wall_time"], space.apply(offsets)))
     fields = {k: data[k] for k in ("seed_name", "seed_source", "subject", "subject_version", "strategy",
                                    "seed_value", "budget", "shrink_budget", "params", "sims_used",
-                                   "shrink_sims", "discarded", "interrupted", "stop_reason", "wall_time")}
+                                   "shrink_sims", "discarded", "interrupted", "stop_reason", "wall_time",
+                                   "episode_seed")}
     report = SearchReport(**fields)
+    report.skipped = data.get("skipped", 0)
     report.candidates = cands
     report.failures = [Failure(cands[f["found"]], cands[f["shrunk"]], f["shrink_sims"], f["note"])
                        for f in data["failures"]]
@@ -423,6 +426,8 @@ def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
              + f", {len(r.failures)} distinct failure(s) ({by}), best clearance "
              + (f"{best:.3f} m" if math.isfinite(best) else "n/a")
              + f", {r.shrink_sims} shrink sims, {r.wall_time:.1f} s"]
+    if r.skipped:
+        lines.append(f"  {r.skipped} mutant(s) next to a known failure were redrawn without simulating them")
     if r.interrupted:
         lines.append(f"  CUT SHORT: {r.stop_reason or 'interrupted'}; the failures found so far are kept "
                      f"(unshrunk ones are frozen as found)")

@@ -177,3 +177,23 @@ def test_bad_arguments(seed):
         run_search(seed, Straight, budget=0)
     with pytest.raises(ValueError, match="evolve, random"):
         run_search(seed, Straight, budget=1, strategy="annealing")
+
+
+def test_frozen_files_round_trip_and_are_not_duplicated(seed, found, tmp_path):
+    from pytest_navscenario.freeze import freeze_failures, write_search_log
+    from pytest_navscenario.loader import load_scenario
+    from pytest_navscenario.scenario import content_hash
+
+    space = SearchSpace(seed)
+    first = freeze_failures(found, space, tmp_path, subject="straight")
+    assert first and all(f.new for f in first)
+    for f, failure in zip(first, found.failures):
+        frozen = load_scenario(f.path)
+        assert f.path.name == f"crate-{content_hash(frozen)}.yaml"
+        assert content_hash(frozen) == content_hash(space.apply(failure.shrunk.offsets))  # exactly what ran
+        assert frozen.provenance["outcome"] == failure.shrunk.outcome and frozen.search is None
+    second = freeze_failures(found, space, tmp_path, subject="straight")
+    assert [f.path for f in second] == [f.path for f in first] and not any(f.new for f in second)
+    assert len(list((tmp_path / "crate").glob("*.yaml"))) == len(first)
+    log = write_search_log(found, space, tmp_path).read_text().splitlines()
+    assert len(log) == found.sims_used + found.shrink_sims
