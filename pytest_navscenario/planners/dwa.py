@@ -118,11 +118,11 @@ class _Window:
         self.rot, self.off = rot.reshape(-1, 2), off.reshape(-1, 1)
         self.half = np.tile(np.asarray(table.half, dtype=np.float32), n * steps)[:, None]
         # rows that give, times [tx, ty, 1]: |target - rollout pose_k|^2 - |target|^2 (n*steps
-        # rows), the same for the end pose (n), and (target - end) . end heading (n)
-        ex, ey, eth = x[:, -1], y[:, -1], th[:, -1]
+        # rows), then the target in the end pose's frame: forward (n rows), left (n rows)
+        ex, ey, ec, es = x[:, -1], y[:, -1], c[:, -1], s[:, -1]
         rows = [np.stack([-2 * x, -2 * y, x * x + y * y], axis=-1).reshape(-1, 3),
-                np.stack([-2 * ex, -2 * ey, ex * ex + ey * ey], axis=-1),
-                np.stack([np.cos(eth), np.sin(eth), -(ex * np.cos(eth) + ey * np.sin(eth))], axis=-1)]
+                np.stack([ec, es, -(ec * ex + es * ey)], axis=-1),
+                np.stack([-es, ec, es * ex - ec * ey], axis=-1)]
         self.score_rows = np.ascontiguousarray(np.concatenate(rows))
         _, _, _, wv, wt = table.weights
         self.static = table.vel[g] * wv - table.turn[g] * wt
@@ -234,7 +234,7 @@ class DynamicWindowPlanner:
 
         # Clearance: footprint at every rollout pose vs the lidar points within reach.
         r = obs.ranges
-        near = np.flatnonzero(r < min(win.reach, p.range_max * 0.999))
+        near = (r < min(win.reach, p.range_max * 0.999)).nonzero()[0]
         points = None
         if near.size:
             points = self._unit[:, near] * r[near]          # (2, m) float32, robot frame
@@ -258,24 +258,24 @@ class DynamicWindowPlanner:
         d0sq = tx * tx + ty * ty
         d0 = math.sqrt(d0sq)
         q = win.score_rows @ np.array((tx, ty, 1.0))
+        nk = n * steps
         wp, wh, wc = self._weights[:3]
         if self._in_goal_phase(obs, d0):
             want = float(wrap_angle(p.goal_yaw - float(obs.pose[2])))
             heading_err = np.abs(wrap_angle(want - win.stop_yaw))
-            dend = np.sqrt(np.maximum(q[n * steps:n * steps + n] + d0sq, 0.0))
-            score = dend * (-wp / max(p.goal_tolerance, 1e-6))
+            score = np.hypot(q[nk:nk + n], q[nk + n:]) * (-wp / max(p.goal_tolerance, 1e-6))
             score -= heading_err * (wh / math.pi)
         else:
             # closest approach along the rollout: driving past a near target is fine
-            dmin = np.sqrt(np.maximum(q[:n * steps].reshape(n, steps).min(axis=1) + d0sq, 0.0))
-            dend = np.sqrt(np.maximum(q[n * steps:n * steps + n] + d0sq, 1e-12))
-            cos_err = q[n * steps + n:] / dend              # cos of the end heading error
+            dmin = q[:nk].reshape(n, steps).min(axis=1)
+            dmin += d0sq
+            np.sqrt(np.maximum(dmin, 0.0, out=dmin), out=dmin)
+            heading_err = np.abs(np.arctan2(q[nk + n:], q[nk:nk + n]))   # at the end pose
             # a rollout that reaches the target is not penalised for ending past it
             reach_tol = 0.5 * (p.waypoint_tolerance if len(obs.waypoints) else p.goal_tolerance)
-            cos_err[dmin < reach_tol] = 1.0
-            np.clip(cos_err, -1.0, 1.0, out=cos_err)
-            score = (d0 - dmin) * (wp / (p.max_speed * self.horizon))
-            score -= np.arccos(cos_err) * (wh / math.pi)   # linear in the angle, as in Fox et al.
+            heading_err[dmin < reach_tol] = 0.0
+            score = dmin * (-wp / (p.max_speed * self.horizon))
+            score -= heading_err * (wh / math.pi)           # linear in the angle, as in Fox et al.
         score += clear * (wc / t.cap)
         score += win.static
         safe = clear >= self._min_clear
@@ -300,8 +300,12 @@ class DynamicWindowPlanner:
         d0 = math.hypot(tx, ty)
         length = min(d0, self.lookahead)
         cb, sb = tx / max(d0, 1e-9), ty / max(d0, 1e-9)
-        lane = np.array(((cb, sb), (-sb, cb)), dtype=np.float32) @ points   # along, lateral
-        if not np.any((np.abs(lane[1]) < self._lane) & (np.abs(lane[0] - length / 2) < length / 2)):
+        # the lane as the square |u| < 1, |v| < 1 in scaled lane coordinates
+        half_len = max(length / 2.0, 1e-6)
+        lane = np.array(((cb / half_len, sb / half_len), (-sb / self._lane, cb / self._lane)),
+                        dtype=np.float32) @ points
+        lane[0] -= 1.0
+        if np.abs(lane, out=lane).max(axis=0).min() >= 1.0:
             self._side = 0.0
             return tx, ty
         # blocked: check the lane along every beam direction
