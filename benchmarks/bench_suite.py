@@ -18,6 +18,7 @@ import dataclasses
 import json
 import os
 import re
+import resource
 import statistics
 import subprocess
 import sys
@@ -59,19 +60,28 @@ def generate(folder: Path, count: int, rng_seed: int = 1) -> int:
     return written
 
 
-def run_pytest(folder: Path, extra: list[str], results: Path) -> tuple[float, float, str]:
+def _children_cpu() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def run_pytest(target: Path, extra: list[str], results: Path | None) -> tuple[float, float, str, float]:
+    """(process wall time, pytest's own session time, pytest's last line, CPU time of pytest and
+    its xdist workers: less sensitive to other load on the machine than wall time)."""
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
-    cmd = [sys.executable, "-m", "pytest", str(folder), "-q", "-p", "no:cacheprovider",
-           f"--nav-results={results}", "--nav-artifacts=none", "--nav-summary=no", "--nav-plots=none",
-           *extra]
-    t0 = time.perf_counter()
-    proc = subprocess.run(cmd, cwd=folder, env=env, capture_output=True, text=True)
-    wall = time.perf_counter() - t0
+    cmd = [sys.executable, "-m", "pytest", str(target), "-q", "-p", "no:cacheprovider",
+           "--nav-artifacts=none", "--nav-summary=no", "--nav-plots=none", *extra]
+    if results is not None:
+        cmd.append(f"--nav-results={results}")
+    cpu0, t0 = _children_cpu(), time.perf_counter()
+    proc = subprocess.run(cmd, cwd=target if target.is_dir() else target.parent, env=env,
+                          capture_output=True, text=True)
+    wall, cpu = time.perf_counter() - t0, _children_cpu() - cpu0
     tail = proc.stdout.strip().splitlines()[-1] if proc.stdout.strip() else proc.stderr
     match = re.search(r" in ([0-9.]+)s", tail)
     if proc.returncode not in (0, 1) or not match:
         raise SystemExit(f"pytest failed ({proc.returncode}):\n{proc.stdout[-2000:]}\n{proc.stderr[-2000:]}")
-    return wall, float(match.group(1)), tail
+    return wall, float(match.group(1)), tail, cpu
 
 
 def main() -> int:
@@ -79,38 +89,49 @@ def main() -> int:
     ap.add_argument("--count", type=int, default=500)
     ap.add_argument("--repeats", type=int, default=3)
     args = ap.parse_args()
+    med = statistics.median
     with tempfile.TemporaryDirectory(prefix="navbench-") as tmp:
         folder = Path(tmp) / "suite"
         n = generate(folder, args.count)
-        # a project root of its own, so that only the generated files are collected
-        (folder / "pytest.ini").write_text("[pytest]\n")
+        (folder / "pytest.ini").write_text("[pytest]\n")  # its own rootdir: only these files collected
         print(f"{n} scenario files in {len(SEEDS)} families; {args.repeats} runs per mode; "
-              f"{os.cpu_count()} CPUs")
-        figures: dict[str, dict[str, list[float]]] = {}
-        outcomes: dict[str, list[dict]] = {}
-        for label, extra in [("serial", []), ("-n 2", ["-n", "2"])]:
-            walls, sessions, overheads = [], [], []
-            for r in range(args.repeats):
-                results = Path(tmp) / f"r-{label.strip('- ').replace(' ', '')}-{r}.jsonl"
-                wall, session, tail = run_pytest(folder, extra, results)
-                records = [json.loads(line) for line in results.read_text().splitlines()]
-                outcomes[f"{label}-{r}"] = [{k: v for k, v in rec.items() if k != "wall_time"} for rec in records]
-                episodes = [rec["wall_time"] for rec in records]
-                walls.append(wall)
-                sessions.append(session)
-                overheads.append((session - sum(episodes)) / len(episodes))
-                print(f"  {label:6s} run {r + 1}: {wall:6.2f} s wall, pytest session {session:6.2f} s, "
-                      f"sum of episodes {sum(episodes):6.2f} s  [{tail}]")
-            figures[label] = {"wall": walls, "session": sessions, "overhead": overheads}
-        runs = list(outcomes.values())
-        mismatched = sum(1 for recs in runs[1:] for a, b in zip(runs[0], recs) if a != b)
-        print(f"records identical across all runs and modes: {all(recs == runs[0] for recs in runs)} "
-              f"({mismatched} differing records)")
-        med = {k: statistics.median(v["wall"]) for k, v in figures.items()}
-        print(f"median wall: serial {med['serial']:.2f} s, -n 2 {med['-n 2']:.2f} s, "
-              f"speed-up {med['serial'] / med['-n 2']:.2f}x")
-        print(f"plugin overhead per item (serial, session minus episodes): "
-              f"{1000 * statistics.median(figures['serial']['overhead']):.2f} ms median")
+              f"{os.cpu_count()} CPUs; load average before: {os.getloadavg()[0]:.2f}")
+        walls: dict[str, list[float]] = {"serial": [], "-n 2": []}
+        cpus: dict[str, list[float]] = {"serial": [], "-n 2": []}
+        rest: dict[str, list[tuple[int, float]]] = {"all": [], "one family": []}
+        records: list[list[dict]] = []
+        for r in range(args.repeats):
+            for label, target, extra in [("serial", folder, []), ("-n 2", folder, ["-n", "2"]),
+                                         ("one family", folder / SEEDS[0], [])]:
+                results = Path(tmp) / f"r{r}-{len(records)}.jsonl"
+                wall, session, tail, cpu = run_pytest(target, extra, results)
+                recs = [json.loads(line) for line in results.read_text().splitlines()]
+                episodes = sum(rec["wall_time"] for rec in recs)
+                print(f"  run {r + 1} {label:10s}: {wall:6.2f} s wall, {cpu:6.2f} s CPU, session {session:6.2f} s, "
+                      f"episodes {episodes:6.2f} s  [{tail}]")
+                if label in walls:
+                    walls[label].append(wall)
+                    cpus[label].append(cpu)
+                    records.append([{k: v for k, v in rec.items() if k != "wall_time"} for rec in recs])
+                if label != "-n 2":
+                    rest["all" if label == "serial" else "one family"].append((len(recs), session - episodes))
+        collect = [run_pytest(folder, ["--collect-only"], None)[1] for _ in range(args.repeats)]
+        same = all(recs == records[0] for recs in records)
+        print(f"records identical across all serial and -n 2 runs: {same}")
+        print(f"median wall: serial {med(walls['serial']):.2f} s, -n 2 {med(walls['-n 2']):.2f} s, "
+              f"speed-up {med(walls['serial']) / med(walls['-n 2']):.2f}x")
+        (n_all, _), (n_one, _) = rest["all"][0], rest["one family"][0]
+        extra_all = med(x for _, x in rest["all"])
+        extra_one = med(x for _, x in rest["one family"])
+        print(f"median CPU time: serial {med(cpus['serial']):.2f} s, -n 2 {med(cpus['-n 2']):.2f} s; "
+              f"load average after: {os.getloadavg()[0]:.2f} (wall times inflate with load)")
+        print(f"session time not spent in run_scenario: {extra_all:.2f} s for {n_all} items, "
+              f"{extra_one:.2f} s for {n_one} items")
+        print(f"  = {1000 * extra_all / n_all:.2f} ms per item on average (fixed costs included); "
+              f"marginal per-item overhead {1000 * (extra_all - extra_one) / (n_all - n_one):.2f} ms "
+              f"(difference between the two suite sizes: start-up and imports cancel)")
+        print(f"collection alone (--collect-only, {n} files): {med(collect):.2f} s session, "
+              f"{1000 * med(collect) / n:.2f} ms per file")
     return 0
 
 
