@@ -1,27 +1,34 @@
 """``--nav-bag``: real pytest runs (plugin autoload off, loaded with -p), real episodes."""
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import pytest
+
+from pytest_navscenario.loader import dump_scenario, load_scenario
 
 PLUGIN = ["-p", "pytest_navscenario.plugin"]
 SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
 
 
-@pytest.fixture
-def project(pytester, monkeypatch):
-    """Two scenarios: cylinders as shipped (passes) and the same with a 2 s timeout (fails)."""
-    monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
-    import dataclasses
-
-    from pytest_navscenario.loader import dump_scenario, load_scenario
-
+def _texts() -> tuple[str, str]:
+    """Two scenarios: cylinders as shipped (passes) and the same with a 2 s timeout (fails).
+    Made once at import: in-process pytester runs swap modules under the loader afterwards."""
     seed = load_scenario(SCENARIOS / "cylinders.yaml")
     late = dataclasses.replace(seed, mission=dataclasses.replace(seed.mission, timeout=2.0))
+    return dump_scenario(seed), dump_scenario(late)
+
+
+OK_TEXT, LATE_TEXT = _texts()
+
+
+@pytest.fixture
+def project(pytester, monkeypatch):
+    monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
     folder = pytester.mkdir("scen")
-    (folder / "ok.yaml").write_text(dump_scenario(seed))
-    (folder / "late.yaml").write_text(dump_scenario(late))
+    (folder / "ok.yaml").write_text(OK_TEXT)
+    (folder / "late.yaml").write_text(LATE_TEXT)
     return pytester
 
 
@@ -31,8 +38,9 @@ def bags_in(folder: Path) -> list[str]:
 
 def test_failed_writes_one_bag_per_failed_episode_under_xdist(project):
     project.makeini("[pytest]\nnav_bag_dir = out/bags\nnav_bag_format = ros1\n")
+    # a subprocess: an in-process run under xdist would leave pytester's module snapshot mixed up
     res = project.runpytest_subprocess(*PLUGIN, "-p", "xdist.plugin", "-n", "2", "scen",
-                                       "--nav-bag=failed", "--nav-artifacts=none")
+                                       "--nav-bag=failed", "--nav-artifacts=none", "--nav-plots=none")
     res.assert_outcomes(passed=1, failed=1)
     names = bags_in(project.path / "out" / "bags")
     assert len(names) == 1 and names[0].startswith("scen_late.yaml") and names[0].endswith(".bag")
