@@ -73,7 +73,13 @@ class ScenarioFile(pytest.File):
         except BaseException:
             get_state(self.config).bad_scenario_files += 1
             raise
-        item = ScenarioItem.from_parent(self, name=scenario.name or self.path.stem, scenario=scenario)
+        name = scenario.name or self.path.stem
+        if "::" in name or not name.strip():
+            get_state(self.config).bad_scenario_files += 1
+            raise ScenarioError(f"scenario name {name!r} cannot be a pytest item name ('::' separates "
+                                f"node ids)", path=str(self.path), field="name",
+                                hint="use letters, digits, '-', '_' or '.', e.g. boxes1-narrow")
+        item = ScenarioItem.from_parent(self, name=name, scenario=scenario)
         for mark in scenario.marks:
             item.add_marker(getattr(pytest.mark, mark.name)(*mark.args, **dict(mark.kwargs)))
         if scenario.family:

@@ -21,7 +21,8 @@ DEFAULT_ARTIFACTS = "nav-artifacts"
 OPTIONS = (
     ("--nav-subject", "nav_subject",
      "planner under test: 'package.module:Attribute' (a class or zero-argument factory) or a "
-     "built-in name (dwa, potential-field). Default: the built-in 'dwa'."),
+     "built-in name (dwa, potential-field), or exec:PROGRAM [ARGS] for an external planner. "
+     "Default: the built-in 'dwa'."),
     ("--nav-seed", "nav_seed",
      "base seed (integer >= 0) mixed into each scenario's own noise seed; 0 (default) runs each "
      "scenario with its own seed. Shown in the header."),
@@ -38,9 +39,10 @@ OPTIONS = (
 def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("navscenario", "navigation scenarios (pytest-navscenario)")
     helps = {ini: text for _, ini, text in OPTIONS}
+    metavars = {"nav_subject": "SPEC", "nav_seed": "N", "nav_results": "PATH", "nav_artifacts": "DIR",
+                "nav_summary": "yes|no"}
     for opt, ini, text in OPTIONS:
-        group.addoption(opt, dest=ini, default=None, metavar=ini.split("_", 1)[1].upper(),
-                        help=text + f" [ini: {ini}]")
+        group.addoption(opt, dest=ini, default=None, metavar=metavars[ini], help=text + f" [ini: {ini}]")
     parser.addini("nav_subject", helps["nav_subject"], default="")
     parser.addini("nav_seed", helps["nav_seed"], default="0")
     parser.addini("nav_results", helps["nav_results"], default="")

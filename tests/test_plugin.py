@@ -305,3 +305,10 @@ def test_nav_run_fixture_runs_modified_scenarios(project):
     """)
     result = project.runpytest(*PLUGIN, "--nav-subject=straight:Straight", "test_mine.py")
     result.assert_outcomes(passed=4)
+
+
+def test_scenario_name_that_breaks_node_ids_is_a_collection_error(project):
+    project.makefile(".yaml", weird=scenario(2, extra='name: "a::b"\n'), fine=scenario(2))
+    result = project.runpytest(*PLUGIN, "--collect-only", "-q")
+    result.stdout.fnmatch_lines(["fine.yaml::fine", "*weird.yaml: name: scenario name 'a::b' cannot be a "
+                                 "pytest item name*(fix: use letters*"])
