@@ -157,6 +157,7 @@ def _read(reader: Any, path: Path, odom_topic, scan_topic, start, end) -> BagDat
     odom, scans, static_tf = [], [], {}
     odom_frame = base_frame = scan_frame = ""
     scan_meta = None
+    odd_scans = 0
     for conn, bag_ns, raw in reader.messages(connections=wanted):
         msg = reader.deserialize(raw, conn.msgtype)
         if conn.topic == "/tf_static":
@@ -177,7 +178,8 @@ def _read(reader: Any, path: Path, odom_topic, scan_topic, start, end) -> BagDat
                 scan_meta = meta + (float(msg.range_min), float(msg.range_max))
                 scan_frame = msg.header.frame_id.lstrip("/")
             elif meta != scan_meta[:3]:
-                continue  # a scan with another geometry: rare, skipped and counted below
+                odd_scans += 1  # another beam layout than the first scan's: skipped, reported below
+                continue
             scans.append((stamp, ranges))
     if not odom:
         raise BagImportError(f"{path}: topic {odom_name} has no messages; record odometry or choose "
@@ -207,6 +209,9 @@ def _read(reader: Any, path: Path, odom_topic, scan_topic, start, end) -> BagDat
         st = (np.array([s[0] for s in scans], dtype=float) - origin) * 1e-9
         inside = (st >= data.odom[0, 0]) & (st <= data.odom[-1, 0])
         n, amin, ainc, rmin, rmax = scan_meta
+        if odd_scans:
+            data.notes.append(f"{odd_scans} scan(s) on {scan_name} with another beam count or angles than "
+                              f"the first ({n} beams from {math.degrees(amin):.1f} deg) were skipped")
         data.scan_topic = scan_name
         data.scan_frame = scan_frame
         data.scan_t = st[inside]
@@ -596,11 +601,15 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
                       start: float | None = None, end: float | None = None,
                       laser_pose: tuple[float, float, float] | None = None,
                       path_as: str = "waypoints", reference_file: str | None = None,
-                      name: str = "", settings: FitSettings = FitSettings()) -> BagSeed:
+                      name: str = "", robot_radius: float = 0.15,
+                      settings: FitSettings = FitSettings()) -> BagSeed:
     """Build a seed scenario from a bag (see the module docstring). ``laser_pose`` is x, y (m),
-    yaw (degrees) of the laser in the robot's base frame; ``reference_file`` is the CSV name
+    yaw (degrees) of the laser in the robot's base frame; ``robot_radius`` the seed's circular
+    footprint (m); ``reference_file`` is the CSV name
     written into ``scenario.reference`` when ``path_as`` is ``"reference"`` or ``"both"``
     (waypoints to drive the loop and the reference to measure how closely the run replays it)."""
+    if not (math.isfinite(robot_radius) and 0 < robot_radius <= 5):
+        raise BagImportError(f"--robot-radius must be a length in (0, 5] m, got {robot_radius}")
     if path_as not in PATH_AS:
         raise BagImportError(f"--path-as must be one of {', '.join(PATH_AS)}, got {path_as!r}")
     data = read_bag(path, odom_topic=odom_topic, scan_topic=scan_topic, start=start, end=end)
@@ -648,7 +657,7 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
     lidar = Lidar(beams=min(len(data.scan_angles), 360) if data.scan_topic else 72,
                   range_max=_r(data.range_max if data.scan_topic and math.isfinite(data.range_max) else 8.0, 2),
                   range_min=_r(data.range_min if data.scan_topic else 0.05, 3))
-    robot = Robot(footprint=Footprint(shape="circle", radius=0.15), drive="diff", limits=limits, lidar=lidar)
+    robot = Robot(footprint=Footprint(shape="circle", radius=robot_radius), drive="diff", limits=limits, lidar=lidar)
     timeout = _r(max(30.0, math.ceil(max(duration, length / max(limits.max_speed, 0.1)) * 2.0 + 10.0)), 1)
     scenario = Scenario(
         mission=Mission(start=start_pose, goal=goal_pose, waypoints=waypoints,
@@ -689,6 +698,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--path-as", choices=PATH_AS, default="waypoints",
                    help="driven path as decimated waypoints (default), a reference trajectory (CSV t,x,y beside "
                         "the seed, for the reference deviation metrics) or both")
+    p.add_argument("--robot-radius", type=float, default=0.15, metavar="M",
+                   help="the seed robot's circular footprint radius, m (default 0.15; edit the seed for a box)")
     p.add_argument("--name", default="", help="scenario name (default: the output file's stem)")
     p.add_argument("--force", action="store_true", help="overwrite an existing output file")
 
@@ -699,7 +710,8 @@ def run(args: argparse.Namespace) -> int:
     csv_name = f"{out.stem}.reference.csv"
     seed = scenario_from_bag(args.bag, odom_topic=args.odom_topic, scan_topic=args.scan_topic,
                              start=args.start, end=args.end, laser_pose=args.laser_pose,
-                             path_as=args.path_as, reference_file=csv_name, name=args.name)
+                             path_as=args.path_as, reference_file=csv_name, name=args.name,
+                             robot_radius=args.robot_radius)
     extra = {}
     if args.path_as != "waypoints":
         extra[csv_name] = reference_csv(seed.path)

@@ -196,8 +196,13 @@ def _pose6(elem: ET.Element | None, where: str, path: Path) -> tuple[float, ...]
         vals = [float(v) for v in elem.text.split()]
     except ValueError:
         vals = []
+    if elem.get("rotation_format", "euler_rpy") != "euler_rpy":
+        raise WorldImportError(f"{path}: {where}: <pose rotation_format={elem.get('rotation_format')!r}> is not "
+                               f"supported; write the rotation as 'x y z roll pitch yaw'")
     if len(vals) != 6:
         raise WorldImportError(f"{path}: {where}: <pose> must hold 6 numbers 'x y z roll pitch yaw', got {elem.text.strip()!r}")
+    if (elem.get("degrees") or "").strip().lower() in ("true", "1"):  # SDF 1.9: angles in degrees
+        vals[3:] = [math.radians(v) for v in vals[3:]]
     return tuple(vals)
 
 

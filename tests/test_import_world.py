@@ -80,13 +80,19 @@ SDF = """<?xml version="1.0"?>
         <geometry><cylinder><radius>0.1</radius><length>3</length></cylinder></geometry></collision>
       <collision name="ball"><geometry><sphere><radius>0.3</radius></sphere></geometry></collision>
     </link></model>
-  <model name="post"><static>1</static><pose>-1 -1 0 0 0 0</pose><link name="l"><collision name="c">
+  <model name="post"><static>1</static><pose degrees="true">-1 -1 0 0 0 45</pose><link name="l"><collision name="c">
     <geometry><cylinder><radius>0.2</radius><length>2</length></cylinder></geometry></collision></link></model>
   <model name="cart"><link name="l"><collision name="c">
     <geometry><box><size>1 1 1</size></box></geometry></collision></link></model>
   <state world_name="w"><model name="post"><pose>-1 -3 0 0 0 0</pose></model></state>
 </world></sdf>
 """
+
+
+def sdf_obstacles_of(folder: Path, models: str):
+    src = folder / "one.sdf"
+    src.write_text(f"<sdf version='1.9'><world name='w'>{models}</world></sdf>")
+    return sdf_obstacles(src)
 
 
 def test_sdf_poses_composed_and_unrepresentable_listed(tmp_path, capsys):
@@ -98,6 +104,10 @@ def test_sdf_poses_composed_and_unrepresentable_listed(tmp_path, capsys):
     assert (block.x, block.y) == pytest.approx((0.5, 3.0))
     assert block.yaw == pytest.approx(120.0) and (block.length, block.width, block.height) == (2.0, 1.0, 1.0)
     assert (post.x, post.y, post.radius) == (-1.0, -3.0, 0.2)  # the <state> pose wins, as in Gazebo
+    (bar,) = sdf_obstacles_of(tmp_path, "<model name='bar'><static>1</static><pose degrees='true'>0 0 0 0 0 45</pose>"
+                                        "<link name='l'><collision name='c'><geometry><box><size>2 1 1</size></box>"
+                                        "</geometry></collision></link></model>").obstacles
+    assert bar.yaw == pytest.approx(45.0)  # SDF 1.9 <pose degrees="true">
     assert world.ignored_planes == 1
     text = "\n".join(world.warnings)
     for what in ("model://sun", "collision pipe: cylinder tilted", "collision ball: sphere",
