@@ -41,7 +41,7 @@ class BagImportError(NavScenarioError):
 
 @dataclass
 class BagData:
-    """What the importer needs from a bag, as plain arrays (times in s since the bag's start)."""
+    """What the importer needs from a bag, as plain arrays (times in s after the first odometry message)."""
     path: Path
     odom_topic: str
     odom_frame: str
@@ -97,8 +97,9 @@ def _pick(path: Path, connections: list, wanted: str | None, types: Sequence[str
 
 def read_bag(path: str | Path, *, odom_topic: str | None = None, scan_topic: str | None = None,
              start: float | None = None, end: float | None = None) -> BagData:
-    """Read odometry, laser scans and static transforms; ``start``/``end`` are seconds since
-    the bag's first message. Raises BagImportError naming the file and what is missing."""
+    """Read odometry, laser scans and static transforms; ``start``/``end`` are seconds after
+    the first odometry message (message header stamps; the bag's receive time where a stamp is
+    zero). Raises BagImportError naming the file and what is missing."""
     from rosbags.highlevel import AnyReader
     from rosbags.typesys import Stores, get_typestore
 
@@ -151,9 +152,6 @@ def _read(reader: Any, path: Path, odom_topic, scan_topic, start, end) -> BagDat
     scan_name = _pick(path, conns, scan_topic, SCAN_TYPES, "laser scan", "--scan-topic", ("/scan",), False)
     wanted = [c for c in conns if c.topic in (odom_name, scan_name) or
               (c.topic == "/tf_static" and c.msgtype in TF_STATIC_TYPES)]
-    t0 = reader.start_time
-    lo = None if start is None else t0 + int(start * 1e9)
-    hi = None if end is None else t0 + int(end * 1e9)
     odom, scans, static_tf = [], [], {}
     odom_frame = base_frame = scan_frame = ""
     scan_meta = None
@@ -187,20 +185,19 @@ def _read(reader: Any, path: Path, odom_topic, scan_topic, start, end) -> BagDat
     odom_arr = np.array(odom, dtype=float)
     order = np.argsort(odom_arr[:, 0], kind="stable")
     odom_arr = odom_arr[order]
-    origin = float(t0)
+    origin = float(odom_arr[0, 0])  # t = 0 at the first odometry message
     odom_arr[:, 0] = (odom_arr[:, 0] - origin) * 1e-9
     data = BagData(path=path, odom_topic=odom_name, odom_frame=odom_frame or "odom",
                    base_frame=base_frame or "base_link", odom=odom_arr, static_tf=static_tf)
-    if lo is not None or hi is not None:
+    if start is not None or end is not None:
         keep = np.ones(len(odom_arr), bool)
-        if lo is not None:
+        if start is not None:
             keep &= odom_arr[:, 0] >= start
-        if hi is not None:
+        if end is not None:
             keep &= odom_arr[:, 0] <= end
         if keep.sum() < 2:
-            span = f"{odom_arr[0, 0]:.1f}..{odom_arr[-1, 0]:.1f} s"
             raise BagImportError(f"{path}: fewer than 2 odometry messages between --start {start} and "
-                                 f"--end {end} (odometry covers {span} after the bag's start)")
+                                 f"--end {end} (the odometry covers 0..{odom_arr[-1, 0]:.1f} s)")
         data.odom = odom_arr[keep]
     if scan_name is None:
         data.notes.append(f"no laser scan topic in {path.name}: the seed has the trajectory only, no obstacles")
@@ -688,8 +685,8 @@ def _triple(text: str) -> tuple[float, float, float]:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("bag", help="ROS 1 .bag file, rosbag2 folder, or .mcap/.db3 file")
     p.add_argument("-o", "--output", required=True, help="seed scenario YAML to write (an existing file is kept unless --force)")
-    p.add_argument("--start", type=float, default=None, help="window start, seconds after the bag's first message")
-    p.add_argument("--end", type=float, default=None, help="window end, seconds after the bag's first message")
+    p.add_argument("--start", type=float, default=None, help="window start, seconds after the first odometry message")
+    p.add_argument("--end", type=float, default=None, help="window end, seconds after the first odometry message")
     p.add_argument("--odom-topic", default=None, help="nav_msgs/Odometry topic (default: found by type)")
     p.add_argument("--scan-topic", default=None, help="sensor_msgs/LaserScan topic (default: found by type)")
     p.add_argument("--laser-pose", type=_triple, default=None, metavar="X,Y,YAW",
