@@ -167,7 +167,7 @@ def result_summary(result: EpisodeResult) -> dict[str, Any]:
         "outcome": result.outcome.value, "passed": result.passed, "message": result.message,
         "metrics": result.metrics.as_dict(),
     }
-    for key in ("collision", "safety_stop"):
+    for key in ("collision", "safety_stop", "subject_failure"):
         event = getattr(result, key)
         if event is not None:
             out[key] = dict(vars(event))

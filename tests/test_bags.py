@@ -146,6 +146,10 @@ def test_same_episode_gives_the_same_bytes(episodes, tmp_path):
     a = write_episode_bag(episodes["boxes2"], tmp_path / "a.bag", fmt="ros1").read_bytes()
     b = write_episode_bag(episodes["boxes2"], tmp_path / "b.bag", fmt="ros1").read_bytes()
     assert a == b
+    one = write_episode_bag(episodes["boxes2"], tmp_path / "1" / "ep")
+    two = write_episode_bag(episodes["boxes2"], tmp_path / "2" / "ep")
+    for name in ("ep.mcap", "metadata.yaml"):
+        assert (one / name).read_bytes() == (two / name).read_bytes()
 
 
 def test_rewrite_replaces_and_failure_leaves_nothing(episodes, tmp_path):
