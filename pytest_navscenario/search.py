@@ -411,6 +411,9 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
     if budget <= 0:
         raise ValueError(f"budget must be a positive number of simulations, got {budget}")
     space = space or SearchSpace(seed)
+    if not space.params:
+        raise ValueError(f"the search space of seed {seed.name!r} is empty (every part frozen or bounds "
+                         f"[0, 0]); widen its search: bounds")
     reason = invalid_reason(seed)
     if reason is not None:
         from .errors import ScenarioError

@@ -197,3 +197,9 @@ def test_frozen_files_round_trip_and_are_not_duplicated(seed, found, tmp_path):
     assert len(list((tmp_path / "crate").glob("*.yaml"))) == len(first)
     log = write_search_log(found, space, tmp_path).read_text().splitlines()
     assert len(log) == found.sims_used + found.shrink_sims
+
+
+def test_empty_space_is_refused(seed):
+    space = SearchSpace(seed, {"frozen": ["crate", "far"]})
+    with pytest.raises(ValueError, match="empty"):
+        run_search(seed, Straight, budget=3, space=space)
