@@ -164,8 +164,9 @@ def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
         t = np.asarray(traj.t, dtype=float)
         duration = float(t[-1] - t[0])
         # the swept area (the "thick line"), then outlines to scale every outline_every seconds
-        step = max(1, len(pose) // 400)
-        swept = shapely.union_all(footprint_polygons(fp, pose[::step]))
+        # a footprint every 5 cm of travel or 10 degrees of turn is enough for the union (fast)
+        step = max(1, len(pose) // 1000)
+        swept = shapely.union_all(footprint_polygons(fp, pose[_thin(pose, step, 0.05, 10.0)]))
         rings = [np.asarray(g.exterior.coords) for g in getattr(swept, "geoms", [swept]) if not g.is_empty]
         ax.add_collection(PolyCollection(rings, closed=True, facecolors="#90caf9", edgecolors="none",
                                          alpha=0.35, zorder=1, label="swept by the footprint"),
@@ -290,6 +291,25 @@ def _nice_step(raw: float) -> float:
     return 10 ** (exp + 1)
 
 
+def _thin(pose: np.ndarray, step: int, min_move: float, min_turn_deg: float) -> np.ndarray:
+    """Indices (every ``step``-th pose, first and last kept) at least ``min_move`` m or
+    ``min_turn_deg`` degrees apart from the previous kept one."""
+    idx = np.arange(0, len(pose), step)
+    if idx[-1] != len(pose) - 1:
+        idx = np.append(idx, len(pose) - 1)
+    kept = [0]
+    px, py, pyaw = pose[0]
+    turn = math.radians(min_turn_deg)
+    for i in idx[1:]:
+        x, y, yaw = pose[i]
+        if (x - px) ** 2 + (y - py) ** 2 >= min_move ** 2 or abs((yaw - pyaw + math.pi) % (2 * math.pi) - math.pi) >= turn:
+            kept.append(int(i))
+            px, py, pyaw = x, y, yaw
+    if kept[-1] != len(pose) - 1:
+        kept.append(len(pose) - 1)
+    return np.asarray(kept)
+
+
 def _spread(pose: np.ndarray, idx: np.ndarray, min_move: float) -> np.ndarray:
     """Keep the indices whose pose moved at least ``min_move`` m (or turned 30 degrees) since the
     last kept one, and the last: a robot that stands still gets one outline, not a pile."""
@@ -314,8 +334,9 @@ def episode_title(result: EpisodeResult, prefix: str = "", width: int = 60) -> s
     name = s.name + (f" [{s.family}]" if s.family and s.family != s.name else "")
     subject = result.subject + (f" {result.subject_version}" if result.subject_version else "")
     message = textwrap.shorten(result.message, 2 * width, placeholder="...")
-    wrapped = textwrap.fill(message, width) if message else ""
-    head = textwrap.fill(f"{prefix}{name}: {result.outcome.value.upper()} ({subject})", width)
+    wrapped = textwrap.fill(message, width, break_on_hyphens=False) if message else ""
+    head = textwrap.fill(f"{prefix}{name}: {result.outcome.value.upper()} ({subject})", width,
+                         break_on_hyphens=False)
     return head + (f"\n{wrapped}" if wrapped else "")
 
 

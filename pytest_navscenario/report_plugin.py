@@ -7,6 +7,8 @@ Options (each with an ini twin)::
     --nav-baseline-mode=fail|warn fail (default): the session fails when this run broke a scenario
                                   the baseline passed; warn: only report it
     --nav-plots=failed|all|none   trajectory plots of failing items (default), of every item, or none
+    --nav-plots-max=N             at most N plots per session (default 50, 0 = no limit; not for
+                                  failing items when --nav-html is given)
     --nav-plots-dir=DIR           where plots go; default: the item's artifacts folder
                                   (<artifacts>/<item>/plots/trajectory.png), or nav-plots/ under the
                                   rootdir when artifacts are off
@@ -38,6 +40,9 @@ OPTIONS = (
      "the baseline passed fails now) or warn (report only)"),
     ("--nav-plots", "nav_plots", "failed",
      "trajectory plots: failed (default: for failing items), all, or none"),
+    ("--nav-plots-max", "nav_plots_max", "50",
+     "make at most N trajectory plots per session (default 50; 0 = no limit): a plot costs ~0.2 s of "
+     "CPU on the controller; --nav-html lifts the limit for failing items (the report shows them all)"),
     ("--nav-plots-dir", "nav_plots_dir", "",
      "folder for trajectory plots; default: each item's artifacts folder (plots/trajectory.png), or "
      f"{DEFAULT_PLOTS_DIR}/ under the rootdir when artifacts are off"),
@@ -53,6 +58,7 @@ class ReportSettings:
     plots: str
     plots_dir: Path | None
     html: Path | None
+    plots_max: int = 50
 
 
 @dataclass
@@ -62,6 +68,7 @@ class ReportState:
     records: list[dict[str, Any]] = field(default_factory=list)
     plots: dict[tuple[str, int], Path | bytes] = field(default_factory=dict)  # (nodeid, repeat) -> file or PNG
     plot_errors: list[str] = field(default_factory=list)
+    not_plotted: int = 0                      # items left without a plot by --nav-plots-max
     comparison: Any = None
     html_written: Path | None = None
     gate_failed: bool = False
@@ -119,7 +126,15 @@ def read_report_settings(config: pytest.Config, check_files: bool = True) -> Rep
     html = _path(raw, base) if raw else None
     if html is not None and html.is_dir():
         raise pytest.UsageError(f"{where}: {raw!r} is a folder; give a file name such as report.html")
-    return ReportSettings(baseline=baseline, mode=mode, plots=plots, plots_dir=plots_dir, html=html)
+    raw, where, _ = _value(config, "nav_plots_max")
+    try:
+        plots_max = int(raw)
+        if plots_max < 0:
+            raise ValueError
+    except ValueError:
+        raise pytest.UsageError(f"{where}: expected a whole number >= 0 (0 = no limit), got {raw!r}") from None
+    return ReportSettings(baseline=baseline, mode=mode, plots=plots, plots_dir=plots_dir, html=html,
+                          plots_max=plots_max)
 
 
 def _is_worker(config: pytest.Config) -> bool:
@@ -179,8 +194,13 @@ def pytest_navscenario_episode_report(config: pytest.Config, report: pytest.Test
         return
     rec = payload["record"]
     state.records.append(rec)
-    make, to_file = _wants_plot(state.settings, rec["outcome"] != "success")
+    failed = rec["outcome"] != "success"
+    make, to_file = _wants_plot(state.settings, failed)
     if not make or payload.get("trajectory") is None:
+        return
+    limit = state.settings.plots_max
+    if limit and len(state.plots) >= limit and not (failed and state.settings.html is not None):
+        state.not_plotted += 1
         return
     key = (rec["nodeid"], int(rec.get("repeat") or 0))
     try:
@@ -288,6 +308,9 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
         where = folders[0] if len(folders) == 1 else (
             str(state.settings.plots_dir) if state.settings.plots_dir else f"{len(folders)} folders")
         tr.write_line(f"navscenario: {len(files)} trajectory plot(s) in {where}")
+    if state.not_plotted:
+        tr.write_line(f"navscenario: {state.not_plotted} more item(s) not plotted: at most "
+                      f"{state.settings.plots_max} plots per session (--nav-plots-max=N, 0 = no limit)")
     if state.html_written is not None:
         tr.write_line(f"navscenario: HTML report written to {state.html_written}")
     for err in state.plot_errors:

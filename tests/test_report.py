@@ -62,9 +62,10 @@ COMMON = ["-p", "pytest_navscenario.plugin", "-p", "no:cacheprovider", SUBJECT, 
 RUNS = {
     # regression gate on, HTML report, default plots (failing items, into the artifacts folders)
     "gate": ["scenarios", *COMMON, "--nav-html=out/report.html"],
-    # warn only; plots of every item into one folder; on 2 xdist workers (plots made on the controller)
+    # warn only; plots of every item (at most 2) into one folder; on 2 xdist workers (plots made on
+    # the controller); this project has a third scenario, ok2
     "warn": ["scenarios", *COMMON, "--nav-baseline-mode=warn", "--nav-plots=all", "--nav-plots-dir=plots",
-             "-p", "xdist.plugin", "-n", "2"],
+             "--nav-plots-max=2", "-p", "xdist.plugin", "-n", "2"],
     # a default run where everything passes: no plot, matplotlib never imported
     "pass": ["scenarios/ok.yaml", "-p", "pytest_navscenario.plugin", "-p", "no:cacheprovider", SUBJECT],
     # a baseline that is not a results file: one clear usage error before anything runs
@@ -93,6 +94,8 @@ def runs(tmp_path_factory: pytest.TempPathFactory):
         (root / "scenarios").mkdir()
         (root / "scenarios" / "ok.yaml").write_text(OK)
         (root / "scenarios" / "crash.yaml").write_text(CRASH)
+        if name == "warn":
+            (root / "scenarios" / "ok2.yaml").write_text(OK.replace("x: 2", "x: 1.5"))
         base = [record(root, "scenarios/ok.yaml", "success"), record(root, "scenarios/crash.yaml", "success"),
                 record(root, "scenarios/gone.yaml", "success")]
         write_results(root / "base.jsonl", base)
@@ -125,8 +128,9 @@ def test_warn_mode_reports_but_passes_and_plots_every_item_under_xdist(runs):
     assert code == 0, out
     assert "warning: 1 regression(s) against the baseline" in out
     plots = sorted(p.name for p in (root / "plots").glob("*.png"))
-    assert len(plots) == 2 and plots[0].startswith("scenarios_crash.yaml_crash")
+    assert len(plots) == 2 and any(p.startswith("scenarios_ok") for p in plots)  # passing items too
     assert "navscenario: 2 trajectory plot(s) in" in out
+    assert "1 more item(s) not plotted: at most 2 plots per session (--nav-plots-max=N" in out
 
 
 def test_default_passing_run_does_not_import_matplotlib(runs):
