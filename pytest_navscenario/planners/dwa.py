@@ -102,7 +102,7 @@ class _Window:
     that a tick costs a few dozen numpy calls on small arrays."""
 
     __slots__ = ("n", "rot", "off", "half", "score_rows", "static", "stop_yaw", "reach", "cand",
-                 "speed")
+                 "speed", "commands")
 
     def __init__(self, table: _Table, I, J, K):
         g = (I * table.shape[1] + J) * table.shape[2] + K
@@ -128,7 +128,9 @@ class _Window:
         self.static = table.vel[g] * wv - table.turn[g] * wt
         self.stop_yaw = table.stop_yaw[g]
         self.reach = float(table.reach[g].max())
-        self.cand = np.stack([I, J, K], axis=1)
+        self.cand = [(int(i), int(j), int(k)) for i, j, k in zip(I, J, K)]
+        self.commands = [Command(float(table.vx[i]), float(table.vy[j]), float(table.wz[k]))
+                         for i, j, k in self.cand]
         self.speed = np.abs(table.vx[I]) + np.abs(table.vy[J])
 
 
@@ -284,9 +286,8 @@ class DynamicWindowPlanner:
             best = int(np.argmax(score))
         else:  # nothing is safe: brake as hard as the window allows (lowest speed, most room)
             best = int(np.lexsort((-clear, win.speed))[0])
-        i, j, k = (int(v) for v in win.cand[best])
-        self._idx = (i, j, k)
-        return Command(float(t.vx[i]), float(t.vy[j]), float(t.wz[k]))
+        self._idx = win.cand[best]
+        return win.commands[best]
 
     def _subgoal(self, tx: float, ty: float, points: np.ndarray) -> tuple[float, float]:
         """The target, or a detour point when lidar points block the straight lane to it.
