@@ -410,7 +410,7 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
         raise ValueError(f"unknown search strategy {strategy!r}; use one of {', '.join(STRATEGIES)}")
     if budget <= 0:
         raise ValueError(f"budget must be a positive number of simulations, got {budget}")
-    space = space or SearchSpace(seed)
+    space = space if space is not None else SearchSpace(seed)
     if not space.params:
         raise ValueError(f"the search space of seed {seed.name!r} is empty (every part frozen or bounds "
                          f"[0, 0]); widen its search: bounds")

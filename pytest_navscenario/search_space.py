@@ -312,5 +312,5 @@ def scenarios_around(seed: Scenario, space: SearchSpace | None = None):
         @given(scenarios_around(load_scenario("scenarios/boxes1.yaml")))
         def test_never_collides(scenario): ...
     """
-    space = space or SearchSpace(seed)
+    space = space if space is not None else SearchSpace(seed)
     return offsets_strategy(space).map(space.apply)
