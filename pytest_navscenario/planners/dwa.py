@@ -280,12 +280,10 @@ class DynamicWindowPlanner:
             score -= heading_err * (wh / math.pi)           # linear in the angle, as in Fox et al.
         score += clear * (wc / t.cap)
         score += win.static
-        safe = clear >= self._min_clear
-        if safe.any():
-            score[~safe] = -np.inf
-            best = int(np.argmax(score))
-        else:  # nothing is safe: brake as hard as the window allows (lowest speed, most room)
-            best = int(np.lexsort((-clear, win.speed))[0])
+        score[clear < self._min_clear] = -np.inf        # not admissible: too close
+        best = int(score.argmax())
+        if score[best] == -np.inf:  # nothing is safe: brake as hard as the window allows
+            best = int(np.lexsort((-clear, win.speed))[0])  # (lowest speed, then most room)
         self._idx = win.cand[best]
         return win.commands[best]
 
