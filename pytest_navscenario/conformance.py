@@ -25,7 +25,10 @@ from .planner import Observation, load_subject
 from .scenario import BoxObstacle, CylinderObstacle, Mission, Pose, Scenario
 
 SLOW_TICK = 0.05            # s: a tick slower than this gets a warning (10 Hz control leaves 0.1 s)
+HUNG_TICK = 10.0            # s: a reset/act call this long is stopped and reported as a problem
 LIMIT_SLACK = 1.05          # commands up to 5 % over a limit are not worth a warning
+_HARNESS_FILES = ("pytest_navscenario/deadline.py", "pytest_navscenario/sim.py",
+                  "pytest_navscenario/conformance.py")
 _OBS_ARRAYS = ("pose", "velocity", "ranges", "angles", "goal", "waypoints")
 
 
@@ -143,15 +146,17 @@ def _signature_problem(obj: Any, method: str, arg: str) -> str | None:
 
 
 def check_planner(planner: Any, scenario: Scenario | None = None, *, ticks: int = 20,
-                  seed: int = 0, slow_tick: float = SLOW_TICK) -> PlannerCheck:
+                  seed: int = 0, slow_tick: float = SLOW_TICK,
+                  tick_limit: float | None = HUNG_TICK) -> PlannerCheck:
     """Run ``planner`` through ``ticks`` ticks of ``scenario`` (default: a short built-in one)
     in the real simulation and report protocol mistakes in plain words.
 
     ``planner`` follows the rules of ``run_scenario``: a spec (``"dwa"``, ``"pkg.mod:Planner"``),
     a class or zero-argument factory, or a planner object. With a spec, class or factory a second
     fresh instance replays the same observations to check determinism; an object is deep-copied
-    for that (before its first reset). Never raises for a broken planner (see ``raise_if_failed``);
-    raises SubjectLoadError only when the spec cannot be loaded.
+    for that (before its first reset). A reset or tick longer than ``tick_limit`` seconds is
+    stopped and reported (None: no limit). Never raises for a broken planner (see
+    ``raise_if_failed``); raises SubjectLoadError only when the spec cannot be loaded.
     """
     from .sim import simulate, validate_command
 
@@ -183,7 +188,7 @@ def check_planner(planner: Any, scenario: Scenario | None = None, *, ticks: int 
                                   f"its spec only; add e.g. `{attr} = \"...\"` to the class")
 
     recorder = _Recorder(instance)
-    facts = simulate(scenario, recorder, seed, max_ticks=ticks)
+    facts = simulate(scenario, recorder, seed, max_ticks=ticks, tick_limit=tick_limit)
     check.ticks = len(recorder.observations)
     if recorder.times:
         check.max_tick_time = max(recorder.times)
@@ -198,8 +203,11 @@ def check_planner(planner: Any, scenario: Scenario | None = None, *, ticks: int 
         where = f"at tick {failure.tick} (t={failure.time:.2f} s)" if recorder.reset_called else ""
         check.problems.append(f"{message} {where}".strip())
         if failure.traceback:
-            last = failure.traceback.strip().splitlines()
-            origin = next((ln.strip() for ln in reversed(last) if ln.strip().startswith("File ")), "")
+            frames = [ln.strip() for ln in failure.traceback.splitlines()
+                      if ln.strip().startswith("File ")]
+            # the planner's own frame: the last one outside the harness (deadline, sim)
+            own = [f for f in frames if not any(h in f for h in _HARNESS_FILES)]
+            origin = (own or frames or [""])[-1]
             if origin:
                 check.problems[-1] += f" [{origin}]"
     if recorder.mutated:

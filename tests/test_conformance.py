@@ -203,3 +203,18 @@ def test_planner_check_str_lists_problems_and_warnings():
                          median_tick_time=0.001)
     assert str(check) == ("check_planner(x): FAILED after 1 tick (act: median 1.00 ms, max 2.00 ms)\n"
                           "  problem: p1\n  warning: w1")
+
+
+class Hangs(Base):
+    def act(self, obs):
+        time.sleep(5.0)
+        return (0.0, 0.0, 0.0)
+
+
+def test_a_hung_tick_is_stopped_and_reported_with_the_planners_line():
+    t0 = time.perf_counter()
+    check = check_planner(Hangs, ticks=3, tick_limit=0.2)
+    assert time.perf_counter() - t0 < 2.0
+    assert not check.ok
+    assert "did not answer within the per-tick limit of 0.2 s" in check.problems[0]
+    assert "test_conformance.py" in check.problems[0] and "in act" in check.problems[0]
