@@ -122,8 +122,8 @@ def test_readme_example_command_runs_the_users_planner(tmp_path):
     env = dict(os.environ, PYTEST_DISABLE_PLUGIN_AUTOLOAD="1")
     proc = subprocess.run(
         [sys.executable, "-m", "pytest", "-p", "pytest_navscenario.plugin", "examples/scenarios",
-         "--nav-subject=examples.mynav:Planner", f"--nav-results={tmp_path / 'r.jsonl'}",
+         "examples/test_mynav.py", "--nav-subject=examples.mynav:Planner", f"--nav-results={tmp_path / 'r.jsonl'}",
          f"--nav-artifacts={tmp_path / 'art'}", "-p", "no:cacheprovider"],
         cwd=ROOT, env=env, capture_output=True, text=True, timeout=120)
-    assert "2 passed, 1 xfailed" in proc.stdout, proc.stdout + proc.stderr
+    assert "6 passed, 2 xfailed" in proc.stdout, proc.stdout + proc.stderr
     assert {r["subject"] for r in read_results(tmp_path / "r.jsonl")} == {"mynav"}
