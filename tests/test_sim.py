@@ -345,3 +345,20 @@ def test_starting_inside_an_obstacle_is_a_collision_at_t0():
     res = simulate(scenario([BoxObstacle("under", 0.0, 0.0, 1.0, 1.0)]), GoTo(), seed=0)
     assert res.end == "collision" and res.collision.time == 0.0 and res.collision.obstacle == "under"
     assert res.ticks == 0 and len(res.trajectory.t) == 1
+
+
+def test_a_graze_between_two_ticks_is_caught_by_the_per_step_contact_check():
+    import shapely
+
+    from pytest_navscenario.geometry import footprint_polygons, obstacle_polygon
+
+    # omni drive moving diagonally; a 5 mm pin sits ~1 cm inside the swept area's edge, so the
+    # footprint's corner covers it for ~60 ms, between two 0.1 s ticks
+    pin = CylinderObstacle("pin", 2.32, 3.0, 0.005)
+    free = simulate(scenario(safety=False, goal=Pose(10, 10, 90), timeout=6.0), Constant((0.5, -0.5, 0.0)), 0)
+    overlap = shapely.intersects(footprint_polygons(Footprint(), free.trajectory.pose), obstacle_polygon(pin))
+    assert 0 < overlap.sum() <= 8 and not overlap[::10].any()      # no tick-time pose touches it
+    hit = simulate(scenario([pin], safety=False, goal=Pose(10, 10, 90), timeout=6.0),
+                   Constant((0.5, -0.5, 0.0)), 0)
+    assert hit.end == "collision" and hit.collision.obstacle == "pin"
+    assert hit.collision.time == pytest.approx(free.trajectory.t[overlap][0])
