@@ -90,7 +90,7 @@ class _Table:
         win = self.windows.get(idx)
         if win is None:
             w = self.w
-            axes = [np.unique(np.clip(np.arange(i - w, i + w + 1), 0, n - 1))
+            axes = [np.array(sorted({min(max(i + d, 0), n - 1) for d in range(-w, w + 1)}))
                     for i, n in zip(idx, self.shape)]
             I, J, K = (a.ravel() for a in np.meshgrid(*axes, indexing="ij"))
             win = self.windows[idx] = _Window(self, I, J, K)
