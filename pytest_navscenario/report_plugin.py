@@ -7,7 +7,7 @@ Options (each with an ini twin)::
     --nav-baseline-mode=fail|warn fail (default): the session fails when this run broke a scenario
                                   the baseline passed; warn: only report it
     --nav-plots=failed|all|none   trajectory plots of failing items (default), of every item, or none
-    --nav-plots-max=N             at most N plots per session (default 50, 0 = no limit; not for
+    --nav-plots-max=N             at most N plots per session (default 20, 0 = no limit; not for
                                   failing items when --nav-html is given)
     --nav-plots-dir=DIR           where plots go; default: the item's artifacts folder
                                   (<artifacts>/<item>/plots/trajectory.png), or nav-plots/ under the
@@ -40,8 +40,8 @@ OPTIONS = (
      "the baseline passed fails now) or warn (report only)"),
     ("--nav-plots", "nav_plots", "failed",
      "trajectory plots: failed (default: for failing items), all, or none"),
-    ("--nav-plots-max", "nav_plots_max", "50",
-     "make at most N trajectory plots per session (default 50; 0 = no limit): a plot costs ~0.2 s of "
+    ("--nav-plots-max", "nav_plots_max", "20",
+     "make at most N trajectory plots per session (default 20; 0 = no limit): a plot costs ~0.25 s of "
      "CPU on the controller; --nav-html lifts the limit for failing items (the report shows them all)"),
     ("--nav-plots-dir", "nav_plots_dir", "",
      "folder for trajectory plots; default: each item's artifacts folder (plots/trajectory.png), or "
@@ -58,7 +58,7 @@ class ReportSettings:
     plots: str
     plots_dir: Path | None
     html: Path | None
-    plots_max: int = 50
+    plots_max: int = 20
 
 
 @dataclass
