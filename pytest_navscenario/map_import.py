@@ -3,7 +3,8 @@
 A map_server occupancy grid (the YAML with ``image``, ``resolution``, ``origin``,
 ``occupied_thresh``, ``free_thresh``, ``negate`` and the PGM beside it) becomes box obstacles:
 occupied cells (occupancy probability above ``occupied_thresh``, computed as map_server does:
-``(255 - v) / 255``, or ``v / 255`` with ``negate: 1``) are merged into few boxes by greedy
+``(255 - v) / 255``, or ``v / 255`` with ``negate: 1``; in ``mode: raw`` the pixel value is the
+occupancy in percent) are merged into few boxes by greedy
 maximal rectangles (grow right, then down), so a 200 x 200 map of walls gives tens of boxes,
 not thousands. The origin's yaw rotates the map about the origin.
 """
@@ -32,6 +33,7 @@ class MapInfo:
     origin: tuple[float, float, float]   # x, y (m), yaw (rad)
     occupied_thresh: float
     negate: bool
+    mode: str = "trinary"
 
 
 def read_map_yaml(path: str | Path) -> MapInfo:
@@ -76,9 +78,14 @@ def read_map_yaml(path: str | Path) -> MapInfo:
     negate = data.get("negate", 0)
     if negate not in (0, 1, True, False):
         raise MapImportError(f"{path}: negate: expected 0 or 1, got {negate!r}")
+    if not 0 <= occ <= 1:
+        raise MapImportError(f"{path}: occupied_thresh: expected a probability in [0, 1], got {occ}")
+    mode = str(data.get("mode", "trinary"))
+    if mode not in ("trinary", "scale", "raw"):
+        raise MapImportError(f"{path}: mode: expected trinary, scale or raw, got {mode!r}")
     o = [float(v) for v in origin] + [0.0] * (3 - len(origin))
     return MapInfo(image=img, resolution=res, origin=(o[0], o[1], o[2]), occupied_thresh=occ,
-                   negate=bool(negate))
+                   negate=bool(negate), mode=mode)
 
 
 def read_pgm(path: Path) -> np.ndarray:
@@ -129,6 +136,8 @@ def read_pgm(path: Path) -> np.ndarray:
 def occupied_mask(info: MapInfo) -> np.ndarray:
     """Boolean (h, w) grid, row 0 at the top of the image, True where occupied."""
     img = read_pgm(info.image)
+    if info.mode == "raw":  # pixel = occupancy in percent, 255 (or > 100) = unknown
+        return (img <= 100.0) & (img / 100.0 > info.occupied_thresh)
     p = img / 255.0 if info.negate else (255.0 - img) / 255.0
     return p > info.occupied_thresh
 

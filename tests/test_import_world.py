@@ -170,6 +170,15 @@ def test_map_negate_and_origin_yaw(tmp_path):
     assert (b.length, b.width) == pytest.approx((0.3, 0.2))
 
 
+def test_map_raw_mode_reads_occupancy_percent(tmp_path):
+    img = np.zeros((3, 4), np.uint8)
+    img[0, 0], img[1, 1], img[2, 2] = 100, 60, 255   # occupied, below 0.65, unknown
+    path = write_map(tmp_path, img)
+    path.write_text(path.read_text() + "mode: raw\n")
+    boxes, _, cells = map_obstacles(path)
+    assert cells == 1 and len(boxes) == 1
+
+
 def test_merge_rectangles_modest_count_on_a_maze():
     rng = np.random.default_rng(3)
     mask = np.zeros((200, 200), bool)
