@@ -18,7 +18,8 @@ from pytest_navscenario.results import read_results
 from pytest_navscenario.runner import effective_seed
 from pytest_navscenario.scenario import content_hash
 
-PLUGIN = ["-p", "pytest_navscenario.plugin"]
+# Trajectory plots of failing items (the report plugin, tested there) are off: they dominate the time.
+PLUGIN = ["-p", "pytest_navscenario.plugin", "--nav-plots=none"]
 
 PLANNER = '''
 import math

@@ -112,7 +112,7 @@ def test_interrupted_run_still_writes_the_results_of_what_ran(pytester, monkeypa
     pytester.syspathinsert()
     text = "version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 1, y: 0}}\n"
     pytester.makefile(".yaml", a=text, b=text, c=text)
-    result = pytester.runpytest("-p", "pytest_navscenario.plugin", "--nav-subject=stopper:Stopper",
+    result = pytester.runpytest("-p", "pytest_navscenario.plugin", "--nav-subject=stopper:Stopper", "--nav-plots=none",
                                 "--nav-results=r.jsonl", no_reraise_ctrlc=True)
     assert result.ret == pytest.ExitCode.INTERRUPTED
     assert [r["scenario"] for r in read_results(pytester.path / "r.jsonl")] == ["a"]
@@ -123,7 +123,7 @@ def test_readme_example_command_runs_the_users_planner(tmp_path):
     proc = subprocess.run(
         [sys.executable, "-m", "pytest", "-p", "pytest_navscenario.plugin", "examples/scenarios",
          "examples/test_mynav.py", "--nav-subject=examples.mynav:Planner", f"--nav-results={tmp_path / 'r.jsonl'}",
-         f"--nav-artifacts={tmp_path / 'art'}", "-p", "no:cacheprovider"],
+         f"--nav-artifacts={tmp_path / 'art'}", "--nav-plots=none", "-p", "no:cacheprovider"],
         cwd=ROOT, env=env, capture_output=True, text=True, timeout=120)
     assert "6 passed, 2 xfailed" in proc.stdout, proc.stdout + proc.stderr
     assert {r["subject"] for r in read_results(tmp_path / "r.jsonl")} == {"mynav"}
