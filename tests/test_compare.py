@@ -123,6 +123,11 @@ def test_other_format_version_is_one_clear_line(files, tmp_path, capsys):
     assert len(err) == 1 and f"{b}:1: results format version 0" in err[0]
     assert main(["compare", str(a), str(tmp_path / "missing.jsonl")]) == 2
     assert "no such results file" in capsys.readouterr().err
+    incomplete = rec("scenarios/boxes/b1.yaml::b1", "success")
+    del incomplete["scenario_hash"]
+    b.write_text(json.dumps(incomplete) + "\n")
+    assert main(["compare", str(a), str(b)]) == 2
+    assert f"{b}:1: record lacks field(s) scenario_hash" in capsys.readouterr().err
 
 
 def test_junit_one_case_per_scenario_failing_on_regressions(files, tmp_path):
