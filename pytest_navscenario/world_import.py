@@ -244,6 +244,10 @@ def sdf_obstacles(path: str | Path) -> SdfWorld:
     for inc in world.findall("include"):
         uri = (inc.findtext("uri") or "?").strip()
         out.warnings.append(f"<include> {uri}: included models are not resolved (not imported)")
+    for tag in ("actor", "population"):
+        for elem in world.findall(tag):
+            out.warnings.append(f"<{tag}> {elem.get('name', '?')}: moving or generated models are not "
+                                f"supported (not imported)")
     tilt = math.radians(1.0)
     for model in world.findall("model"):
         _model(path, model, (0.0,) * 6, state_poses, out, tilt, top=True)
@@ -258,6 +262,9 @@ def _model(path: Path, model: ET.Element, parent: tuple[float, ...], state_poses
     static = (model.findtext("static") or "0").strip().lower() in ("1", "true")
     for inner in model.findall("model"):
         _model(path, inner, mpose, {}, out, tilt, top=False)
+    for inc in model.findall("include"):
+        uri = (inc.findtext("uri") or "?").strip()
+        out.warnings.append(f"model {mname}: <include> {uri}: included models are not resolved (not imported)")
     for link in model.findall("link"):
         lname = link.get("name", "?")
         lpose = _compose(mpose, _pose6(link.find("pose"), f"model {mname} link {lname}", path))
