@@ -108,10 +108,10 @@ def test_sdf_poses_composed_and_unrepresentable_listed(tmp_path, capsys):
                                         "<link name='l'><collision name='c'><geometry><box><size>2 1 1</size></box>"
                                         "</geometry></collision></link></model>").obstacles
     assert bar.yaw == pytest.approx(45.0)  # SDF 1.9 <pose degrees="true">
-    world = sdf_obstacles_of(tmp_path, "<actor name='walker'/><model name='m'><include><uri>model://x</uri>"
-                                       "</include></model>")
-    assert world.obstacles == [] and len(world.warnings) == 2
-    assert "<actor> walker" in world.warnings[0] and "model m: <include> model://x" in world.warnings[1]
+    odd = sdf_obstacles_of(tmp_path, "<actor name='walker'/><model name='m'><include><uri>model://x</uri>"
+                                     "</include></model>")
+    assert odd.obstacles == [] and len(odd.warnings) == 2
+    assert "<actor> walker" in odd.warnings[0] and "model m: <include> model://x" in odd.warnings[1]
     assert world.ignored_planes == 1
     text = "\n".join(world.warnings)
     for what in ("model://sun", "collision pipe: cylinder tilted", "collision ball: sphere",
