@@ -176,6 +176,8 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
     state = config.stash.get(STATE_KEY, None)
     if state is None or state.is_worker or state.settings.results is None:
         return
+    if config.option.collectonly:  # nothing ran: keep an existing results file
+        return
     from .results import write_results
     try:
         write_results(state.settings.results, state.records)
@@ -195,7 +197,7 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
         tr.write_sep("=", "navscenario summary")
         for line in format_summary(state.records).splitlines():
             tr.write_line(line)
-    if state.settings.results is not None:
+    if state.settings.results is not None and not config.option.collectonly:
         tr.write_line(f"navscenario: wrote {len(state.records)} record(s) to {state.settings.results}")
     if state.failed_artifacts:
         tr.write_line(f"navscenario: artifacts of {len(state.failed_artifacts)} failing item(s) in "

@@ -67,7 +67,11 @@ class Subject:
 
 def resolve_subject(config: pytest.Config, spec: str | None, origin: str) -> Subject:
     """Ask the hook first, then use ``spec`` (from option/ini), else the built-in default."""
-    provided = config.hook.pytest_navscenario_make_subject(config=config)
+    try:
+        provided = config.hook.pytest_navscenario_make_subject(config=config)
+    except Exception as exc:
+        raise pytest.UsageError(f"navscenario: the pytest_navscenario_make_subject hook raised "
+                                f"{type(exc).__name__}: {exc}") from exc
     if provided is not None:
         if isinstance(provided, str):
             return Subject(spec=provided.strip(), origin="pytest_navscenario_make_subject hook")

@@ -313,3 +313,13 @@ def test_scenario_name_that_breaks_node_ids_is_a_collection_error(project):
     result = project.runpytest(*PLUGIN, "--collect-only", "-q")
     result.stdout.fnmatch_lines(["fine.yaml::fine", "*weird.yaml: name: scenario name 'a::b' cannot be a "
                                  "pytest item name*(fix: use letters*"])
+
+
+def test_make_subject_hook_that_raises_is_a_usage_error(project):
+    project.makeconftest("""
+        def pytest_navscenario_make_subject(config):
+            raise RuntimeError("no licence server")
+    """)
+    result = project.runpytest(*PLUGIN)
+    assert result.ret == pytest.ExitCode.USAGE_ERROR
+    assert "pytest_navscenario_make_subject hook raised RuntimeError: no licence server" in result.stderr.str()
