@@ -19,6 +19,7 @@ from typing import Any
 import pytest
 
 MODES = ("none", "failed", "all")
+FORMATS = ("mcap", "sqlite3", "ros1")  # = bags.FORMATS, repeated so loading the plugin imports no numpy
 DEFAULT_DIR = "nav-bags"
 
 # (option, ini name, help)
@@ -67,8 +68,6 @@ def _value(config: pytest.Config, name: str) -> tuple[str, str, Path]:
 
 def read_bag_settings(config: pytest.Config) -> BagState:
     """Parse and check the three options; pytest.UsageError names the option and the choices."""
-    from .bags import FORMATS
-
     mode, where, _ = _value(config, "nav_bag")
     mode = mode.lower() or "none"
     if mode not in MODES:

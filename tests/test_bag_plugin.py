@@ -72,3 +72,14 @@ def test_all_writes_mcap_for_passing_episodes_too(project):
     res.assert_outcomes(passed=1)
     (bag,) = (project.path / "b").iterdir()
     assert len(list(bag.glob("*.mcap"))) == 1 and (bag / "metadata.yaml").exists()
+
+
+def test_plugin_knows_the_writer_formats_without_importing_it():
+    import subprocess
+    import sys
+
+    from pytest_navscenario import bag_plugin, bags
+    assert bag_plugin.FORMATS == bags.FORMATS
+    code = "import sys, pytest_navscenario.bag_plugin; print('pytest_navscenario.bags' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "False"
