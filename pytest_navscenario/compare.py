@@ -96,6 +96,7 @@ class Comparison:
     # (records carry the planner's name, which need not be importable), plus extra options.
     subject_specs: dict[str, str] = field(default_factory=dict)
     extra_args: str = ""
+    command_prefix: str = ""        # e.g. "cd /rootdir && "
 
     @property
     def broke(self) -> list[Pair]:
@@ -115,7 +116,7 @@ class Comparison:
         """The command that re-runs this one scenario with B's (or A's) subject."""
         rec = pair.b if side == "b" else pair.a
         subject = self.subject_specs.get(side, rec.get("subject") or "")
-        cmd = f"pytest {shlex.quote(pair.nodeid)}"
+        cmd = f"{self.command_prefix}pytest {shlex.quote(pair.nodeid)}"
         if subject:
             cmd += f" {shlex.quote(f'--nav-subject={subject}')}"
         if self.extra_args:

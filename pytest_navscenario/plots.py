@@ -35,6 +35,8 @@ OUTCOME_COLOURS = {"success": "#2e7d32", "collision": "#c62828", "safety-stop": 
                    "timeout": "#6a1b9a", "subject-error": "#37474f"}
 A_COLOUR, B_COLOUR = "#7f9fbf", "#1f4e79"
 SPEED_CMAP = "viridis"
+MAX_NAMED_OBSTACLES = 40   # more obstacles than this: only the ones involved are named
+MAX_GAP_SEARCH = 200       # touching obstacles: look for the narrowest real gap among at most this many
 
 
 def _figure(width: float, height: float, constrained: bool = True) -> "Figure":
@@ -88,7 +90,7 @@ def _gap(scenario: Any, metrics: Any) -> tuple[float, str, str]:
     else:
         from .paths import min_obstacle_gap
         gap = min_obstacle_gap(scenario)
-    if gap[0] > 1e-6 or len(scenario.obstacles) < 3:
+    if gap[0] > 1e-6 or not 3 <= len(scenario.obstacles) <= MAX_GAP_SEARCH:
         return gap
     polys = [obstacle_polygon(o) for o in scenario.obstacles]
     best = (math.inf, "", "")
@@ -143,7 +145,13 @@ def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
     ax.add_collection(PolyCollection([np.asarray(p.exterior.coords) for p in polys], closed=True,
                                      facecolors="#9e9e9e", edgecolors="#424242", linewidths=1.0,
                                      zorder=2), autolim=False)
+    # every name on small maps; on big ones (imported maps) only the obstacles the story is about
+    involved = {m.min_clearance_obstacle, *(m.min_gap_obstacles or "").split("|"),
+                result.collision.obstacle if result.collision else "",
+                result.safety_stop.obstacle if result.safety_stop else ""}
     for obs, poly in zip(s.obstacles, polys):
+        if len(polys) > MAX_NAMED_OBSTACLES and obs.name not in involved:
+            continue
         ax.annotate(obs.name, (poly.centroid.x, poly.centroid.y), ha="center", va="center",
                     fontsize=7, zorder=8, bbox=halo)
 
@@ -426,6 +434,9 @@ def comparison_figure(a: EpisodeResult, b: EpisodeResult, labels: tuple[str, str
     for ax, res, label in zip(axes, (a, b), labels):
         mapping = draw_episode(ax, res, norm=norm, outline_every=every,
                                title=episode_title(res, prefix=f"{label}: ", width=width)) or mapping
+    boxes = [_extent(r) for r in (a, b)]  # the shared axes must show both runs whole
+    axes[0].set_xlim(min(x[0] for x in boxes), max(x[1] for x in boxes))
+    axes[0].set_ylim(min(x[2] for x in boxes), max(x[3] for x in boxes))
     axes[1].set_ylabel("")
     _figure_legend(fig, axes)
     _colorbar(fig, mapping, cax)

@@ -196,7 +196,7 @@ def pytest_navscenario_episode_report(config: pytest.Config, report: pytest.Test
     state.records.append(rec)
     failed = rec["outcome"] != "success"
     make, to_file = _wants_plot(state.settings, failed)
-    if not make or payload.get("trajectory") is None:
+    if not make:  # (without a trajectory in the payload the plot still shows layout and markers)
         return
     limit = state.settings.plots_max
     if limit and len(state.plots) >= limit and not (failed and state.settings.html is not None):
@@ -226,10 +226,18 @@ def _subject_and_seed(config: pytest.Config) -> tuple[str | None, int | None]:
     return spec, state.settings.seed
 
 
+def _cd_rootdir(config: pytest.Config) -> str:
+    """'cd ROOTDIR && ' when pytest was started elsewhere (node ids are relative to the rootdir)."""
+    import shlex
+    if Path(config.invocation_params.dir) != Path(config.rootpath):
+        return f"cd {shlex.quote(str(config.rootpath))} && "
+    return ""
+
+
 def _reproduce(config: pytest.Config, rec: dict[str, Any]) -> str:
     import shlex
     spec, seed = _subject_and_seed(config)
-    cmd = f"pytest {shlex.quote(rec['nodeid'])}"
+    cmd = f"{_cd_rootdir(config)}pytest {shlex.quote(rec['nodeid'])}"
     if spec:
         cmd += f" {shlex.quote(f'--nav-subject={spec}')}"
     if seed is not None:
@@ -254,6 +262,7 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
             state.comparison.subject_specs["b"] = spec
         if seed is not None:
             state.comparison.extra_args = f"--nav-seed={seed}"
+        state.comparison.command_prefix = _cd_rootdir(config)
         if state.comparison.has_regressions and s.mode == "fail":
             state.gate_failed = True
             if session.exitstatus == pytest.ExitCode.OK:
