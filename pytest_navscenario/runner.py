@@ -25,7 +25,7 @@ def effective_seed(scenario_seed: int, base_seed: int | None) -> int:
     pytest's default run, the search and nav_run all see the same bits), else a deterministic mix."""
     if not base_seed:
         return int(scenario_seed)
-    mixed = np.random.SeedSequence([int(scenario_seed) & 0xFFFFFFFF, int(base_seed) & 0xFFFFFFFF])
+    mixed = np.random.SeedSequence([int(scenario_seed) % 2**64, int(base_seed) % 2**64])
     return int(mixed.generate_state(1)[0])
 
 
