@@ -51,9 +51,9 @@ _STATE = pytest.StashKey[BagState]()
 
 def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("navscenario-bags", "ROS bags of episodes (pytest-navscenario)")
+    metavars = {"nav_bag": "failed|all|none", "nav_bag_format": "mcap|sqlite3|ros1", "nav_bag_dir": "DIR"}
     for opt, ini, text in OPTIONS:
-        group.addoption(opt, dest=ini, default=None, metavar=ini.split("_")[-1].upper(),
-                        help=f"{text} [ini: {ini}]")
+        group.addoption(opt, dest=ini, default=None, metavar=metavars[ini], help=f"{text} [ini: {ini}]")
     parser.addini("nav_bag", OPTIONS[0][2], default="none")
     parser.addini("nav_bag_format", OPTIONS[1][2], default="mcap")
     parser.addini("nav_bag_dir", OPTIONS[2][2], default=DEFAULT_DIR)
