@@ -251,7 +251,8 @@ def test_limits_are_documented_numbers():
 
 finite = st.floats(-1000, 1000, allow_nan=False, allow_subnormal=False)
 positive = st.floats(0.001, 100, allow_nan=False, allow_subnormal=False)
-names = st.text(st.characters(codec="utf-8", categories=("L", "N", "P", "S", "Zs")), min_size=1, max_size=12)
+names = st.text(st.characters(codec="utf-8", categories=("L", "N", "P", "S", "Zs")), min_size=1,
+                max_size=12).filter(str.strip)
 
 
 @st.composite
