@@ -111,7 +111,8 @@ def _unknown_key_hint(key: Any, keys: tuple[str, ...], path: str) -> str:
     """Did-you-mean among this section's keys, else where the key belongs if it is known elsewhere."""
     text = str(key)
     if not difflib.get_close_matches(text.lower(), keys, n=1, cutoff=0.6):
-        homes = [home for home, section_keys in _KEY_HOMES if text in section_keys and home != path]
+        homes = [home for home, section_keys in _KEY_HOMES
+                 if text in section_keys and home != path and not (home == "obstacles[]" and path.startswith("obstacles["))]
         if homes:
             return f"'{text}' belongs under '{homes[0]}'" + (f" (or '{homes[1]}')" if len(homes) > 1 else "")
     return _did_you_mean(key, keys)
@@ -384,7 +385,13 @@ def _obstacles(ctx: _Ctx, top: _Section) -> tuple[Obstacle, ...]:
         if kind not in OBSTACLE_TYPES:
             raise ctx.fail(f"unknown obstacle type {describe(type_item[1])}", f"{path}.type",
                            type_item[0] or line, _did_you_mean(kind if kind is not None else "", OBSTACLE_TYPES))
-        sec = _Section(ctx, item, path, BOX_KEYS if kind == "box" else CYLINDER_KEYS, line=line)
+        keys, other_keys, other = ((BOX_KEYS, CYLINDER_KEYS, "cylinder") if kind == "box"
+                                   else (CYLINDER_KEYS, BOX_KEYS, "box"))
+        for key, (key_line, _) in item.items.items():
+            if key not in keys and key in other_keys:
+                raise ctx.fail(f"'{key}' does not apply to type: {kind} (it is a {other} key)", f"{path}.{key}",
+                               key_line or line, f"remove '{key}', or set type: {other}")
+        sec = _Section(ctx, item, path, keys, line=line)
         name = sec.string("name", None)
         if name is not None:
             _check_name(ctx, name, f"{path}.name", sec.line_of("name"))
