@@ -60,15 +60,52 @@ def generate(folder: Path, count: int, rng_seed: int = 1) -> int:
     return written
 
 
+# Written into the generated suite's rootdir: measures, in a serial run, the CPU time of the session
+# (collection + running + reporting) and of the items' call phases (run_scenario + the item's own
+# few lines), so the per-item overhead is a CPU-time difference, robust against other load.
+PROBE = """
+import json, os, time
+import pytest
+
+_T = {"calls": 0.0, "n": 0}
+
+
+def pytest_sessionstart(session):
+    _T["start"] = time.process_time()
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_call(item):
+    t0 = time.process_time()
+    try:
+        return (yield)
+    finally:
+        _T["calls"] += time.process_time() - t0
+        _T["n"] += 1
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_unconfigure(config):
+    out = os.environ.get("NAVBENCH_PROBE")
+    if out and not hasattr(config, "workerinput") and "start" in _T:
+        _T["session"] = time.process_time() - _T.pop("start")
+        with open(out, "w") as fh:
+            json.dump(_T, fh)
+"""
+
+
 def _children_cpu() -> float:
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
     return usage.ru_utime + usage.ru_stime
 
 
-def run_pytest(target: Path, extra: list[str], results: Path | None) -> tuple[float, float, str, float]:
+def run_pytest(target: Path, extra: list[str], results: Path | None,
+               probe: Path | None = None) -> tuple[float, float, str, float]:
     """(process wall time, pytest's own session time, pytest's last line, CPU time of pytest and
     its xdist workers: less sensitive to other load on the machine than wall time)."""
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    if probe is not None:
+        env["NAVBENCH_PROBE"] = str(probe)
     cmd = [sys.executable, "-m", "pytest", str(target), "-q", "-p", "no:cacheprovider",
            "--nav-artifacts=none", "--nav-summary=no", "--nav-plots=none", *extra]
     if results is not None:
@@ -94,6 +131,8 @@ def main() -> int:
         folder = Path(tmp) / "suite"
         n = generate(folder, args.count)
         (folder / "pytest.ini").write_text("[pytest]\n")  # its own rootdir: only these files collected
+        (folder / "conftest.py").write_text(PROBE)
+        probes: list[dict] = []
         print(f"{n} scenario files in {len(SEEDS)} families; {args.repeats} runs per mode; "
               f"{os.cpu_count()} CPUs; load average before: {os.getloadavg()[0]:.2f}")
         walls: dict[str, list[float]] = {"serial": [], "-n 2": []}
@@ -104,7 +143,10 @@ def main() -> int:
             for label, target, extra in [("serial", folder, []), ("-n 2", folder, ["-n", "2"]),
                                          ("one family", folder / SEEDS[0], [])]:
                 results = Path(tmp) / f"r{r}-{len(records)}.jsonl"
-                wall, session, tail, cpu = run_pytest(target, extra, results)
+                probe = Path(tmp) / "probe.json" if label == "serial" else None
+                wall, session, tail, cpu = run_pytest(target, extra, results, probe)
+                if probe is not None:
+                    probes.append(json.loads(probe.read_text()))
                 recs = [json.loads(line) for line in results.read_text().splitlines()]
                 episodes = sum(rec["wall_time"] for rec in recs)
                 print(f"  run {r + 1} {label:10s}: {wall:6.2f} s wall, {cpu:6.2f} s CPU, session {session:6.2f} s, "
@@ -130,6 +172,10 @@ def main() -> int:
         print(f"  = {1000 * extra_all / n_all:.2f} ms per item on average (fixed costs included); "
               f"marginal per-item overhead {1000 * (extra_all - extra_one) / (n_all - n_one):.2f} ms "
               f"(difference between the two suite sizes: start-up and imports cancel)")
+        per_item = [(p["session"] - p["calls"]) / p["n"] for p in probes]
+        print(f"CPU time per item outside the call phase (collection, reports, report.nav, results; "
+              f"serial): {1000 * med(per_item):.2f} ms median "
+              f"(call phases {med(p['calls'] for p in probes):.2f} s, session {med(p['session'] for p in probes):.2f} s CPU)")
         print(f"collection alone (--collect-only, {n} files): {med(collect):.2f} s session, "
               f"{1000 * med(collect) / n:.2f} ms per file")
     return 0
