@@ -7,8 +7,8 @@ definitions) with ``rosbags``. Odometry and laser topics are found by type (over
 * start and goal: the first and last odometry pose in the time window;
 * the driven path: decimated waypoints, or a reference trajectory (CSV ``t,x,y`` beside the
   seed, ``reference.file`` relative to it);
-* obstacles: every scan projected with the laser's mount transform (``/tf_static``, else
-  ``--laser-pose``, else estimated from the scans themselves), accumulated in the odometry
+* obstacles: every scan projected with the laser's mount transform (``--laser-pose``, else
+  ``/tf_static``, else the first ``/tf`` transforms, else estimated from the scans), accumulated in the odometry
   frame on a grid, clustered, and fitted as cylinders (round clusters) and oriented boxes
   (straight segments). Box walls are placed behind the observed surface, away from the
   viewpoints that saw it, so the free space the robot drove through stays free.
@@ -31,6 +31,7 @@ ODOM_TYPES = ("nav_msgs/msg/Odometry",)
 SCAN_TYPES = ("sensor_msgs/msg/LaserScan",)
 TF_STATIC_TYPES = ("tf2_msgs/msg/TFMessage",)
 PATH_AS = ("waypoints", "reference", "both")
+TF_SCAN_LIMIT = 500  # /tf messages read for the laser mount (the mount is fixed; /tf can be long)
 
 
 class BagImportError(NavScenarioError):
@@ -55,6 +56,7 @@ class BagData:
     range_min: float = 0.0
     range_max: float = math.inf
     static_tf: dict[str, tuple[str, float, float, float]] = field(default_factory=dict)  # child -> (parent, x, y, yaw)
+    first_tf: dict[str, tuple[str, float, float, float]] = field(default_factory=dict)   # the same, first seen on /tf
     notes: list[str] = field(default_factory=list)
 
 
@@ -151,13 +153,25 @@ def _read(reader: Any, path: Path, odom_topic, scan_topic, start, end) -> BagDat
     odom_name = _pick(path, conns, odom_topic, ODOM_TYPES, "odometry", "--odom-topic", ("/odom",), True)
     scan_name = _pick(path, conns, scan_topic, SCAN_TYPES, "laser scan", "--scan-topic", ("/scan",), False)
     wanted = [c for c in conns if c.topic in (odom_name, scan_name) or
-              (c.topic == "/tf_static" and c.msgtype in TF_STATIC_TYPES)]
-    odom, scans, static_tf = [], [], {}
+              (c.topic in ("/tf_static", "/tf") and c.msgtype in TF_STATIC_TYPES)]
+    odom, scans, static_tf, first_tf = [], [], {}, {}
+    tf_seen = 0
     odom_frame = base_frame = scan_frame = ""
     scan_meta = None
     odd_scans = 0
     for conn, bag_ns, raw in reader.messages(connections=wanted):
         msg = reader.deserialize(raw, conn.msgtype)
+        if conn.topic == "/tf":
+            # older bags publish the laser mount on /tf: keep the first transform of each frame
+            tf_seen += 1
+            if tf_seen > TF_SCAN_LIMIT:
+                continue
+            for tf in msg.transforms:
+                child = tf.child_frame_id.lstrip("/")
+                if child not in first_tf:
+                    tr, rot = tf.transform.translation, tf.transform.rotation
+                    first_tf[child] = (tf.header.frame_id.lstrip("/"), tr.x, tr.y, _yaw(rot))
+            continue
         if conn.topic == "/tf_static":
             for tf in msg.transforms:
                 tr, rot = tf.transform.translation, tf.transform.rotation
@@ -188,7 +202,8 @@ def _read(reader: Any, path: Path, odom_topic, scan_topic, start, end) -> BagDat
     origin = float(odom_arr[0, 0])  # t = 0 at the first odometry message
     odom_arr[:, 0] = (odom_arr[:, 0] - origin) * 1e-9
     data = BagData(path=path, odom_topic=odom_name, odom_frame=odom_frame or "odom",
-                   base_frame=base_frame or "base_link", odom=odom_arr, static_tf=static_tf)
+                   base_frame=base_frame or "base_link", odom=odom_arr, static_tf=static_tf,
+                   first_tf=first_tf)
     if start is not None or end is not None:
         keep = np.ones(len(odom_arr), bool)
         if start is not None:
@@ -225,15 +240,17 @@ def _read(reader: Any, path: Path, odom_topic, scan_topic, start, end) -> BagDat
 
 # ------------------------------------------------------------------ geometry
 
-def laser_mount(data: BagData) -> tuple[float, float, float] | None:
-    """The laser's pose (x, y, yaw rad) in the odometry child frame from /tf_static, or None."""
+def laser_mount(data: BagData, source: str = "/tf_static") -> tuple[float, float, float] | None:
+    """The laser's pose (x, y, yaw rad) in the odometry child frame from ``source`` ("/tf_static",
+    or "/tf": the first transform of each frame there, with /tf_static filling gaps), or None."""
+    tree = data.static_tf if source == "/tf_static" else {**data.static_tf, **data.first_tf}
     frame, x, y, yaw = data.scan_frame, 0.0, 0.0, 0.0
     for _ in range(32):
         if frame == data.base_frame:
             return (x, y, yaw)
-        if frame not in data.static_tf:
+        if frame not in tree:
             break
-        parent, px, py, pyaw = data.static_tf[frame]
+        parent, px, py, pyaw = tree[frame]
         c, s = math.cos(pyaw), math.sin(pyaw)
         x, y, yaw = px + c * x - s * y, py + s * x + c * y, pyaw + yaw
         frame = parent
@@ -621,6 +638,9 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
         else:
             mount = laser_mount(data)
             how = "from /tf_static"
+            if mount is None and data.first_tf:
+                mount = laser_mount(data, "/tf")
+                how = "from the first /tf transforms (no /tf_static)"
             if mount is None:
                 mount = estimate_mount(data)
                 how = (f"estimated from the scans (no /tf_static transform {data.base_frame} -> "

@@ -142,3 +142,44 @@ def test_bag_without_scans_gives_trajectory_only(tmp_path, capsys):
     seed = load_scenario(out)
     assert seed.obstacles == ()
     assert (seed.mission.start.x, seed.mission.goal.x) == pytest.approx((5.0, 9.9))
+
+
+def test_laser_mount_from_tf_when_there_is_no_tf_static(tmp_path, capsys):
+    """A ROS 1 bag whose laser mount (0.3 m ahead, turned 90 degrees) is only on /tf: the scans of a
+    straight wall at y = 2 m must come out as one wall along x, its face at y = 2."""
+    from rosbags.rosbag1 import Writer
+
+    from pytest_navscenario.bags import _typestore, build
+    ts = _typestore(True)  # noetic + tf2_msgs/TFMessage
+    beams = np.radians(np.arange(-80.0, 81.0, 1.0))      # laser frame
+    world_dir = beams + math.pi / 2                      # laser yaw 90 degrees on a robot at yaw 0
+    bag = tmp_path / "tf_mount.bag"
+    with Writer(bag) as w:
+        odom = w.add_connection("/odom", "nav_msgs/msg/Odometry", typestore=ts)
+        tf = w.add_connection("/tf", "tf2_msgs/msg/TFMessage", typestore=ts)
+        scan = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts)
+        for i in range(60):
+            t = 1.0 + 0.1 * i
+            stamp = {"sec": int(t), "nanosec": int(round((t % 1) * 1e9))}
+            x = 0.05 * i
+            ns = int(round(t * 1e9))
+            w.write(odom, ns, ts.serialize_ros1(build(ts, "nav_msgs/msg/Odometry", {
+                "header": {"stamp": stamp, "frame_id": "odom"}, "child_frame_id": "base_link",
+                "pose": {"pose": {"position": {"x": x}, "orientation": {"w": 1.0}}}}), "nav_msgs/msg/Odometry"))
+            w.write(tf, ns, ts.serialize_ros1(build(ts, "tf2_msgs/msg/TFMessage", {"transforms": [{
+                "header": {"stamp": stamp, "frame_id": "base_link"}, "child_frame_id": "laser",
+                "transform": {"translation": {"x": 0.3},
+                              "rotation": {"z": math.sin(math.pi / 4), "w": math.cos(math.pi / 4)}}}]}),
+                "tf2_msgs/msg/TFMessage"))
+            ranges = (2.0 / np.sin(world_dir)).astype(np.float32)
+            w.write(scan, ns, ts.serialize_ros1(build(ts, "sensor_msgs/msg/LaserScan", {
+                "header": {"stamp": stamp, "frame_id": "laser"}, "angle_min": float(beams[0]),
+                "angle_max": float(beams[-1]), "angle_increment": float(beams[1] - beams[0]),
+                "range_min": 0.1, "range_max": 30.0, "ranges": ranges}), "sensor_msgs/msg/LaserScan"))
+    seed = scenario_from_bag(bag)
+    assert any("from the first /tf transforms" in n for n in seed.notes)
+    assert seed.mount == pytest.approx((0.3, 0.0, math.pi / 2))
+    long = [o for o in seed.scenario.obstacles if isinstance(o, BoxObstacle) and o.length > 5]
+    assert len(long) == 1
+    wall = long[0]
+    assert abs(wall.yaw) < 0.5 and wall.y - wall.width / 2 == pytest.approx(2.0, abs=0.03)
