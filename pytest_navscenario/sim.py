@@ -569,6 +569,8 @@ def simulate(scenario: Scenario, planner: Any, seed: int, max_ticks: int | None 
             # handler records the first warning of each kind per episode (a cheap test)
             if _MUJOCO_WARNINGS if own_handler else warn_count.any():
                 raise SimulationDivergedError(_divergence_message(scenario, d, i * dt))
+        if warn_count.any():   # the authoritative per-data counters, once per episode
+            raise SimulationDivergedError(_divergence_message(scenario, d, i * dt))
     finally:
         if deadline is not None:
             deadline.__exit__(None, None, None)
