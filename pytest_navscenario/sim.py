@@ -183,7 +183,8 @@ def model_xml(scenario: Scenario) -> str:
 
 @dataclass
 class World:
-    """A compiled model and the lookups the loop needs (shared by episodes; never mutated)."""
+    """A compiled model and the lookups the loop needs, shared by episodes (the model is never
+    changed; only the pool of MjData to reuse is)."""
     model: mujoco.MjModel
     robot_body: int
     robot_geom: int
