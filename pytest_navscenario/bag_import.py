@@ -16,6 +16,7 @@ definitions) with ``rosbags``. Odometry and laser topics are found by type (over
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -316,21 +317,57 @@ class Cluster:
     viewpoint: np.ndarray  # (2,) mean laser position that saw them
 
 
-def occupied_clusters(points: np.ndarray, origins: np.ndarray, *, res: float = 0.05,
-                      min_hits: int = 2, link: float = 0.3, min_cells: int = 3) -> tuple[list[Cluster], int]:
-    """Grid the returns, keep cells hit ``min_hits`` times, group cells closer than ``link``
-    (sparse beams leave gaps along a far face; a robot does not fit through ``link`` anyway).
+@dataclass
+class Grid:
+    """Returns accumulated per grid cell: the cell's mean return and mean viewpoint, and hits."""
+    means: np.ndarray    # (k, 4) x, y of the returns, x, y of the laser that saw them
+    counts: np.ndarray   # (k,) returns per cell
+    returns: int         # returns in total
+
+
+def _cells(points: np.ndarray, origins: np.ndarray, res: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(cell keys (k, 2), sums of [point, origin] (k, 4), counts (k,)) of a batch of returns."""
+    cells = np.floor(points / res).astype(np.int64)
+    keys, inverse, counts = np.unique(cells, axis=0, return_inverse=True, return_counts=True)
+    sums = np.zeros((len(keys), 4))
+    np.add.at(sums, inverse.reshape(-1), np.concatenate([points, origins], axis=1))
+    return keys, sums, counts
+
+
+def grid_returns(data: BagData, mount: tuple[float, float, float], res: float = 0.05,
+                 chunk: int = 1000) -> Grid:
+    """Project the scans ``chunk`` at a time and sum them per cell, so an hour-long bag needs
+    memory for its grid, not for every return at once."""
+    parts = []
+    total = 0
+    for i in range(0, len(data.scan_t), chunk):
+        sub = dataclasses.replace(data, scan_t=data.scan_t[i:i + chunk], scan_ranges=data.scan_ranges[i:i + chunk])
+        pts, origins = project_scans(sub, mount)
+        total += len(pts)
+        if len(pts):
+            parts.append(_cells(pts, origins, res))
+    if not parts:
+        return Grid(np.zeros((0, 4)), np.zeros(0, np.int64), 0)
+    keys = np.concatenate([p[0] for p in parts])
+    sums = np.concatenate([p[1] for p in parts])
+    counts = np.concatenate([p[2] for p in parts])
+    if len(parts) > 1:  # merge the cells that several chunks share
+        keys, inverse = np.unique(keys, axis=0, return_inverse=True)
+        inverse = inverse.reshape(-1)
+        merged = np.zeros((len(keys), 4))
+        np.add.at(merged, inverse, sums)
+        sums, counts = merged, np.bincount(inverse, weights=counts, minlength=len(keys)).astype(np.int64)
+    return Grid(means=sums / counts[:, None], counts=counts, returns=total)
+
+
+def occupied_clusters(grid: Grid, *, min_hits: int = 2, link: float = 0.3,
+                      min_cells: int = 3) -> tuple[list[Cluster], int]:
+    """Keep cells hit ``min_hits`` times, group cells closer than ``link`` (sparse beams leave
+    gaps along a far face; a robot does not fit through ``link`` anyway).
 
     Returns the clusters and the number of small clusters (< ``min_cells``) dropped as noise.
     """
-    if len(points) == 0:
-        return [], 0
-    cells = np.floor(points / res).astype(np.int64)
-    keys, inverse, counts = np.unique(cells, axis=0, return_inverse=True, return_counts=True)
-    inverse = inverse.reshape(-1)
-    sums = np.zeros((len(keys), 4))
-    np.add.at(sums, inverse, np.concatenate([points, origins], axis=1))
-    means = (sums / counts[:, None])[counts >= min_hits]
+    means = grid.means[grid.counts >= min_hits]
     clusters, dropped = [], 0
     for members in _groups(means[:, :2], link):
         if len(members) < min_cells:
@@ -518,8 +555,6 @@ def fit_obstacles(clusters: list[Cluster], s: FitSettings = FitSettings(),
                   free_xy: np.ndarray | None = None) -> list[Obstacle]:
     """Cylinders for round clusters, one box for a compact block, else oriented boxes for the
     straight runs and small leftovers. ``free_xy``: positions the robot drove through."""
-    import dataclasses
-
     obstacles: list[Obstacle] = []
     n_cyl = n_box = 0
     for cl in sorted(clusters, key=lambda c: (round(float(c.points[:, 0].mean()), 3),
@@ -647,11 +682,11 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
                        f"{data.scan_frame}; pass --laser-pose x,y,yaw to set it)")
         notes.append(f"laser {data.scan_frame} at x={mount[0]:.3f} y={mount[1]:.3f} "
                      f"yaw={math.degrees(mount[2]):.1f} deg in {data.base_frame}, {how}")
-        pts, origins = project_scans(data, mount)
-        clusters, dropped = occupied_clusters(pts, origins, res=settings.res, link=settings.link)
+        grid = grid_returns(data, mount, settings.res)
+        clusters, dropped = occupied_clusters(grid, link=settings.link)
         obstacles = fit_obstacles(clusters, settings, free_xy=od[:, 1:3])
         n_cyl = sum(isinstance(o, CylinderObstacle) for o in obstacles)
-        notes.append(f"{len(data.scan_t)} scans, {len(pts)} returns -> {len(clusters)} clusters -> "
+        notes.append(f"{len(data.scan_t)} scans, {grid.returns} returns -> {len(clusters)} clusters -> "
                      f"{n_cyl} cylinders, {len(obstacles) - n_cyl} boxes"
                      + (f" ({dropped} specks of < 3 cells ignored as noise)" if dropped else ""))
     start_pose = Pose(_r(od[0, 1]), _r(od[0, 2]), _r(math.degrees(od[0, 3]), 2))

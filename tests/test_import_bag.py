@@ -91,6 +91,15 @@ def test_window_laser_pose_and_reference_csv(tmp_path, capsys):
     assert sum(isinstance(o, CylinderObstacle) for o in seed.obstacles) == 9
 
 
+def test_grid_in_chunks_equals_grid_at_once():
+    from pytest_navscenario.bag_import import grid_returns, read_bag
+    data = read_bag(TB3, end=20.0)
+    small, whole = grid_returns(data, (-0.064, 0, 0), chunk=7), grid_returns(data, (-0.064, 0, 0), chunk=10_000)
+    assert small.returns == whole.returns > 10_000
+    np.testing.assert_array_equal(small.counts, whole.counts)
+    np.testing.assert_allclose(small.means, whole.means, atol=1e-12)
+
+
 def test_decimate_path_follows_the_path():
     t = np.linspace(0, 2 * math.pi, 400)
     xy = np.stack([2 * np.cos(t), 2 * np.sin(t)], 1)
