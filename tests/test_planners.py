@@ -189,3 +189,16 @@ def test_dwa_shares_precomputed_rollouts_only_between_identical_settings(seeds):
     for planner in (a, b, c):
         planner.reset(seeds["boxes1"])
     assert a._t is b._t and a._t is not c._t
+
+
+def test_dwa_brakes_in_front_of_a_dead_end_instead_of_running_into_the_safety_layer(seeds):
+    s = seeds["corridor"]
+    dead_end = dataclasses.replace(
+        s, obstacles=s.obstacles + (BoxObstacle("cap", 0.0, 7.6, 2.4, 0.2),),
+        mission=dataclasses.replace(s.mission, timeout=12.0))
+    result = run_scenario(dead_end, "dwa")
+    assert result.outcome is Outcome.TIMEOUT, result.message        # not a safety stop
+    assert result.safety_stop is None and result.collision is None
+    assert np.abs(result.trajectory.velocity[-1, :2]).max() < 0.05    # standing, not creeping
+    nose = result.trajectory.pose[:, 1].max() + 0.45
+    assert nose < 7.5 - 0.1                                           # well short of the cap
