@@ -10,8 +10,10 @@ measured on exactly the same scenarios. Pure data and text: no matplotlib here.
 """
 from __future__ import annotations
 
+import math
 import os
 import shlex
+import statistics
 from collections import Counter
 from dataclasses import dataclass, field
 from typing import Any, Iterable, Sequence
@@ -20,6 +22,9 @@ from .results import OUTCOMES, ResultsFileError, read_results
 from .stats import mcnemar_exact, rate_with_interval
 
 RATE_OUTCOMES = ("success", "safety-stop", "timeout", "collision", "subject-error")
+# compared over the pairs both subjects passed: (record metrics key, label)
+METRICS = (("path_efficiency", "path efficiency"), ("duration", "duration (s)"),
+           ("mean_speed", "mean speed (m/s)"), ("min_clearance", "min clearance (m)"))
 
 
 @dataclass(frozen=True)
@@ -72,6 +77,9 @@ class FamilyComparison:
     broke: int                      # A passed, B failed (discordant)
     fixed: int                      # A failed, B passed (discordant)
     mcnemar_p: float                # exact McNemar p on success
+    # metric -> (median under A, median under B, pairs): over the pairs that BOTH passed, so the
+    # figures describe the same successful drives (NaN when there are none)
+    metrics: dict[str, tuple[float, float, int]] = field(default_factory=dict)
 
     @property
     def success_change(self) -> float:
@@ -161,11 +169,19 @@ def _family_comparison(family: str, pairs: Sequence[Pair]) -> FamilyComparison:
     cb = Counter(p.b["outcome"] for p in pairs)
     broke = sum(1 for p in pairs if _passed(p.a) and not _passed(p.b))
     fixed = sum(1 for p in pairs if not _passed(p.a) and _passed(p.b))
+    both = [p for p in pairs if _passed(p.a) and _passed(p.b)]
+    metrics = {}
+    for key, _label in METRICS:
+        va = [(p.a.get("metrics") or {}).get(key) for p in both]
+        vb = [(p.b.get("metrics") or {}).get(key) for p in both]
+        ok = [(x, y) for x, y in zip(va, vb) if isinstance(x, (int, float)) and isinstance(y, (int, float))]
+        metrics[key] = ((statistics.median(x for x, _ in ok), statistics.median(y for _, y in ok), len(ok))
+                        if ok else (math.nan, math.nan, 0))
     return FamilyComparison(
         family=family, n=n,
         a={o: Rate.of(ca[o], n) for o in RATE_OUTCOMES},
         b={o: Rate.of(cb[o], n) for o in RATE_OUTCOMES},
-        broke=broke, fixed=fixed, mcnemar_p=mcnemar_exact(broke, fixed))
+        broke=broke, fixed=fixed, mcnemar_p=mcnemar_exact(broke, fixed), metrics=metrics)
 
 
 def compare_records(a: Sequence[dict[str, Any]], b: Sequence[dict[str, Any]], *,
@@ -222,6 +238,13 @@ def _pct(r: Rate) -> str:
     return f"{100 * r.rate:5.1f}% [{100 * r.low:.0f}-{100 * r.high:.0f}]"
 
 
+def _arrow(a: float, b: float) -> str:
+    if math.isnan(a) or math.isnan(b):
+        return "-"
+    digits = 1 if max(abs(a), abs(b)) >= 10 else 2
+    return f"{a:.{digits}f} -> {b:.{digits}f}"
+
+
 def _p(p: float) -> str:
     return "<0.001" if p < 0.001 else f"{p:.3f}"
 
@@ -253,6 +276,13 @@ def format_comparison(cmp: Comparison, *, max_listed: int = 50) -> str:
                 ch = "   -" if fam.n == 0 else f"{100 * change:+7.1f}pp"
                 lines.append(f"{'':<{fw}} {'':>4}  B " + cells
                              + f" {ch:>8} {fam.broke:>5} {fam.fixed:>5} {_p(fam.mcnemar_p):>6}")
+    if any(fam.metrics.get(k, (0, 0, 0))[2] for fam in rows for k, _ in METRICS):
+        lines += ["", "metrics over the pairs both passed, median A -> B:",
+                  f"{'family':<{fw}} {'n':>4}  " + "".join(f" {label:>19}" for _, label in METRICS)]
+        for fam in rows:
+            n_both = max(fam.metrics[k][2] for k, _ in METRICS)
+            cells = "".join(f" {_arrow(*fam.metrics[k][:2]):>19}" for k, _ in METRICS)
+            lines.append(f"{fam.family:<{fw}} {n_both:>4}  " + cells)
     broke, fixed = cmp.broke, cmp.fixed
 
     def listing(title: str, items: Sequence[Any], render) -> None:

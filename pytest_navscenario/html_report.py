@@ -45,7 +45,7 @@ def _e(value: Any) -> str:
 
 
 def _num(value: Any, digits: int) -> str:
-    if value is None:
+    if value is None or (isinstance(value, float) and value != value):
         return "&ndash;"
     try:
         return f"{float(value):.{digits}f}"
@@ -116,6 +116,17 @@ def _comparison_section(cmp: "Comparison", bars_png: bytes | None) -> str:
         f'<table class="summary"><thead><tr><th>family</th><th>n</th><th></th>{head}<th>change</th>'
         f"<th>broke</th><th>fixed</th><th>p</th></tr></thead><tbody>{''.join(rows)}</tbody></table>",
     ]
+    from .compare import METRICS as CMP_METRICS
+    fams = cmp.families + ([cmp.overall] if len(cmp.families) > 1 else [])
+    if any(f.metrics.get(k, (0, 0, 0))[2] for f in fams for k, _ in CMP_METRICS):
+        mhead = "".join(f"<th>{_e(label)}</th>" for _, label in CMP_METRICS)
+        mrows = "".join(
+            f"<tr><td>{_e(f.family)}</td><td>{max(f.metrics[k][2] for k, _ in CMP_METRICS)}</td>"
+            + "".join(f"<td>{_num(f.metrics[k][0], 2)} &rarr; {_num(f.metrics[k][1], 2)}</td>"
+                      for k, _ in CMP_METRICS) + "</tr>" for f in fams)
+        parts.append(f"<p>Metrics over the pairs both passed (median A &rarr; B):</p>"
+                     f'<table class="summary"><thead><tr><th>family</th><th>n</th>{mhead}</tr></thead>'
+                     f"<tbody>{mrows}</tbody></table>")
     if bars_png:
         parts.append(f'<div class="plot">{_img(bars_png, "success and safety-stop rates, A vs B")}</div>')
     for title, items, cls in (("B broke (A passed, B failed)", cmp.broke, "bad"),

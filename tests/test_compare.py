@@ -64,6 +64,8 @@ def test_improvement_and_regression_per_family(files, capsys):
     assert corridor.a["success"].rate == 0 and corridor.b["success"].rate == 1
     assert corridor.success_change == pytest.approx(1.0)
     assert cmp.overall.n == 5 and cmp.overall.mcnemar_p == pytest.approx(0.625)  # b=1, c=3
+    assert boxes.metrics["min_clearance"] == (0.2, 0.2, 1)    # only b1 passed under both
+    assert corridor.metrics["min_clearance"][2] == 0
     lo, hi = corridor.b["success"].low, corridor.b["success"].high
     assert lo == pytest.approx(0.3424, abs=1e-4) and hi == 1.0                   # Wilson 2/2
 
@@ -73,6 +75,7 @@ def test_improvement_and_regression_per_family(files, capsys):
     assert "reproduce: pytest scenarios/boxes/b2.yaml::b2 --nav-subject=mypkg.nav:Planner" in out
     assert "B fixed (A failed, B passed) (3):" in out
     assert "result: 1 regression(s), 3 fix(es)" in out
+    assert "metrics over the pairs both passed, median A -> B:" in out
     assert main(["compare", str(a), str(b)]) == 0   # without the gate: report only
 
 
