@@ -199,6 +199,7 @@ def test_dwa_brakes_in_front_of_a_dead_end_instead_of_running_into_the_safety_la
     result = run_scenario(dead_end, "dwa")
     assert result.outcome is Outcome.TIMEOUT, result.message        # not a safety stop
     assert result.safety_stop is None and result.collision is None
-    assert np.abs(result.trajectory.velocity[-1, :2]).max() < 0.05    # standing, not creeping
+    last_3s = result.trajectory.pose[-300:, :2]
+    assert np.ptp(last_3s, axis=0).max() < 0.1                       # it has stopped
     nose = result.trajectory.pose[:, 1].max() + 0.45
-    assert nose < 7.5 - 0.1                                           # well short of the cap
+    assert nose < 7.5 - 0.2                                           # well short of the cap
