@@ -179,3 +179,16 @@ def test_html_escapes_names_and_messages(tmp_path):
     assert page.count('<section class="failure"') == 1 and "goal &lt;not&gt; reached" in page
     assert page.count('<section class="passed"') == 1   # only passing runs that have a plot
     assert json.dumps("f&amp;g")[1:-1] in page
+
+
+@pytest.mark.parametrize("option, message", [
+    ("--nav-plots=sometimes", "--nav-plots: expected one of failed, all, none, got 'sometimes'"),
+    ("--nav-baseline-mode=maybe", "--nav-baseline-mode: expected one of fail, warn, got 'maybe'"),
+    ("--nav-plots-max=-1", "--nav-plots-max: expected a whole number >= 0 (0 = no limit), got '-1'"),
+    ("--nav-baseline=missing.jsonl", "--nav-baseline: no results file"),
+])
+def test_bad_option_values_are_usage_errors(pytester: pytest.Pytester, monkeypatch, option, message):
+    monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
+    result = pytester.runpytest_inprocess("-p", "pytest_navscenario.plugin", option)
+    assert result.ret == pytest.ExitCode.USAGE_ERROR
+    assert message in result.stderr.str()
