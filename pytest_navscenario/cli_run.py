@@ -14,9 +14,9 @@ from typing import Any
 
 from .planner import BUILTIN_SUBJECTS, DEFAULT_SUBJECT
 
-_SUBJECT_HELP = (f"planner under test: a built-in name ({', '.join(sorted(BUILTIN_SUBJECTS))}) "
-                 f"or 'package.module:Attribute' (a class or zero-argument factory); "
-                 f"default {DEFAULT_SUBJECT}")
+_SUBJECT_HELP = (f"planner under test: a built-in name ({', '.join(sorted(BUILTIN_SUBJECTS))}), "
+                 f"'package.module:Attribute' (a class or zero-argument factory) or "
+                 f"'exec:PROGRAM ARGS' (an external process); default {DEFAULT_SUBJECT}")
 
 
 def add_arguments_run(p: argparse.ArgumentParser) -> None:
@@ -92,6 +92,8 @@ def add_arguments_check_planner(p: argparse.ArgumentParser) -> None:
                    help="scenario YAML to check on (default: a short built-in scenario)")
     p.add_argument("--ticks", type=int, default=20, help="control ticks to run (default 20)")
     p.add_argument("--seed", type=int, default=0, help="lidar noise seed (default 0)")
+    p.add_argument("--tick-limit", type=float, default=10.0, metavar="SECONDS",
+                   help="stop and report a reset/act call that takes longer (default 10)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
 
 
@@ -105,7 +107,8 @@ def run_check_planner(args: argparse.Namespace) -> int:
     if args.ticks < 1:
         print("navscenario check-planner: error: --ticks must be at least 1", file=sys.stderr)
         return 2
-    check = check_planner(args.subject, scenario, ticks=args.ticks, seed=args.seed)
+    check = check_planner(args.subject, scenario, ticks=args.ticks, seed=args.seed,
+                          tick_limit=args.tick_limit if args.tick_limit > 0 else None)
     if args.json:
         print(json.dumps(_json_safe({
             "subject": check.subject, "ok": check.ok, "problems": check.problems,
