@@ -477,6 +477,9 @@ def bars_figure(cmp: "Comparison") -> "Figure":
                             textcoords="offset points", ha="center", va="bottom" if sign > 0 else "top",
                             fontsize=7, zorder=4, bbox=dict(boxstyle="square,pad=0.1", fc="white",
                                                             ec="none", alpha=0.7))
+    if not rows or not cmp.pairs:
+        ax.text(0.5, 0.5, "no comparable scenario pairs:\nsee the 'only in A / only in B / not comparable' lists",
+                transform=ax.transAxes, ha="center", va="center", fontsize=10, color="#c62828")
     ax.axhline(0, color="black", lw=0.8)
     ax.set_xticks(x, [f"{r.family}\nn={r.n}" + (f"\np={r.mcnemar_p:.2g}" if r.n else "") for r in rows],
                   fontsize=8)

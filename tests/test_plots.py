@@ -146,3 +146,13 @@ def test_cli_plot_option(tmp_path, capsys):
 def test_nice_grid_steps(raw, step):
     from pytest_navscenario.plots import _nice_step
     assert _nice_step(raw) == step
+
+
+def test_bar_chart_says_when_nothing_could_be_compared():
+    from pytest_navscenario.compare import compare_records
+    from pytest_navscenario.plots import bars_figure
+    from test_compare import BASE, rec, suite
+
+    cmp = compare_records(suite(BASE), [rec("scenarios/x/new.yaml::new", "success")])
+    ax = bars_figure(cmp).axes[0]
+    assert not ax.patches and "no comparable scenario pairs" in ax.texts[0].get_text()
