@@ -318,15 +318,18 @@ def default_bag_path(folder: str | os.PathLike, stem: str, fmt: str = "mcap") ->
 
 
 def write_episode_bag(result: EpisodeResult, path: str | os.PathLike, *, fmt: str = "mcap") -> Path:
-    """Write ``result`` as a bag at ``path`` and return ``path``.
+    """Write ``result`` as a bag at ``path`` and return the path written.
 
     ``fmt``: ``"mcap"`` (rosbag2 folder with one .mcap file, the default), ``"sqlite3"``
-    (rosbag2 folder with a .db3 file) or ``"ros1"`` (one ROS 1 .bag file). An existing bag at
-    ``path`` is replaced; the new one appears whole or not at all.
+    (rosbag2 folder with a .db3 file) or ``"ros1"`` (one ROS 1 .bag file; ``.bag`` is appended
+    to a path without it, as readers recognise ROS 1 bags by it). An existing bag at the path is
+    replaced; the new one appears whole or not at all.
     """
     if fmt not in FORMATS:
         raise BagWriteError(f"unknown bag format {fmt!r} (choose one of {', '.join(FORMATS)})")
     path = Path(path)
+    if fmt == "ros1" and path.suffix != ".bag":
+        path = path.with_name(path.name + ".bag")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         staging = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent))

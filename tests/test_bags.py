@@ -189,3 +189,18 @@ def test_round_trip_episode_bag_seed_recovers_obstacles(episodes, tmp_path, name
     assert (seed.mission.start.x, seed.mission.start.y) == pytest.approx(tuple(pose[0, :2]), abs=1e-3)
     assert (seed.mission.goal.x, seed.mission.goal.y) == pytest.approx(tuple(pose[-1, :2]), abs=1e-3)
     assert seed.mission.goal.yaw == pytest.approx(math.degrees(pose[-1, 2]), abs=0.01)
+
+
+def test_hit_obstacle_is_red_and_the_event_is_in_the_result(episodes, tmp_path):
+    from pytest_navscenario.result import Collision, Outcome
+    result = episodes["cylinders"]
+    name = result.scenario.obstacles[1].name
+    crashed = dataclasses.replace(result, outcome=Outcome.COLLISION,
+                                  collision=Collision(time=4.2, obstacle=name, x=1.0, y=5.0, depth=0.01))
+    written = write_episode_bag(crashed, tmp_path / "crash", fmt="ros1")
+    assert written == tmp_path / "crash.bag"
+    bag = read_bag(written)
+    colours = [(m.color.r, m.color.g, m.color.b) for m in bag["/navscenario/obstacles"][1][0][1].markers]
+    assert colours[1] == pytest.approx((0.9, 0.2, 0.15)) and colours[0] != colours[1]
+    summary = json.loads(bag["/navscenario/result"][1][0][1].data)
+    assert summary["outcome"] == "collision" and summary["collision"]["obstacle"] == name
