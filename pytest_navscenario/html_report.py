@@ -34,6 +34,8 @@ class Entry:
     record: dict[str, Any]
     plot_png: bytes | None = None
     reproduce: str = ""
+    view: dict[str, Any] | None = None   # view_data(result): the interactive time-slider view
+
 
     @property
     def failed(self) -> bool:
@@ -177,6 +179,46 @@ def _anchor(rec: dict[str, Any]) -> str:
     return hashlib.sha1(key.encode()).hexdigest()[:12]
 
 
+def view_data(result: Any, max_points: int = 400) -> dict[str, Any] | None:
+    """A compact, JSON-able picture of one episode for the report's interactive viewer: obstacle
+    outlines, footprint, goal, and the poses and speeds at up to ``max_points`` instants."""
+    import numpy as np
+
+    from .geometry import obstacle_polygon
+
+    traj = result.trajectory
+    n = len(traj.t)
+    if n < 2:
+        return None
+    idx = np.unique(np.linspace(0, n - 1, min(max_points, n)).round().astype(int))
+    pose = np.asarray(traj.pose, dtype=float)[idx]
+    vel = np.asarray(traj.velocity, dtype=float)[idx]
+    s = result.scenario
+    fp = s.robot.footprint
+    return {
+        "t": np.round(np.asarray(traj.t, dtype=float)[idx], 2).tolist(),
+        "x": np.round(pose[:, 0], 3).tolist(), "y": np.round(pose[:, 1], 3).tolist(),
+        "yaw": np.round(pose[:, 2], 3).tolist(), "v": np.round(np.hypot(vel[:, 0], vel[:, 1]), 2).tolist(),
+        "obs": [np.round(np.asarray(obstacle_polygon(o).exterior.coords), 3).tolist() for o in s.obstacles],
+        "fp": {"shape": fp.shape, "length": fp.length, "width": fp.width, "radius": fp.radius},
+        "goal": [s.mission.goal.x, s.mission.goal.y, s.mission.goal_tolerance.position],
+        "vmax": max(0.1, float(s.robot.limits.max_speed)),
+    }
+
+
+def _viewer(view: dict[str, Any] | None) -> str:
+    if not view:
+        return ""
+    import json
+    try:
+        data = json.dumps(view, separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
+    except ValueError:  # NaN/inf in a diverged run: the static plot still shows it
+        return ""
+    return ('<div class="viewer"><canvas width="420" height="420"></canvas><br>'
+            '<input type="range" min="0" step="1" aria-label="time"> <span class="t"></span>'
+            f'<script type="application/json" class="nav-view">{data}</script></div>')
+
+
 def _failure(e: Entry) -> str:
     r = e.record
     m = r.get("metrics") or {}
@@ -189,8 +231,8 @@ def _failure(e: Entry) -> str:
             f"<p>{_e(r.get('message', ''))}</p>"
             f"<p class=\"muted\">family {_e(r.get('family', ''))} &middot; subject {_e(subject)} "
             f"&middot; seed {_e(r.get('seed'))} &middot; repeat {_e(r.get('repeat', 0))}</p>{cmd}"
-            f'<div class="facts"><dl>{facts}</dl><div class="plot">{_img(e.plot_png, r["nodeid"])}</div></div>'
-            f"</section>")
+            f'<div class="facts"><dl>{facts}</dl><div class="plot">{_img(e.plot_png, r["nodeid"])}</div>'
+            f"{_viewer(e.view)}</div></section>")
 
 
 def _passing_plots(entries: Sequence[Entry]) -> str:
@@ -217,7 +259,7 @@ table.sortable th{cursor:pointer;user-select:none}table.sortable th:after{conten
 section.failure{border:1px solid #e0e0e0;border-radius:6px;padding:.4em 1em;margin:1em 0}
 .facts{display:flex;gap:1.5em;align-items:flex-start;flex-wrap:wrap}dl{display:grid;grid-template-columns:auto auto;gap:2px 10px;margin:0}
 dt{color:#616161}dd{margin:0}.plot img{max-width:100%;height:auto}
-.controls button{margin-right:.5em}
+.controls button{margin-right:.5em}.viewer canvas{border:1px solid #e0e0e0}.viewer input{width:420px}
 """
 
 JS = """
@@ -229,6 +271,28 @@ document.querySelectorAll('table.sortable th').forEach(function(th,i){th.addEven
  if(asc)th.setAttribute('data-asc','1');
  var rows=Array.prototype.slice.call(tbody.rows);rows.sort(function(a,b){var x=cellValue(a,i,type),y=cellValue(b,i,type);
   return (x<y?-1:x>y?1:0)*(asc?1:-1);});rows.forEach(function(r){tbody.appendChild(r);});});});
+function navViewer(box){
+ var d=JSON.parse(box.querySelector('script.nav-view').textContent);
+ var cv=box.querySelector('canvas'),ctx=cv.getContext('2d'),sl=box.querySelector('input'),lab=box.querySelector('.t');
+ var xs=d.x.concat([d.goal[0]]),ys=d.y.concat([d.goal[1]]);
+ d.obs.forEach(function(p){p.forEach(function(q){xs.push(q[0]);ys.push(q[1]);});});
+ var x0=Math.min.apply(null,xs)-1,x1=Math.max.apply(null,xs)+1,y0=Math.min.apply(null,ys)-1,y1=Math.max.apply(null,ys)+1;
+ var s=Math.min(cv.width/(x1-x0),cv.height/(y1-y0));
+ function X(x){return (x-x0)*s;} function Y(y){return cv.height-(y-y0)*s;}
+ function poly(p){ctx.beginPath();p.forEach(function(q,i){if(i)ctx.lineTo(X(q[0]),Y(q[1]));else ctx.moveTo(X(q[0]),Y(q[1]));});ctx.closePath();}
+ function robot(i){var c=Math.cos(d.yaw[i]),n=Math.sin(d.yaw[i]),l=d.fp.length/2,w=d.fp.width/2;
+  if(d.fp.shape==='circle'){ctx.beginPath();ctx.arc(X(d.x[i]),Y(d.y[i]),d.fp.radius*s,0,2*Math.PI);return;}
+  poly([[l,w],[-l,w],[-l,-w],[l,-w]].map(function(q){return [d.x[i]+c*q[0]-n*q[1],d.y[i]+n*q[0]+c*q[1]];}));}
+ function draw(i){ctx.clearRect(0,0,cv.width,cv.height);ctx.fillStyle='#9e9e9e';
+  d.obs.forEach(function(p){poly(p);ctx.fill();});
+  ctx.strokeStyle='#2e7d32';ctx.beginPath();ctx.arc(X(d.goal[0]),Y(d.goal[1]),Math.max(3,d.goal[2]*s),0,2*Math.PI);ctx.stroke();
+  ctx.lineWidth=2;for(var k=1;k<d.x.length;k++){var f=Math.min(1,d.v[k]/d.vmax);
+   ctx.strokeStyle='hsl('+Math.round(260-200*f)+',75%,'+(k<=i?45:80)+'%)';ctx.beginPath();
+   ctx.moveTo(X(d.x[k-1]),Y(d.y[k-1]));ctx.lineTo(X(d.x[k]),Y(d.y[k]));ctx.stroke();}
+  ctx.strokeStyle='#d50000';robot(i);ctx.stroke();ctx.lineWidth=1;
+  lab.textContent='t = '+d.t[i].toFixed(2)+' s, speed '+d.v[i].toFixed(2)+' m/s (drag to replay)';}
+ sl.max=String(d.x.length-1);sl.value=sl.max;sl.addEventListener('input',function(){draw(+sl.value);});draw(d.x.length-1);}
+document.querySelectorAll('.viewer').forEach(navViewer);
 function sortFailures(key){var box=document.getElementById('failures');
  var items=Array.prototype.slice.call(box.querySelectorAll('section.failure'));
  items.sort(function(a,b){var x=a.dataset[key]+'\\u0000'+a.dataset.nodeid,y=b.dataset[key]+'\\u0000'+b.dataset.nodeid;

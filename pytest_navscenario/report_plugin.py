@@ -67,6 +67,7 @@ class ReportState:
     baseline_records: list[dict[str, Any]] = field(default_factory=list)
     records: list[dict[str, Any]] = field(default_factory=list)
     plots: dict[tuple[str, int], Path | bytes] = field(default_factory=dict)  # (nodeid, repeat) -> file or PNG
+    views: dict[tuple[str, int], dict[str, Any]] = field(default_factory=dict)  # for the HTML's viewer
     plot_errors: list[str] = field(default_factory=list)
     not_plotted: int = 0                      # items left without a plot by --nav-plots-max
     comparison: Any = None
@@ -207,7 +208,13 @@ def pytest_navscenario_episode_report(config: pytest.Config, report: pytest.Test
         from .payload import episode_from_payload
         from .plots import png_bytes, save_figure, trajectory_figure
 
-        fig = trajectory_figure(episode_from_payload(payload))
+        episode = episode_from_payload(payload)
+        fig = trajectory_figure(episode)
+        if state.settings.html is not None and failed:
+            from .html_report import view_data
+            view = view_data(episode)
+            if view is not None:
+                state.views[key] = view
         if to_file:
             state.plots[key] = save_figure(fig, _plot_path(config, state.settings, rec, artifact_dir))
         else:
@@ -282,7 +289,9 @@ def _write_html(config: pytest.Config, state: ReportState) -> None:
         plot = state.plots.get((rec["nodeid"], int(rec.get("repeat") or 0)))
         png = plot.read_bytes() if isinstance(plot, Path) and plot.is_file() else (
             plot if isinstance(plot, bytes) else None)
-        entries.append(Entry(record=rec, plot_png=png, reproduce=_reproduce(config, rec)))
+        key = (rec["nodeid"], int(rec.get("repeat") or 0))
+        entries.append(Entry(record=rec, plot_png=png, reproduce=_reproduce(config, rec),
+                             view=state.views.get(key)))
     bars = None
     if state.comparison is not None and state.comparison.pairs:
         from .plots import bars_figure, png_bytes

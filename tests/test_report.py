@@ -165,6 +165,12 @@ def test_html_report_is_self_contained_with_one_entry_per_failure(runs):
     assert 'id="comparison"' in page and "B broke (A passed, B failed) (1)" in page
     assert "<script>" in page and "sortFailures" in page and 'class="sortable"' in page
     assert page.count("<tr><td>") >= 2                        # runs table: one row per scenario
+    # the failure's interactive time-slider view: the episode's poses as JSON next to a canvas
+    views = re.findall(r'<script type="application/json" class="nav-view">(.*?)</script>', page)
+    assert len(views) == 1 and '<div class="viewer"><canvas' in page
+    view = json.loads(views[0])
+    assert 2 <= len(view["t"]) <= 400 and len(view["x"]) == len(view["v"]) == len(view["t"])
+    assert view["t"][-1] == pytest.approx(1.6, abs=0.1) and len(view["obs"]) == 1   # the crash, the wall
 
 
 def test_html_escapes_names_and_messages(tmp_path):
