@@ -1,7 +1,8 @@
 """Compare two results files (planner A = baseline, planner B = candidate) scenario by scenario.
 
-Pairing: records are paired by ``(nodeid, repeat)``. With ``--nav-repeat`` every repeat index is
-its own paired observation (repeat r of A against repeat r of B); nothing is averaged away. A pair
+Pairing: records are paired by ``(nodeid, repeat)``. When a scenario ran several times, every
+repeat index is its own paired observation (repeat r of A against repeat r of B); nothing is
+averaged away. A pair
 whose ``scenario_hash`` differs is *not comparable* (the layout changed between the runs) and is
 listed as such, never counted. Records only in A or only in B are listed too.
 
