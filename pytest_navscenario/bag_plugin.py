@@ -121,9 +121,12 @@ def pytest_navscenario_episode_report(config: pytest.Config, report: pytest.Test
 
     path = bag_path_for(state, record)
     try:
-        write_episode_bag(episode_from_payload(payload), path, fmt=state.fmt)
-    except (NavScenarioError, OSError) as exc:
-        state.errors.append(f"{record['nodeid']}: cannot write bag {path}: {exc}")
+        path = write_episode_bag(episode_from_payload(payload), path, fmt=state.fmt)
+    except NavScenarioError as exc:  # names the bag and the reason
+        state.errors.append(f"{record['nodeid']}: {exc}")
+        return
+    except Exception as exc:  # one bad bag must not end the run: reported at the end
+        state.errors.append(f"{record['nodeid']}: cannot write bag {path}: {type(exc).__name__}: {exc}")
         return
     state.written.append(path)
 
@@ -144,6 +147,7 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
 
 
 def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    """A bag that could not be written makes an otherwise green run exit with status 3."""
     state = session.config.stash.get(_STATE, None)
     if state is not None and state.errors and session.exitstatus == 0:
         session.exitstatus = pytest.ExitCode.INTERNAL_ERROR

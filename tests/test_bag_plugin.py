@@ -67,6 +67,15 @@ def test_default_writes_no_bag_and_bad_values_are_usage_errors(project):
     res.stderr.fnmatch_lines(["*--nav-bag-format: expected one of mcap, sqlite3, ros1, got 'bag'*"])
 
 
+def test_a_bag_that_cannot_be_written_is_reported_not_fatal(project):
+    (project.path / "afile").write_text("not a folder\n")
+    res = project.runpytest(*PLUGIN, "scen/ok.yaml", "--nav-bag=all", "--nav-bag-dir=afile/bags")
+    res.assert_outcomes(passed=1)   # the episode ran and passed; the bag error sets the exit status
+    assert res.ret == pytest.ExitCode.INTERNAL_ERROR
+    res.stdout.fnmatch_lines(["navscenario: error: scen/ok.yaml::*: *afile/bags/scen_ok.yaml_*: cannot create "
+                              "the bag's folder: *Not a directory*"])
+
+
 def test_all_writes_mcap_for_passing_episodes_too(project):
     res = project.runpytest(*PLUGIN, "scen/ok.yaml", "--nav-bag=all", "--nav-bag-dir=b")
     res.assert_outcomes(passed=1)
