@@ -2,9 +2,8 @@
 
 Pairing: records are paired by ``(nodeid, repeat)``. When a scenario ran several times, every
 repeat index is its own paired observation (repeat r of A against repeat r of B); nothing is
-averaged away. A pair
-whose ``scenario_hash`` differs is *not comparable* (the layout changed between the runs) and is
-listed as such, never counted. Records only in A or only in B are listed too.
+averaged away. A pair whose ``scenario_hash`` differs is *not comparable* (the layout changed
+between the runs) and is listed as such, never counted. Records only in A or only in B are listed too.
 
 Rates and the McNemar test are computed over the comparable pairs only, so A and B are always
 measured on exactly the same scenarios. Pure data and text: no matplotlib here.
@@ -49,6 +48,7 @@ class Unpaired:
     repeat: int
     family: str
     reason: str
+    record: dict[str, Any] | None = field(default=None, compare=False, repr=False)  # B's (A's if only in A)
 
     @property
     def label(self) -> str:
@@ -197,14 +197,14 @@ def compare_records(a: Sequence[dict[str, Any]], b: Sequence[dict[str, Any]], *,
     for key in sorted(set(ia) | set(ib)):
         ra, rb = ia.get(key), ib.get(key)
         if rb is None:
-            only_a.append(Unpaired(key[0], key[1], ra["family"], f"only in {a_name}"))
+            only_a.append(Unpaired(key[0], key[1], ra["family"], f"only in {a_name}", ra))
         elif ra is None:
-            only_b.append(Unpaired(key[0], key[1], rb["family"], f"only in {b_name}"))
+            only_b.append(Unpaired(key[0], key[1], rb["family"], f"only in {b_name}", rb))
         elif ra["scenario_hash"] != rb["scenario_hash"]:
             not_comparable.append(Unpaired(
                 key[0], key[1], ra["family"],
                 f"scenario changed between the runs (scenario_hash {ra['scenario_hash']} in {a_name}, "
-                f"{rb['scenario_hash']} in {b_name}): re-run both subjects on the same file"))
+                f"{rb['scenario_hash']} in {b_name}): re-run both subjects on the same file", rb))
         else:
             if ra["family"] != rb["family"]:
                 warnings.append(f"{key[0]}: family {ra['family']!r} in {a_name}, {rb['family']!r} in "

@@ -18,6 +18,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="write the comparison as JUnit XML: one test case per scenario, failing where B broke what A passed")
     p.add_argument("--plot", metavar="OUT.png",
                    help="write the two-sided bar chart (success up, safety-stop down, per family, A beside B)")
+    p.add_argument("--html", metavar="OUT.html",
+                   help="write a self-contained HTML report: the comparison, the bar chart and B's runs")
     p.add_argument("--fail-on-regression", action="store_true",
                    help="exit with status 1 when B fails a scenario that A passed (a CI gate)")
     p.add_argument("--max-listed", type=int, default=50, metavar="N",
@@ -47,6 +49,16 @@ def run(args: argparse.Namespace) -> int:
         from .plots import save_bars
         save_bars(cmp, args.plot)
         print(f"bar chart written to {args.plot}")
+    if args.html:
+        from .html_report import Entry, write_html
+        from .plots import bars_figure, png_bytes
+        b_records = [p.b for p in cmp.pairs] + [u.record for u in cmp.only_b + cmp.not_comparable
+                                                 if u.record is not None]
+        entries = [Entry(record=r, reproduce=_reproduce(cmp, r)) for r in b_records]
+        bars = png_bytes(bars_figure(cmp)) if cmp.pairs else None
+        write_html(args.html, entries, title=f"navscenario compare: {cmp.b_subject} vs {cmp.a_subject}",
+                   comparison=cmp, bars_png=bars, info=[f"A: {args.a}", f"B: {args.b}"])
+        print(f"HTML report written to {args.html}")
     if args.side_by_side:
         from .compare import rerun_side_by_side
         written, problems = rerun_side_by_side(cmp, args.side_by_side, root=args.root, limit=args.max_plots,
@@ -57,3 +69,10 @@ def run(args: argparse.Namespace) -> int:
     if args.fail_on_regression and cmp.has_regressions:
         return 1
     return 0
+
+
+def _reproduce(cmp, rec) -> str:
+    import shlex
+    subject = cmp.subject_specs.get("b", rec.get("subject") or "")
+    cmd = f"pytest {shlex.quote(rec['nodeid'])}"
+    return cmd + (f" {shlex.quote(f'--nav-subject={subject}')}" if subject else "")

@@ -175,3 +175,17 @@ def test_side_by_side_reruns_regressions_with_both_subjects(tmp_path, capsys):
     assert "1 side-by-side plot(s) written" in captured.out
     assert "s/short.yaml::short: B re-run gave success, the results file says collision" in captured.err
     assert "moved.yaml changed since the run" in captured.err
+
+
+def test_html_comparison_report(files, tmp_path):
+    changed = dict(BASE, **{"scenarios/boxes/b1.yaml::b1": "collision"})
+    b_recs = suite(changed, subject="new") + [rec("scenarios/boxes/extra.yaml::extra", "timeout")]
+    a, b = files(suite(BASE), b_recs)
+    out = tmp_path / "cmp.html"
+    assert main(["compare", str(a), str(b), "--html", str(out)]) == 0
+    page = out.read_text()
+    # B's failures: b1 (broke), b3, c1, c2 (failed in both), extra (only in B)
+    assert page.count('<section class="failure"') == 5
+    assert 'id="comparison"' in page and "B broke (A passed, B failed) (1)" in page
+    assert page.count("data:image/png;base64,") == 1       # the bar chart
+    assert "pytest scenarios/boxes/b1.yaml::b1 --nav-subject=new" in page
