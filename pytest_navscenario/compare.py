@@ -123,15 +123,18 @@ class Comparison:
 
     def reproduce_command(self, pair: Pair, side: str = "b") -> str:
         """The command that re-runs this one scenario with B's (or A's) subject."""
-        rec = pair.b if side == "b" else pair.a
+        return self.record_command(pair.b if side == "b" else pair.a, side)
+
+    def record_command(self, rec: dict[str, Any], side: str = "b") -> str:
+        """The command that re-runs the scenario of one record with that side's subject."""
         subject = self.subject_specs.get(side, rec.get("subject") or "")
-        cmd = f"{self.command_prefix}pytest {shlex.quote(pair.nodeid)}"
+        cmd = f"{self.command_prefix}pytest {shlex.quote(rec['nodeid'])}"
         if subject:
             cmd += f" {shlex.quote(f'--nav-subject={subject}')}"
         if self.extra_args:
             cmd += f" {self.extra_args}"
-        if pair.repeat:
-            cmd += f"  # repeat {pair.repeat}, episode seed {rec.get('seed')}"
+        if rec.get("repeat"):
+            cmd += f"  # repeat {rec['repeat']}, episode seed {rec.get('seed')}"
         return cmd
 
 

@@ -54,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
         from .plots import bars_figure, png_bytes
         b_records = [p.b for p in cmp.pairs] + [u.record for u in cmp.only_b + cmp.not_comparable
                                                  if u.record is not None]
-        entries = [Entry(record=r, reproduce=_reproduce(cmp, r)) for r in b_records]
+        entries = [Entry(record=r, reproduce=cmp.record_command(r)) for r in b_records]
         bars = png_bytes(bars_figure(cmp)) if cmp.pairs else None
         write_html(args.html, entries, title=f"navscenario compare: {cmp.b_subject} vs {cmp.a_subject}",
                    comparison=cmp, bars_png=bars, info=[f"A: {args.a}", f"B: {args.b}"])
@@ -70,9 +70,3 @@ def run(args: argparse.Namespace) -> int:
         return 1
     return 0
 
-
-def _reproduce(cmp, rec) -> str:
-    import shlex
-    subject = cmp.subject_specs.get("b", rec.get("subject") or "")
-    cmd = f"pytest {shlex.quote(rec['nodeid'])}"
-    return cmd + (f" {shlex.quote(f'--nav-subject={subject}')}" if subject else "")
