@@ -43,8 +43,18 @@ def _clean(value: Any) -> Any:
     return value
 
 
+def _portable(path: str | None, root: str | Path | None) -> str | None:
+    """``path`` relative to ``root`` (posix separators) when it lies inside it."""
+    if not path or root is None:
+        return path
+    try:
+        return Path(path).resolve().relative_to(Path(root).resolve()).as_posix()
+    except (ValueError, OSError):
+        return path
+
+
 def frozen_scenario(report: SearchReport, failure: Failure, space: SearchSpace, *, date: str | None = None,
-                    subject: str | None = None) -> Scenario:
+                    subject: str | None = None, root: str | Path | None = None) -> Scenario:
     """The shrunk failure as a standalone scenario with its provenance (no ``search:`` block)."""
     cand = failure.shrunk
     scenario = cand.scenario if cand.scenario is not None else space.apply(cand.offsets)
@@ -53,7 +63,7 @@ def frozen_scenario(report: SearchReport, failure: Failure, space: SearchSpace, 
     name = f"{seed.name}-{h}"
     provenance: dict[str, Any] = {
         "seed": seed.name,
-        "seed_file": seed.source,
+        "seed_file": _portable(seed.source, root),
         "subject": subject or report.subject,
         "subject_version": report.subject_version,
         "outcome": cand.outcome,
@@ -79,7 +89,7 @@ def frozen_scenario(report: SearchReport, failure: Failure, space: SearchSpace, 
 
 
 def freeze_failures(report: SearchReport, space: SearchSpace, out_dir: str | Path, *,
-                    subject: str | None = None) -> list[FrozenFile]:
+                    subject: str | None = None, root: str | Path | None = None) -> list[FrozenFile]:
     """Write each failure of ``report`` under ``out_dir/<seed name>/`` (existing ones kept)."""
     from .loader import save_scenario
 
@@ -87,7 +97,7 @@ def freeze_failures(report: SearchReport, space: SearchSpace, out_dir: str | Pat
     written: list[FrozenFile] = []
     seen: set[Path] = set()
     for failure in report.failures:
-        scenario = frozen_scenario(report, failure, space, subject=subject)
+        scenario = frozen_scenario(report, failure, space, subject=subject, root=root)
         path = folder / f"{scenario.name}.yaml"
         if path in seen:     # two distinct failures that shrank to the same layout
             continue

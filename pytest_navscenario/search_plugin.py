@@ -374,7 +374,7 @@ def pytest_runtest_logreport(report: pytest.TestReport) -> None:
     search = payload_to_report(payload, job.space)
     entry: dict[str, Any] = {"report": search, "job": job, "files": [], "log": None, "error": ""}
     try:
-        entry["files"] = freeze_failures(search, job.space, state.settings.out)
+        entry["files"] = freeze_failures(search, job.space, state.settings.out, root=config.rootpath)
         entry["log"] = write_search_log(search, job.space, state.settings.out)
     except Exception as exc:  # never lose the summary: say what could not be written
         entry["error"] = f"could not write the frozen failures under {state.settings.out}: {type(exc).__name__}: {exc}"

@@ -77,6 +77,7 @@ def test_search_freezes_failures_that_fail_again_when_collected(project):
     from pytest_navscenario.loader import load_scenario
     prov = load_scenario(frozen[0]).provenance
     assert prov["seed"] == "crate" and prov["search_seed"] == 3 and prov["budget"] == 6
+    assert prov["seed_file"] == "scenarios/crate.yaml"
     assert prov["subject"] == "straight_planner:Straight" and prov["subject_version"] == "1.0"
     assert prov["outcome"] in ("collision", "safety-stop") and "date" in prov
 
