@@ -113,7 +113,7 @@ def _comparison_section(cmp: "Comparison", bars_png: bytes | None) -> str:
     parts = [
         "<section id=\"comparison\"><h2>Comparison with the baseline</h2>",
         f"<p>A = <code>{_e(cmp.a_name)}</code> ({_e(cmp.a_subject)}), "
-        f"B = this run ({_e(cmp.b_subject)}). {len(cmp.pairs)} paired scenario runs (by node id and "
+        f"B = <code>{_e(cmp.b_name)}</code> ({_e(cmp.b_subject)}). {len(cmp.pairs)} paired scenario runs (by node id and "
         f"repeat index); rates over these pairs with 95 % Wilson intervals; p = exact McNemar test.</p>",
         f'<table class="summary"><thead><tr><th>family</th><th>n</th><th></th>{head}<th>change</th>'
         f"<th>broke</th><th>fixed</th><th>p</th></tr></thead><tbody>{''.join(rows)}</tbody></table>",
