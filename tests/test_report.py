@@ -198,3 +198,22 @@ def test_bad_option_values_are_usage_errors(pytester: pytest.Pytester, monkeypat
     result = pytester.runpytest_inprocess("-p", "pytest_navscenario.plugin", option)
     assert result.ret == pytest.ExitCode.USAGE_ERROR
     assert message in result.stderr.str()
+
+
+@pytest.mark.parametrize("mode, status", [("fail", pytest.ExitCode.TESTS_FAILED), ("warn", pytest.ExitCode.OK)])
+def test_gate_exit_status_with_pytester(pytester: pytest.Pytester, monkeypatch, mode, status):
+    """The regression gate in-process: the items pass (crash is xfail), only the gate decides."""
+    monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
+    pytester.syspathinsert()
+    pytester.makepyfile(straight=PLANNER)
+    pytester.mkdir("scenarios")
+    (pytester.path / "scenarios" / "ok.yaml").write_text(OK)
+    (pytester.path / "scenarios" / "crash.yaml").write_text(CRASH)
+    write_results(pytester.path / "base.jsonl", [record(pytester.path, "scenarios/ok.yaml", "success"),
+                                                 record(pytester.path, "scenarios/crash.yaml", "success")])
+    result = pytester.runpytest_inprocess("-p", "pytest_navscenario.plugin", "scenarios", SUBJECT,
+                                          "--nav-baseline=base.jsonl", f"--nav-baseline-mode={mode}",
+                                          "--nav-plots=none")
+    assert result.ret == status
+    result.assert_outcomes(passed=1, xfailed=1)
+    result.stdout.fnmatch_lines(["*B broke (regressions: A passed, B failed) (1):*"])
