@@ -144,12 +144,6 @@ def _is_worker(config: pytest.Config) -> bool:
 
 def pytest_configure(config: pytest.Config) -> None:
     settings = read_report_settings(config, check_files=not _is_worker(config))
-    from .payload import request_trajectories
-
-    if settings.plots == "all":
-        request_trajectories(config, "all")
-    elif settings.plots == "failed" or settings.html is not None:
-        request_trajectories(config, "failed")
     state = ReportState(settings=settings)
     if settings.baseline is not None and not _is_worker(config):
         from .results import ResultsFileError, read_results
@@ -158,6 +152,21 @@ def pytest_configure(config: pytest.Config) -> None:
         except ResultsFileError as exc:
             raise pytest.UsageError(f"--nav-baseline: {exc}") from None
     config.stash[REPORT_KEY] = state
+
+
+def pytest_collection_modifyitems(session: pytest.Session, config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Ask the core plugin for trajectories, once scenario items exist (in every process that
+    collects, i.e. each xdist worker). Done here rather than at configure time so that a pytest run
+    without scenarios never imports payload.py and numpy (~0.4 s)."""
+    state = config.stash.get(REPORT_KEY, None)
+    if state is None or not any(hasattr(item, "nav_result") for item in items):
+        return
+    from .payload import request_trajectories
+
+    if state.settings.plots == "all":
+        request_trajectories(config, "all")
+    elif state.settings.plots == "failed" or state.settings.html is not None:
+        request_trajectories(config, "failed")
 
 
 def _wants_plot(settings: ReportSettings, failed: bool) -> tuple[bool, bool]:
