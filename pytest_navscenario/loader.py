@@ -428,12 +428,16 @@ def _obstacles(ctx: _Ctx, top: _Section) -> tuple[Obstacle, ...]:
     return tuple(result)
 
 
-def _check_name(ctx: _Ctx, name: str, field: str, line: int | None) -> None:
+def _check_name(ctx: _Ctx, name: str, field: str, line: int | None, *, file_name: bool = False) -> None:
+    """Names are one-line labels; scenario names and families also name files (no path tricks)."""
     limit = int(SCENARIO_LIMITS["max_name_length"])
     if len(name) > limit:
         raise ctx.fail(f"is {len(name)} characters long, more than {limit}", field, line, "shorten it")
     if any(ch in name for ch in "\n\r\t\x00"):
         raise ctx.fail("must be one line without tabs", field, line, "remove the line breaks")
+    if file_name and (any(ch in name for ch in "/\\") or name.strip() in (".", "..")):
+        raise ctx.fail(f"{name!r} cannot be used: scenario names and families become file and folder names",
+                       field, line, "use letters, digits, '-', '_' and '.', without '/' or '\\'")
 
 
 def _simulation(ctx: _Ctx, top: _Section) -> Simulation:
@@ -605,11 +609,14 @@ def _build(root: YNode | None, ctx: _Ctx, name: str | None, family: str | None) 
             lines[key] = top.line_of(key)
     scenario_name = top.string("name", name or "")
     if scenario_name:
-        _check_name(ctx, scenario_name, "name", top.line_of("name"))
+        _check_name(ctx, scenario_name, "name", top.line_of("name"), file_name=True)
+    scenario_family = top.string("family", family or "", nonempty=False)
+    if scenario_family:
+        _check_name(ctx, scenario_family, "family", top.line_of("family"), file_name=True)
     scenario = Scenario(
         version=int(version),
         name=scenario_name,
-        family=top.string("family", family or "", nonempty=False),
+        family=scenario_family,
         description=top.string("description", "", nonempty=False),
         marks=_marks(ctx, top),
         robot=_robot(ctx, top),

@@ -209,6 +209,8 @@ BAD = [
     ("reference-time", BASE + "reference:\n  points:\n  - [0, 0, 0]\n  - [0, 1, 1]\n", 10, "reference.points[1][0]",
      ["does not increase"]),
     ("mark", BASE + "marks: ['not valid']\n", 7, "marks[0]", ["not a valid Python identifier"]),
+    ("name-path", BASE + "name: ../../etc/x\n", 7, "name", ["become file and folder names"]),
+    ("family-path", BASE + "family: ..\n", 7, "family", ["become file and folder names"]),
     ("section-type", BASE + "robot: fast\n", 7, "robot", ["expected the robot settings", "'fast'"]),
     ("obstacles-type", BASE.replace("obstacles:\n  - {type: box, name: wall, x: 3, y: 5, length: 1, width: 1}\n",
                                     "obstacles: {a: 1}\n"), 5, "obstacles", ["expected a list of obstacles"]),
@@ -255,6 +257,7 @@ finite = st.floats(-1000, 1000, allow_nan=False, allow_subnormal=False)
 positive = st.floats(0.001, 100, allow_nan=False, allow_subnormal=False)
 names = st.text(st.characters(codec="utf-8", categories=("L", "N", "P", "S", "Zs")), min_size=1,
                 max_size=12).filter(str.strip)
+file_names = names.filter(lambda t: not set(t) & set("/\\") and t.strip() not in (".", ".."))
 
 
 @st.composite
@@ -277,7 +280,7 @@ def scenarios(draw):
                          lambda inner: st.lists(inner, max_size=3) | st.dictionaries(names, inner, max_size=3),
                          max_leaves=8)
     return Scenario(
-        version=1, name=draw(names), family=draw(st.just("") | names), description=draw(st.just("") | names),
+        version=1, name=draw(file_names), family=draw(st.just("") | file_names), description=draw(st.just("") | names),
         marks=tuple(draw(st.lists(mark, max_size=3))),
         robot=Robot(footprint=draw(footprint), drive=draw(st.sampled_from(["omni", "diff"])),
                     limits=draw(st.builds(Limits, positive, positive, positive, positive, positive)),
