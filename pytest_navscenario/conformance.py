@@ -182,11 +182,6 @@ def check_planner(planner: Any, scenario: Scenario | None = None, *, ticks: int 
     if bad:
         check.problems.extend(bad)
         return check
-    for attr in ("name", "version"):
-        if getattr(instance, attr, None) is None:
-            check.warnings.append(f"no `{attr}` attribute: results files will name the planner by "
-                                  f"its spec only; add e.g. `{attr} = \"...\"` to the class")
-
     recorder = _Recorder(instance)
     facts = simulate(scenario, recorder, seed, max_ticks=ticks, tick_limit=tick_limit)
     check.ticks = len(recorder.observations)
@@ -215,6 +210,10 @@ def check_planner(planner: Any, scenario: Scenario | None = None, *, ticks: int 
             "act() wrote into the observation's arrays: " + ", ".join(recorder.mutated[:3])
             + "; the harness passes read-only arrays, so copy before changing them")
 
+    for attr in ("name", "version"):   # read after reset: some planners name themselves there
+        if getattr(instance, attr, None) is None:
+            check.warnings.append(f"no `{attr}` attribute: results files will name the planner by "
+                                  f"its spec only; add e.g. `{attr} = \"...\"` to the class")
     _check_limits(check, scenario, recorder.answers, validate_command)
     steady = recorder.times[1:]   # the first tick may pay one-time set-up (caches, tables)
     if steady and max(steady) > slow_tick:
