@@ -257,8 +257,10 @@ SHORT = {"success": "success", "safety-stop": "safety-stop", "timeout": "timeout
          "collision": "collision", "subject-error": "error"}
 
 
-def format_comparison(cmp: Comparison, *, max_listed: int = 50) -> str:
-    """The comparison as plain text (for the terminal and the CLI)."""
+def format_comparison(cmp: Comparison, *, max_listed: int = 50, max_unpaired: int | None = None,
+                      only_a_note: str = "not compared") -> str:
+    """The comparison as plain text (for the terminal and the CLI). ``max_listed`` scenarios per
+    list (``max_unpaired`` for the only-in-A / only-in-B lists, default the same)."""
     lines = [f"A = {cmp.a_name}: {cmp.a_subject}", f"B = {cmp.b_name}: {cmp.b_subject}",
              f"{len(cmp.pairs)} paired scenario runs (same nodeid and repeat index); rates over these pairs",
              "with 95 % Wilson intervals; change = B - A success; p = exact McNemar test on success"]
@@ -289,14 +291,14 @@ def format_comparison(cmp: Comparison, *, max_listed: int = 50) -> str:
             lines.append(f"{fam.family:<{fw}} {n_both:>4}  " + cells)
     broke, fixed = cmp.broke, cmp.fixed
 
-    def listing(title: str, items: Sequence[Any], render) -> None:
+    def listing(title: str, items: Sequence[Any], render, limit: int = max_listed) -> None:
         if not items:
             return
         lines.extend(["", f"{title} ({len(items)}):"])
-        for item in items[:max_listed]:
+        for item in items[:limit]:
             lines.extend(render(item))
-        if len(items) > max_listed:
-            lines.append(f"  ... and {len(items) - max_listed} more")
+        if len(items) > limit:
+            lines.append(f"  ... and {len(items) - limit} more")
 
     def pair_lines(p: Pair) -> list[str]:
         return [f"  {p.label}: A {p.a['outcome']}, B {p.b['outcome']}"
@@ -306,8 +308,9 @@ def format_comparison(cmp: Comparison, *, max_listed: int = 50) -> str:
     listing("B broke (regressions: A passed, B failed)", broke, pair_lines)
     listing("B fixed (A failed, B passed)", fixed, pair_lines)
     listing("not comparable", cmp.not_comparable, lambda u: [f"  {u.label}: {u.reason}"])
-    listing(f"only in A ({cmp.a_name}), not compared", cmp.only_a, lambda u: [f"  {u.label}"])
-    listing(f"only in B ({cmp.b_name}), not compared", cmp.only_b, lambda u: [f"  {u.label}"])
+    few = max_listed if max_unpaired is None else max_unpaired
+    listing(f"only in A ({cmp.a_name}), {only_a_note}", cmp.only_a, lambda u: [f"  {u.label}"], few)
+    listing(f"only in B ({cmp.b_name}), not compared", cmp.only_b, lambda u: [f"  {u.label}"], few)
     for w in cmp.warnings:
         lines.append(f"warning: {w}")
     lines.append("")

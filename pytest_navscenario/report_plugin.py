@@ -320,7 +320,9 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
     if state.comparison is not None:
         from .compare import format_comparison
         tr.write_sep("=", f"navscenario comparison with the baseline {state.settings.baseline}")
-        for line in format_comparison(state.comparison, max_listed=20).splitlines():
+        text = format_comparison(state.comparison, max_listed=20, max_unpaired=5,
+                                 only_a_note="not run now (a subset selected?), not compared")
+        for line in text.splitlines():
             tr.write_line(line)
         n = len(state.comparison.broke)
         if n and state.settings.mode == "fail":
