@@ -189,3 +189,12 @@ def test_html_comparison_report(files, tmp_path):
     assert 'id="comparison"' in page and "B broke (A passed, B failed) (1)" in page
     assert page.count("data:image/png;base64,") == 1       # the bar chart
     assert "pytest scenarios/boxes/b1.yaml::b1 --nav-subject=new" in page
+
+
+def test_subject_errors_get_their_own_column():
+    changed = dict(BASE, **{"scenarios/boxes/b1.yaml::b1": "subject-error"})
+    cmp = compare_records(suite(BASE), suite(changed, subject="new"))
+    assert cmp.overall.b["subject-error"].count == 1 and cmp.overall.a["subject-error"].count == 0
+    header = next(line for line in format_comparison(cmp).splitlines() if line.startswith("family"))
+    assert header.split()[2:7] == ["success", "safety-stop", "timeout", "collision", "error"]
+    assert "error" not in format_comparison(compare_records(suite(BASE), suite(BASE))).split("\n\n")[1]
