@@ -57,7 +57,8 @@ def _num(value: Any, digits: int) -> str:
 
 def _img(png: bytes | None, alt: str) -> str:
     if not png:
-        return '<p class="muted">(no plot: the trajectory was not recorded)</p>'
+        return ('<p class="muted">(no plot: no trajectory was kept for this run; pytest --nav-html plots '
+                'every failure, navscenario compare --side-by-side re-runs regressions)</p>')
     data = base64.b64encode(png).decode("ascii")
     return f'<img alt="{_e(alt)}" src="data:image/png;base64,{data}">'
 
