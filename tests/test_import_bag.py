@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 import sqlite3
-import time
 from pathlib import Path
 
 import numpy as np
@@ -23,10 +22,7 @@ SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
 
 @pytest.fixture(scope="module")
 def tb3():
-    t0 = time.perf_counter()
-    seed = scenario_from_bag(TB3)
-    seed.seconds = time.perf_counter() - t0
-    return seed
+    return scenario_from_bag(TB3)
 
 
 def test_turtlebot3_gives_nine_pillars_on_a_1_1_m_grid(tb3):
@@ -56,7 +52,7 @@ def test_turtlebot3_path_and_speed(tb3):
     assert len(m.waypoints) >= 10
     driven = np.hypot(*np.diff(tb3.path[:, 1:], axis=0).T).sum()
     assert driven == pytest.approx(24.8, abs=0.1)
-    assert tb3.seconds < 5.0, f"import took {tb3.seconds:.2f} s (budget 5 s)"
+    # the 5 s budget is measured by benchmarks/bench_bags.py, not here (a timed test is flaky)
 
 
 def test_turtlebot3_seed_is_driven_by_dwa(tb3, tmp_path):
