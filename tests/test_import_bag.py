@@ -46,7 +46,7 @@ def test_turtlebot3_walls_enclose_the_loop(tb3):
     assert any("estimated from the scans" in n and "--laser-pose" in n for n in tb3.notes)
 
 
-def test_turtlebot3_path_and_speed(tb3):
+def test_turtlebot3_start_from_odometry_and_loop_as_waypoints(tb3):
     m = tb3.scenario.mission
     assert (m.start.x, m.start.y) == pytest.approx((-1.93, 0.015), abs=0.01)  # odometry, not the origin
     assert len(m.waypoints) >= 10
