@@ -35,6 +35,7 @@ class Entry:
     plot_png: bytes | None = None
     reproduce: str = ""
     view: dict[str, Any] | None = None   # view_data(result): the interactive time-slider view
+    compare_png: bytes | None = None     # a regression: the scenario under the baseline | this run
 
 
     @property
@@ -233,7 +234,10 @@ def _failure(e: Entry) -> str:
             f"<p class=\"muted\">family {_e(r.get('family', ''))} &middot; subject {_e(subject)} "
             f"&middot; seed {_e(r.get('seed'))} &middot; repeat {_e(r.get('repeat', 0))}</p>{cmd}"
             f'<div class="facts"><dl>{facts}</dl><div class="plot">{_img(e.plot_png, r["nodeid"])}</div>'
-            f"{_viewer(e.view)}</div></section>")
+            f"{_viewer(e.view)}</div>"
+            + (f'<p>The same scenario under the baseline and now:</p><div class="plot">'
+               f'{_img(e.compare_png, r["nodeid"] + " side by side")}</div>' if e.compare_png else "")
+            + "</section>")
 
 
 def _passing_plots(entries: Sequence[Entry]) -> str:

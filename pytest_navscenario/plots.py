@@ -365,7 +365,7 @@ def _panel_size(results: Sequence[EpisodeResult]) -> tuple[float, float]:
     h = max(b[3] for b in boxes) - min(b[2] for b in boxes)
     aspect = w / max(h, 1e-6)
     ph = 6.0
-    pw = float(np.clip(ph * aspect, 2.6, 9.0))
+    pw = float(np.clip(ph * aspect, 2.6, 9.0 if len(results) == 1 else 6.5))
     ph = float(np.clip(pw / aspect, 2.6, 7.0))
     return round(pw, 2), round(ph, 2)
 

@@ -6,6 +6,8 @@ Options (each with an ini twin)::
                                   comparison goes into the terminal summary
     --nav-baseline-mode=fail|warn fail (default): the session fails when this run broke a scenario
                                   the baseline passed; warn: only report it
+    --nav-baseline-subject=SPEC   re-run the baseline's subject on each regression for a side-by-side
+                                  plot (default: the subject its records name)
     --nav-plots=failed|all|none   trajectory plots of failing items (default), of every item, or none
     --nav-plots-max=N             at most N plots per session (default 20, 0 = no limit; not for
                                   failing items when --nav-html is given)
@@ -38,6 +40,9 @@ OPTIONS = (
     ("--nav-baseline-mode", "nav_baseline_mode", "fail",
      "what a regression against --nav-baseline does: fail (default: the session fails when a scenario "
      "the baseline passed fails now) or warn (report only)"),
+    ("--nav-baseline-subject", "nav_baseline_subject", "",
+     "the baseline's subject spec, to re-run it for side-by-side plots of regressions (default: the "
+     "subject named in the baseline's records; built-in names work as they are)"),
     ("--nav-plots", "nav_plots", "failed",
      "trajectory plots: failed (default: for failing items), all, or none"),
     ("--nav-plots-max", "nav_plots_max", "20",
@@ -59,6 +64,7 @@ class ReportSettings:
     plots_dir: Path | None
     html: Path | None
     plots_max: int = 20
+    baseline_subject: str | None = None
 
 
 @dataclass
@@ -68,6 +74,10 @@ class ReportState:
     records: list[dict[str, Any]] = field(default_factory=list)
     plots: dict[tuple[str, int], Path | bytes] = field(default_factory=dict)  # (nodeid, repeat) -> file or PNG
     views: dict[tuple[str, int], dict[str, Any]] = field(default_factory=dict)  # for the HTML's viewer
+    side_by_side: dict[tuple[str, int], Path | bytes] = field(default_factory=dict)  # regressions: A | B
+    baseline_index: dict[tuple[str, int], dict[str, Any]] = field(default_factory=dict)
+    bad_baseline_subjects: set[str] = field(default_factory=set)
+    notes: list[str] = field(default_factory=list)
     plot_errors: list[str] = field(default_factory=list)
     not_plotted: int = 0                      # items left without a plot by --nav-plots-max
     comparison: Any = None
@@ -134,8 +144,9 @@ def read_report_settings(config: pytest.Config, check_files: bool = True) -> Rep
             raise ValueError
     except ValueError:
         raise pytest.UsageError(f"{where}: expected a whole number >= 0 (0 = no limit), got {raw!r}") from None
+    raw, _, _ = _value(config, "nav_baseline_subject")
     return ReportSettings(baseline=baseline, mode=mode, plots=plots, plots_dir=plots_dir, html=html,
-                          plots_max=plots_max)
+                          plots_max=plots_max, baseline_subject=raw or None)
 
 
 def _is_worker(config: pytest.Config) -> bool:
@@ -151,6 +162,7 @@ def pytest_configure(config: pytest.Config) -> None:
             state.baseline_records = read_results(settings.baseline)
         except ResultsFileError as exc:
             raise pytest.UsageError(f"--nav-baseline: {exc}") from None
+        state.baseline_index = {(r["nodeid"], int(r.get("repeat") or 0)): r for r in state.baseline_records}
     config.stash[REPORT_KEY] = state
 
 
@@ -224,12 +236,47 @@ def pytest_navscenario_episode_report(config: pytest.Config, report: pytest.Test
             view = view_data(episode)
             if view is not None:
                 state.views[key] = view
+        path = _plot_path(config, state.settings, rec, artifact_dir)
         if to_file:
-            state.plots[key] = save_figure(fig, _plot_path(config, state.settings, rec, artifact_dir))
+            state.plots[key] = save_figure(fig, path)
         else:
             state.plots[key] = png_bytes(fig)
+        base = state.baseline_index.get(key)
+        if (failed and base is not None and base["outcome"] == "success"
+                and base["scenario_hash"] == rec["scenario_hash"]):
+            side = _side_by_side(state, episode, base, rec)
+            if side is not None:
+                state.side_by_side[key] = (save_figure(side, path.with_name(f"{path.stem}-vs-baseline.png"))
+                                           if to_file else png_bytes(side))
     except Exception as exc:  # a plotting bug must not hide the test results; say so at the end
         state.plot_errors.append(f"{rec['nodeid']}: {type(exc).__name__}: {exc}")
+
+
+def _side_by_side(state: ReportState, episode: Any, base: dict[str, Any], rec: dict[str, Any]) -> Any:
+    """A regression: re-run the baseline's subject on the same scenario with the baseline's episode
+    seed and return the side-by-side figure (A = baseline | B = this run), or None with a note."""
+    import dataclasses
+
+    from .errors import NavScenarioError
+    from .plots import comparison_figure
+    from .runner import run_scenario
+
+    spec = state.settings.baseline_subject or base.get("subject")
+    if not spec or spec in state.bad_baseline_subjects:
+        return None
+    sim = dataclasses.replace(episode.scenario.simulation, seed=int(base.get("seed") or 0))
+    try:
+        res_a = run_scenario(dataclasses.replace(episode.scenario, simulation=sim), spec)
+    except NavScenarioError as exc:
+        state.bad_baseline_subjects.add(spec)
+        state.notes.append(f"no side-by-side plots: cannot re-run the baseline's subject {spec!r} ({exc}); "
+                           f"give its spec with --nav-baseline-subject=SPEC")
+        return None
+    if res_a.outcome.value != base["outcome"]:
+        state.notes.append(f"{rec['nodeid']}: the baseline's subject {spec!r} re-run gave "
+                           f"{res_a.outcome.value}, the baseline file says {base['outcome']} (another "
+                           f"version of it, or --nav-baseline-subject names another planner?)")
+    return comparison_figure(res_a, episode, labels=(f"A (baseline: {spec})", "B (this run)"))
 
 
 def _subject_and_seed(config: pytest.Config) -> tuple[str | None, int | None]:
@@ -299,8 +346,11 @@ def _write_html(config: pytest.Config, state: ReportState) -> None:
         png = plot.read_bytes() if isinstance(plot, Path) and plot.is_file() else (
             plot if isinstance(plot, bytes) else None)
         key = (rec["nodeid"], int(rec.get("repeat") or 0))
+        side = state.side_by_side.get(key)
+        side_png = side.read_bytes() if isinstance(side, Path) and side.is_file() else (
+            side if isinstance(side, bytes) else None)
         entries.append(Entry(record=rec, plot_png=png, reproduce=_reproduce(config, rec),
-                             view=state.views.get(key)))
+                             view=state.views.get(key), compare_png=side_png))
     bars = None
     if state.comparison is not None and state.comparison.pairs:
         from .plots import bars_figure, png_bytes
@@ -342,5 +392,11 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
                       f"{state.settings.plots_max} plots per session (--nav-plots-max=N, 0 = no limit)")
     if state.html_written is not None:
         tr.write_line(f"navscenario: HTML report written to {state.html_written}")
+    sides = [p for p in state.side_by_side.values() if isinstance(p, Path)]
+    if sides:
+        tr.write_line(f"navscenario: {len(sides)} side-by-side plot(s) of regressions (baseline | this run), "
+                      f"e.g. {sides[0]}")
+    for note in state.notes:
+        tr.write_line(f"navscenario: {note}", yellow=True)
     for err in state.plot_errors:
         tr.write_line(f"navscenario: could not draw {err}", red=True)

@@ -60,8 +60,9 @@ SUBJECT = "--nav-subject=straight:Straight"
 COMMON = ["-p", "pytest_navscenario.plugin", "-p", "no:cacheprovider", SUBJECT, "--nav-baseline=base.jsonl"]
 
 RUNS = {
-    # regression gate on, HTML report, default plots (failing items, into the artifacts folders)
-    "gate": ["scenarios", *COMMON, "--nav-html=out/report.html"],
+    # regression gate on, HTML report, default plots (failing items, into the artifacts folders),
+    # side-by-side plots of regressions (the baseline subject re-run: here the same planner)
+    "gate": ["scenarios", *COMMON, "--nav-html=out/report.html", "--nav-baseline-subject=straight:Straight"],
     # warn only; plots of every item (at most 2) into one folder; on 2 xdist workers (plots made on
     # the controller); this project has a third scenario, ok2
     "warn": ["scenarios", *COMMON, "--nav-baseline-mode=warn", "--nav-plots=all", "--nav-plots-dir=plots",
@@ -121,6 +122,10 @@ def test_regression_gate_fails_the_session(runs):
     assert "reproduce: pytest scenarios/crash.yaml::crash --nav-subject=straight:Straight --nav-seed=0" in out
     assert "only in A (" in out and "scenarios/gone.yaml::gone" in out
     assert "MATPLOTLIB-IMPORTED: True" in out
+    assert "1 side-by-side plot(s) of regressions (baseline | this run)" in out
+    # the "baseline" re-run is the same straight planner: it crashes too, and the run says so
+    assert ("scenarios/crash.yaml::crash: the baseline's subject 'straight:Straight' re-run gave collision, "
+            "the baseline file says success") in out
 
 
 def test_warn_mode_reports_but_passes_and_plots_every_item_under_xdist(runs):
@@ -151,6 +156,8 @@ def test_failure_plot_lands_in_the_items_artifacts_folder(runs):
     _, _, root = runs["gate"]
     plots = list((root / "nav-artifacts").glob("scenarios_crash.yaml_crash-*/plots/trajectory.png"))
     assert len(plots) == 1 and plots[0].stat().st_size > 20_000
+    side = plots[0].with_name("trajectory-vs-baseline.png")
+    assert side.stat().st_size > 20_000
     assert not list((root / "nav-artifacts").glob("scenarios_ok*"))
 
 
@@ -160,7 +167,8 @@ def test_html_report_is_self_contained_with_one_entry_per_failure(runs):
     assert "HTML report written to" in out
     assert page.count('<section class="failure"') == 1
     assert 'data-outcome="collision"' in page and 'data-family="scenarios"' in page
-    assert page.count("data:image/png;base64,") == 2         # the failure's plot + the bar chart
+    assert page.count("data:image/png;base64,") == 3         # the failure's plot, side by side, bar chart
+    assert "The same scenario under the baseline and now:" in page
     assert not re.search(r"(src|href)=\"(https?:)?//", page)  # nothing fetched from a server
     assert 'id="comparison"' in page and "B broke (A passed, B failed) (1)" in page
     assert "<script>" in page and "sortFailures" in page and 'class="sortable"' in page
