@@ -143,10 +143,10 @@ def main() -> int:
             for label, target, extra in [("serial", folder, []), ("-n 2", folder, ["-n", "2"]),
                                          ("one family", folder / SEEDS[0], [])]:
                 results = Path(tmp) / f"r{r}-{len(records)}.jsonl"
-                probe = Path(tmp) / "probe.json" if label == "serial" else None
+                probe = Path(tmp) / "probe.json" if label != "-n 2" else None
                 wall, session, tail, cpu = run_pytest(target, extra, results, probe)
                 if probe is not None:
-                    probes.append(json.loads(probe.read_text()))
+                    probes.append(dict(json.loads(probe.read_text()), label=label))
                 recs = [json.loads(line) for line in results.read_text().splitlines()]
                 episodes = sum(rec["wall_time"] for rec in recs)
                 print(f"  run {r + 1} {label:10s}: {wall:6.2f} s wall, {cpu:6.2f} s CPU, session {session:6.2f} s, "
@@ -172,10 +172,13 @@ def main() -> int:
         print(f"  = {1000 * extra_all / n_all:.2f} ms per item on average (fixed costs included); "
               f"marginal per-item overhead {1000 * (extra_all - extra_one) / (n_all - n_one):.2f} ms "
               f"(difference between the two suite sizes: start-up and imports cancel)")
-        per_item = [(p["session"] - p["calls"]) / p["n"] for p in probes]
-        print(f"CPU time per item outside the call phase (collection, reports, report.nav, results; "
-              f"serial): {1000 * med(per_item):.2f} ms median "
-              f"(call phases {med(p['calls'] for p in probes):.2f} s, session {med(p['session'] for p in probes):.2f} s CPU)")
+        full = [p for p in probes if p["label"] == "serial"]
+        small = [p for p in probes if p["label"] != "serial"]
+        outside = {k: med(p["session"] - p["calls"] for p in ps) for k, ps in (("full", full), ("small", small))}
+        print(f"CPU time outside the items' call phases (collection, reports, report.nav, results), serial: "
+              f"{outside['full']:.2f} s for {full[0]['n']} items = {1000 * outside['full'] / full[0]['n']:.2f} ms "
+              f"per item; marginal {1000 * (outside['full'] - outside['small']) / (full[0]['n'] - small[0]['n']):.2f}"
+              f" ms per item (vs {small[0]['n']} items; call phases {med(p['calls'] for p in full):.2f} s CPU)")
         print(f"collection alone (--collect-only, {n} files): {med(collect):.2f} s session, "
               f"{1000 * med(collect) / n:.2f} ms per file")
     return 0
