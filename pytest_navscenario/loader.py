@@ -17,6 +17,7 @@ number is expected.
 """
 from __future__ import annotations
 
+import datetime
 import difflib
 import math
 import numbers
@@ -496,15 +497,15 @@ def _marks(ctx: _Ctx, top: _Section) -> tuple[Mark, ...]:
         args: tuple[Any, ...] = ()
         kwargs: dict[str, Any] = {}
         if isinstance(value, YMap):
-            kwargs = to_plain(value)
+            kwargs = _free(ctx, value, field)
             bad = [k for k in kwargs if not isinstance(k, str) or not _IDENT.match(k)]
             if bad:
                 raise ctx.fail(f"mark keyword {bad[0]!r} is not a valid Python identifier", field, line,
                                "keywords are names such as reason or strict")
         elif isinstance(value, YSeq):
-            args = tuple(to_plain(value))
+            args = tuple(_free(ctx, value, field))
         elif value is not None and not (isinstance(value, YScalar) and value.value is None):
-            args = (to_plain(value),)
+            args = (_free(ctx, value, field),)
         marks.append(Mark(name=name, args=args, kwargs=kwargs))
     return tuple(marks)
 
@@ -516,6 +517,31 @@ def _mapping(ctx: _Ctx, top: _Section, key: str) -> Mapping[str, Any] | None:
     if not isinstance(node, YMap):
         raise ctx.fail(f"expected a mapping, got {describe(node)}", key, top.line_of(key),
                        f"write '{key}:' followed by indented 'key: value' lines")
+    return _free(ctx, node, key)
+
+
+_PLAIN_TYPES = (str, bool, int, float, type(None))
+
+
+def _free(ctx: _Ctx, node: YNode, field: str) -> Any:
+    """Free-form data (search, provenance, mark arguments) as plain Python values. Only strings,
+    numbers, booleans, null, lists and mappings: these cross to xdist workers and into JSON
+    unchanged (YAML dates and !!binary would not), so anything else is refused here."""
+    def check(n: YNode, path: str) -> None:
+        if isinstance(n, YScalar):
+            if not isinstance(n.value, _PLAIN_TYPES):
+                raise ctx.fail(f"{describe(n)} is not supported in free-form data", path, n.line,
+                               "quote it to keep it as text; free-form data holds text, numbers, true/false, null, lists and mappings")
+        elif isinstance(n, YSeq):
+            for i, item in enumerate(n.items):
+                check(item, f"{path}[{i}]")
+        else:
+            for key, (_, item) in n.items.items():
+                if not isinstance(key, _PLAIN_TYPES):
+                    raise ctx.fail(f"key {key!r} is not supported in free-form data", path, n.line,
+                                   "use text keys")
+                check(item, f"{path}.{key}")
+    check(node, field)
     return to_plain(node)
 
 
@@ -745,6 +771,8 @@ def _plain(value: Any) -> Any:
         return [_plain(v) for v in value]
     if type(value).__module__ == "numpy" and hasattr(value, "tolist"):  # numpy scalars and arrays
         return _plain(value.tolist())
+    if isinstance(value, (datetime.date, datetime.time)):  # free-form data keeps dates as text
+        return value.isoformat()
     return value
 
 

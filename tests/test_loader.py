@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import dataclasses
+import datetime
 import math
 import textwrap
 
@@ -109,10 +110,11 @@ def test_dump_key_order_and_plain_types():
 def test_dump_accepts_numpy_numbers_from_generated_scenarios():
     s = Scenario(mission=Mission(start=Pose(np.float64(0.1), np.float64(0.2)), goal=Pose(0, 10)),
                  obstacles=(BoxObstacle("b", np.float64(3.0), np.float32(4.5), 1.0, 1.0),),
-                 provenance={"clearance": np.float64(0.125), "seed": np.int64(7), "offsets": np.array([0.5, 1.0])})
+                 provenance={"clearance": np.float64(0.125), "seed": np.int64(7), "offsets": np.array([0.5, 1.0]),
+                             "date": datetime.date(2026, 11, 21)})
     back = loads_scenario(dump_scenario(s))
     assert type(back.mission.start.x) is float and back.obstacles == s.obstacles
-    assert back.provenance == {"clearance": 0.125, "seed": 7, "offsets": [0.5, 1.0]}
+    assert back.provenance == {"clearance": 0.125, "seed": 7, "offsets": [0.5, 1.0], "date": "2026-11-21"}
 
 
 def test_from_dict_and_to_dict_are_inverse():
@@ -214,6 +216,8 @@ BAD = [
     ("section-type", BASE + "robot: fast\n", 7, "robot", ["expected the robot settings", "'fast'"]),
     ("obstacles-type", BASE.replace("obstacles:\n  - {type: box, name: wall, x: 3, y: 5, length: 1, width: 1}\n",
                                     "obstacles: {a: 1}\n"), 5, "obstacles", ["expected a list of obstacles"]),
+    ("date-in-free-data", BASE + "provenance:\n  found: 2024-01-31\n", 8, "provenance.found",
+     ["a date value is not supported in free-form data", "quote it"]),
     ("python-tag", BASE + "search: !!python/object/apply:os.system ['true']\n", 7, None, ["unsupported YAML tag"]),
     ("two-documents", BASE + "---\nversion: 1\n", 7, None, ["more than one YAML document"]),
     ("tab", BASE + "robot:\n\tdrive: omni\n", 8, None, ["invalid YAML", "tabs for indentation"]),
