@@ -326,3 +326,17 @@ def test_readme_example_loads_and_round_trips():
     assert s.name == "boxes1" and [o.name for o in s.obstacles] == ["left", "cyl1"]
     assert s.mission.goal_tolerance.yaw == 15.0 and s.marks[1].kwargs == {"reason": "known bug #12"}
     assert loads_scenario(dump_scenario(s)) == s
+
+
+def test_pure_python_parser_gives_the_same_results(monkeypatch, good_file):
+    """Without libyaml (some platforms), the pure-Python parser feeds the same composer."""
+    from pytest_navscenario import yaml_tree
+    with_c = load_scenario(good_file)
+    monkeypatch.setattr(yaml_tree, "_Loader", yaml.SafeLoader)
+    assert load_scenario(good_file) == with_c
+    for _, text, line, field, fragments in BAD[:12]:
+        with pytest.raises(ScenarioError) as info:
+            loads_scenario(text, "bad.yaml")
+        assert (info.value.line, info.value.field) == (line, field) and fragments[0] in str(info.value)
+    with pytest.raises(ScenarioError, match="levels deep"):
+        loads_scenario("version: 1\nmission: " + "[" * 5000 + "]" * 5000)
