@@ -16,6 +16,7 @@ topic                            type                                rate
 /navscenario/waypoints           nav_msgs/Path                       once, latched
 /navscenario/obstacles           visualization_msgs/MarkerArray      once, latched
 /navscenario/result              std_msgs/String (JSON)              once, at the end
+/navscenario/scenario            std_msgs/String (scenario YAML)     once, latched
 ===============================  ==================================  =====================
 
 The bag clock is the simulation clock (t = 0 at the episode's start); the scenario's world
@@ -53,9 +54,10 @@ TOPICS: dict[str, str] = {
     "/navscenario/waypoints": "nav_msgs/msg/Path",
     "/navscenario/obstacles": "visualization_msgs/msg/MarkerArray",
     "/navscenario/result": "std_msgs/msg/String",
+    "/navscenario/scenario": "std_msgs/msg/String",
 }
 LATCHED = ("/tf_static", "/goal_pose", "/navscenario/waypoints", "/navscenario/obstacles",
-           "/navscenario/result")
+           "/navscenario/result", "/navscenario/scenario")
 
 
 class BagWriteError(NavScenarioError):
@@ -192,6 +194,8 @@ def _messages(result: EpisodeResult, ros1: bool):
     yield "/navscenario/waypoints", 0.0, {"header": header(0.0, ODOM_FRAME), "poses": [
         {"header": header(0.0, ODOM_FRAME), "pose": _pose(p.x, p.y, p.yaw_rad)} for p in points]}
     yield "/navscenario/obstacles", 0.0, {"markers": _markers(result)}
+    from .loader import dump_scenario
+    yield "/navscenario/scenario", 0.0, {"data": dump_scenario(scenario)}  # the bag reproduces the run
 
     if len(t) > 1:
         dt = float(np.median(np.diff(t)))

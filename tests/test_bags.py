@@ -119,6 +119,9 @@ def test_mcap_bag_reads_back_every_topic_count_and_type(episodes, tmp_path):
     assert summary["outcome"] == result.outcome.value
     assert summary["metrics"]["min_clearance"] == result.metrics.min_clearance
 
+    from pytest_navscenario.loader import loads_scenario
+    assert loads_scenario(bag["/navscenario/scenario"][1][0][1].data) == result.scenario
+
 
 def test_latched_topics_carry_transient_local_qos(episodes, tmp_path):
     path = write_episode_bag(episodes["cylinders"], tmp_path / "ep")
