@@ -48,6 +48,24 @@ def test_truncated_bag(capsys, tmp_path):
     assert f"{cut}: a damaged or truncated bag" in err
 
 
+def test_truncated_mcap_bag(capsys, tmp_path):
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    from pytest_navscenario.bags import build
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    bag = tmp_path / "run"
+    with Writer(bag, version=9, storage_plugin=StoragePlugin.MCAP) as w:
+        conn = w.add_connection("/odom", "nav_msgs/msg/Odometry", typestore=ts)
+        for i in range(200):
+            msg = build(ts, "nav_msgs/msg/Odometry", {"header": {"stamp": {"sec": i}}})
+            w.write(conn, (i + 1) * 1_000_000_000, ts.serialize_cdr(msg, "nav_msgs/msg/Odometry"))
+    mcap = bag / "run.mcap"
+    mcap.write_bytes(mcap.read_bytes()[: mcap.stat().st_size // 2])
+    err = run_cli(capsys, tmp_path, "from-bag", str(bag))
+    assert f"{bag}: a damaged or truncated bag" in err
+
+
 def test_missing_bag(capsys, tmp_path):
     err = run_cli(capsys, tmp_path, "from-bag", str(tmp_path / "nope.bag"))
     assert "nope.bag: no such bag file or folder" in err
