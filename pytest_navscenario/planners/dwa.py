@@ -69,6 +69,8 @@ class _Table:
         self.vy = _grid(-p.max_lateral_speed, p.max_lateral_speed, p.max_accel * p.tick / window)
         self.wz = _grid(-p.max_yaw_rate, p.max_yaw_rate, p.max_yaw_accel * p.tick / window)
         self.shape = (len(self.vx), len(self.vy), len(self.wz))
+        self.max_window = min(2 * window + 1, len(self.vx)) * min(2 * window + 1, len(self.vy)) \
+            * min(2 * window + 1, len(self.wz))
         VX, VY, WZ = (a.ravel() for a in np.meshgrid(self.vx, self.vy, self.wz, indexing="ij"))
         t = np.linspace(horizon / steps, horizon, steps)
         self.x, self.y, self.th = _rollout(VX[:, None], VY[:, None], WZ[:, None], t)  # (G, steps)
@@ -101,7 +103,7 @@ class _Window:
     """Everything a tick needs about the candidates of one dynamic window, precomputed so
     that a tick costs a few dozen numpy calls on small arrays."""
 
-    __slots__ = ("n", "rot", "off", "half", "score_rows", "static", "stop_yaw", "reach", "cand",
+    __slots__ = ("n", "rot3", "half", "score_rows", "static", "stop_yaw", "reach", "cand",
                  "speed", "commands")
 
     def __init__(self, table: _Table, I, J, K):
@@ -115,7 +117,9 @@ class _Window:
         rot[:, :, 0, 0], rot[:, :, 0, 1], rot[:, :, 1, 0], rot[:, :, 1, 1] = c, s, -s, c
         off = np.empty((n, steps, 2), dtype=np.float32)
         off[:, :, 0], off[:, :, 1] = -(c * x + s * y), s * x - c * y
-        self.rot, self.off = rot.reshape(-1, 2), off.reshape(-1, 1)
+        rot3 = np.empty((n * steps * 2, 3), dtype=np.float32)   # [rot | off] for [px, py, 1]
+        rot3[:, :2], rot3[:, 2] = rot.reshape(-1, 2), off.reshape(-1)
+        self.rot3 = rot3
         self.half = np.tile(np.asarray(table.half, dtype=np.float32), n * steps)[:, None]
         # rows that give, times [tx, ty, 1]: |target - rollout pose_k|^2 - |target|^2 (n*steps
         # rows), then the target in the end pose's frame: forward (n rows), left (n rows)
@@ -210,6 +214,8 @@ class DynamicWindowPlanner:
         t = self._t
         self._beams_shape = angles.shape
         self._unit = np.stack([np.cos(angles), np.sin(angles)]).astype(np.float32)
+        self._points = np.ones((3, len(angles)), dtype=np.float32)   # [px, py, 1] per beam
+        self._terms = np.empty((3, self._t.max_window))                # progress, heading, room
         spacing = float(np.max(np.diff(angles))) if len(angles) > 1 else 0.0
         reach = float(t.reach.max()) - t.cap
         self._inflation = 0.5 * spacing * reach
@@ -237,24 +243,31 @@ class DynamicWindowPlanner:
         # Clearance: footprint at every rollout pose vs the lidar points within reach.
         r = obs.ranges
         near = (r < min(win.reach, p.range_max * 0.999)).nonzero()[0]
+        terms = self._terms[:, :n]                      # rows: distance to target, heading error,
+        clear = terms[2]                                # clearance (one weighted sum below)
         points = None
         if near.size:
-            points = self._unit[:, near] * r[near]          # (2, m) float32, robot frame
-            E = win.rot @ points                            # (n * steps * 2, m): local x, y
-            E += win.off
+            np.multiply(self._unit, r, out=self._points[:2])
+            P = self._points[:, near]                       # (3, m) [px, py, 1], robot frame
+            points = P[:2]
+            E = win.rot3 @ P                                # (n * steps * 2, m): local x, y
             np.abs(E, out=E)
             E -= win.half
             np.maximum(E, 0.0, out=E)
-            np.square(E, out=E)
-            E = E.reshape(n, steps, 2, -1)
-            clear = np.sqrt((E[:, :, 0] + E[:, :, 1]).reshape(n, -1).min(axis=1), dtype=float)
+            E = E.reshape(n * steps, 2, -1)
+            d = np.hypot(E[:, 0], E[:, 1]).reshape(n, -1)   # footprint-point distances
+            np.minimum.reduce(d, axis=1, out=clear)
             clear -= t.radius + self._inflation
             np.minimum(clear, t.cap, out=clear)
         else:
-            clear = np.full(n, t.cap)
+            clear.fill(t.cap)
 
         # Score: progress towards the target, heading, clearance, speed, turning.
-        tx, ty = target_in_robot_frame(obs.pose, obs.target)
+        target = obs.waypoints[0] if len(obs.waypoints) else obs.goal
+        pose = obs.pose
+        dx, dy = float(target[0]) - float(pose[0]), float(target[1]) - float(pose[1])
+        c, s = math.cos(float(pose[2])), math.sin(float(pose[2]))
+        tx, ty = c * dx + s * dy, -s * dx + c * dy       # target in the robot frame
         if points is not None and self.lookahead > 0:
             tx, ty = self._subgoal(tx, ty, points)
         d0sq = tx * tx + ty * ty
@@ -262,23 +275,25 @@ class DynamicWindowPlanner:
         q = win.score_rows @ np.array((tx, ty, 1.0))
         nk = n * steps
         wp, wh, wc = self._weights[:3]
+        dist, heading_err = terms[0], terms[1]
         if self._in_goal_phase(obs, d0):
-            want = float(wrap_angle(p.goal_yaw - float(obs.pose[2])))
-            heading_err = np.abs(wrap_angle(want - win.stop_yaw))
-            score = np.hypot(q[nk:nk + n], q[nk + n:]) * (-wp / max(p.goal_tolerance, 1e-6))
-            score -= heading_err * (wh / math.pi)
+            want = float(wrap_angle(p.goal_yaw - float(pose[2])))
+            np.abs(wrap_angle(want - win.stop_yaw), out=heading_err)
+            np.hypot(q[nk:nk + n], q[nk + n:], out=dist)    # distance from the end pose
+            k_dist = -wp / max(p.goal_tolerance, 1e-6)
         else:
             # closest approach along the rollout: driving past a near target is fine
-            dmin = q[:nk].reshape(n, steps).min(axis=1)
-            dmin += d0sq
-            np.sqrt(np.maximum(dmin, 0.0, out=dmin), out=dmin)
-            heading_err = np.abs(np.arctan2(q[nk + n:], q[nk:nk + n]))   # at the end pose
+            np.minimum.reduce(q[:nk].reshape(n, steps), axis=1, out=dist)
+            dist += d0sq
+            np.sqrt(np.maximum(dist, 0.0, out=dist), out=dist)
+            np.arctan2(q[nk + n:], q[nk:nk + n], out=heading_err)   # at the end pose
+            np.abs(heading_err, out=heading_err)
             # a rollout that reaches the target is not penalised for ending past it
             reach_tol = 0.5 * (p.waypoint_tolerance if len(obs.waypoints) else p.goal_tolerance)
-            heading_err[dmin < reach_tol] = 0.0
-            score = dmin * (-wp / (p.max_speed * self.horizon))
-            score -= heading_err * (wh / math.pi)           # linear in the angle, as in Fox et al.
-        score += clear * (wc / t.cap)
+            heading_err[dist < reach_tol] = 0.0
+            k_dist = -wp / (p.max_speed * self.horizon)
+        # heading linear in the angle, as in Fox et al.
+        score = np.array((k_dist, -wh / math.pi, wc / t.cap)) @ terms
         score += win.static
         score[clear < self._min_clear] = -np.inf        # not admissible: too close
         best = int(score.argmax())
