@@ -254,9 +254,11 @@ class DynamicWindowPlanner:
             np.abs(E, out=E)
             E -= win.half
             np.maximum(E, 0.0, out=E)
+            np.square(E, out=E)
             E = E.reshape(n * steps, 2, -1)
-            d = np.hypot(E[:, 0], E[:, 1]).reshape(n, -1)   # footprint-point distances
-            np.minimum.reduce(d, axis=1, out=clear)
+            d2 = (E[:, 0] + E[:, 1]).reshape(n, -1)         # squared footprint-point distances
+            np.minimum.reduce(d2, axis=1, out=clear)
+            np.sqrt(clear, out=clear)
             clear -= t.radius + self._inflation
             np.minimum(clear, t.cap, out=clear)
         else:
