@@ -226,6 +226,7 @@ class DynamicWindowPlanner:
         self._dirs = np.stack([c, s], axis=1).astype(np.float32)          # (directions, 2)
         self._dirs_normal = np.stack([-s, c], axis=1).astype(np.float32)
         self._lane = self._t.half[1] + self._t.radius + self._min_clear
+        self._lane_map = np.zeros((2, 3), dtype=np.float32)
 
     # -- one tick -------------------------------------------------------------------------
     def act(self, obs: Observation) -> Command:
@@ -249,7 +250,7 @@ class DynamicWindowPlanner:
         if near.size:
             np.multiply(self._unit, r, out=self._points[:2])
             P = self._points[:, near]                       # (3, m) [px, py, 1], robot frame
-            points = P[:2]
+            points = P
             E = win.rot3 @ P                                # (n * steps * 2, m): local x, y
             np.abs(E, out=E)
             E -= win.half
@@ -311,22 +312,25 @@ class DynamicWindowPlanner:
         straight line (every rollout that makes progress is inadmissible). Like the vector
         field histogram, look for the free lane (robot half width + clearance wide, as long as
         the distance to the target, at most ``lookahead``) whose direction is closest to the
-        target's, keeping to the side chosen before, and aim along it instead.
+        target's, keeping to the side chosen before, and aim along it instead. ``points`` are
+        the nearby lidar points as [px, py, 1] columns in the robot frame.
         """
         d0 = math.hypot(tx, ty)
         length = min(d0, self.lookahead)
         cb, sb = tx / max(d0, 1e-9), ty / max(d0, 1e-9)
         # the lane as the square |u| < 1, |v| < 1 in scaled lane coordinates
         half_len = max(length / 2.0, 1e-6)
-        lane = np.array(((cb / half_len, sb / half_len), (-sb / self._lane, cb / self._lane)),
-                        dtype=np.float32) @ points
-        lane[0] -= 1.0
-        if np.abs(lane, out=lane).max(axis=0).min() >= 1.0:
+        m = self._lane_map
+        m[0, 0], m[0, 1], m[0, 2] = cb / half_len, sb / half_len, -1.0
+        m[1, 0], m[1, 1] = -sb / self._lane, cb / self._lane
+        lane = m @ points                                    # points: [px, py, 1] rows
+        np.abs(lane, out=lane)
+        if np.minimum.reduce(np.maximum(lane[0], lane[1])) >= 1.0:
             self._side = 0.0
             return tx, ty
         # blocked: check the lane along every beam direction
-        along = self._dirs @ points                          # (directions, m)
-        lateral = np.abs(self._dirs_normal @ points)
+        along = self._dirs @ points[:2]                      # (directions, m)
+        lateral = np.abs(self._dirs_normal @ points[:2])
         blocked = ((lateral < self._lane) & (np.abs(along - length / 2) < length / 2)).any(axis=1)
         if blocked.all():
             return tx, ty
