@@ -121,12 +121,13 @@ class _Window:
         rot3[:, :2], rot3[:, 2] = rot.reshape(-1, 2), off.reshape(-1)
         self.rot3 = rot3
         self.half = np.tile(np.asarray(table.half, dtype=np.float32), n * steps)[:, None]
-        # rows that give, times [tx, ty, 1]: |target - rollout pose_k|^2 - |target|^2 (n*steps
+        # rows that give, times [tx, ty, 1, |target|^2]: |target - rollout pose_k|^2 (n*steps
         # rows), then the target in the end pose's frame: forward (n rows), left (n rows)
         ex, ey, ec, es = x[:, -1], y[:, -1], c[:, -1], s[:, -1]
-        rows = [np.stack([-2 * x, -2 * y, x * x + y * y], axis=-1).reshape(-1, 3),
-                np.stack([ec, es, -(ec * ex + es * ey)], axis=-1),
-                np.stack([-es, ec, es * ex - ec * ey], axis=-1)]
+        zero = np.zeros_like(ex)
+        rows = [np.stack([-2 * x, -2 * y, x * x + y * y, np.ones_like(x)], axis=-1).reshape(-1, 4),
+                np.stack([ec, es, -(ec * ex + es * ey), zero], axis=-1),
+                np.stack([-es, ec, es * ex - ec * ey, zero], axis=-1)]
         self.score_rows = np.ascontiguousarray(np.concatenate(rows))
         _, _, _, wv, wt = table.weights
         self.static = table.vel[g] * wv - table.turn[g] * wt
@@ -216,6 +217,8 @@ class DynamicWindowPlanner:
         self._unit = np.stack([np.cos(angles), np.sin(angles)]).astype(np.float32)
         self._points = np.ones((3, len(angles)), dtype=np.float32)   # [px, py, 1] per beam
         self._terms = np.empty((3, self._t.max_window))                # progress, heading, room
+        self._term_weights = np.array((0.0, -self.weights[1] / math.pi, self.weights[2] / self._t.cap))
+        self._target_vec = np.array((0.0, 0.0, 1.0, 0.0))
         spacing = float(np.max(np.diff(angles))) if len(angles) > 1 else 0.0
         reach = float(t.reach.max()) - t.cap
         self._inflation = 0.5 * spacing * reach
@@ -275,9 +278,11 @@ class DynamicWindowPlanner:
             tx, ty = self._subgoal(tx, ty, points)
         d0sq = tx * tx + ty * ty
         d0 = math.sqrt(d0sq)
-        q = win.score_rows @ np.array((tx, ty, 1.0))
+        v = self._target_vec
+        v[0], v[1], v[3] = tx, ty, d0sq
+        q = win.score_rows @ v
         nk = n * steps
-        wp, wh, wc = self._weights[:3]
+        wp = self._weights[0]
         dist, heading_err = terms[0], terms[1]
         if self._in_goal_phase(obs, d0):
             want = float(wrap_angle(p.goal_yaw - float(pose[2])))
@@ -287,7 +292,6 @@ class DynamicWindowPlanner:
         else:
             # closest approach along the rollout: driving past a near target is fine
             np.minimum.reduce(q[:nk].reshape(n, steps), axis=1, out=dist)
-            dist += d0sq
             np.sqrt(np.maximum(dist, 0.0, out=dist), out=dist)
             np.arctan2(q[nk + n:], q[nk:nk + n], out=heading_err)   # at the end pose
             np.abs(heading_err, out=heading_err)
@@ -296,7 +300,9 @@ class DynamicWindowPlanner:
             heading_err[dist < reach_tol] = 0.0
             k_dist = -wp / (p.max_speed * self.horizon)
         # heading linear in the angle, as in Fox et al.
-        score = np.array((k_dist, -wh / math.pi, wc / t.cap)) @ terms
+        w = self._term_weights
+        w[0] = k_dist
+        score = w @ terms
         score += win.static
         score[clear < self._min_clear] = -np.inf        # not admissible: too close
         best = int(score.argmax())
