@@ -24,7 +24,7 @@ import numpy as np
 
 from ..planner import Command, Observation
 from ..scenario import Scenario
-from ._common import RobotParams, require_reset, target_in_robot_frame, wrap_angle
+from ._common import RobotParams, require_reset, wrap_angle
 
 TABLE_CACHE_SIZE = 4    # robot descriptions x settings whose rollout tables are kept
 
