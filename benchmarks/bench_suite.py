@@ -121,11 +121,63 @@ def run_pytest(target: Path, extra: list[str], results: Path | None,
     return wall, float(match.group(1)), tail, cpu
 
 
+SPIN = "import time\nt = time.perf_counter()\nx = 0\nfor i in range(4_000_000):\n    x += i * i\nprint(time.perf_counter() - t)\n"
+
+
+def parallel_capacity() -> float:
+    """How much faster two CPU-bound processes finish than one after the other, right now (2.0 on
+    two idle cores; less when other jobs share the machine): the ceiling of any -n 2 speed-up."""
+    one = float(subprocess.run([sys.executable, "-c", SPIN], capture_output=True, text=True).stdout)
+    t0 = time.perf_counter()
+    procs = [subprocess.Popen([sys.executable, "-c", SPIN], stdout=subprocess.PIPE) for _ in range(2)]
+    for proc in procs:
+        proc.communicate()
+    return 2 * one / (time.perf_counter() - t0)
+
+
+def _probe_run(folder: Path, extra: list[str]) -> dict:
+    probe = folder / "probe.json"
+    run_pytest(folder, extra, None, probe)
+    return json.loads(probe.read_text())
+
+
+def floor(count: int, repeats: int) -> int:
+    """Per-item CPU outside the call phase when episodes cost (almost) nothing, against pytest's own
+    per-item cost on empty Python test functions (same installed plugins)."""
+    med = statistics.median
+    with tempfile.TemporaryDirectory(prefix="navfloor-") as tmp:
+        scen, py = Path(tmp) / "scenarios", Path(tmp) / "python"
+        for folder in (scen, py):
+            folder.mkdir()
+            (folder / "pytest.ini").write_text("[pytest]\n")
+            (folder / "conftest.py").write_text(PROBE)
+        for i in range(count):
+            (scen / f"s{i:04d}.yaml").write_text(
+                "version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 0.1, y: 0}, timeout: 0.2}\n"
+                f"obstacles: [{{type: box, x: 3, y: {i % 7}, length: 1, width: 1}}]\n")
+        for i in range(0, count, 100):
+            (py / f"test_m{i}.py").write_text("".join(f"def test_{j}(): pass\n" for j in range(min(100, count - i))))
+        rows = {}
+        for label, folder, extra in [("scenario files, 2-tick episodes", scen, ["--nav-results=r.jsonl"]),
+                                     ("empty Python tests", py, [])]:
+            probes = [_probe_run(folder, extra) for _ in range(repeats)]
+            rows[label] = med((p["session"] - p["calls"]) / p["n"] for p in probes)
+            print(f"{label}: {1000 * rows[label]:.2f} ms CPU per item outside the call phase "
+                  f"(median of {repeats}, {probes[0]['n']} items, fixed session costs included)")
+        print(f"plugin + loader share: {1000 * (rows['scenario files, 2-tick episodes'] - rows['empty Python tests']):.2f} ms per item")
+    return 0
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--count", type=int, default=500)
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--floor", action="store_true",
+                    help="only the overhead floor: COUNT scenario files whose episodes last 2 ticks vs "
+                         "COUNT empty Python tests, CPU time outside the call phase per item")
     args = ap.parse_args()
+    if args.floor:
+        return floor(args.count, args.repeats)
     med = statistics.median
     with tempfile.TemporaryDirectory(prefix="navbench-") as tmp:
         folder = Path(tmp) / "suite"
@@ -134,7 +186,8 @@ def main() -> int:
         (folder / "conftest.py").write_text(PROBE)
         probes: list[dict] = []
         print(f"{n} scenario files in {len(SEEDS)} families; {args.repeats} runs per mode; "
-              f"{os.cpu_count()} CPUs; load average before: {os.getloadavg()[0]:.2f}")
+              f"{os.cpu_count()} CPUs; load average before: {os.getloadavg()[0]:.2f}; "
+              f"parallel capacity of two CPU-bound processes now: {parallel_capacity():.2f}x")
         walls: dict[str, list[float]] = {"serial": [], "-n 2": []}
         cpus: dict[str, list[float]] = {"serial": [], "-n 2": []}
         rest: dict[str, list[tuple[int, float]]] = {"all": [], "one family": []}
@@ -165,6 +218,7 @@ def main() -> int:
         (n_all, _), (n_one, _) = rest["all"][0], rest["one family"][0]
         extra_all = med(x for _, x in rest["all"])
         extra_one = med(x for _, x in rest["one family"])
+        print(f"parallel capacity after: {parallel_capacity():.2f}x (2.00 = two idle cores)")
         print(f"median CPU time: serial {med(cpus['serial']):.2f} s, -n 2 {med(cpus['-n 2']):.2f} s; "
               f"load average after: {os.getloadavg()[0]:.2f} (wall times inflate with load)")
         print(f"session time not spent in run_scenario: {extra_all:.2f} s for {n_all} items, "
