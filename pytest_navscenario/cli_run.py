@@ -93,7 +93,7 @@ def add_arguments_check_planner(p: argparse.ArgumentParser) -> None:
     p.add_argument("--ticks", type=int, default=20, help="control ticks to run (default 20)")
     p.add_argument("--seed", type=int, default=0, help="lidar noise seed (default 0)")
     p.add_argument("--tick-limit", type=float, default=10.0, metavar="SECONDS",
-                   help="stop and report a reset/act call that takes longer (default 10)")
+                   help="stop and report an act() call that takes longer (default 10)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
 
 

@@ -25,7 +25,7 @@ from .planner import Observation, load_subject
 from .scenario import BoxObstacle, CylinderObstacle, Mission, Pose, Scenario
 
 SLOW_TICK = 0.05            # s: a tick slower than this gets a warning (10 Hz control leaves 0.1 s)
-HUNG_TICK = 10.0            # s: a reset/act call this long is stopped and reported as a problem
+HUNG_TICK = 10.0            # s: an act() call this long is stopped and reported as a problem
 LIMIT_SLACK = 1.05          # commands up to 5 % over a limit are not worth a warning
 _HARNESS_FILES = ("pytest_navscenario/deadline.py", "pytest_navscenario/sim.py",
                   "pytest_navscenario/conformance.py")
@@ -154,7 +154,7 @@ def check_planner(planner: Any, scenario: Scenario | None = None, *, ticks: int 
     ``planner`` follows the rules of ``run_scenario``: a spec (``"dwa"``, ``"pkg.mod:Planner"``),
     a class or zero-argument factory, or a planner object. With a spec, class or factory a second
     fresh instance replays the same observations to check determinism; an object is deep-copied
-    for that (before its first reset). A reset or tick longer than ``tick_limit`` seconds is
+    for that (before its first reset). An act() call longer than ``tick_limit`` seconds is
     stopped and reported (None: no limit). Never raises for a broken planner (see
     ``raise_if_failed``); raises SubjectLoadError only when the spec cannot be loaded.
     """
