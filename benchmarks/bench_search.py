@@ -68,11 +68,16 @@ def part_speed(budget: int) -> dict:
             "distinct_failures": r["distinct_failures"]}
 
 
-def part_power(budget: int, search_seeds: int, jobs: int) -> list[dict]:
-    tasks = [(s, p, strat, k, budget) for s in SEEDS for p in PLANNERS for strat in ("evolve", "random")
+def part_power(budget: int, search_seeds: int, jobs: int, reuse_random: str | None = None) -> list[dict]:
+    reused = []
+    if reuse_random:  # random sampling does not depend on the evolve strategy: reuse a saved run
+        reused = [r for r in json.loads(Path(reuse_random).read_text())["power"]
+                  if r["strategy"] == "random" and r["budget"] == budget and r["search_seed"] < search_seeds]
+    strategies = ("evolve",) if reused else ("evolve", "random")
+    tasks = [(s, p, strat, k, budget) for s in SEEDS for p in PLANNERS for strat in strategies
              for k in range(search_seeds)]
     with ProcessPoolExecutor(jobs) as pool:
-        rows = list(pool.map(one_search, tasks))
+        rows = list(pool.map(one_search, tasks)) + reused
     print(f"\npower: budget {budget}, {search_seeds} search seeds; distinct failures (total over search "
           f"seeds) and lowest clearance (m)")
     print(f"{'seed':<11} {'planner':<16} {'evolve':>7} {'random':>7} {'ev.clr':>7} {'rnd.clr':>7}")
@@ -91,7 +96,7 @@ def part_power(budget: int, search_seeds: int, jobs: int) -> list[dict]:
     print(f"{'total':<28} {tot['evolve']:>7} {tot['random']:>7}   evolve/random = {ratio:.2f}")
     for p in PLANNERS:
         for strat in ("evolve", "random"):
-            walls = [r["wall"] for r in rows if r["planner"] == p and r["strategy"] == strat]
+            walls = [r["wall"] for r in rows if r["planner"] == p and r["strategy"] == strat] or [math.nan]
             print(f"  median wall per search, {p} {strat}: {statistics.median(walls):.1f} s")
     return rows
 
@@ -120,12 +125,13 @@ def main() -> None:
     ap.add_argument("--search-seeds", type=int, default=5)
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--out", default="bench_search.json")
+    ap.add_argument("--reuse-random", metavar="JSON", help="take the random-sampling rows from an earlier --out file")
     a = ap.parse_args()
     out: dict = {}
     if a.part in ("all", "speed"):
         out["speed"] = part_speed(a.speed_budget)
     if a.part in ("all", "power", "suite"):
-        rows = part_power(a.budget, a.search_seeds, a.jobs)
+        rows = part_power(a.budget, a.search_seeds, a.jobs, a.reuse_random)
         out["power"] = [{k: v for k, v in r.items() if not k.startswith("suite")} for r in rows]
         if a.part in ("all", "suite"):
             out["suite"] = part_suite(rows, a.jobs)

@@ -31,7 +31,8 @@ DISTINCT_DISTANCE = 0.1    # fraction of each parameter's range
 ARCHIVE_SIZE = 8
 CROWDING_DISTANCE = 0.05   # archive members closer than this replace each other
 DEFAULT_SHRINK_BUDGET = 40
-EXPLOIT = 0.7              # after a short warm-up, 70 % of candidates mutate an elite, 30 % explore
+EXPLOIT = 0.7              # after a short warm-up, 70 % of candidates mutate an elite, 30 % explore,
+                           # then the share follows each operator's rate of new distinct failures
 MUTATION_SCALES = (0.05, 0.15, 0.3)   # Gaussian step sd as a fraction of the parameter's range
 MAX_INVALID_FACTOR = 50    # give up after budget * this many discarded candidates in a row
 
@@ -232,6 +233,18 @@ def _evolve(space: SearchSpace, sim: _Simulator, budget: int, seed_value: int, o
         parts.setdefault(p.part, []).append(i)
     groups = list(parts.values())
     invalid_run = [0]
+    # operator statistics: [tries, new distinct failures] for uniform exploration and mutation
+    stats = {"explore": [0, 0], "mutate": [0, 0]}
+
+    def exploit_share() -> float:
+        """Share of mutations: EXPLOIT at first, then following which operator has been finding
+        new distinct failures (so where uniform sampling already fails often, the search does
+        not fall behind it)."""
+        (te, he), (tm, hm) = stats["explore"], stats["mutate"]
+        if te + tm < 10:
+            return EXPLOIT
+        re_, rm = (he + 1) / (te + 2), (hm + 1) / (tm + 2)
+        return min(0.85, max(0.15, rm / (re_ + rm)))
 
     def draw_candidate(data) -> tuple[tuple[float, ...], str]:
         # Every example draws the same choices whatever the archive holds (Hypothesis checks
@@ -245,7 +258,7 @@ def _evolve(space: SearchSpace, sim: _Simulator, budget: int, seed_value: int, o
         if used == 0:
             return space.zero(), "seed"
         warmup = used <= max(2, min(10, budget // 10))
-        if warmup or not archive.members or rnd.random() >= EXPLOIT:
+        if warmup or not archive.members or rnd.random() >= exploit_share():
             return tuple(rnd.uniform(p.lo, p.hi) for p in space.params), "explore"
         failures = [f.found for f in sim.report.failures]
         if failures and rnd.random() < 0.5:
@@ -292,7 +305,11 @@ def _evolve(space: SearchSpace, sim: _Simulator, budget: int, seed_value: int, o
         invalid_run[0] = 0
         cand = sim.simulate(offsets, scenario, "search", origin)
         archive.add(cand)
+        before = len(sim.report.failures)
         on_result(cand)
+        if origin in stats:
+            stats[origin][0] += 1
+            stats[origin][1] += len(sim.report.failures) - before
         clearance = cand.clearance if math.isfinite(cand.clearance) else 10.0
         target(-clearance + (10.0 if cand.failed else 0.0), label="fitness")
 
