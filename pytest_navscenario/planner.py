@@ -14,12 +14,13 @@ from __future__ import annotations
 
 import importlib
 from dataclasses import dataclass
-from typing import Any, Callable, NamedTuple, Protocol, runtime_checkable
-
-import numpy as np
+from typing import TYPE_CHECKING, Any, Callable, NamedTuple, Protocol, runtime_checkable
 
 from .errors import SubjectLoadError
 from .scenario import Obstacle, Scenario
+
+if TYPE_CHECKING:  # numpy is not imported at plugin load: only episodes need it
+    import numpy as np
 
 
 class Command(NamedTuple):

@@ -10,7 +10,9 @@ Record fields (format_version 1)::
     scenario          scenario name
     family            scenario family
     scenario_hash     scenario.content_hash(): pairs the same layout across files
-    subject           subject name or spec; subject_version (or null)
+    subject           subject name (its ``name`` attribute) or spec; subject_version (or null)
+    subject_spec      what to pass to --nav-subject to run the same subject again (or null when a
+                      conftest hook provided it)
     seed              the episode's effective noise seed
     repeat            repeat index (0 unless --nav-repeat)
     outcome           "success" | "collision" | "safety-stop" | "timeout" | "subject-error"
@@ -60,7 +62,8 @@ def _json_safe(value: Any) -> Any:
     return value
 
 
-def make_record(result: EpisodeResult, *, nodeid: str, path: str, repeat: int = 0) -> dict[str, Any]:
+def make_record(result: EpisodeResult, *, nodeid: str, path: str, repeat: int = 0,
+                subject_spec: str | None = None) -> dict[str, Any]:
     """The results-file record of one episode."""
     s = result.scenario
     return {
@@ -74,6 +77,7 @@ def make_record(result: EpisodeResult, *, nodeid: str, path: str, repeat: int = 
         "scenario_hash": content_hash(s),
         "subject": result.subject,
         "subject_version": result.subject_version,
+        "subject_spec": subject_spec,
         "seed": result.seed,
         "repeat": repeat,
         "outcome": result.outcome.value,
@@ -91,6 +95,7 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            os.fchmod(fh.fileno(), 0o666 & ~_umask())  # mkstemp makes 0600; give the usual mode
             fh.write(text)
             fh.flush()
             os.fsync(fh.fileno())
@@ -101,6 +106,12 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
         except OSError:
             pass
         raise
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
 
 
 def write_results(path: str | os.PathLike, records: Iterable[dict[str, Any]]) -> None:
