@@ -80,7 +80,7 @@ class Metrics:
     min_gap_obstacles: str            # "a|b"
     path_length: float
     shortest_path_length: float       # collision-free for the footprint, through the waypoints
-    path_efficiency: float            # shortest / driven (1 = optimal; NaN if not moved)
+    path_efficiency: float            # shortest / (driven + still to go); 1 = optimal (metrics.py)
     max_deviation: float              # from the shortest path
     mean_deviation: float
     duration: float
