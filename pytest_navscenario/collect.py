@@ -132,7 +132,8 @@ class ScenarioItem(pytest.Item):
         from .runner import run_scenario
 
         state = get_state(self.config)
-        result = run_scenario(self.scenario, state.subject.runner_arg, seed=state.settings.seed)
+        result = run_scenario(self.scenario, state.subject.runner_arg, seed=state.settings.seed,
+                              tick_limit=state.settings.tick_limit)
         self.nav_result = result
         m = result.metrics
         self.user_properties.extend([

@@ -64,7 +64,7 @@ def nav_run(request: pytest.FixtureRequest) -> Callable[..., Any]:
     ``scenario_or_path``: a Scenario or a YAML file (relative paths: the current folder, then
     the test file's folder, then the rootdir). ``planner``: None for the session's subject
     (``--nav-subject``), or a spec string, class/factory or planner instance. ``seed``: the base
-    seed (default: the session's ``--nav-seed``). ``overrides``: top-level Scenario fields to
+    seed (default: the session's ``--nav-seed``); the per-tick limit is ``--nav-tick-limit``. ``overrides``: top-level Scenario fields to
     replace, e.g. ``obstacles=()``, or callables mapping the old value to the new one.
     Returns the EpisodeResult whatever the outcome: the test makes its own assertions.
     """
@@ -80,6 +80,7 @@ def nav_run(request: pytest.FixtureRequest) -> Callable[..., Any]:
             scenario = load_scenario(_find(Path(scenario), request))
         scenario = apply_overrides(scenario, overrides)
         subject = state.subject.runner_arg if planner is None else planner
-        return run_scenario(scenario, subject, seed=state.settings.seed if seed is None else seed)
+        return run_scenario(scenario, subject, seed=state.settings.seed if seed is None else seed,
+                            tick_limit=state.settings.tick_limit)
 
     return run

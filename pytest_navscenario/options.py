@@ -16,6 +16,7 @@ import pytest
 DEFAULT_GLOB = ["*.yaml", "*.yml"]
 DEFAULT_SCENARIO_PATHS = ["scenarios"]
 DEFAULT_ARTIFACTS = "nav-artifacts"
+DEFAULT_TICK_LIMIT = 1.0
 
 # (option, ini name, help); used for --help, the ini registration and the README table.
 OPTIONS = (
@@ -33,6 +34,9 @@ OPTIONS = (
      "item; 'none' disables. Default: nav-artifacts under the rootdir."),
     ("--nav-summary", "nav_summary",
      "print the per-family outcome table at the end: yes (default) or no."),
+    ("--nav-tick-limit", "nav_tick_limit",
+     "seconds one planner tick (act) may take; a slower or hanging planner ends the episode as a "
+     "subject-error and the next item runs. Default 1; 0 or none: no limit."),
 )
 
 
@@ -40,7 +44,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("navscenario", "navigation scenarios (pytest-navscenario)")
     helps = {ini: text for _, ini, text in OPTIONS}
     metavars = {"nav_subject": "SPEC", "nav_seed": "N", "nav_results": "PATH", "nav_artifacts": "DIR",
-                "nav_summary": "yes|no"}
+                "nav_summary": "yes|no", "nav_tick_limit": "SECONDS"}
     for opt, ini, text in OPTIONS:
         group.addoption(opt, dest=ini, default=None, metavar=metavars[ini], help=text + f" [ini: {ini}]")
     parser.addini("nav_subject", helps["nav_subject"], default="")
@@ -48,6 +52,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addini("nav_results", helps["nav_results"], default="")
     parser.addini("nav_artifacts", helps["nav_artifacts"], default=DEFAULT_ARTIFACTS)
     parser.addini("nav_summary", helps["nav_summary"], default="yes")
+    parser.addini("nav_tick_limit", helps["nav_tick_limit"], default=str(DEFAULT_TICK_LIMIT))
     parser.addini("nav_scenario_glob",
                   "file name patterns of scenario files (space separated); files matching them are "
                   "collected when they are a YAML mapping with 'version' and 'mission' keys "
@@ -65,6 +70,7 @@ class Settings:
     results: Path | None
     artifacts: Path | None
     summary: bool
+    tick_limit: float | None          # s per planner tick; None: no limit
     globs: tuple[str, ...]
     scenario_paths: tuple[Path, ...]
 
@@ -120,6 +126,18 @@ def read_settings(config: pytest.Config) -> Settings:
     else:
         raise pytest.UsageError(f"{where}: expected yes or no, got {raw!r}")
 
+    raw, where, _ = _value(config, "nav_tick_limit")
+    if raw.strip().lower() in ("none", "off", "no", ""):
+        tick_limit = None
+    else:
+        try:
+            tick_limit = float(raw)
+        except ValueError:
+            tick_limit = -1.0
+        if not tick_limit >= 0 or tick_limit == float("inf"):
+            raise pytest.UsageError(f"{where}: expected seconds >= 0 (0 or none: no limit), got {raw!r}")
+        tick_limit = tick_limit or None
+
     globs = tuple(g for g in config.getini("nav_scenario_glob") if g.strip())
     if not globs:
         raise pytest.UsageError("ini option nav_scenario_glob is empty; give file name patterns "
@@ -127,4 +145,4 @@ def read_settings(config: pytest.Config) -> Settings:
     paths = tuple(_path(p.strip(), Path(config.rootpath))
                   for p in config.getini("nav_scenario_paths") if p.strip())
     return Settings(subject_spec=subject, seed=seed, results=results, artifacts=artifacts,
-                    summary=summary, globs=globs, scenario_paths=paths)
+                    summary=summary, tick_limit=tick_limit, globs=globs, scenario_paths=paths)

@@ -92,7 +92,9 @@ def pytest_report_header(config: pytest.Config) -> list[str]:
     if state is None:
         return []
     s = state.settings
-    lines = [f"navscenario: subject {state.subject.label}, seed {s.seed} (--nav-seed)"]
+    limit = f"{s.tick_limit:g} s" if s.tick_limit else "none"
+    lines = [f"navscenario: subject {state.subject.label}, seed {s.seed} (--nav-seed), "
+             f"tick limit {limit}"]
     extra = []
     if s.results is not None:
         extra.append(f"results {s.results}")

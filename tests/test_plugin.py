@@ -243,6 +243,7 @@ def test_bad_subject_stops_the_run_before_any_test(project, spec, message):
 @pytest.mark.parametrize("option, message", [
     ("--nav-seed=abc", "--nav-seed: seed must be a whole number >= 0, got 'abc'"),
     ("--nav-summary=maybe", "--nav-summary: expected yes or no, got 'maybe'"),
+    ("--nav-tick-limit=-1", "--nav-tick-limit: expected seconds >= 0 (0 or none: no limit), got '-1'"),
 ])
 def test_bad_option_value_is_a_usage_error(project, option, message):
     result = project.runpytest(*PLUGIN, option)
@@ -323,3 +324,21 @@ def test_make_subject_hook_that_raises_is_a_usage_error(project):
     result = project.runpytest(*PLUGIN)
     assert result.ret == pytest.ExitCode.USAGE_ERROR
     assert "pytest_navscenario_make_subject hook raised RuntimeError: no licence server" in result.stderr.str()
+
+
+def test_hanging_planner_is_a_subject_error_and_the_next_item_runs(project):
+    project.makepyfile(hang="""
+        class Hang:
+            def reset(self, scenario):
+                self.hang = scenario.name == "a_hangs"
+
+            def act(self, obs):
+                while self.hang and obs.tick == 3:
+                    pass
+                return 1.0, 0.0, 0.0
+    """)
+    project.makefile(".yaml", a_hangs=scenario(1), b_fine=scenario(1))
+    result = project.runpytest(*PLUGIN, "--nav-subject=hang:Hang", "--nav-tick-limit=0.2")
+    result.stdout.fnmatch_lines(["*tick limit 0.2 s*",
+                                 "subject-error:*tick 3*per-tick limit of 0.2 s*"])
+    result.assert_outcomes(passed=1, failed=1)
