@@ -342,3 +342,16 @@ def test_hanging_planner_is_a_subject_error_and_the_next_item_runs(project):
     result.stdout.fnmatch_lines(["*tick limit 0.2 s*",
                                  "subject-error:*tick 3*per-tick limit of 0.2 s*"])
     result.assert_outcomes(passed=1, failed=1)
+
+
+def test_ini_twins_configure_the_run(project):
+    project.makeini("[pytest]\nnav_subject = straight:Straight\nnav_seed = 3\n"
+                    "nav_results = out/r.jsonl\nnav_summary = no\nnav_scenario_glob = *.scn.yaml\n")
+    project.makefile(".scn.yaml", ok=scenario(1))
+    project.makefile(".yaml", ignored=scenario(1))   # does not match nav_scenario_glob
+    result = project.runpytest(*PLUGIN)
+    result.stdout.fnmatch_lines(["navscenario: subject straight:Straight (ini nav_subject), seed 3*"])
+    result.assert_outcomes(passed=1)
+    [record] = read_results(project.path / "out" / "r.jsonl")   # relative to the rootdir
+    assert record["nodeid"] == "ok.scn.yaml::ok.scn" and record["seed"] == effective_seed(0, 3)
+    assert "navscenario summary" not in result.stdout.str()
