@@ -79,12 +79,15 @@ class ScenarioFile(pytest.File):
             raise ScenarioError(f"scenario name {name!r} cannot be a pytest item name ('::' separates "
                                 f"node ids)", path=str(self.path), field="name",
                                 hint="use letters, digits, '-', '_' or '.', e.g. boxes1-narrow")
-        item = ScenarioItem.from_parent(self, name=name, scenario=scenario)
-        for mark in scenario.marks:
-            item.add_marker(getattr(pytest.mark, mark.name)(*mark.args, **dict(mark.kwargs)))
-        if scenario.family:
-            item.extra_keyword_matches.add(scenario.family)
-        yield item
+        repeats = get_state(self.config).settings.repeat
+        for repeat in range(repeats):
+            item = ScenarioItem.from_parent(self, name=name if repeats == 1 else f"{name}[r{repeat}]",
+                                            scenario=scenario, repeat=repeat)
+            for mark in scenario.marks:
+                item.add_marker(getattr(pytest.mark, mark.name)(*mark.args, **dict(mark.kwargs)))
+            if scenario.family:
+                item.extra_keyword_matches.add(scenario.family)
+            yield item
 
     def repr_failure(self, excinfo: pytest.ExceptionInfo[BaseException], style: Any = None) -> Any:
         exc = excinfo.value
@@ -94,6 +97,16 @@ class ScenarioFile(pytest.File):
         if isinstance(exc, (NavScenarioError, OSError, UnicodeDecodeError)):
             return f"cannot load scenario file {rel_path(self.config, self.path)}: {exc}"
         return super().repr_failure(excinfo)
+
+
+def repeat_seed(base_seed: int, repeat: int) -> int:
+    """The base seed of one --nav-repeat run: the run's own seed for repeat 0, else a stable
+    63-bit mix of (base seed, repeat) so every repeat draws different sensor noise."""
+    if repeat == 0:
+        return base_seed
+    import hashlib
+    digest = hashlib.sha256(f"navscenario-repeat:{base_seed}:{repeat}".encode()).digest()
+    return int.from_bytes(digest[:8], "big") >> 1
 
 
 class ScenarioFailed(Exception):
@@ -119,9 +132,10 @@ def _fmt(value: Any, unit: str = "", digits: int = 3) -> str:
 class ScenarioItem(pytest.Item):
     """One episode of one scenario against the session's subject; passes iff the outcome is success."""
 
-    def __init__(self, *, scenario: Any, **kwargs: Any):
+    def __init__(self, *, scenario: Any, repeat: int = 0, **kwargs: Any):
         super().__init__(**kwargs)
         self.scenario = scenario
+        self.repeat = repeat          # --nav-repeat index: 0 .. N-1
         self.nav_result: Any = None   # the EpisodeResult, until the call report has taken it
 
     @property
@@ -132,7 +146,8 @@ class ScenarioItem(pytest.Item):
         from .runner import run_scenario
 
         state = get_state(self.config)
-        result = run_scenario(self.scenario, state.subject.runner_arg, seed=state.settings.seed,
+        result = run_scenario(self.scenario, state.subject.runner_arg,
+                              seed=repeat_seed(state.settings.seed, self.repeat),
                               tick_limit=state.settings.tick_limit)
         self.nav_result = result
         m = result.metrics
@@ -146,6 +161,7 @@ class ScenarioItem(pytest.Item):
             ("nav_duration", _fmt(m.duration, digits=3)),
             ("nav_subject", result.subject),
             ("nav_seed", str(result.seed)),
+            ("nav_repeat", str(self.repeat)),
         ])
         if not result.passed:
             raise ScenarioFailed(result)
@@ -157,6 +173,8 @@ class ScenarioItem(pytest.Item):
         if state.subject.spec is not None and state.subject.origin != "built-in default":
             parts.append(shlex.quote(f"--nav-subject={state.subject.spec}"))
         parts.append(f"--nav-seed={state.settings.seed}")
+        if state.settings.repeat > 1:
+            parts.append(f"--nav-repeat={state.settings.repeat}")
         cmd = " ".join(parts)
         if Path(self.config.invocation_params.dir) != Path(self.config.rootpath):
             cmd = f"cd {shlex.quote(str(self.config.rootpath))} && {cmd}"

@@ -37,6 +37,9 @@ OPTIONS = (
     ("--nav-tick-limit", "nav_tick_limit",
      "seconds one planner tick (act) may take; a slower or hanging planner ends the episode as a "
      "subject-error and the next item runs. Default 1; 0 or none: no limit."),
+    ("--nav-repeat", "nav_repeat",
+     "run each scenario N times with different noise seeds (repeat 0 keeps the run's seed) and "
+     "report the scenarios whose outcomes differ (flaky) with per-outcome counts. Default 1."),
 )
 
 
@@ -44,7 +47,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("navscenario", "navigation scenarios (pytest-navscenario)")
     helps = {ini: text for _, ini, text in OPTIONS}
     metavars = {"nav_subject": "SPEC", "nav_seed": "N", "nav_results": "PATH", "nav_artifacts": "DIR",
-                "nav_summary": "yes|no", "nav_tick_limit": "SECONDS"}
+                "nav_summary": "yes|no", "nav_tick_limit": "SECONDS", "nav_repeat": "N"}
     for opt, ini, text in OPTIONS:
         group.addoption(opt, dest=ini, default=None, metavar=metavars[ini], help=text + f" [ini: {ini}]")
     parser.addini("nav_subject", helps["nav_subject"], default="")
@@ -53,6 +56,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addini("nav_artifacts", helps["nav_artifacts"], default=DEFAULT_ARTIFACTS)
     parser.addini("nav_summary", helps["nav_summary"], default="yes")
     parser.addini("nav_tick_limit", helps["nav_tick_limit"], default=str(DEFAULT_TICK_LIMIT))
+    parser.addini("nav_repeat", helps["nav_repeat"], default="1")
     parser.addini("nav_scenario_glob",
                   "file name patterns of scenario files (space separated); files matching them are "
                   "collected when they are a YAML mapping with 'version' and 'mission' keys "
@@ -71,6 +75,7 @@ class Settings:
     artifacts: Path | None
     summary: bool
     tick_limit: float | None          # s per planner tick; None: no limit
+    repeat: int                       # episodes per scenario (>= 1)
     globs: tuple[str, ...]
     scenario_paths: tuple[Path, ...]
 
@@ -144,5 +149,14 @@ def read_settings(config: pytest.Config) -> Settings:
                                 "such as '*.yaml *.yml'")
     paths = tuple(_path(p.strip(), Path(config.rootpath))
                   for p in config.getini("nav_scenario_paths") if p.strip())
+    raw, where, _ = _value(config, "nav_repeat")
+    try:
+        repeat = int(raw.strip())
+    except ValueError:
+        repeat = 0
+    if not 1 <= repeat <= 10_000:
+        raise pytest.UsageError(f"{where}: expected a whole number of runs per scenario from 1 to "
+                                f"10000, got {raw!r} (e.g. --nav-repeat=10)")
     return Settings(subject_spec=subject, seed=seed, results=results, artifacts=artifacts,
-                    summary=summary, tick_limit=tick_limit, globs=globs, scenario_paths=paths)
+                    summary=summary, tick_limit=tick_limit, repeat=repeat, globs=globs,
+                    scenario_paths=paths)

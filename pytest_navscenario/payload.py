@@ -62,13 +62,15 @@ def _event(value: Any) -> dict[str, Any] | None:
 
 
 def episode_to_payload(result: EpisodeResult, *, nodeid: str, path: str,
-                       with_trajectory: bool, repeat: int = 0) -> dict[str, Any]:
+                       with_trajectory: bool, repeat: int = 0,
+                       subject_spec: str | None = None) -> dict[str, Any]:
     """The ``report.nav`` dict of one episode (see the module docstring)."""
     from .loader import scenario_to_dict
     from .results import make_record
 
     return {
-        "record": make_record(result, nodeid=nodeid, path=path, repeat=repeat),
+        "record": make_record(result, nodeid=nodeid, path=path, repeat=repeat,
+                              subject_spec=subject_spec),
         "scenario": scenario_to_dict(result.scenario),
         "source": path,
         "events": {

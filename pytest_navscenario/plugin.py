@@ -95,6 +95,9 @@ def pytest_report_header(config: pytest.Config) -> list[str]:
     limit = f"{s.tick_limit:g} s" if s.tick_limit else "none"
     lines = [f"navscenario: subject {state.subject.label}, seed {s.seed} (--nav-seed), "
              f"tick limit {limit}"]
+    if s.repeat > 1:
+        lines.append(f"navscenario: {s.repeat} runs per scenario with different noise seeds "
+                     f"(--nav-repeat; scenarios without sensor noise repeat identically)")
     extra = []
     if s.results is not None:
         extra.append(f"results {s.results}")
@@ -139,8 +142,10 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) ->
         want = trajectories_requested(item.config)
         with_traj = want == "all" or (not result.passed and (
             want == "failed" or state.settings.artifacts is not None))
+        spec = state.subject.spec if state.subject.origin != "hook" else None
         report.nav = episode_to_payload(result, nodeid=item.nodeid, path=item.rel_path,  # type: ignore[attr-defined]
-                                        with_trajectory=with_traj)
+                                        with_trajectory=with_traj, repeat=item.repeat,  # type: ignore[attr-defined]
+                                        subject_spec=spec)
         item.nav_result = None  # type: ignore[attr-defined]  # the payload has it; free the arrays
     return report
 
@@ -180,9 +185,10 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
         return
     if config.option.collectonly:  # nothing ran: keep an existing results file
         return
+    from .flaky import annotate_repeats
     from .results import write_results
     try:
-        write_results(state.settings.results, state.records)
+        write_results(state.settings.results, annotate_repeats(state.records))
     except OSError as exc:
         sys.stderr.write(f"navscenario: cannot write the results file {state.settings.results}: {exc}\n")
         session.exitstatus = pytest.ExitCode.INTERNAL_ERROR
@@ -198,6 +204,11 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
         from .summary import format_summary
         tr.write_sep("=", "navscenario summary")
         for line in format_summary(state.records).splitlines():
+            tr.write_line(line)
+    if state.settings.repeat > 1 and state.records:
+        from .flaky import format_flaky
+        tr.write_sep("=", "navscenario flaky scenarios")
+        for line in format_flaky(state.records).splitlines():
             tr.write_line(line)
     if state.settings.results is not None and not config.option.collectonly:
         tr.write_line(f"navscenario: wrote {len(state.records)} record(s) to {state.settings.results}")
