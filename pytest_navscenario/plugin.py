@@ -49,6 +49,27 @@ def pytest_configure(config: pytest.Config) -> None:
     config.pluginmanager.register(Controller(config), "navscenario-controller")
     if config.pluginmanager.hasplugin("xdist"):
         config.pluginmanager.register(XdistHooks(), "navscenario-xdist")
+    _stop_gracefully_on_sigterm(config)
+
+
+def _stop_gracefully_on_sigterm(config: pytest.Config) -> None:
+    """SIGTERM (a CI job cancelled, ``kill``) ends the run like Ctrl-C: pytest's own interruption
+    path, so the results file, frozen failures and the summary of what finished are still written.
+    Only in the controller's main thread, and only when nobody else handles SIGTERM."""
+    import signal
+    import threading
+
+    if _is_worker(config) or threading.current_thread() is not threading.main_thread():
+        return
+    if signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
+        return
+
+    def on_sigterm(signum: int, frame: Any) -> None:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)  # a second SIGTERM kills at once
+        raise KeyboardInterrupt("SIGTERM")
+
+    signal.signal(signal.SIGTERM, on_sigterm)
+    config.add_cleanup(lambda: signal.signal(signal.SIGTERM, signal.SIG_DFL))
 
 
 def _is_worker(config: pytest.Config) -> bool:
