@@ -40,7 +40,7 @@ from .scenario import Scenario
 
 PROTOCOL = "navscenario-exec"
 PROTOCOL_VERSION = 1
-DEFAULT_TICK_TIMEOUT = 1.0      # s, per observation (the harness's --nav-tick-timeout)
+DEFAULT_TICK_TIMEOUT = 1.0      # s, per observation, unless the run sets its own (--nav-tick-limit)
 RESET_TIMEOUT = 10.0            # s, for the first answer (program start-up included)
 STDERR_LINES = 20               # kept for error messages
 MAX_LINE = 1 << 20              # a reply longer than 1 MiB is garbage
@@ -197,7 +197,11 @@ atexit.register(_shutdown_all)
 
 
 class ExternalPlanner:
-    """Planner-protocol adapter around a shared ExternalProcess (one per command line)."""
+    """Planner-protocol adapter around a shared ExternalProcess (one per command line).
+
+    ``tick_timeout`` bounds each answer; run_scenario sets it to the run's tick limit, so an
+    external planner is held to the same limit as an in-process one (also outside the main
+    thread, where no alarm signal is available)."""
 
     def __init__(self, process: ExternalProcess, tick_timeout: float = DEFAULT_TICK_TIMEOUT):
         self.process = process

@@ -82,6 +82,8 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
 
     t0 = time.perf_counter()
     instance, spec = make_planner(planner)
+    if tick_limit and hasattr(instance, "tick_timeout"):  # adapters that enforce the limit themselves
+        instance.tick_timeout = tick_limit
     ep_seed = effective_seed(scenario.simulation.seed, seed)
     facts = simulate(scenario, instance, ep_seed, tick_limit=tick_limit)
     name, version = subject_identity(instance, spec)  # after reset: a planner may name itself there
