@@ -113,6 +113,13 @@ EXTERNAL = textwrap.dedent('''\
 ''')
 
 
+# Memory bound per episode: pytest itself keeps every test report until the session ends (~3 KiB
+# per test for plain Python tests, measured with pytest 9), and the controller keeps each episode's
+# results record for the summary and the results file (~3 KiB); episode payloads are trimmed once
+# consumed. Anything above this bound is a leak.
+BOUND_KIB = 10.0
+
+
 def children_of(pid: int) -> list[str]:
     out = subprocess.run(["ps", "-eo", "pid,ppid,args"], capture_output=True, text=True).stdout
     return [line for line in out.splitlines()[1:] if "soak_external.py" in line]
@@ -161,13 +168,14 @@ def main() -> int:
     print(f"outcomes: {json.dumps(outcomes, sort_keys=True)}")
     if growth:
         print(f"memory growth per episode after warm-up (KiB, per worker): "
-              f"{', '.join(f'{g:.2f}' for g in growth)} (median {statistics.median(growth):.2f})")
+              f"{', '.join(f'{g:.2f}' for g in growth)} (median {statistics.median(growth):.2f}; "
+              f"bound {BOUND_KIB:g})")
     else:
         print("memory: no in-process samples (external planner runs in its own process)")
     print(f"leaked planner processes after the run: {len(leaked)}")
     for line in leaked:
         print("  " + line)
-    ok = len(records) == args.episodes and not leaked and (not growth or max(growth) < 1.0)
+    ok = len(records) == args.episodes and not leaked and (not growth or max(growth) < BOUND_KIB)
     print("OK" if ok else "PROBLEM")
     if proc.returncode not in (0, 1):
         print(proc.stdout[-3000:], proc.stderr[-3000:])

@@ -8,8 +8,9 @@ Implement them in a ``conftest.py`` or a plugin. Example: provide the subject fr
         return lambda: Planner(gain=config.getoption("--my-gain"))
 
 Feature plugins (plots, bags, comparison) read each episode on the controller either from
-``report.nav`` in their own ``pytest_runtest_logreport`` or through
-``pytest_navscenario_episode_report`` below; the payload format is documented in payload.py.
+``report.nav`` in their own ``pytest_runtest_logreport`` (not ``trylast``: after every other
+plugin has seen it, the core trims the payload to its record to keep memory flat in long runs) or
+through ``pytest_navscenario_episode_report`` below; the payload format is documented in payload.py.
 Call ``payload.request_trajectories(config, "failed" | "all")`` in ``pytest_configure`` to have
 the trajectory included (it is left out by default: it is the bulk of the payload).
 """

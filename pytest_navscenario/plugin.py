@@ -171,6 +171,16 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) ->
     return report
 
 
+@pytest.hookimpl(trylast=True)
+def pytest_runtest_logreport(report: pytest.TestReport) -> None:
+    """Once every plugin has seen an episode (and an xdist worker has sent it), keep only its
+    record: pytest holds every report until the session ends, so the full payload (scenario,
+    metrics, trajectory) would grow memory by ~10 KiB per episode in long runs."""
+    nav = getattr(report, "nav", None)
+    if nav is not None and len(nav) > 1:
+        report.nav = {"record": nav["record"]}  # type: ignore[attr-defined]
+
+
 class Controller:
     """Per-config hooks that need the config but whose hookspecs do not pass it."""
 
