@@ -38,6 +38,7 @@ import numpy as np
 
 from .errors import NavScenarioError
 from .result import EpisodeResult
+from .results import json_safe
 from .scenario import BoxObstacle, CylinderObstacle
 
 FORMATS = ("mcap", "sqlite3", "ros1")
@@ -150,16 +151,6 @@ def _pose(x: float, y: float, yaw: float, z: float = 0.0) -> dict[str, Any]:
     return {"position": {"x": float(x), "y": float(y), "z": float(z)}, "orientation": _quat(yaw)}
 
 
-def _json_safe(value: Any) -> Any:
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: _json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
-    return value
-
-
 def result_summary(result: EpisodeResult) -> dict[str, Any]:
     """The JSON written on /navscenario/result: outcome, message, metrics and the scenario."""
     s = result.scenario
@@ -173,7 +164,7 @@ def result_summary(result: EpisodeResult) -> dict[str, Any]:
         event = getattr(result, key)
         if event is not None:
             out[key] = dict(vars(event))
-    return _json_safe(out)
+    return json_safe(out)
 
 
 def _messages(result: EpisodeResult, ros1: bool):

@@ -37,7 +37,7 @@ import numpy as np
 
 from .errors import ScenarioError
 from .paths import (box_box_distance, footprint_core, min_obstacle_gap, obstacle_shapes,
-                    path_through, point_box_distance, shortest_path)
+                    path_through, shortest_path)
 from .result import Collision, Metrics, Trajectory
 from .scenario import Scenario
 
@@ -134,7 +134,6 @@ def min_clearance(scenario: Scenario, t: np.ndarray, pose: np.ndarray
     x, y = pose[:, 0], pose[:, 1]
     # 1. every S-th pose; window w = poses [w*S, (w+1)*S), which stay within reach[w] of pose w*S
     stride = COARSE_STRIDE
-    nw = -(-n // stride)
     rep = np.arange(n) // stride * stride
     away = np.sqrt((x - x[rep]) ** 2 + (y - y[rep]) ** 2)
     reach = np.maximum.reduceat(away, np.arange(0, n, stride))

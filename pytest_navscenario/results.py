@@ -52,13 +52,14 @@ def _tool_version() -> str:
     return __version__
 
 
-def _json_safe(value: Any) -> Any:
+def json_safe(value: Any) -> Any:
+    """Strict-JSON copy: non-finite floats become null (JSON has no NaN/inf)."""
     if isinstance(value, float) and not math.isfinite(value):
         return None
     if isinstance(value, dict):
-        return {k: _json_safe(v) for k, v in value.items()}
+        return {k: json_safe(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
+        return [json_safe(v) for v in value]
     return value
 
 
@@ -83,7 +84,7 @@ def make_record(result: EpisodeResult, *, nodeid: str, path: str, repeat: int = 
         "outcome": result.outcome.value,
         "passed": result.passed,
         "message": result.message,
-        "metrics": _json_safe(result.metrics.as_dict()),
+        "metrics": json_safe(result.metrics.as_dict()),
         "wall_time": result.wall_time,
     }
 

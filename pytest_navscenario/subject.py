@@ -10,7 +10,6 @@ from typing import Any, Callable
 
 import pytest
 
-from .errors import SubjectLoadError
 from .planner import BUILTIN_SUBJECTS, DEFAULT_SUBJECT, load_subject
 
 
@@ -51,18 +50,8 @@ class Subject:
 
     def check(self) -> None:
         """Load the subject and make one planner; SubjectLoadError if it breaks the protocol."""
-        factory = self.factory
-        try:
-            planner = factory()
-        except Exception as exc:
-            raise SubjectLoadError(f"subject {self.label}: calling it to make a planner raised "
-                                   f"{type(exc).__name__}: {exc}") from exc
-        missing = [m for m in ("reset", "act") if not callable(getattr(planner, m, None))]
-        if missing:
-            raise SubjectLoadError(
-                f"subject {self.label}: the object it makes ({type(planner).__name__}) has no "
-                f"{' and no '.join(m + '()' for m in missing)} method; a planner needs "
-                f"reset(scenario) and act(observation) -> (vx, vy, wz) (see planner.py)")
+        from .runner import make_planner
+        make_planner(self.runner_arg)
 
 
 def resolve_subject(config: pytest.Config, spec: str | None, origin: str) -> Subject:

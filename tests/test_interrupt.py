@@ -3,7 +3,6 @@ valid output: the results file holds exactly the episodes that finished, complet
 no temporary file is left behind, and the summary says the run was interrupted."""
 from __future__ import annotations
 
-import json
 import os
 import signal
 import subprocess
