@@ -233,6 +233,8 @@ def _evolve(space: SearchSpace, sim: _Simulator, budget: int, seed_value: int, o
         parts.setdefault(p.part, []).append(i)
     groups = list(parts.values())
     invalid_run = [0]
+    counter = [0]
+    simulated: set[tuple[float, ...]] = set()
     # operator statistics: [tries, new distinct failures] for uniform exploration and mutation
     stats = {"explore": [0, 0], "mutate": [0, 0]}
 
@@ -253,7 +255,12 @@ def _evolve(space: SearchSpace, sim: _Simulator, budget: int, seed_value: int, o
         # Hypothesis-drawn Random (Hypothesis's own floats favour bounds and round values).
         pick = data.draw(st.integers(0, ARCHIVE_SIZE - 1), label="elite")   # shrinks toward the best
         k = data.draw(st.integers(0, 3), label="k")
-        rnd = data.draw(st.randoms(use_true_random=True), label="rng")  # one drawn seed: no state-dependent draws
+        # One drawn integer seeds a Random, mixed with the example counter: Hypothesis often
+        # repeats a draw (simplest values, mutations), and a repeated seed would repeat the
+        # candidate and waste a simulation.
+        drawn = data.draw(st.integers(0, 2**64 - 1), label="rng")
+        counter[0] += 1
+        rnd = random.Random(f"{seed_value}:{counter[0]}:{drawn}")
         used = sim.report.sims_used
         if used == 0:
             return space.zero(), "seed"
@@ -298,11 +305,13 @@ def _evolve(space: SearchSpace, sim: _Simulator, budget: int, seed_value: int, o
                                           "the search bounds are too wide for this seed, or every nearby layout fails already")
                 raise _Stop()
             reject()
-        if origin == "mutate" and is_near_failure(space, offsets, sim.report.failures):
+        key = tuple(round(v, 6) for v in offsets)
+        if key in simulated or (origin == "mutate" and is_near_failure(space, offsets, sim.report.failures)):
             sim.report.skipped += 1   # would most likely repeat a known failure: not worth a simulation
             invalid_run[0] += 1
             reject()
         invalid_run[0] = 0
+        simulated.add(key)
         cand = sim.simulate(offsets, scenario, "search", origin)
         archive.add(cand)
         before = len(sim.report.failures)
