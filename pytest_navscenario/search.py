@@ -99,7 +99,7 @@ class SearchReport:
     sims_used: int = 0
     shrink_sims: int = 0
     discarded: dict[str, int] = field(default_factory=dict)   # reason -> count
-    skipped: int = 0              # mutants too close to a known failure, redrawn without simulating
+    skipped: int = 0              # repeats and mutants next to a known failure, redrawn without simulating
     candidates: list[Candidate] = field(default_factory=list)  # search + shrink sims, in order
     failures: list[Failure] = field(default_factory=list)
     interrupted: bool = False

@@ -427,7 +427,8 @@ def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
              + (f"{best:.3f} m" if math.isfinite(best) else "n/a")
              + f", {r.shrink_sims} shrink sims, {r.wall_time:.1f} s"]
     if r.skipped:
-        lines.append(f"  {r.skipped} mutant(s) next to a known failure were redrawn without simulating them")
+        lines.append(f"  {r.skipped} candidate(s) repeating a simulated one or next to a known failure were "
+                     f"redrawn without simulating them")
     if r.interrupted:
         lines.append(f"  CUT SHORT: {r.stop_reason or 'interrupted'}; the failures found so far are kept "
                      f"(unshrunk ones are frozen as found)")
