@@ -276,7 +276,7 @@ def test_marks_from_yaml_select_with_m_and_k(project):
     }
     for name, text in files.items():
         project.makefile(".yaml", **{name: text})
-    result = project.runpytest(*PLUGIN, "--nav-subject=straight:Straight", "-rsx", "-W", "error")
+    result = project.runpytest(*PLUGIN, "--nav-subject=straight:Straight", "-rsx", "-W", "error::pytest.PytestUnknownMarkWarning")
     result.assert_outcomes(passed=2, skipped=1, xfailed=1)
     result.stdout.fnmatch_lines(["*SKIPPED*b_skip.yaml*not today*", "*XFAIL*c_xfail*known gap*"])
     result = project.runpytest(*PLUGIN, "--collect-only", "-q", "-m", "slow")
