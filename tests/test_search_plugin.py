@@ -71,8 +71,11 @@ def test_search_freezes_failures_that_fail_again_when_collected(project):
     assert frozen, result.stdout.str()
     log = [json.loads(line) for line in (out / "crate" / "search-log.jsonl").read_text().splitlines()]
     assert sum(r["phase"] == "search" for r in log) == 6 and all("params" in r and "outcome" in r for r in log)
-    cases = ET.parse(project.path / "suite.xml").getroot().iter("testcase")
-    assert sum(1 for _ in cases) == 6
+    cases = list(ET.parse(project.path / "suite.xml").getroot().iter("testcase"))
+    assert len(cases) == 6
+    failing = [r for r in log if r["phase"] == "search" and r["outcome"] != "success"]
+    assert sum(1 for c in cases if c.find("failure") is not None) == len(failing) > 0
+    result.stdout.fnmatch_lines(["navsearch crate: 6/6 sims, * failure(s), best clearance *"])  # live progress
 
     from pytest_navscenario.loader import load_scenario
     prov = load_scenario(frozen[0]).provenance
