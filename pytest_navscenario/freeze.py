@@ -20,7 +20,7 @@ from typing import Any, Iterable
 
 from .results import atomic_write_text
 from .scenario import Scenario, content_hash
-from .search import Candidate, Failure, SearchReport
+from .search import Failure, SearchReport
 from .search_space import SearchSpace
 
 DEFAULT_OUT = "scenarios/regressions"

@@ -143,7 +143,6 @@ class _Simulator:
         self.counts = {"search": 0, "shrink": 0}
 
     def simulate(self, offsets: Sequence[float], scenario: Scenario, phase: str, origin: str) -> Candidate:
-        from .result import Outcome  # noqa: F401  (import cost paid once)
         from .runner import run_scenario
         from .scenario import content_hash
 
