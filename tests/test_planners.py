@@ -177,7 +177,8 @@ def test_the_same_planner_object_can_run_several_episodes_and_gives_the_same_bit
 def test_dwa_detours_around_a_box_centred_on_the_line_instead_of_stalling_in_front_of_it(seeds):
     s = seeds["boxes2"]
     centred = dataclasses.replace(s, obstacles=(dataclasses.replace(s.obstacles[0], x=0.0),) + s.obstacles[1:])
-    stalled = run_scenario(centred, DynamicWindowPlanner(lookahead=0.0))   # plain DWA: local minimum
+    # plain DWA (no detour lanes, no stall recovery): the local minimum in front of the box
+    stalled = run_scenario(centred, DynamicWindowPlanner(lookahead=0.0, stall_time=0.0))
     assert stalled.outcome is Outcome.TIMEOUT and stalled.trajectory.pose[-1, 1] < 3.5
     detour = run_scenario(centred, DynamicWindowPlanner())
     assert detour.outcome is Outcome.SUCCESS, detour.message
@@ -196,10 +197,32 @@ def test_dwa_brakes_in_front_of_a_dead_end_instead_of_running_into_the_safety_la
     dead_end = dataclasses.replace(
         s, obstacles=s.obstacles + (BoxObstacle("cap", 0.0, 7.6, 2.4, 0.2),),
         mission=dataclasses.replace(s.mission, timeout=12.0))
-    result = run_scenario(dead_end, "dwa")
+    result = run_scenario(dead_end, DynamicWindowPlanner(stall_time=0.0))   # no stall recovery
     assert result.outcome is Outcome.TIMEOUT, result.message        # not a safety stop
     assert result.safety_stop is None and result.collision is None
     last_3s = result.trajectory.pose[-300:, :2]
     assert np.ptp(last_3s, axis=0).max() < 0.1                       # it has stopped
     nose = result.trajectory.pose[:, 1].max() + 0.45
     assert nose < 7.5 - 0.2                                           # well short of the cap
+    # with stall recovery (the default) it backs out of the dead end again, just as safely
+    escaped = run_scenario(dead_end, "dwa")
+    assert escaped.safety_stop is None and escaped.collision is None, escaped.message
+    assert escaped.trajectory.pose[:, 1].max() + 0.45 < 7.5 - 0.2
+    y = escaped.trajectory.pose[:, 1]
+    assert y[-1] < y.max() - 0.4                                      # on its way back out
+
+
+def test_dwa_escapes_the_corner_of_a_jittered_l_corridor_where_plain_dwa_stalls(seeds):
+    # examples/pictures/suite/L-corridor/L-corridor-v07.yaml: the straight line to the waypoint
+    # at the bend crosses the first leg's inner wall, so plain DWA stops at the corridor's mouth
+    s = seeds["L-corridor"]
+    layout = {"leg1_outer": (4.326, 3.182, 45.0), "leg1_inner": (1.98, 3.692, 64.8),
+              "leg2_outer": (4.652, 7.231, 145.31), "leg2_inner": (1.957, 6.508, 146.43)}
+    jittered = dataclasses.replace(s, obstacles=tuple(
+        dataclasses.replace(o, x=layout[o.name][0], y=layout[o.name][1], yaw=layout[o.name][2])
+        for o in s.obstacles))
+    stalled = run_scenario(jittered, DynamicWindowPlanner(stall_time=0.0))
+    assert stalled.outcome is Outcome.TIMEOUT and not stalled.trajectory.waypoint_times
+    result = run_scenario(jittered, DynamicWindowPlanner())
+    assert result.outcome is Outcome.SUCCESS, result.message
+    assert result.metrics.min_clearance > 0.15

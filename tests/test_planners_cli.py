@@ -14,7 +14,7 @@ def test_run_prints_outcome_message_and_metrics_and_exits_0_on_success(capsys):
     code = cli.main(["run", str(SEEDS_DIR / "boxes1.yaml"), "--subject", "dwa", "--seed", "0"])
     out = capsys.readouterr().out
     assert code == 0, out
-    assert "boxes1" in out and "with dwa 1.0, seed 0" in out
+    assert "boxes1" in out and "with dwa 1.1, seed 0" in out
     assert "outcome: success" in out and "message: success in" in out
     assert "min_clearance            0.750 m" in out and "path_efficiency" in out
 

@@ -9,7 +9,15 @@ safety layer's own sweep stays clear: it slows down near obstacles); and picks t
 the rest by a weighted sum of progress towards the target, heading, clearance and speed.
 Near the goal of a mission with a yaw tolerance it turns to the goal yaw.
 
-Speed: the commands live on a fixed grid (one step = what the acceleration limits allow in one
+Local minima (a dead end, the outer wall of a bend, circling): when the robot has not got
+``stall_progress`` closer to its target for ``stall_time`` seconds, it aims, for the rest of that
+leg, at a point along a route planned on a grid of every lidar return it has seen (see
+``_route.py``; no map from the scenario is used), and it does not stand still while stuck. When
+no command is admissible it takes the one with the most room (it backs off) instead of freezing.
+Within a metre of its target an omnidirectional robot may arrive sideways (the heading term
+fades), which lets a long body reach a waypoint in a corner.
+
+Speed (stall recovery aside, which plans only when stuck): the commands live on a fixed grid (one step = what the acceleration limits allow in one
 tick) whose rollouts are computed once per robot description and shared by every instance; the
 candidates of each dynamic window are gathered once into one contiguous matrix that maps lidar
 points into every rollout pose's frame. A tick is then one small matrix product (rollout poses x
@@ -25,6 +33,7 @@ import numpy as np
 from ..planner import Command, Observation
 from ..scenario import Scenario
 from ._common import RobotParams, require_reset, wrap_angle
+from ._route import LidarGrid
 
 TABLE_CACHE_SIZE = 4    # robot descriptions x settings whose rollout tables are kept
 
@@ -104,7 +113,7 @@ class _Window:
     that a tick costs a few dozen numpy calls on small arrays."""
 
     __slots__ = ("n", "rot3", "half", "score_rows", "static", "stop_yaw", "reach", "cand",
-                 "speed", "commands")
+                 "speed", "still", "commands")
 
     def __init__(self, table: _Table, I, J, K):
         g = (I * table.shape[1] + J) * table.shape[2] + K
@@ -137,6 +146,7 @@ class _Window:
         self.commands = [Command(float(table.vx[i]), float(table.vy[j]), float(table.wz[k]))
                          for i, j, k in self.cand]
         self.speed = np.abs(table.vx[I]) + np.abs(table.vy[J])
+        self.still = (self.speed == 0.0) & (table.wz[K] == 0.0)
 
 
 _TABLES: "OrderedDict[tuple, _Table]" = OrderedDict()
@@ -170,17 +180,27 @@ class DynamicWindowPlanner:
         turn_weight: penalty on the yaw rate, so that ties do not make it wobble (0.05).
         lookahead: metres of the straight lane to the target checked for a blockage; when it
             is blocked the planner aims along the closest free lane instead (3.0; 0 = off).
+        stall_time: seconds without getting ``stall_progress`` metres closer to the target
+            after which the planner is stuck in a local minimum (a dead end, the outer wall of
+            a bend, circling): for the rest of that leg it follows a route to the target planned
+            on the grid of every lidar return seen so far (1.5; 0 = off).
+        stall_progress: metres (0.25).
+        route_lookahead: metres along that route to the point aimed at (1.5).
+        replan_period: seconds between two route plans while routing (2.0).
+        route_margin: metres the route keeps beyond the detour lane's half width (0.05).
     """
 
     name = "dwa"
-    version = "1.0"
+    version = "1.1"     # 1.1: stall recovery (route on the lidar grid), backing off, sideways arrival
 
     def __init__(self, *, horizon: float = 1.5, steps: int = 5, window: int = 1,
                  reverse_speed: float = 0.2, clearance_buffer: float = 0.05,
                  clearance_cap: float = 0.8, progress_weight: float = 1.0,
                  heading_weight: float = 0.4, clearance_weight: float = 0.4,
                  velocity_weight: float = 0.1, turn_weight: float = 0.05,
-                 lookahead: float = 3.0):
+                 lookahead: float = 3.0, stall_time: float = 1.5,
+                 stall_progress: float = 0.25, route_lookahead: float = 1.5,
+                 replan_period: float = 2.0, route_margin: float = 0.05):
         if horizon <= 0 or steps < 1 or window < 1:
             raise ValueError("DynamicWindowPlanner: horizon must be > 0, steps >= 1, window >= 1")
         self.horizon = float(horizon)
@@ -194,6 +214,12 @@ class DynamicWindowPlanner:
         self.turn_weight = float(turn_weight)
         self._weights = self.weights + (self.turn_weight,)
         self.lookahead = float(lookahead)
+        self.stall_time = float(stall_time)
+        self.stall_progress = float(stall_progress)
+        self.route_lookahead = float(route_lookahead)
+        self.replan_period = float(replan_period)
+        self.near = 1.0
+        self.route_margin = float(route_margin)
         self._p: RobotParams | None = None
         self._idx: tuple[int, int, int] | None = None
         self._goal_phase = False
@@ -207,6 +233,12 @@ class DynamicWindowPlanner:
         self._goal_phase = False
         self._beams_shape = None
         self._side = 0.0          # side (+1 left, -1 right) of the last detour around a blockage
+        m = scenario.mission
+        sites = [(m.start.x, m.start.y), (m.goal.x, m.goal.y)] + [(w.x, w.y) for w in m.waypoints]
+        self._grid = LidarGrid(np.array(sites, dtype=float), border=min(p.range_max, 10.0))
+        self._leg = -1            # remaining waypoints when the current leg started
+        self._best, self._best_t = math.inf, 0.0     # closest to the leg's target so far, when
+        self._routing, self._plan_t = False, -math.inf
 
     def _beams(self, angles: np.ndarray) -> None:
         """Per-episode lidar geometry: float32 unit vectors of the beams, and the inflation
@@ -229,6 +261,8 @@ class DynamicWindowPlanner:
         self._dirs = np.stack([c, s], axis=1).astype(np.float32)          # (directions, 2)
         self._dirs_normal = np.stack([-s, c], axis=1).astype(np.float32)
         self._lane = self._t.half[1] + self._t.radius + self._min_clear
+        # the route keeps as far from the walls as a detour lane: where the rollouts can pass
+        self._grid.set_inflation(self._lane + self.route_margin)
         self._lane_map = np.zeros((2, 3), dtype=np.float32)
 
     # -- one tick -------------------------------------------------------------------------
@@ -274,7 +308,10 @@ class DynamicWindowPlanner:
         dx, dy = float(target[0]) - float(pose[0]), float(target[1]) - float(pose[1])
         c, s = math.cos(float(pose[2])), math.sin(float(pose[2]))
         tx, ty = c * dx + s * dy, -s * dx + c * dy       # target in the robot frame
-        if points is not None and self.lookahead > 0:
+        routed = False
+        if self.stall_time > 0:
+            routed, tx, ty = self._route(obs, r, c, s, dx, dy, tx, ty)
+        if not routed and points is not None and self.lookahead > 0:
             tx, ty = self._subgoal(tx, ty, points)
         d0sq = tx * tx + ty * ty
         d0 = math.sqrt(d0sq)
@@ -302,14 +339,64 @@ class DynamicWindowPlanner:
         # heading linear in the angle, as in Fox et al.
         w = self._term_weights
         w[0] = k_dist
+        if p.omni and d0 < self.near:
+            # close to the target an omnidirectional robot need not face it: it may slide in
+            # sideways, where a long body would not fit nose first (a waypoint in a corner)
+            w[1] = -self.weights[1] / math.pi * (d0 / self.near)
+        else:
+            w[1] = -self.weights[1] / math.pi
         score = w @ terms
         score += win.static
         score[clear < self._min_clear] = -np.inf        # not admissible: too close
         best = int(score.argmax())
-        if score[best] == -np.inf:  # nothing is safe: brake as hard as the window allows
-            best = int(np.lexsort((-clear, win.speed))[0])  # (lowest speed, then most room)
+        if routed and win.still[best] and score[best] > -np.inf:
+            # stuck: standing still is the local minimum itself, so take the best move
+            moving = np.where(win.still, -np.inf, score)
+            if moving.max() > -np.inf:
+                best = int(moving.argmax())
+        if score[best] == -np.inf:
+            # nothing is safe: take the command with the most room (backing off, away from
+            # what is too close, rather than freezing there), the slowest of equals
+            best = int(np.lexsort((win.speed, -clear))[0])
         self._idx = win.cand[best]
         return win.commands[best]
+
+    def _route(self, obs: Observation, r: np.ndarray, c: float, s: float, dx: float, dy: float,
+               tx: float, ty: float) -> tuple[bool, float, float]:
+        """Remember the lidar returns; detect a stall; once stalled, aim along the grid route.
+
+        Returns (routed, tx, ty): the point to aim at in the robot frame."""
+        p, grid = self._p, self._grid
+        x, y = float(obs.pose[0]), float(obs.pose[1])
+        # the robot moves <= 1 m in ten ticks and the lidar sees metres: a scan a second is
+        # enough to remember the walls, every other tick once they matter (routing)
+        if obs.tick % (2 if self._routing else 10) == 0:
+            hit = (r < p.range_max * 0.999).nonzero()[0]
+            grid.mark(x, y, c, s, self._unit[:, hit] * r[hit])
+        leg = len(obs.waypoints)
+        if leg != self._leg:
+            self._leg, self._best, self._best_t = leg, math.inf, obs.time
+            self._routing, self._plan_t = False, -math.inf
+        d = math.hypot(dx, dy)
+        if d < self._best - self.stall_progress:
+            self._best, self._best_t = d, obs.time
+        if not self._routing:
+            if obs.time - self._best_t < self.stall_time:
+                return False, tx, ty
+            self._routing = True
+        if d < self.route_lookahead:
+            return True, tx, ty
+        tol = p.waypoint_tolerance if leg else p.goal_tolerance
+        if obs.time - self._plan_t >= self.replan_period - 1e-9:
+            self._plan_t = obs.time
+            if not grid.plan((x, y), (x + dx, y + dy), 0.6 * tol):
+                # no way out near the target (a dead end): plan over everything seen
+                grid.plan((x, y), (x + dx, y + dy), 0.6 * tol, border=math.inf)
+        point = grid.carrot((x, y), self.route_lookahead)
+        if point is None:
+            return False, tx, ty
+        ex, ey = point[0] - x, point[1] - y
+        return True, c * ex + s * ey, -s * ex + c * ey
 
     def _subgoal(self, tx: float, ty: float, points: np.ndarray) -> tuple[float, float]:
         """The target, or a detour point when lidar points block the straight lane to it.
