@@ -154,6 +154,18 @@ def test_observation_content_and_read_only_arrays():
             arr[0] = 0.0
 
 
+def test_the_beam_angles_shared_by_episodes_cannot_be_unlocked():
+    # every episode of a lidar configuration hands out views of one read-only table: a planner
+    # that unlocked it could change the angles of later episodes and recorded trajectories
+    planner = GoTo()
+    res = simulate(scenario(timeout=0.2), planner, seed=0)
+    again = simulate(scenario(timeout=0.2), GoTo(), seed=0)
+    for arr in (planner.seen[0].angles, res.trajectory.angles, again.trajectory.angles):
+        with pytest.raises(ValueError):
+            arr.flags.writeable = True
+    assert again.trajectory.angles.tolist() == lidar_angles(scenario()).tolist()
+
+
 def test_max_ticks_stops_early():
     res = simulate(scenario(), GoTo(), seed=0, max_ticks=3)
     assert res.end == "max-ticks" and res.ticks == 3
