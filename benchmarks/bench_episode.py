@@ -9,7 +9,8 @@ path, same physics, same safety-layer work: the loop without the planner's cost)
 bare MuJoCo, mj_step + one mj_multiRay per tick for as many ticks and nothing else; then the
 shares of the episode: ``physics`` (stepping with per-step contact check and recording), ``rays``,
 ``planner`` (the planner's own code), ``safety`` and ``harness`` = everything but physics, rays and
-the planner (safety layer included: observation, validation, limits, goal checks). Medians over ``--repeats`` runs, after a warm-up
+the planner (safety layer included: observation, validation, limits, goal checks), each in ms and
+the planner's and harness's shares in %. Medians over ``--repeats`` runs, after a warm-up
 run (model compiled and cached, as in a search or a suite). Times are CPU time of this process
 (time.process_time), which stays meaningful on a machine shared with other jobs; ``wall`` is the
 episode's wall-clock median for comparison. Phase shares come from the episode's own perf_counter
@@ -87,8 +88,8 @@ def main(argv=None) -> int:
     print(f"python {sys.version.split()[0]}, mujoco {mujoco.__version__}, {os.cpu_count()} cores, "
           f"load average {os.getloadavg()[0]:.1f}, median of {args.repeats} runs")
     head = (f"{'scenario':12s} {'planner':16s} {'outcome':11s} {'sim s':>6s} {'ticks':>5s} "
-            f"{'episode':>8s} {'wall':>8s} {'run_scen':>8s} {'replay':>8s} {'floor':>7s} {'physics':>7s} {'rays':>5s} "
-            f"{'planner':>7s} {'safety':>6s} {'harness':>7s}")
+            f"{'episode':>8s} {'wall':>8s} {'run_scen':>8s} {'replay':>8s} {'floor':>7s} {'physics':>7s} {'rays':>6s} "
+            f"{'planner':>7s} {'safety':>6s} {'harness':>7s} {'plan %':>6s} {'harn %':>6s}")
     print(head)
     print("-" * len(head))
     for path in args.scenarios:
@@ -96,8 +97,10 @@ def main(argv=None) -> int:
         for spec in PLANNERS:
             res = run_scenario(sc, spec)            # warm-up: compile + cache the model
             ticks = len(res.trajectory.tick_t)
-            eps, walls, runs, replays, floors, parts = [], [], [], [], [], {k: [] for k in
-                                                    ("physics", "rays", "planner", "safety", "harness")}
+            phases = ("physics", "rays", "planner", "safety", "harness")
+            eps, walls, runs, replays, floors = [], [], [], [], []
+            parts = {k: [] for k in phases}      # share of the episode's own wall time
+            absolute = {k: [] for k in phases}   # seconds (wall, from the episode's timings)
             for _ in range(args.repeats):
                 planner, _ = make_planner(spec)
                 t0, w0 = time.process_time(), time.perf_counter()
@@ -106,6 +109,7 @@ def main(argv=None) -> int:
                 walls.append(time.perf_counter() - w0)
                 for k in parts:
                     parts[k].append(facts.timings[k] / facts.timings["total"])
+                    absolute[k].append(facts.timings[k])
                 t0 = time.process_time()
                 run_scenario(sc, spec)
                 runs.append(time.process_time() - t0)
@@ -115,12 +119,14 @@ def main(argv=None) -> int:
                 assert again.trajectory.pose.tobytes() == facts.trajectory.pose.tobytes(), "replay differs"
                 floors.append(bare_floor(sc, ticks))
             share = {k: statistics.median(v) * 100 for k, v in parts.items()}
+            ms = {k: statistics.median(v) * 1e3 for k, v in absolute.items()}
             print(f"{sc.name:12s} {spec:16s} {res.outcome.value:11s} {res.trajectory.duration:6.1f} "
                   f"{ticks:5d} {statistics.median(eps) * 1e3:6.2f}ms {statistics.median(walls) * 1e3:6.2f}ms "
                   f"{statistics.median(runs) * 1e3:6.2f}ms {statistics.median(replays) * 1e3:6.2f}ms "
                   f"{statistics.median(floors) * 1e3:5.2f}ms "
-                  f"{share['physics']:6.0f}% {share['rays']:4.0f}% {share['planner']:6.0f}% "
-                  f"{share['safety']:5.1f}% {share['harness']:6.1f}%")
+                  f"{ms['physics']:5.2f}ms {ms['rays']:4.2f}ms {ms['planner']:5.2f}ms {ms['safety']:4.2f}ms "
+                  f"{ms['harness']:5.2f}ms {share['planner']:5.0f}% {share['harness']:5.1f}%")
+    print(f"load average after: {os.getloadavg()[0]:.1f}")
     return 0
 
 
