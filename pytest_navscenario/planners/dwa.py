@@ -355,9 +355,12 @@ class DynamicWindowPlanner:
             if moving.max() > -np.inf:
                 best = int(moving.argmax())
         if score[best] == -np.inf:
-            # nothing is safe: take the command with the most room (backing off, away from
-            # what is too close, rather than freezing there), the slowest of equals
-            best = int(np.lexsort((win.speed, -clear))[0])
+            # nothing is safe: brake as hard as the window allows (lowest speed, then most
+            # room); once standing, take the command with the most room instead (back off,
+            # away from what is too close, rather than freeze there)
+            best = int(np.lexsort((-clear, win.speed))[0])
+            if win.still[best] and win.still[win.cand.index(self._idx)]:
+                best = int(np.lexsort((win.speed, -clear))[0])
         self._idx = win.cand[best]
         return win.commands[best]
 
