@@ -134,9 +134,6 @@ class SearchSpace:
         return {p.name: round(float(v), POSITION_DECIMALS)
                 for p, v in zip(self.params, offsets) if v != 0}
 
-    def from_mapping(self, mapping: Mapping[str, float]) -> tuple[float, ...]:
-        return tuple(float(mapping.get(p.name, 0.0)) for p in self.params)
-
     def apply(self, offsets: Sequence[float]) -> Scenario:
         """The seed with ``offsets`` added (values rounded; sizes clamped to ``min_size``)."""
         if len(offsets) != len(self.params):

@@ -5,7 +5,6 @@ obstacles, so a seed with a crate beside the line has failures a small shift awa
 """
 from __future__ import annotations
 
-import math
 
 import pytest
 from hypothesis import given, settings
@@ -14,6 +13,7 @@ from pytest_navscenario.errors import ScenarioError
 from pytest_navscenario.loader import loads_scenario
 from pytest_navscenario.search import run_search
 from pytest_navscenario.search_space import SearchSpace, invalid_reason, scenarios_around
+from straight_planner import Straight
 
 SEED_YAML = """\
 version: 1
@@ -31,23 +31,6 @@ search:
   obstacle_size: 0
   obstacle_yaw: 0
 """
-
-
-class Straight:
-    """Drives straight at its target at 1 m/s, blind to obstacles (a planner that is easy to break)."""
-    name = "straight"
-    version = "1.0"
-
-    def reset(self, scenario):
-        pass
-
-    def act(self, obs):
-        x, y, yaw = obs.pose
-        dx, dy = obs.target[0] - x, obs.target[1] - y
-        dist = math.hypot(dx, dy) or 1.0
-        c, s = math.cos(yaw), math.sin(yaw)
-        vx, vy = (c * dx + s * dy) / dist, (-s * dx + c * dy) / dist
-        return (vx, vy, 0.0)
 
 
 @pytest.fixture(scope="module")

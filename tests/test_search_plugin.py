@@ -1,6 +1,6 @@
 """``pytest --navsearch``: real pytest runs (pytester) with the plugin loaded explicitly.
 
-The subject is a straight-line driver that ignores obstacles (see STRAIGHT below), so the
+The subject is a straight-line driver that ignores obstacles (tests/straight_planner.py), so the
 ``crate`` seed has failures a small shift away and searches stay a few simulations long.
 """
 from __future__ import annotations
@@ -8,37 +8,13 @@ from __future__ import annotations
 import json
 import re
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import pytest
 
 from test_search import SEED_YAML
 
-STRAIGHT = '''
-import math
-
-class Straight:
-    name = "straight"
-    version = "1.0"
-
-    def reset(self, scenario):
-        pass
-
-    def act(self, obs):
-        x, y, yaw = obs.pose
-        dx, dy = obs.target[0] - x, obs.target[1] - y
-        dist = math.hypot(dx, dy) or 1.0
-        c, s = math.cos(yaw), math.sin(yaw)
-        return ((c * dx + s * dy) / dist, (-s * dx + c * dy) / dist, 0.0)
-
-CALLS = [0]
-
-def interrupted_after_five():
-    """A subject whose sixth episode is interrupted as if by Ctrl-C."""
-    CALLS[0] += 1
-    if CALLS[0] > 5:
-        raise KeyboardInterrupt
-    return Straight()
-'''
+STRAIGHT = (Path(__file__).parent / "straight_planner.py").read_text()
 
 SUBJECT = "--nav-subject=straight_planner:Straight"
 
