@@ -12,26 +12,15 @@ node id, so two items never share a folder and no scenario name can write outsid
 """
 from __future__ import annotations
 
-import hashlib
 import io
 import json
-import re
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from .results import atomic_write_text
+from .files import atomic_write_text, folder_name
 from .state import get_state
-
-_UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")
-
-
-def folder_name(nodeid: str) -> str:
-    """A file-system-safe, unique folder name for a node id."""
-    readable = _UNSAFE.sub("_", nodeid).strip("._-")[:80] or "item"
-    digest = hashlib.sha1(nodeid.encode("utf-8")).hexdigest()[:8]
-    return f"{readable}-{digest}"
 
 
 def item_dir(config: pytest.Config, nodeid: str) -> Path | None:

@@ -1,66 +1,15 @@
-"""The planner protocol: what a subject under test sees each tick and what it must answer.
-
-A planner is any object with::
-
-    reset(self, scenario: Scenario) -> None        # once per episode, before the first tick
-    act(self, obs: Observation) -> Command          # once per control tick
-
-and optionally ``name`` / ``version`` string attributes (copied into the results file).
-Angles here are in **radians** (YAML scenarios use degrees; see scenario.py).
-A subject is named as ``package.module:Attribute``: a class or a zero-argument factory that
-returns a fresh planner; the harness calls it once per episode.
-"""
+"""Loading a subject under test: a built-in planner name (``dwa``), ``package.module:Attribute``
+(a class or a zero-argument factory returning a fresh planner; the harness calls it once per
+episode) or ``exec:PROGRAM [ARGS]`` (an external process). Each is checked against the planner
+protocol (see protocol.py) before any episode runs."""
 from __future__ import annotations
 
 import importlib
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Callable, NamedTuple, Protocol, runtime_checkable
+from typing import Any
 
 from .errors import SubjectLoadError
-from .scenario import Obstacle, Scenario
+from .protocol import PlannerFactory
 
-if TYPE_CHECKING:  # numpy is not imported at plugin load: only episodes need it
-    import numpy as np
-
-
-class Command(NamedTuple):
-    """Velocity command in the robot frame: vx forward (m/s), vy left (m/s), wz (rad/s).
-
-    A differential-drive robot cannot move sideways: its ``vy`` is ignored by the drive.
-    A planner may also return any length-3 sequence of finite floats.
-    """
-    vx: float
-    vy: float = 0.0
-    wz: float = 0.0
-
-
-@dataclass(frozen=True)
-class Observation:
-    """What the planner sees at one control tick (arrays are read-only)."""
-    tick: int                     # 0, 1, 2, ...
-    time: float                   # s since the episode started
-    pose: np.ndarray              # (3,) x, y (m), yaw (rad) in the world frame
-    velocity: np.ndarray          # (3,) vx, vy (m/s), wz (rad/s) in the robot frame, measured
-    ranges: np.ndarray            # (beams,) m; no return reads as lidar.range_max
-    angles: np.ndarray            # (beams,) rad, beam directions in the robot frame
-    goal: np.ndarray              # (3,) x, y, yaw (rad) of the final goal
-    waypoints: np.ndarray         # (k, 2) remaining intermediate waypoints, in order (k may be 0)
-    obstacles: tuple[Obstacle, ...]  # static map, for planners that use one (YAML units)
-
-    @property
-    def target(self) -> np.ndarray:
-        """The next point to drive to: the first remaining waypoint, else the goal position."""
-        return self.waypoints[0] if len(self.waypoints) else self.goal[:2]
-
-
-@runtime_checkable
-class Planner(Protocol):
-    def reset(self, scenario: Scenario) -> None: ...
-
-    def act(self, obs: Observation) -> Any: ...
-
-
-PlannerFactory = Callable[[], Planner]
 
 BUILTIN_SUBJECTS = {
     "dwa": "pytest_navscenario.planners.dwa:DynamicWindowPlanner",
@@ -111,3 +60,40 @@ def subject_identity(planner: Any, spec: str) -> tuple[str, str | None]:
     name = getattr(planner, "name", None) or spec
     version = getattr(planner, "version", None)
     return str(name), (str(version) if version is not None else None)
+
+
+def make_planner(planner: Any = None) -> tuple[Any, str]:
+    """(planner instance, spec) from None (built-in default), a spec string, a class or factory,
+    or a ready planner object. Raises SubjectLoadError in plain words."""
+    if planner is None:
+        planner = DEFAULT_SUBJECT
+    if isinstance(planner, str):
+        spec = planner
+        factory = load_subject(spec)
+    elif hasattr(planner, "act") and not isinstance(planner, type):
+        return planner, _spec_of(planner)
+    elif callable(planner):
+        spec, factory = _spec_of(planner), planner
+    else:
+        raise SubjectLoadError(
+            f"planner must be None, a 'package.module:Attribute' string, a class/factory or an object "
+            f"with reset() and act(); got {type(planner).__name__} {planner!r:.60}")
+    try:
+        instance = factory()
+    except Exception as exc:
+        raise SubjectLoadError(f"subject {spec!r}: calling it to make a planner raised "
+                               f"{type(exc).__name__}: {exc}") from exc
+    missing = [m for m in ("reset", "act") if not callable(getattr(instance, m, None))]
+    if missing:
+        raise SubjectLoadError(
+            f"subject {spec!r}: the object it makes ({type(instance).__name__}) has no "
+            f"{' and no '.join(m + '()' for m in missing)} method; a planner needs reset(scenario) "
+            f"and act(observation) -> (vx, vy, wz) (see pytest_navscenario/planner.py)")
+    return instance, spec
+
+
+def _spec_of(obj: Any) -> str:
+    cls = obj if isinstance(obj, type) or callable(obj) and not hasattr(obj, "act") else type(obj)
+    module = getattr(cls, "__module__", None) or "?"
+    name = getattr(cls, "__qualname__", None) or getattr(cls, "__name__", None) or type(cls).__name__
+    return f"{module}:{name}"

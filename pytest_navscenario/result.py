@@ -6,9 +6,9 @@ import enum
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
-import numpy as np
 
 from .scenario import Scenario
+from .trajectory import Collision, SafetyStop, SubjectFailure, Trajectory
 
 
 class Outcome(str, enum.Enum):
@@ -25,47 +25,6 @@ class Outcome(str, enum.Enum):
     @property
     def passed(self) -> bool:
         return self is Outcome.SUCCESS
-
-
-@dataclass(frozen=True)
-class Collision:
-    time: float
-    obstacle: str          # name of the obstacle that was hit
-    x: float               # contact point, world frame
-    y: float
-    depth: float           # penetration depth (m, >= 0)
-
-
-@dataclass(frozen=True)
-class SafetyStop:
-    time: float
-    obstacle: str          # the obstacle the predicted sweep would have hit
-    speed: float           # robot speed (m/s) when halted
-
-
-@dataclass(frozen=True)
-class SubjectFailure:
-    message: str
-    tick: int
-    time: float
-    traceback: str | None = None   # the planner's own traceback, when it raised
-
-
-@dataclass
-class Trajectory:
-    """Recorded states. Physics-rate arrays (every MuJoCo step, t=0 included) and tick-rate arrays."""
-    t: np.ndarray            # (n,) s
-    pose: np.ndarray         # (n, 3) x, y, yaw (rad), world frame
-    velocity: np.ndarray     # (n, 3) vx, vy (m/s), wz (rad/s), robot frame, measured
-    tick_t: np.ndarray       # (m,) s, control ticks
-    command: np.ndarray      # (m, 3) commanded vx, vy, wz (robot frame) after the drive's limits
-    ranges: np.ndarray       # (m, beams) float32 lidar ranges as the planner saw them (noise included)
-    angles: np.ndarray       # (beams,) rad, beam directions in the robot frame
-    waypoint_times: tuple[float, ...] = ()  # when each intermediate waypoint was passed
-
-    @property
-    def duration(self) -> float:
-        return float(self.t[-1]) if len(self.t) else 0.0
 
 
 @dataclass(frozen=True)
@@ -118,25 +77,3 @@ class EpisodeResult:
         return self.outcome.passed
 
 
-_TRAJ_ARRAYS = ("t", "pose", "velocity", "tick_t", "command", "ranges", "angles")
-
-
-def trajectory_to_dict(traj: Trajectory) -> dict[str, Any]:
-    """Plain lists (JSON / xdist-serialisable). Inverse: trajectory_from_dict."""
-    out: dict[str, Any] = {name: np.asarray(getattr(traj, name)).tolist() for name in _TRAJ_ARRAYS}
-    out["waypoint_times"] = list(traj.waypoint_times)
-    return out
-
-
-def trajectory_from_dict(data: dict[str, Any]) -> Trajectory:
-    beams = len(data.get("angles", []))
-    arrays = {
-        "t": np.asarray(data["t"], dtype=float),
-        "pose": np.asarray(data["pose"], dtype=float).reshape(-1, 3),
-        "velocity": np.asarray(data["velocity"], dtype=float).reshape(-1, 3),
-        "tick_t": np.asarray(data["tick_t"], dtype=float),
-        "command": np.asarray(data["command"], dtype=float).reshape(-1, 3),
-        "ranges": np.asarray(data["ranges"], dtype=np.float32).reshape(-1, beams),
-        "angles": np.asarray(data["angles"], dtype=float),
-    }
-    return Trajectory(**arrays, waypoint_times=tuple(data.get("waypoint_times", ())))

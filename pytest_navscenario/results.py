@@ -27,13 +27,12 @@ either the previous file or a complete new one.
 from __future__ import annotations
 
 import json
-import math
 import os
-import tempfile
 from pathlib import Path
 from typing import Any, Iterable
 
 from .errors import NavScenarioError
+from .files import atomic_write_text, json_safe
 from .result import EpisodeResult
 from .scenario import content_hash
 
@@ -50,17 +49,6 @@ class ResultsFileError(NavScenarioError):
 def _tool_version() -> str:
     from . import __version__
     return __version__
-
-
-def json_safe(value: Any) -> Any:
-    """Strict-JSON copy: non-finite floats become null (JSON has no NaN/inf)."""
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [json_safe(v) for v in value]
-    return value
 
 
 def make_record(result: EpisodeResult, *, nodeid: str, path: str, repeat: int = 0,
@@ -87,32 +75,6 @@ def make_record(result: EpisodeResult, *, nodeid: str, path: str, repeat: int = 
         "metrics": json_safe(result.metrics.as_dict()),
         "wall_time": result.wall_time,
     }
-
-
-def atomic_write_text(path: str | os.PathLike, text: str) -> None:
-    """Write ``text`` to ``path`` via a temporary file in the same folder and an atomic rename."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            os.fchmod(fh.fileno(), 0o666 & ~_umask())  # mkstemp makes 0600; give the usual mode
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
 
 
 def write_results(path: str | os.PathLike, records: Iterable[dict[str, Any]]) -> None:

@@ -14,8 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import SubjectLoadError
-from .planner import DEFAULT_SUBJECT, load_subject, subject_identity
+from .planner import make_planner, subject_identity
 from .result import EpisodeResult
 from .scenario import Scenario
 
@@ -27,43 +26,6 @@ def effective_seed(scenario_seed: int, base_seed: int | None) -> int:
         return int(scenario_seed)
     mixed = np.random.SeedSequence([int(scenario_seed) % 2**64, int(base_seed) % 2**64])
     return int(mixed.generate_state(1)[0])
-
-
-def _spec_of(obj: Any) -> str:
-    cls = obj if isinstance(obj, type) or callable(obj) and not hasattr(obj, "act") else type(obj)
-    module = getattr(cls, "__module__", None) or "?"
-    name = getattr(cls, "__qualname__", None) or getattr(cls, "__name__", None) or type(cls).__name__
-    return f"{module}:{name}"
-
-
-def make_planner(planner: Any = None) -> tuple[Any, str]:
-    """(planner instance, spec) from None (built-in default), a spec string, a class or factory,
-    or a ready planner object. Raises SubjectLoadError in plain words."""
-    if planner is None:
-        planner = DEFAULT_SUBJECT
-    if isinstance(planner, str):
-        spec = planner
-        factory = load_subject(spec)
-    elif hasattr(planner, "act") and not isinstance(planner, type):
-        return planner, _spec_of(planner)
-    elif callable(planner):
-        spec, factory = _spec_of(planner), planner
-    else:
-        raise SubjectLoadError(
-            f"planner must be None, a 'package.module:Attribute' string, a class/factory or an object "
-            f"with reset() and act(); got {type(planner).__name__} {planner!r:.60}")
-    try:
-        instance = factory()
-    except Exception as exc:
-        raise SubjectLoadError(f"subject {spec!r}: calling it to make a planner raised "
-                               f"{type(exc).__name__}: {exc}") from exc
-    missing = [m for m in ("reset", "act") if not callable(getattr(instance, m, None))]
-    if missing:
-        raise SubjectLoadError(
-            f"subject {spec!r}: the object it makes ({type(instance).__name__}) has no "
-            f"{' and no '.join(m + '()' for m in missing)} method; a planner needs reset(scenario) "
-            f"and act(observation) -> (vx, vy, wz) (see pytest_navscenario/planner.py)")
-    return instance, spec
 
 
 def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = None,
