@@ -20,10 +20,10 @@ import tempfile
 import time
 from pathlib import Path
 
-from pytest_navscenario.bag_import import scenario_from_bag
-from pytest_navscenario.bags import FORMATS, default_bag_path, write_episode_bag
-from pytest_navscenario.loader import load_scenario
-from pytest_navscenario.runner import run_scenario
+from pytest_navscenario.ros.bag_import import scenario_from_bag
+from pytest_navscenario.ros.bag_writer import FORMATS, default_bag_path, write_episode_bag
+from pytest_navscenario.scenario.loader import load_scenario
+from pytest_navscenario.harness.runner import run_scenario
 
 ROOT = Path(__file__).resolve().parent.parent
 TB3 = ROOT / "tests" / "data" / "fuse_turtlebot3.bag"

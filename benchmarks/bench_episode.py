@@ -28,9 +28,10 @@ import time
 import mujoco
 import numpy as np
 
-from pytest_navscenario.loader import load_scenario
-from pytest_navscenario.runner import make_planner, run_scenario
-from pytest_navscenario.sim import LIDAR_HEIGHT, compiled_world, lidar_angles, simulate, steps_per_tick
+from pytest_navscenario.scenario.loader import load_scenario
+from pytest_navscenario.subjects.loading import make_planner
+from pytest_navscenario.harness.runner import run_scenario
+from pytest_navscenario.sim.episode import LIDAR_HEIGHT, compiled_world, lidar_angles, simulate, steps_per_tick
 
 PLANNERS = ("dwa", "potential-field")
 

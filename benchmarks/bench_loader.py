@@ -18,8 +18,9 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from pytest_navscenario.errors import ScenarioError  # noqa: E402
-from pytest_navscenario.loader import SCENARIO_LIMITS, dump_scenario, loads_scenario  # noqa: E402
+from pytest_navscenario.core.errors import ScenarioError  # noqa: E402
+from pytest_navscenario.scenario.loader import SCENARIO_LIMITS, loads_scenario
+from pytest_navscenario.scenario.dump import dump_scenario  # noqa: E402
 
 CLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 

@@ -28,10 +28,10 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from pytest_navscenario import load_scenario, run_scenario  # noqa: E402
-from pytest_navscenario import paths  # noqa: E402
-from pytest_navscenario.metrics import compute_metrics  # noqa: E402
-from pytest_navscenario.result import Trajectory  # noqa: E402
-from pytest_navscenario.scenario import BoxObstacle, Mission, Pose, Scenario  # noqa: E402
+from pytest_navscenario.verdict import paths  # noqa: E402
+from pytest_navscenario.verdict.metrics import compute_metrics  # noqa: E402
+from pytest_navscenario.sim.trajectory import Trajectory  # noqa: E402
+from pytest_navscenario.scenario.model import BoxObstacle, Mission, Pose, Scenario  # noqa: E402
 
 
 def timed(fn, repeats: int, before=None) -> dict[str, float]:

@@ -16,9 +16,9 @@ import statistics
 import time
 from pathlib import Path
 
-from pytest_navscenario.loader import load_scenario
-from pytest_navscenario.planner import load_subject
-from pytest_navscenario.runner import run_scenario
+from pytest_navscenario.scenario.loader import load_scenario
+from pytest_navscenario.subjects.loading import load_subject
+from pytest_navscenario.harness.runner import run_scenario
 
 SEEDS = ["boxes1", "boxes2", "corridor", "cylinders", "L-corridor"]
 SUBJECTS = ["dwa", "potential-field"]

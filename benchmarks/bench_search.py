@@ -25,14 +25,14 @@ PLANNERS = ("dwa", "potential-field")
 
 
 def _load(name):
-    from pytest_navscenario.loader import load_scenario
+    from pytest_navscenario.scenario.loader import load_scenario
     return load_scenario(ROOT / "scenarios" / f"{name}.yaml")
 
 
 def one_search(args):
     seed_name, planner, strategy, seed_value, budget = args
-    from pytest_navscenario.planner import load_subject
-    from pytest_navscenario.search import run_search
+    from pytest_navscenario.subjects.loading import load_subject
+    from pytest_navscenario.search.engine import run_search
 
     t0, c0 = time.perf_counter(), time.process_time()
     r = run_search(_load(seed_name), load_subject(planner), budget=budget, seed_value=seed_value,
@@ -49,9 +49,9 @@ def one_search(args):
 
 def rerun(args):
     seed_name, planner, offsets_list = args
-    from pytest_navscenario.planner import load_subject
-    from pytest_navscenario.runner import run_scenario
-    from pytest_navscenario.search_space import SearchSpace
+    from pytest_navscenario.subjects.loading import load_subject
+    from pytest_navscenario.harness.runner import run_scenario
+    from pytest_navscenario.search.space import SearchSpace
 
     space = SearchSpace(_load(seed_name))
     factory = load_subject(planner)

@@ -33,8 +33,9 @@ SEEDS = ["boxes1", "boxes2", "corridor", "cylinders", "L-corridor"]
 def generate(folder: Path, count: int, rng_seed: int = 1) -> int:
     import numpy as np
 
-    from pytest_navscenario.errors import ScenarioError
-    from pytest_navscenario.loader import dump_scenario, load_scenario, loads_scenario
+    from pytest_navscenario.core.errors import ScenarioError
+    from pytest_navscenario.scenario.loader import load_scenario, loads_scenario
+    from pytest_navscenario.scenario.dump import dump_scenario
 
     rng = np.random.default_rng(rng_seed)
     written = 0

@@ -31,9 +31,9 @@ ROOT = Path(__file__).resolve().parent.parent
 
 def variants(seed, n: int, rng: np.random.Generator):
     """Jittered copies of ``seed`` that keep start and goal clear (loader.check_scenario)."""
-    from pytest_navscenario.errors import ScenarioError
-    from pytest_navscenario.loader import check_scenario
-    from pytest_navscenario.scenario import BoxObstacle
+    from pytest_navscenario.core.errors import ScenarioError
+    from pytest_navscenario.scenario.loader import check_scenario
+    from pytest_navscenario.scenario.model import BoxObstacle
 
     out = []
     tries = 0
@@ -61,7 +61,8 @@ def write_suite(folder: Path, n: int) -> None:
     """The seeds and their variants as scenario files, one folder (= family) per seed."""
     import shutil
 
-    from pytest_navscenario.loader import dump_scenario, load_scenario
+    from pytest_navscenario.scenario.loader import load_scenario
+    from pytest_navscenario.scenario.dump import dump_scenario
 
     if folder.is_dir():
         shutil.rmtree(folder)
@@ -83,11 +84,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeats", type=int, default=7, help="renders per picture for the timing")
     args = parser.parse_args(argv)
 
-    from pytest_navscenario.compare import compare_records, format_comparison
-    from pytest_navscenario.loader import load_scenario
-    from pytest_navscenario.plots import save_bars, save_comparison, save_trajectory
-    from pytest_navscenario.results import make_record, write_results
-    from pytest_navscenario.runner import run_scenario
+    from pytest_navscenario.report.compare import compare_records, format_comparison
+    from pytest_navscenario.scenario.loader import load_scenario
+    from pytest_navscenario.report.plots import save_bars, save_comparison, save_trajectory
+    from pytest_navscenario.report.results_file import make_record, write_results
+    from pytest_navscenario.harness.runner import run_scenario
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -140,7 +141,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"trajectory.png: {nodeid} ({res.subject}): {res.outcome}: {res.message}")
 
     # cost of one picture (what --nav-plots adds per plotted item): CPU-time medians
-    from pytest_navscenario.plots import bars_figure, comparison_figure, png_bytes, trajectory_figure
+    from pytest_navscenario.report.plots import bars_figure, comparison_figure, png_bytes, trajectory_figure
     for label, make in (("trajectory plot", lambda: trajectory_figure(res)),
                         ("side-by-side plot", lambda: comparison_figure(results["a"][pick], results["b"][pick])),
                         ("bar chart", lambda: bars_figure(cmp))):

@@ -6,7 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from pytest_navscenario.loader import dump_scenario, load_scenario
+from pytest_navscenario.scenario.loader import load_scenario
+from pytest_navscenario.scenario.dump import dump_scenario
 
 PLUGIN = ["-p", "pytest_navscenario.plugin"]
 SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
@@ -87,8 +88,9 @@ def test_plugin_knows_the_writer_formats_without_importing_it():
     import subprocess
     import sys
 
-    from pytest_navscenario import bag_plugin, bags
+    from pytest_navscenario.plugin import bags as bag_plugin
+    from pytest_navscenario.ros import bag_writer as bags
     assert bag_plugin.FORMATS == bags.FORMATS
-    code = "import sys, pytest_navscenario.bag_plugin; print('pytest_navscenario.bags' in sys.modules)"
+    code = "import sys, pytest_navscenario.plugin.bags; print('pytest_navscenario.ros.bag_writer' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"

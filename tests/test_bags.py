@@ -13,12 +13,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pytest_navscenario.bag_import import scenario_from_bag
-from pytest_navscenario.bags import (LATCHED, ODOM_MAX_RATE, TOPICS, BagWriteError, default_bag_path,
-                                     write_episode_bag)
-from pytest_navscenario.loader import load_scenario
-from pytest_navscenario.runner import run_scenario
-from pytest_navscenario.scenario import BoxObstacle, CylinderObstacle
+from pytest_navscenario.ros.bag_import import scenario_from_bag
+from pytest_navscenario.ros.bag_writer import LATCHED, ODOM_MAX_RATE, TOPICS, BagWriteError, default_bag_path, write_episode_bag
+from pytest_navscenario.scenario.loader import load_scenario
+from pytest_navscenario.harness.runner import run_scenario
+from pytest_navscenario.scenario.model import BoxObstacle, CylinderObstacle
 
 SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
 
@@ -119,7 +118,7 @@ def test_mcap_bag_reads_back_every_topic_count_and_type(episodes, tmp_path):
     assert summary["outcome"] == result.outcome.value
     assert summary["metrics"]["min_clearance"] == result.metrics.min_clearance
 
-    from pytest_navscenario.loader import loads_scenario
+    from pytest_navscenario.scenario.loader import loads_scenario
     assert loads_scenario(bag["/navscenario/scenario"][1][0][1].data) == result.scenario
 
 
@@ -195,7 +194,8 @@ def test_round_trip_episode_bag_seed_recovers_obstacles(episodes, tmp_path, name
 
 
 def test_hit_obstacle_is_red_and_the_event_is_in_the_result(episodes, tmp_path):
-    from pytest_navscenario.result import Collision, Outcome
+    from pytest_navscenario.sim.trajectory import Collision
+    from pytest_navscenario.verdict.result import Outcome
     result = episodes["cylinders"]
     name = result.scenario.obstacles[1].name
     crashed = dataclasses.replace(result, outcome=Outcome.COLLISION,

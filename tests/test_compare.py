@@ -7,8 +7,8 @@ import xml.etree.ElementTree as ET
 import pytest
 
 from pytest_navscenario.cli import main
-from pytest_navscenario.compare import compare_files, compare_records, format_comparison
-from pytest_navscenario.results import ResultsFileError, write_results
+from pytest_navscenario.report.compare import compare_files, compare_records, format_comparison
+from pytest_navscenario.report.results_file import ResultsFileError, write_results
 
 
 def rec(nodeid, outcome, *, family=None, subject="dwa", h=None, repeat=0, seed=7, message=""):
@@ -152,8 +152,8 @@ def test_side_by_side_reruns_regressions_with_both_subjects(tmp_path, capsys):
     plot per scenario, says when a re-run disagrees with the file, and refuses a changed file."""
     from matplotlib.image import imread
 
-    from pytest_navscenario.loader import loads_scenario
-    from pytest_navscenario.scenario import content_hash
+    from pytest_navscenario.scenario.loader import loads_scenario
+    from pytest_navscenario.scenario.model import content_hash
 
     text = "version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 1.5, y: 0}, timeout: 5}\n"
     (tmp_path / "s").mkdir()

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from pytest_navscenario import check_planner
-from pytest_navscenario.conformance import PlannerCheck
-from pytest_navscenario.errors import SubjectLoadError
-from pytest_navscenario.planners import DynamicWindowPlanner
+from pytest_navscenario.harness.conformance import PlannerCheck
+from pytest_navscenario.core.errors import SubjectLoadError
+from pytest_navscenario.subjects.planners import DynamicWindowPlanner
 
 
 class Base:

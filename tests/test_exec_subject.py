@@ -10,11 +10,11 @@ from pathlib import Path
 import pytest
 
 from pytest_navscenario import run_scenario
-from pytest_navscenario.errors import SubjectLoadError
-from pytest_navscenario.exec_subject import _PROCESSES
-from pytest_navscenario.planner import load_subject
-from pytest_navscenario.result import Outcome
-from pytest_navscenario.scenario import BoxObstacle, Mission, Pose, Scenario
+from pytest_navscenario.core.errors import SubjectLoadError
+from pytest_navscenario.subjects.external import _PROCESSES
+from pytest_navscenario.subjects.loading import load_subject
+from pytest_navscenario.verdict.result import Outcome
+from pytest_navscenario.scenario.model import BoxObstacle, Mission, Pose, Scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 VECTOR_FIELD = ROOT / "examples" / "external" / "vector_field.py"

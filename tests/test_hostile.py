@@ -11,7 +11,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from pytest_navscenario import ScenarioError, load_scenario, loads_scenario
-from pytest_navscenario.loader import SCENARIO_LIMITS, dump_scenario, scenario_from_dict, scenario_to_dict
+from pytest_navscenario.scenario.loader import SCENARIO_LIMITS, scenario_from_dict
+from pytest_navscenario.scenario.dump import dump_scenario, scenario_to_dict
 
 VALID = textwrap.dedent("""\
     version: 1

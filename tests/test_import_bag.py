@@ -10,10 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pytest_navscenario.bag_import import decimate_path, scenario_from_bag
+from pytest_navscenario.ros.bag_import import decimate_path, scenario_from_bag
 from pytest_navscenario.cli import main
-from pytest_navscenario.loader import load_scenario
-from pytest_navscenario.scenario import BoxObstacle, CylinderObstacle
+from pytest_navscenario.scenario.loader import load_scenario
+from pytest_navscenario.scenario.model import BoxObstacle, CylinderObstacle
 
 DATA = Path(__file__).resolve().parent / "data"
 TB3 = DATA / "fuse_turtlebot3.bag"
@@ -56,7 +56,7 @@ def test_turtlebot3_start_from_odometry_and_loop_as_waypoints(tb3):
 
 
 def test_turtlebot3_seed_is_driven_by_dwa(tb3, tmp_path):
-    from pytest_navscenario.runner import run_scenario
+    from pytest_navscenario.harness.runner import run_scenario
     out = tmp_path / "tb3.yaml"
     assert main(["from-bag", str(TB3), "-o", str(out), "--path-as", "both"]) == 0
     seed = load_scenario(out)
@@ -88,7 +88,7 @@ def test_window_laser_pose_and_reference_csv(tmp_path, capsys):
 
 
 def test_grid_in_chunks_equals_grid_at_once():
-    from pytest_navscenario.bag_import import grid_returns, read_bag
+    from pytest_navscenario.ros.bag_import import grid_returns, read_bag
     data = read_bag(TB3, end=20.0)
     small, whole = grid_returns(data, (-0.064, 0, 0), chunk=7), grid_returns(data, (-0.064, 0, 0), chunk=10_000)
     assert small.returns == whole.returns > 10_000
@@ -109,8 +109,8 @@ def test_decimate_path_follows_the_path():
 def boxes_bag(tmp_path_factory):
     """A rosbag2 sqlite3 bag of a real DWA episode on boxes2, then made 'old': its message
     definitions deleted (ROS 2 bags before Iron embed none)."""
-    from pytest_navscenario.bags import write_episode_bag
-    from pytest_navscenario.runner import run_scenario
+    from pytest_navscenario.ros.bag_writer import write_episode_bag
+    from pytest_navscenario.harness.runner import run_scenario
     result = run_scenario(load_scenario(SCENARIOS / "boxes2.yaml"), "dwa")
     path = write_episode_bag(result, tmp_path_factory.mktemp("old") / "ep", fmt="sqlite3")
     db = sqlite3.connect(path / "ep.db3")
@@ -131,7 +131,7 @@ def test_bag_without_scans_gives_trajectory_only(tmp_path, capsys):
     from rosbags.rosbag2 import StoragePlugin, Writer
     from rosbags.typesys import Stores, get_typestore
 
-    from pytest_navscenario.bags import build
+    from pytest_navscenario.ros.bag_writer import build
     ts = get_typestore(Stores.ROS2_HUMBLE)
     bag = tmp_path / "odom_only"
     with Writer(bag, version=9, storage_plugin=StoragePlugin.MCAP) as w:
@@ -154,7 +154,7 @@ def test_laser_mount_from_tf_when_there_is_no_tf_static(tmp_path, capsys):
     straight wall at y = 2 m must come out as one wall along x, its face at y = 2."""
     from rosbags.rosbag1 import Writer
 
-    from pytest_navscenario.bags import _typestore, build
+    from pytest_navscenario.ros.bag_writer import _typestore, build
     ts = _typestore(True)  # noetic + tf2_msgs/TFMessage
     beams = np.radians(np.arange(-80.0, 81.0, 1.0))      # laser frame
     world_dir = beams + math.pi / 2                      # laser yaw 90 degrees on a robot at yaw 0

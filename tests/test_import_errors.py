@@ -52,7 +52,7 @@ def test_truncated_mcap_bag(capsys, tmp_path):
     from rosbags.rosbag2 import StoragePlugin, Writer
     from rosbags.typesys import Stores, get_typestore
 
-    from pytest_navscenario.bags import build
+    from pytest_navscenario.ros.bag_writer import build
     ts = get_typestore(Stores.ROS2_HUMBLE)
     bag = tmp_path / "run"
     with Writer(bag, version=9, storage_plugin=StoragePlugin.MCAP) as w:
@@ -75,7 +75,7 @@ def test_bag_without_odometry(capsys, tmp_path):
     from rosbags.rosbag1 import Writer
     from rosbags.typesys import Stores, get_typestore
 
-    from pytest_navscenario.bags import build
+    from pytest_navscenario.ros.bag_writer import build
     ts = get_typestore(Stores.ROS1_NOETIC)
     bag = tmp_path / "cmd_only.bag"
     with Writer(bag) as w:

@@ -12,11 +12,11 @@ import shapely
 from shapely.geometry import box as shapely_box
 
 from pytest_navscenario.cli import main
-from pytest_navscenario.geometry import obstacle_polygon
-from pytest_navscenario.loader import load_scenario
-from pytest_navscenario.map_import import map_obstacles, merge_rectangles
-from pytest_navscenario.scenario import BoxObstacle, CylinderObstacle
-from pytest_navscenario.world_import import aerialist_obstacles, sdf_obstacles
+from pytest_navscenario.scenario.geometry import obstacle_polygon
+from pytest_navscenario.scenario.loader import load_scenario
+from pytest_navscenario.ros.map_import import map_obstacles, merge_rectangles
+from pytest_navscenario.scenario.model import BoxObstacle, CylinderObstacle
+from pytest_navscenario.ros.world_import import aerialist_obstacles, sdf_obstacles
 
 DATA = Path(__file__).resolve().parent / "data"
 

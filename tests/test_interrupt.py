@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from pytest_navscenario.results import read_results
+from pytest_navscenario.report.results_file import read_results
 
 SLOW_PLANNER = '''
 import time

@@ -13,10 +13,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from pytest_navscenario import ScenarioError, dump_scenario, load_scenario, loads_scenario
-from pytest_navscenario.loader import (SCENARIO_LIMITS, check_scenario, looks_like_scenario, resolve_path,
-                                       save_scenario, scenario_from_dict, scenario_to_dict)
-from pytest_navscenario.scenario import (BoxObstacle, CylinderObstacle, Footprint, GoalTolerance, Lidar, Limits,
-                                         Mark, Mission, Pose, Reference, Robot, Safety, Scenario, Simulation)
+from pytest_navscenario.scenario.loader import SCENARIO_LIMITS, check_scenario, looks_like_scenario, resolve_path, scenario_from_dict
+from pytest_navscenario.scenario.dump import save_scenario, scenario_to_dict
+from pytest_navscenario.scenario.model import BoxObstacle, CylinderObstacle, Footprint, GoalTolerance, Lidar, Limits, Mark, Mission, Pose, Reference, Robot, Safety, Scenario, Simulation
 
 GOOD = textwrap.dedent("""\
     version: 1
@@ -330,7 +329,7 @@ def test_readme_example_loads_and_round_trips():
 
 def test_pure_python_parser_gives_the_same_results(monkeypatch, good_file):
     """Without libyaml (some platforms), the pure-Python parser feeds the same composer."""
-    from pytest_navscenario import yaml_tree
+    from pytest_navscenario.scenario import yaml_tree
     with_c = load_scenario(good_file)
     monkeypatch.setattr(yaml_tree, "_Loader", yaml.SafeLoader)
     assert load_scenario(good_file) == with_c

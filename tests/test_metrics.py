@@ -5,13 +5,12 @@ import numpy as np
 import pytest
 import shapely
 
-from pytest_navscenario.errors import ScenarioError
-from pytest_navscenario.geometry import footprint_polygons, obstacle_polygons
-from pytest_navscenario.metrics import compute_metrics, min_clearance
-from pytest_navscenario.paths import path_through, shortest_path
-from pytest_navscenario.result import Collision, Trajectory
-from pytest_navscenario.scenario import (BoxObstacle, CylinderObstacle, Footprint, Mission, Pose,
-                                         Reference, Robot, Scenario)
+from pytest_navscenario.core.errors import ScenarioError
+from pytest_navscenario.scenario.geometry import footprint_polygons, obstacle_polygons
+from pytest_navscenario.verdict.metrics import compute_metrics, min_clearance
+from pytest_navscenario.verdict.paths import path_through, shortest_path
+from pytest_navscenario.sim.trajectory import Collision, Trajectory
+from pytest_navscenario.scenario.model import BoxObstacle, CylinderObstacle, Footprint, Mission, Pose, Reference, Robot, Scenario
 
 DT = 0.01
 

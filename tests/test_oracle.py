@@ -2,9 +2,10 @@
 import numpy as np
 import pytest
 
-from pytest_navscenario.oracle import classify
-from pytest_navscenario.result import Collision, Outcome, SafetyStop, SubjectFailure, Trajectory
-from pytest_navscenario.scenario import Mission, Pose, Scenario
+from pytest_navscenario.verdict.oracle import classify
+from pytest_navscenario.sim.trajectory import Collision, SafetyStop, SubjectFailure, Trajectory
+from pytest_navscenario.verdict.result import Outcome
+from pytest_navscenario.scenario.model import Mission, Pose, Scenario
 
 
 def scenario(timeout=30.0, waypoints=()):

@@ -7,11 +7,10 @@ import pytest
 import shapely
 from shapely.geometry import LineString, Polygon
 
-from pytest_navscenario import paths
-from pytest_navscenario.geometry import obstacle_polygons
-from pytest_navscenario.paths import min_obstacle_gap, path_exists, shortest_path
-from pytest_navscenario.scenario import (BoxObstacle, CylinderObstacle, Footprint, Mission, Pose,
-                                         Robot, Scenario)
+from pytest_navscenario.verdict import paths
+from pytest_navscenario.scenario.geometry import obstacle_polygons
+from pytest_navscenario.verdict.paths import min_obstacle_gap, path_exists, shortest_path
+from pytest_navscenario.scenario.model import BoxObstacle, CylinderObstacle, Footprint, Mission, Pose, Robot, Scenario
 
 CIRCLE = Footprint(shape="circle", radius=0.3)
 

@@ -9,15 +9,15 @@ import numpy as np
 import pytest
 from shapely.geometry import Point
 
-from pytest_navscenario.geometry import footprint_polygon
-from pytest_navscenario.loader import load_scenario
-from pytest_navscenario.planner import Command, Observation, load_subject
-from pytest_navscenario.planners import DynamicWindowPlanner, PotentialFieldPlanner
-from pytest_navscenario.planners.dwa import footprint_distance
-from pytest_navscenario.result import Outcome
-from pytest_navscenario.runner import run_scenario
-from pytest_navscenario.scenario import (BoxObstacle, Footprint, GoalTolerance, Limits, Mission,
-                                         Pose, Robot, Scenario)
+from pytest_navscenario.scenario.geometry import footprint_polygon
+from pytest_navscenario.scenario.loader import load_scenario
+from pytest_navscenario.subjects.protocol import Command, Observation
+from pytest_navscenario.subjects.loading import load_subject
+from pytest_navscenario.subjects.planners import DynamicWindowPlanner, PotentialFieldPlanner
+from pytest_navscenario.subjects.planners.dwa import footprint_distance
+from pytest_navscenario.verdict.result import Outcome
+from pytest_navscenario.harness.runner import run_scenario
+from pytest_navscenario.scenario.model import BoxObstacle, Footprint, GoalTolerance, Limits, Mission, Pose, Robot, Scenario
 
 SEEDS_DIR = Path(__file__).resolve().parent.parent / "scenarios"
 SEEDS = ["boxes1", "boxes2", "corridor", "cylinders", "L-corridor"]

@@ -11,8 +11,9 @@ import math
 import numpy as np
 import pytest
 
-from pytest_navscenario.result import Collision, EpisodeResult, Metrics, Outcome, SafetyStop, Trajectory
-from pytest_navscenario.scenario import BoxObstacle, CylinderObstacle, Mission, Pose, Scenario
+from pytest_navscenario.sim.trajectory import Collision, SafetyStop, Trajectory
+from pytest_navscenario.verdict.result import EpisodeResult, Metrics, Outcome
+from pytest_navscenario.scenario.model import BoxObstacle, CylinderObstacle, Mission, Pose, Scenario
 
 
 def make_episode(outcome: str = "collision", *, subject: str = "dwa", bend: float = 0.6,
@@ -66,7 +67,7 @@ def assert_picture(path, min_size=(300, 300)):
 
 
 def test_trajectory_plot_size_and_content(tmp_path):
-    from pytest_navscenario.plots import _figsize, save_figure, trajectory_figure
+    from pytest_navscenario.report.plots import _figsize, save_figure, trajectory_figure
 
     result = make_episode("collision")
     fig = trajectory_figure(result)
@@ -89,8 +90,8 @@ def test_trajectory_plot_size_and_content(tmp_path):
 
 def test_plot_without_trajectory_still_shows_the_layout(tmp_path):
     """Results rebuilt without a trajectory (not requested) still plot the scene and markers."""
-    from pytest_navscenario.payload import _empty_trajectory
-    from pytest_navscenario.plots import save_trajectory
+    from pytest_navscenario.plugin.payload import _empty_trajectory
+    from pytest_navscenario.report.plots import save_trajectory
 
     result = make_episode("timeout")
     result.trajectory = _empty_trajectory()
@@ -98,7 +99,7 @@ def test_plot_without_trajectory_still_shows_the_layout(tmp_path):
 
 
 def test_side_by_side_comparison(tmp_path):
-    from pytest_navscenario.plots import comparison_figure, save_figure
+    from pytest_navscenario.report.plots import comparison_figure, save_figure
 
     a = make_episode("collision", subject="dwa")
     b = make_episode("success", subject="potential-field", bend=-0.3)
@@ -112,8 +113,8 @@ def test_side_by_side_comparison(tmp_path):
 
 
 def test_bar_chart_from_a_comparison(tmp_path):
-    from pytest_navscenario.compare import compare_records
-    from pytest_navscenario.plots import bars_figure, save_figure
+    from pytest_navscenario.report.compare import compare_records
+    from pytest_navscenario.report.plots import bars_figure, save_figure
     from test_compare import BASE, suite
 
     changed = dict(BASE, **{"scenarios/boxes/b2.yaml::b2": "safety-stop",
@@ -131,7 +132,7 @@ def test_bar_chart_from_a_comparison(tmp_path):
 
 def test_cli_plot_option(tmp_path, capsys):
     from pytest_navscenario.cli import main
-    from pytest_navscenario.results import write_results
+    from pytest_navscenario.report.results_file import write_results
     from test_compare import BASE, suite
 
     write_results(tmp_path / "a.jsonl", suite(BASE))
@@ -144,13 +145,13 @@ def test_cli_plot_option(tmp_path, capsys):
 
 @pytest.mark.parametrize("raw, step", [(0.3, 0.5), (1.0, 1.0), (1.2, 2.0), (3.1, 5.0), (0.0, 1.0)])
 def test_nice_grid_steps(raw, step):
-    from pytest_navscenario.plots import _nice_step
+    from pytest_navscenario.report.plots import _nice_step
     assert _nice_step(raw) == step
 
 
 def test_bar_chart_says_when_nothing_could_be_compared():
-    from pytest_navscenario.compare import compare_records
-    from pytest_navscenario.plots import bars_figure
+    from pytest_navscenario.report.compare import compare_records
+    from pytest_navscenario.report.plots import bars_figure
     from test_compare import BASE, rec, suite
 
     cmp = compare_records(suite(BASE), [rec("scenarios/x/new.yaml::new", "success")])

@@ -13,10 +13,10 @@ from pathlib import Path
 
 import pytest
 
-from pytest_navscenario.loader import load_scenario
-from pytest_navscenario.results import read_results
-from pytest_navscenario.runner import effective_seed
-from pytest_navscenario.scenario import content_hash
+from pytest_navscenario.scenario.loader import load_scenario
+from pytest_navscenario.report.results_file import read_results
+from pytest_navscenario.harness.runner import effective_seed
+from pytest_navscenario.scenario.model import content_hash
 
 # Trajectory plots of failing items (the report plugin, tested there) are off: they dominate the time.
 PLUGIN = ["-p", "pytest_navscenario.plugin", "--nav-plots=none"]

@@ -12,13 +12,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pytest_navscenario.artifacts import folder_name
-from pytest_navscenario.loader import loads_scenario
-from pytest_navscenario.payload import (episode_from_payload, episode_to_payload, request_trajectories,
-                                        trajectories_requested)
-from pytest_navscenario.results import read_results
-from pytest_navscenario.runner import run_scenario
-from pytest_navscenario.summary import format_summary
+from pytest_navscenario.core.files import folder_name
+from pytest_navscenario.scenario.loader import loads_scenario
+from pytest_navscenario.plugin.payload import episode_from_payload, episode_to_payload, request_trajectories, trajectories_requested
+from pytest_navscenario.report.results_file import read_results
+from pytest_navscenario.harness.runner import run_scenario
+from pytest_navscenario.report.summary import format_summary
 
 ROOT = Path(__file__).resolve().parents[1]
 

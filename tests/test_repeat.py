@@ -6,8 +6,8 @@ import json
 
 import pytest
 
-from pytest_navscenario.collect import repeat_seed
-from pytest_navscenario.flaky import annotate_repeats, format_flaky
+from pytest_navscenario.plugin.collect import repeat_seed
+from pytest_navscenario.report.flaky import annotate_repeats, format_flaky
 
 # Decides once, from the (noisy) range straight ahead, whether to drive to the goal or stand still:
 # with the lidar's noise the same scenario succeeds under some seeds and times out under others.

@@ -17,9 +17,9 @@ from pathlib import Path
 
 import pytest
 
-from pytest_navscenario.loader import loads_scenario
-from pytest_navscenario.results import write_results
-from pytest_navscenario.scenario import content_hash
+from pytest_navscenario.scenario.loader import loads_scenario
+from pytest_navscenario.report.results_file import write_results
+from pytest_navscenario.scenario.model import content_hash
 
 PLANNER = '''
 import math
@@ -182,7 +182,7 @@ def test_html_report_is_self_contained_with_one_entry_per_failure(runs):
 
 
 def test_html_escapes_names_and_messages(tmp_path):
-    from pytest_navscenario.html_report import Entry, write_html
+    from pytest_navscenario.report.html import Entry, write_html
 
     rec = {"nodeid": "s/<b>.yaml::<script>alert(1)</script>", "family": "f&g", "outcome": "timeout",
            "message": "goal <not> reached", "metrics": {"min_clearance": None, "duration": 3.0},

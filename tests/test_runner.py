@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from pytest_navscenario import run_scenario
-from pytest_navscenario.errors import SubjectLoadError
-from pytest_navscenario.result import Outcome
-from pytest_navscenario.runner import effective_seed, make_planner
-from pytest_navscenario.scenario import (BoxObstacle, Lidar, Mission, Pose, Robot, Safety, Scenario,
-                                         Simulation)
+from pytest_navscenario.core.errors import SubjectLoadError
+from pytest_navscenario.verdict.result import Outcome
+from pytest_navscenario.harness.runner import effective_seed
+from pytest_navscenario.subjects.loading import make_planner
+from pytest_navscenario.scenario.model import BoxObstacle, Lidar, Mission, Pose, Robot, Safety, Scenario, Simulation
 
 
 class Straight:

@@ -9,10 +9,10 @@ from __future__ import annotations
 import pytest
 from hypothesis import given, settings
 
-from pytest_navscenario.errors import ScenarioError
-from pytest_navscenario.loader import loads_scenario
-from pytest_navscenario.search import run_search
-from pytest_navscenario.search_space import SearchSpace, invalid_reason, scenarios_around
+from pytest_navscenario.core.errors import ScenarioError
+from pytest_navscenario.scenario.loader import loads_scenario
+from pytest_navscenario.search.engine import run_search
+from pytest_navscenario.search.space import SearchSpace, invalid_reason, scenarios_around
 from straight_planner import Straight
 
 SEED_YAML = """\
@@ -112,7 +112,7 @@ def test_finds_a_failure_within_a_few_simulations_and_budget_is_exact(found):
 
 
 def test_shrinking_moves_toward_the_seed_and_still_fails(seed, found):
-    from pytest_navscenario.runner import run_scenario
+    from pytest_navscenario.harness.runner import run_scenario
 
     space = SearchSpace(seed)
     for f in found.failures:
@@ -162,9 +162,9 @@ def test_bad_arguments(seed):
 
 
 def test_frozen_files_round_trip_and_are_not_duplicated(seed, found, tmp_path):
-    from pytest_navscenario.freeze import freeze_failures, write_search_log
-    from pytest_navscenario.loader import load_scenario
-    from pytest_navscenario.scenario import content_hash
+    from pytest_navscenario.search.freeze import freeze_failures, write_search_log
+    from pytest_navscenario.scenario.loader import load_scenario
+    from pytest_navscenario.scenario.model import content_hash
 
     space = SearchSpace(seed)
     first = freeze_failures(found, space, tmp_path, subject="straight")

@@ -53,7 +53,7 @@ def test_search_freezes_failures_that_fail_again_when_collected(project):
     assert sum(1 for c in cases if c.find("failure") is not None) == len(failing) > 0
     result.stdout.fnmatch_lines(["navsearch crate: 6/6 sims, * failure(s), best clearance *"])  # live progress
 
-    from pytest_navscenario.loader import load_scenario
+    from pytest_navscenario.scenario.loader import load_scenario
     prov = load_scenario(frozen[0]).provenance
     assert prov["seed"] == "crate" and prov["search_seed"] == 3 and prov["budget"] == 6
     assert prov["seed_file"] == "scenarios/crate.yaml"

@@ -7,12 +7,10 @@ import time
 import numpy as np
 import pytest
 
-from pytest_navscenario.errors import SimulationDivergedError
-from pytest_navscenario.planner import Command
-from pytest_navscenario.scenario import (BoxObstacle, CylinderObstacle, Footprint, GoalTolerance, Lidar,
-                                         Limits, Mission, Pose, Robot, Safety, Scenario, Simulation)
-from pytest_navscenario.sim import (clear_model_cache, lidar_angles, model_xml, simulate, steps_per_tick,
-                                    validate_command)
+from pytest_navscenario.core.errors import SimulationDivergedError
+from pytest_navscenario.subjects.protocol import Command
+from pytest_navscenario.scenario.model import BoxObstacle, CylinderObstacle, Footprint, GoalTolerance, Lidar, Limits, Mission, Pose, Robot, Safety, Scenario, Simulation
+from pytest_navscenario.sim.episode import clear_model_cache, lidar_angles, model_xml, simulate, steps_per_tick, validate_command
 
 
 # ------------------------------------------------------------------ tiny test planners
@@ -362,7 +360,7 @@ def test_starting_inside_an_obstacle_is_a_collision_at_t0():
 def test_a_graze_between_two_ticks_is_caught_by_the_per_step_contact_check():
     import shapely
 
-    from pytest_navscenario.geometry import footprint_polygons, obstacle_polygon
+    from pytest_navscenario.scenario.geometry import footprint_polygons, obstacle_polygon
 
     # omni drive moving diagonally; a 5 mm pin sits ~1 cm inside the swept area's edge, so the
     # footprint's corner covers it for ~60 ms, between two 0.1 s ticks

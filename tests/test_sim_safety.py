@@ -7,10 +7,9 @@ import numpy as np
 import pytest
 import shapely
 
-from pytest_navscenario.geometry import footprint_polygons, obstacle_polygon
-from pytest_navscenario.safety import SAMPLE_SPACING, SafetyLayer, twist_poses
-from pytest_navscenario.scenario import (BoxObstacle, CylinderObstacle, Footprint, Mission, Pose, Robot,
-                                         Safety, Scenario)
+from pytest_navscenario.scenario.geometry import footprint_polygons, obstacle_polygon
+from pytest_navscenario.sim.safety import SAMPLE_SPACING, SafetyLayer, twist_poses
+from pytest_navscenario.scenario.model import BoxObstacle, CylinderObstacle, Footprint, Mission, Pose, Robot, Safety, Scenario
 
 
 def random_layout(rng, shape):

@@ -3,7 +3,7 @@ import math
 
 import pytest
 
-from pytest_navscenario.stats import mcnemar_exact, rate_with_interval, wilson_interval
+from pytest_navscenario.report.stats import mcnemar_exact, rate_with_interval, wilson_interval
 
 # Wilson score intervals (no continuity correction): Newcombe (1998), Stat. Med. 17:857, table I.
 NEWCOMBE = [

@@ -1,0 +1,72 @@
+"""``navscenario compare A.jsonl B.jsonl``: planner A (baseline) against planner B (candidate).
+
+Exit status: 0, or 1 with ``--fail-on-regression`` when B broke a scenario A passed; 2 when a
+file cannot be read (the error names the file and line).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from ..core.files import atomic_write_text
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("a", metavar="A.jsonl", help="baseline results file (pytest --nav-results=A.jsonl)")
+    p.add_argument("b", metavar="B.jsonl", help="candidate results file, same suite, other subject/version")
+    p.add_argument("--junit", metavar="OUT.xml",
+                   help="write the comparison as JUnit XML: one test case per scenario, failing where B broke what A passed")
+    p.add_argument("--plot", metavar="OUT.png",
+                   help="write the two-sided bar chart (success up, safety-stop down, per family, A beside B)")
+    p.add_argument("--html", metavar="OUT.html",
+                   help="write a self-contained HTML report: the comparison, the bar chart and B's runs")
+    p.add_argument("--fail-on-regression", action="store_true",
+                   help="exit with status 1 when B fails a scenario that A passed (a CI gate)")
+    p.add_argument("--max-listed", type=int, default=50, metavar="N",
+                   help="list at most N scenarios per list (default 50)")
+    p.add_argument("--side-by-side", metavar="DIR",
+                   help="re-run the scenarios B broke (then those it fixed) with both subjects and write "
+                        "one side-by-side trajectory plot per scenario into DIR")
+    p.add_argument("--max-plots", type=int, default=10, metavar="N",
+                   help="at most N side-by-side plots (default 10)")
+    p.add_argument("--a-subject", metavar="SPEC",
+                   help="subject to re-run A with (default: the subject named in A's records)")
+    p.add_argument("--b-subject", metavar="SPEC",
+                   help="subject to re-run B with (default: the subject named in B's records)")
+    p.add_argument("--root", default=".", metavar="DIR",
+                   help="folder the records' scenario paths are relative to (the pytest rootdir; default .)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..report.compare import compare_files, format_comparison, to_junit_xml
+
+    cmp = compare_files(args.a, args.b)
+    print(format_comparison(cmp, max_listed=args.max_listed))
+    if args.junit:
+        atomic_write_text(args.junit, to_junit_xml(cmp))
+        print(f"JUnit XML written to {args.junit}")
+    if args.plot:
+        from ..report.plots import save_bars
+        save_bars(cmp, args.plot)
+        print(f"bar chart written to {args.plot}")
+    if args.html:
+        from ..report.html import Entry, write_html
+        from ..report.plots import bars_figure, png_bytes
+        b_records = [p.b for p in cmp.pairs] + [u.record for u in cmp.only_b + cmp.not_comparable
+                                                 if u.record is not None]
+        entries = [Entry(record=r, reproduce=cmp.record_command(r)) for r in b_records]
+        bars = png_bytes(bars_figure(cmp)) if cmp.pairs else None
+        write_html(args.html, entries, title=f"navscenario compare: {cmp.b_subject} vs {cmp.a_subject}",
+                   comparison=cmp, bars_png=bars, info=[f"A: {args.a}", f"B: {args.b}"])
+        print(f"HTML report written to {args.html}")
+    if args.side_by_side:
+        from ..report.rerun import rerun_side_by_side
+        written, problems = rerun_side_by_side(cmp, args.side_by_side, root=args.root, limit=args.max_plots,
+                                               a_subject=args.a_subject, b_subject=args.b_subject)
+        for line in problems:
+            print(f"side-by-side: {line}", file=sys.stderr)
+        print(f"{len(written)} side-by-side plot(s) written to {args.side_by_side}")
+    if args.fail_on_regression and cmp.has_regressions:
+        return 1
+    return 0
+

@@ -1,0 +1,120 @@
+"""``navscenario run`` (one scenario file, one subject: outcome, message and metrics) and
+``navscenario check-planner`` (check a planner against the protocol).
+
+Exit codes: 0 success / check passed, 1 failing outcome / check found problems, 2 usage or
+input error (bad scenario file, subject that cannot be loaded; printed by cli.main).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from typing import Any
+
+from ..subjects.loading import BUILTIN_SUBJECTS, DEFAULT_SUBJECT
+
+_SUBJECT_HELP = (f"planner under test: a built-in name ({', '.join(sorted(BUILTIN_SUBJECTS))}), "
+                 f"'package.module:Attribute' (a class or zero-argument factory) or "
+                 f"'exec:PROGRAM ARGS' (an external process); default {DEFAULT_SUBJECT}")
+
+
+def add_arguments_run(p: argparse.ArgumentParser) -> None:
+    p.add_argument("scenario", help="scenario YAML file")
+    p.add_argument("--subject", "-s", default=DEFAULT_SUBJECT, help=_SUBJECT_HELP)
+    p.add_argument("--seed", type=int, default=None,
+                   help="base seed mixed with the scenario's simulation.seed (default: the scenario's own)")
+    p.add_argument("--tick-limit", type=float, default=None, metavar="SECONDS",
+                   help="a planner tick slower than this is a subject error")
+    p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
+
+
+def _metrics_lines(metrics: Any) -> list[str]:
+    units = {"min_clearance": "m", "min_clearance_time": "s", "min_clearance_x": "m",
+             "min_clearance_y": "m", "min_obstacle_gap": "m", "path_length": "m",
+             "shortest_path_length": "m", "max_deviation": "m", "mean_deviation": "m",
+             "duration": "s", "mean_speed": "m/s", "goal_position_error": "m",
+             "goal_yaw_error": "deg", "smoothness": "m/s^3", "angular_smoothness": "rad/s^2",
+             "reference_mean_deviation": "m", "reference_max_deviation": "m"}
+    rows = []
+    for key, value in metrics.as_dict().items():
+        if isinstance(value, float):
+            if math.isnan(value) and key.startswith("reference_"):
+                continue
+            text = f"{value:.3f}" if math.isfinite(value) else str(value)
+            rows.append(f"  {key:24s} {text} {units.get(key, '')}".rstrip())
+        else:
+            rows.append(f"  {key:24s} {value}")
+    return rows
+
+
+def _json_safe(value: Any) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        return None if math.isnan(value) else ("inf" if value > 0 else "-inf")
+    if isinstance(value, dict):
+        return {k: _json_safe(v) for k, v in value.items()}
+    return value
+
+
+def run_run(args: argparse.Namespace) -> int:
+    from ..scenario.loader import load_scenario
+    from ..harness.runner import run_scenario
+
+    scenario = load_scenario(args.scenario)
+    result = run_scenario(scenario, args.subject, seed=args.seed, tick_limit=args.tick_limit)
+    if args.json:
+        record = {
+            "scenario": scenario.name, "file": args.scenario, "subject": result.subject,
+            "subject_version": result.subject_version, "seed": result.seed,
+            "outcome": result.outcome.value, "passed": result.passed, "message": result.message,
+            "metrics": _json_safe(result.metrics.as_dict()),
+            "wall_time": result.wall_time, "timings": result.timings,
+        }
+        if result.subject_failure is not None and result.subject_failure.traceback:
+            record["traceback"] = result.subject_failure.traceback
+        print(json.dumps(record, indent=2, allow_nan=False))
+    else:
+        version = f" {result.subject_version}" if result.subject_version else ""
+        print(f"{scenario.name} ({args.scenario}) with {result.subject}{version}, seed {result.seed}")
+        print(f"outcome: {result.outcome.value}")
+        print(f"message: {result.message}")
+        if result.subject_failure is not None and result.subject_failure.traceback:
+            print("planner traceback:\n" + result.subject_failure.traceback.rstrip())
+        print("metrics:")
+        print("\n".join(_metrics_lines(result.metrics)))
+        print(f"wall time: {result.wall_time * 1e3:.1f} ms")
+    return 0 if result.passed else 1
+
+
+def add_arguments_check_planner(p: argparse.ArgumentParser) -> None:
+    p.add_argument("subject", help=_SUBJECT_HELP.replace("; default " + DEFAULT_SUBJECT, ""))
+    p.add_argument("--scenario", default=None,
+                   help="scenario YAML to check on (default: a short built-in scenario)")
+    p.add_argument("--ticks", type=int, default=20, help="control ticks to run (default 20)")
+    p.add_argument("--seed", type=int, default=0, help="lidar noise seed (default 0)")
+    p.add_argument("--tick-limit", type=float, default=10.0, metavar="SECONDS",
+                   help="stop and report an act() call that takes longer (default 10)")
+    p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
+
+
+def run_check_planner(args: argparse.Namespace) -> int:
+    from ..harness.conformance import check_planner
+
+    scenario = None
+    if args.scenario:
+        from ..scenario.loader import load_scenario
+        scenario = load_scenario(args.scenario)
+    if args.ticks < 1:
+        print("navscenario check-planner: error: --ticks must be at least 1", file=sys.stderr)
+        return 2
+    check = check_planner(args.subject, scenario, ticks=args.ticks, seed=args.seed,
+                          tick_limit=args.tick_limit if args.tick_limit > 0 else None)
+    if args.json:
+        print(json.dumps(_json_safe({
+            "subject": check.subject, "ok": check.ok, "problems": check.problems,
+            "warnings": check.warnings, "ticks": check.ticks,
+            "max_tick_time": check.max_tick_time, "median_tick_time": check.median_tick_time}),
+            indent=2))
+    else:
+        print(check)
+    return 0 if check.ok else 1

@@ -1,0 +1,252 @@
+"""Plugin: the pytest glue, the top layer (``pytest11`` entry point ``navscenario``: this module).
+
+In: pytest's hooks, the command line and ini. Out: one item per scenario file (``collect.py``),
+``report.nav`` payloads on each call report (``payload.py``), and on the controller the results
+file, artifacts and the summary. This module holds the core hooks only; the work is in small
+modules: ``options.py`` (every option and its ini twin), ``state.py`` (session state in
+``config.stash``), ``collect.py``, ``payload.py``, ``artifacts.py``, ``fixtures.py`` (``nav_run``,
+``nav_subject``), ``hookspecs.py`` (new hooks), and the feature plugins ``search.py``
+(``--navsearch``), ``reports.py`` (plots, HTML, baseline gate) and ``bags.py`` (``--nav-bag``),
+registered through ``pytest_plugins``.
+
+Heavy modules (the loader, the runner and MuJoCo) are imported only when a scenario is collected
+or run, so that loading the plugin into an unrelated pytest run stays cheap. With xdist, workers
+run the episodes and attach ``report.nav`` (a plain dict) to each call report; the controller
+gathers the records and writes every file, so workers never race on one.
+"""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from . import hookspecs
+from .options import pytest_addoption  # noqa: F401  (a hook: options + ini twins)
+
+pytest_plugins = [
+    "pytest_navscenario.plugin.fixtures",
+    "pytest_navscenario.plugin.search",
+    "pytest_navscenario.plugin.reports",
+    "pytest_navscenario.plugin.bags",
+]
+
+WORKER_SEED_KEY = "navscenario_seed"
+
+
+def pytest_addhooks(pluginmanager: pytest.PytestPluginManager) -> None:
+    pluginmanager.add_hookspecs(hookspecs)
+
+
+class XdistHooks:
+    """Registered only when pytest-xdist is installed (its hook names are unknown otherwise)."""
+
+    def pytest_configure_node(self, node: Any) -> None:
+        from .state import STATE_KEY
+        state = node.config.stash.get(STATE_KEY, None)
+        if state is not None:
+            node.workerinput[WORKER_SEED_KEY] = state.settings.seed
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.pluginmanager.register(Controller(config), "navscenario-controller")
+    if config.pluginmanager.hasplugin("xdist"):
+        config.pluginmanager.register(XdistHooks(), "navscenario-xdist")
+    _stop_gracefully_on_sigterm(config)
+
+
+def _stop_gracefully_on_sigterm(config: pytest.Config) -> None:
+    """SIGTERM (a CI job cancelled, ``kill``) ends the run like Ctrl-C: pytest's own interruption
+    path, so the results file, frozen failures and the summary of what finished are still written.
+    Only in the controller's main thread, and only when nobody else handles SIGTERM."""
+    import signal
+    import threading
+
+    if _is_worker(config) or threading.current_thread() is not threading.main_thread():
+        return
+    if signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
+        return
+
+    def on_sigterm(signum: int, frame: Any) -> None:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)  # a second SIGTERM kills at once
+        raise KeyboardInterrupt("SIGTERM")
+
+    signal.signal(signal.SIGTERM, on_sigterm)
+    config.add_cleanup(lambda: signal.signal(signal.SIGTERM, signal.SIG_DFL))
+
+
+def _is_worker(config: pytest.Config) -> bool:
+    return hasattr(config, "workerinput")
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_sessionstart(session: pytest.Session) -> None:
+    """Read the options and load the subject; a bad one stops the run before any test."""
+    import dataclasses
+
+    from ..core.errors import SubjectLoadError
+    from .options import read_settings
+    from .state import STATE_KEY, NavState
+    from ..subjects.resolve import resolve_subject
+
+    config = session.config
+    settings = read_settings(config)
+    worker = _is_worker(config)
+    if worker and WORKER_SEED_KEY in config.workerinput:  # type: ignore[attr-defined]
+        settings = dataclasses.replace(settings, seed=int(config.workerinput[WORKER_SEED_KEY]))  # type: ignore[attr-defined]
+    origin = "--nav-subject" if config.getoption("nav_subject") else "ini nav_subject"
+    subject = resolve_subject(config, settings.subject_spec, origin)
+    config.stash[STATE_KEY] = NavState(settings=settings, subject=subject, is_worker=worker)
+    if not worker and subject.origin != "built-in default":
+        try:
+            subject.check()
+        except SubjectLoadError as exc:
+            raise pytest.UsageError(f"navscenario: {exc}") from None
+    if not worker and settings.results is not None:
+        try:
+            settings.results.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise pytest.UsageError(f"navscenario: cannot create the folder of the results file "
+                                    f"{settings.results}: {exc}") from None
+
+
+def pytest_report_header(config: pytest.Config) -> list[str]:
+    from .state import STATE_KEY
+    state = config.stash.get(STATE_KEY, None)
+    if state is None:
+        return []
+    s = state.settings
+    limit = f"{s.tick_limit:g} s" if s.tick_limit else "none"
+    lines = [f"navscenario: subject {state.subject.label}, seed {s.seed} (--nav-seed), "
+             f"tick limit {limit}"]
+    if s.repeat > 1:
+        lines.append(f"navscenario: {s.repeat} runs per scenario with different noise seeds "
+                     f"(--nav-repeat; scenarios without sensor noise repeat identically)")
+    extra = []
+    if s.results is not None:
+        extra.append(f"results {s.results}")
+    extra.append(f"artifacts {s.artifacts if s.artifacts is not None else 'off'}")
+    lines.append("navscenario: " + ", ".join(extra))
+    return lines
+
+
+def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> Any:
+    from .collect import collect_file
+    return collect_file(file_path, parent)
+
+
+@pytest.hookimpl(wrapper=True, tryfirst=True)
+def pytest_runtestloop(session: pytest.Session) -> Any:
+    """An invalid scenario file is a collection error, but the other items still run.
+
+    pytest stops before running anything when collection had errors (unless
+    --continue-on-collection-errors); that rule is kept for Python test modules, and only the
+    errors of scenario files are left out of the check. The exit status still reports them.
+    """
+    from .state import STATE_KEY
+    state = session.config.stash.get(STATE_KEY, None)
+    hidden = min(session.testsfailed, state.bad_scenario_files) if state is not None else 0
+    session.testsfailed -= hidden
+    try:
+        return (yield)
+    finally:
+        session.testsfailed += hidden
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) -> Any:
+    """Attach ``report.nav`` (payload.py) to the call report of an item that ran an episode."""
+    report = yield
+    result = getattr(item, "nav_result", None)
+    if call.when == "call" and result is not None:
+        from .payload import episode_to_payload, trajectories_requested
+        from .state import get_state
+
+        state = get_state(item.config)
+        want = trajectories_requested(item.config)
+        with_traj = want == "all" or (not result.passed and (
+            want == "failed" or state.settings.artifacts is not None))
+        spec = state.subject.spec if state.subject.origin != "hook" else None
+        report.nav = episode_to_payload(result, nodeid=item.nodeid, path=item.rel_path,  # type: ignore[attr-defined]
+                                        with_trajectory=with_traj, repeat=item.repeat,  # type: ignore[attr-defined]
+                                        subject_spec=spec)
+        item.nav_result = None  # type: ignore[attr-defined]  # the payload has it; free the arrays
+    return report
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_runtest_logreport(report: pytest.TestReport) -> None:
+    """Once every plugin has seen an episode (and an xdist worker has sent it), keep only its
+    record: pytest holds every report until the session ends, so the full payload (scenario,
+    metrics, trajectory) would grow memory by ~10 KiB per episode in long runs."""
+    nav = getattr(report, "nav", None)
+    if nav is not None and len(nav) > 1:
+        report.nav = {"record": nav["record"]}  # type: ignore[attr-defined]
+
+
+class Controller:
+    """Per-config hooks that need the config but whose hookspecs do not pass it."""
+
+    def __init__(self, config: pytest.Config):
+        self.config = config
+
+    def pytest_runtest_logreport(self, report: pytest.TestReport) -> None:
+        """Controller: gather the record, write a failing item's artifacts, tell feature plugins."""
+        nav = getattr(report, "nav", None)
+        if nav is None or report.when != "call" or _is_worker(self.config):
+            return
+        from .state import STATE_KEY
+        state = self.config.stash.get(STATE_KEY, None)
+        if state is None:
+            return
+        state.records.append(nav["record"])
+        folder = None
+        if report.failed and state.settings.artifacts is not None:
+            from .artifacts import write_item_artifacts
+            folder = write_item_artifacts(self.config, nav)
+            if folder is not None:
+                state.failed_artifacts.append(str(folder))
+        self.config.hook.pytest_navscenario_episode_report(
+            config=self.config, report=report, payload=nav, artifact_dir=folder)
+
+
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    """Controller: write the results file (also after Ctrl-C: whatever ran is kept)."""
+    from .state import STATE_KEY
+    config = session.config
+    state = config.stash.get(STATE_KEY, None)
+    if state is None or state.is_worker or state.settings.results is None:
+        return
+    if config.option.collectonly:  # nothing ran: keep an existing results file
+        return
+    from ..report.flaky import annotate_repeats
+    from ..report.results_file import write_results
+    try:
+        write_results(state.settings.results, annotate_repeats(state.records))
+    except OSError as exc:
+        sys.stderr.write(f"navscenario: cannot write the results file {state.settings.results}: {exc}\n")
+        session.exitstatus = pytest.ExitCode.INTERNAL_ERROR
+
+
+def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pytest.Config) -> None:
+    from .state import STATE_KEY
+    state = config.stash.get(STATE_KEY, None)
+    if state is None or state.is_worker or not state.records and state.settings.results is None:
+        return
+    tr = terminalreporter
+    if state.settings.summary and state.records:
+        from ..report.summary import format_summary
+        tr.write_sep("=", "navscenario summary")
+        for line in format_summary(state.records).splitlines():
+            tr.write_line(line)
+    if state.settings.repeat > 1 and state.records:
+        from ..report.flaky import format_flaky
+        tr.write_sep("=", "navscenario flaky scenarios")
+        for line in format_flaky(state.records).splitlines():
+            tr.write_line(line)
+    if state.settings.results is not None and not config.option.collectonly:
+        tr.write_line(f"navscenario: wrote {len(state.records)} record(s) to {state.settings.results}")
+    if state.failed_artifacts:
+        tr.write_line(f"navscenario: artifacts of {len(state.failed_artifacts)} failing item(s) in "
+                      f"{state.settings.artifacts}")

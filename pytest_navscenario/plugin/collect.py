@@ -1,0 +1,228 @@
+"""Collection: scenario YAML files become pytest items, one item per file, named after the scenario.
+
+A file is collected when its name matches ini ``nav_scenario_glob`` (default ``*.yaml *.yml``) AND
+it looks like a scenario (a YAML mapping with ``version`` and ``mission`` keys); any other YAML
+file is left alone. Collection only loads and validates the file: nothing is simulated.
+A file that looks like a scenario but is invalid becomes a collection error quoting the
+ScenarioError (file, line, field, fix); the other files are still collected and run.
+"""
+from __future__ import annotations
+
+import fnmatch
+import re
+import shlex
+from pathlib import Path
+from typing import Any, Iterator
+
+import pytest
+
+from ..core.errors import NavScenarioError, ScenarioError
+from .state import get_state
+
+_TOP_KEY = re.compile(r"^(version|mission)\s*:", re.MULTILINE)
+
+
+def _fallback_looks_like(data: str | bytes) -> bool:
+    text = data.decode("utf-8", "replace") if isinstance(data, bytes) else data
+    return {m.group(1) for m in _TOP_KEY.finditer(text)} == {"version", "mission"}
+
+
+def looks_like_scenario_text(text: str | bytes) -> bool:
+    """True if ``text`` is (meant to be) a scenario: the loader's check, or top-level keys."""
+    try:
+        from ..scenario.loader import looks_like_scenario
+    except ImportError:
+        return _fallback_looks_like(text)
+    try:
+        return bool(looks_like_scenario(text))
+    except Exception:
+        return _fallback_looks_like(text)
+
+
+def collect_file(file_path: Path, parent: pytest.Collector) -> "ScenarioFile | None":
+    """The ``pytest_collect_file`` implementation (called for every file pytest visits)."""
+    globs = get_state(parent.config).settings.globs
+    name = file_path.name
+    if not any(fnmatch.fnmatch(name, g) for g in globs):
+        return None
+    try:
+        data = file_path.read_bytes()
+    except OSError:
+        return None  # unreadable: pytest cannot use it either; nothing suggests it is a scenario
+    if not looks_like_scenario_text(data):
+        return None
+    return ScenarioFile.from_parent(parent, path=file_path)
+
+
+def rel_path(config: pytest.Config, path: Path) -> str:
+    """``path`` relative to the rootdir with posix separators (absolute if outside it)."""
+    try:
+        return path.relative_to(config.rootpath).as_posix()
+    except ValueError:
+        return path.as_posix()
+
+
+class ScenarioFile(pytest.File):
+    """One scenario YAML file; yields exactly one ScenarioItem."""
+
+    def collect(self) -> Iterator["ScenarioItem"]:
+        from ..scenario.loader import load_scenario
+
+        try:
+            scenario = load_scenario(self.path)
+        except BaseException:
+            get_state(self.config).bad_scenario_files += 1
+            raise
+        name = scenario.name or self.path.stem
+        if "::" in name or not name.strip():
+            get_state(self.config).bad_scenario_files += 1
+            raise ScenarioError(f"scenario name {name!r} cannot be a pytest item name ('::' separates "
+                                f"node ids)", path=str(self.path), field="name",
+                                hint="use letters, digits, '-', '_' or '.', e.g. boxes1-narrow")
+        repeats = get_state(self.config).settings.repeat
+        for repeat in range(repeats):
+            item = ScenarioItem.from_parent(self, name=name if repeats == 1 else f"{name}[r{repeat}]",
+                                            scenario=scenario, repeat=repeat)
+            for mark in scenario.marks:
+                item.add_marker(getattr(pytest.mark, mark.name)(*mark.args, **dict(mark.kwargs)))
+            if scenario.family:
+                item.extra_keyword_matches.add(scenario.family)
+            yield item
+
+    def repr_failure(self, excinfo: pytest.ExceptionInfo[BaseException], style: Any = None) -> Any:
+        exc = excinfo.value
+        if isinstance(exc, ScenarioError):
+            where = "" if exc.path else f"{rel_path(self.config, self.path)}: "
+            return f"invalid scenario file: {where}{exc}"
+        if isinstance(exc, (NavScenarioError, OSError, UnicodeDecodeError)):
+            return f"cannot load scenario file {rel_path(self.config, self.path)}: {exc}"
+        return super().repr_failure(excinfo)
+
+
+def repeat_seed(base_seed: int, repeat: int) -> int:
+    """The base seed of one --nav-repeat run: the run's own seed for repeat 0, else a stable
+    63-bit mix of (base seed, repeat) so every repeat draws different sensor noise."""
+    if repeat == 0:
+        return base_seed
+    import hashlib
+    digest = hashlib.sha256(f"navscenario-repeat:{base_seed}:{repeat}".encode()).digest()
+    return int.from_bytes(digest[:8], "big") >> 1
+
+
+class ScenarioFailed(Exception):
+    """Raised by ScenarioItem.runtest when the outcome is not success (carries the result)."""
+
+    def __init__(self, result: Any):
+        super().__init__(f"{result.outcome}: {result.message}")
+        self.result = result
+
+
+def _fmt(value: Any, unit: str = "", digits: int = 3) -> str:
+    if value is None:
+        return "n/a"
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        return str(value)
+    if value != value or value in (float("inf"), float("-inf")):
+        return "n/a"
+    return f"{value:.{digits}f}{unit}"
+
+
+class ScenarioItem(pytest.Item):
+    """One episode of one scenario against the session's subject; passes iff the outcome is success."""
+
+    def __init__(self, *, scenario: Any, repeat: int = 0, **kwargs: Any):
+        super().__init__(**kwargs)
+        self.scenario = scenario
+        self.repeat = repeat          # --nav-repeat index: 0 .. N-1
+        self.nav_result: Any = None   # the EpisodeResult, until the call report has taken it
+
+    @property
+    def rel_path(self) -> str:
+        return rel_path(self.config, self.path)
+
+    def runtest(self) -> None:
+        from ..harness.runner import run_scenario
+
+        state = get_state(self.config)
+        result = run_scenario(self.scenario, state.subject.runner_arg,
+                              seed=repeat_seed(state.settings.seed, self.repeat),
+                              tick_limit=state.settings.tick_limit)
+        self.nav_result = result
+        m = result.metrics
+        self.user_properties.extend([
+            ("nav_outcome", result.outcome.value),
+            ("nav_message", result.message),
+            ("nav_min_clearance", _fmt(m.min_clearance, digits=4)),
+            ("nav_min_clearance_obstacle", m.min_clearance_obstacle),
+            ("nav_path_efficiency", _fmt(m.path_efficiency, digits=4)),
+            ("nav_path_length", _fmt(m.path_length, digits=4)),
+            ("nav_duration", _fmt(m.duration, digits=3)),
+            ("nav_subject", result.subject),
+            ("nav_seed", str(result.seed)),
+            ("nav_repeat", str(self.repeat)),
+        ])
+        if not result.passed:
+            raise ScenarioFailed(result)
+
+    def reproduce_command(self) -> str:
+        """The command line that re-runs exactly this item with the same subject and seed."""
+        state = get_state(self.config)
+        parts = ["pytest", shlex.quote(self.nodeid)]
+        if state.subject.spec is not None and state.subject.origin != "built-in default":
+            parts.append(shlex.quote(f"--nav-subject={state.subject.spec}"))
+        parts.append(f"--nav-seed={state.settings.seed}")
+        if state.settings.repeat > 1:
+            parts.append(f"--nav-repeat={state.settings.repeat}")
+        cmd = " ".join(parts)
+        if Path(self.config.invocation_params.dir) != Path(self.config.rootpath):
+            cmd = f"cd {shlex.quote(str(self.config.rootpath))} && {cmd}"
+        return cmd
+
+    def repr_failure(self, excinfo: pytest.ExceptionInfo[BaseException], style: Any = None) -> Any:
+        exc = excinfo.value
+        if isinstance(exc, ScenarioFailed):
+            return self._describe(exc.result)
+        if isinstance(exc, NavScenarioError):
+            return f"{type(exc).__name__}: {exc}\nreproduce: {self.reproduce_command()}"
+        return super().repr_failure(excinfo, style="short")
+
+    def _describe(self, r: Any) -> str:
+        m = r.metrics
+        lines = [f"{r.outcome}: {r.message}" if r.message else str(r.outcome)]
+        if r.collision is not None:
+            c = r.collision
+            lines.append(f"  collision:     obstacle {c.obstacle!r} at t={_fmt(c.time, ' s', 2)}, contact "
+                         f"({_fmt(c.x, '', 2)}, {_fmt(c.y, '', 2)}), depth {_fmt(c.depth, ' m', 4)}")
+        if r.safety_stop is not None:
+            s = r.safety_stop
+            lines.append(f"  safety stop:   predicted hit of obstacle {s.obstacle!r} at t="
+                         f"{_fmt(s.time, ' s', 2)}, speed {_fmt(s.speed, ' m/s', 2)}")
+        if r.subject_failure is not None:
+            f = r.subject_failure
+            lines.append(f"  planner error: {f.message} (tick {f.tick}, t={_fmt(f.time, ' s', 2)})")
+        obstacle = f" to {m.min_clearance_obstacle!r}" if m.min_clearance_obstacle else ""
+        lines.append(f"  min clearance: {_fmt(m.min_clearance, ' m')}{obstacle} at t="
+                     f"{_fmt(m.min_clearance_time, ' s', 2)}, robot at ({_fmt(m.min_clearance_x, '', 2)}, "
+                     f"{_fmt(m.min_clearance_y, '', 2)})")
+        lines.append(f"  duration:      {_fmt(m.duration, ' s', 2)} (timeout "
+                     f"{_fmt(r.scenario.mission.timeout, ' s', 1)}), path {_fmt(m.path_length, ' m', 2)}, "
+                     f"efficiency {_fmt(m.path_efficiency, '', 2)}, goal error "
+                     f"{_fmt(m.goal_position_error, ' m', 2)}")
+        version = f" {r.subject_version}" if r.subject_version else ""
+        lines.append(f"  subject:       {r.subject}{version}, episode seed {r.seed}")
+        lines.append(f"  scenario:      {self.rel_path}")
+        from .artifacts import item_dir
+        folder = item_dir(self.config, self.nodeid)
+        if folder is not None:
+            lines.append(f"  artifacts:     {folder}")
+        lines.append(f"reproduce: {self.reproduce_command()}")
+        if r.subject_failure is not None and r.subject_failure.traceback:
+            lines.append("planner traceback:")
+            lines.append(r.subject_failure.traceback.rstrip())
+        return "\n".join(lines)
+
+    def reportinfo(self) -> tuple[Path, int, str]:
+        # line 0 (shown as 1): pytest needs a line for skip reports
+        return self.path, 0, f"scenario {self.name} ({self.scenario.family or 'no family'})"

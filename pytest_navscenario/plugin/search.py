@@ -1,0 +1,446 @@
+"""pytest hooks of the failure search: ``pytest --navsearch boxes1 --budget 100``.
+
+With ``--navsearch`` the session runs one search item per seed name instead of the scenario
+items (so ``-n 2`` runs two searches in parallel, one per worker). Workers attach the search
+result to the call report as ``report.navsearch`` (plain data); the controller (or the only
+process) writes the frozen failures, the search log and the JUnit file, so workers never race
+on a file. Progress is shown live in serial runs; under xdist each search reports when done.
+"""
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+DEFAULT_BUDGET = 100
+DEFAULT_SHRINK_BUDGET = 40
+DEFAULT_OUT = "scenarios/regressions"
+
+# (option, dest / ini name, metavar, help)
+OPTIONS = (
+    ("--navsearch", "navsearch", "NAME",
+     "search for failures around the seed scenario NAME (a file NAME.yaml under the "
+     "nav_scenario_paths folders, or a path to a scenario file); repeatable. Runs searches "
+     "instead of the scenario items."),
+    ("--budget", "navsearch_budget", "N",
+     f"simulations per search (valid candidates only; default {DEFAULT_BUDGET})."),
+    ("--navsearch-seed", "navsearch_seed", "N",
+     "random seed of the search (integer >= 0, default 0); the same seed, subject and budget "
+     "repeat a search exactly."),
+    ("--navsearch-strategy", "navsearch_strategy", "NAME",
+     "evolve (default: Hypothesis-driven, exploits the best layouts so far) or random "
+     "(uniform sampling over the same space, as a baseline)."),
+    ("--navsearch-shrink-budget", "navsearch_shrink_budget", "N",
+     f"simulations allowed to shrink each distinct failure toward the seed, on top of the "
+     f"budget (default {DEFAULT_SHRINK_BUDGET}; 0 = keep failures as found)."),
+    ("--navsearch-out", "nav_regressions_dir", "DIR",
+     f"folder for frozen failures, one subfolder per seed, plus each search's log "
+     f"(default {DEFAULT_OUT})."),
+    ("--navsearch-junit", "navsearch_junit", "PATH",
+     "also write the generated suite (every simulated candidate) as a JUnit XML file."),
+)
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    group = parser.getgroup("navsearch", "navigation failure search (pytest-navscenario)")
+    for opt, dest, metavar, text in OPTIONS:
+        kwargs: dict[str, Any] = {"action": "append"} if dest == "navsearch" else {}
+        group.addoption(opt, dest=dest, default=None, metavar=metavar, help=f"{text} [ini: {dest}]", **kwargs)
+        parser.addini(dest, text, type="args" if dest == "navsearch" else "string",
+                      default=[] if dest == "navsearch" else "")
+
+
+_CONFIGS: list[pytest.Config] = []   # the running session's config (a stack: pytester nests runs)
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    _CONFIGS.append(config)
+
+
+def pytest_unconfigure(config: pytest.Config) -> None:
+    if config in _CONFIGS:
+        _CONFIGS.remove(config)
+
+
+# -- settings ------------------------------------------------------------------------------------
+@dataclass
+class SearchSettings:
+    names: list[str]
+    budget: int
+    seed: int
+    strategy: str
+    shrink_budget: int
+    out: Path
+    junit: Path | None
+
+
+@dataclass
+class Job:
+    name: str
+    path: Path
+    seed: Any          # Scenario
+    space: Any         # SearchSpace
+
+
+@dataclass
+class SearchState:
+    settings: SearchSettings
+    jobs: dict[str, Job]
+    is_worker: bool
+    done: list[dict[str, Any]] = field(default_factory=list)   # controller: summary entries
+    junit_items: list[Any] = field(default_factory=list)
+
+
+STATE_KEY = pytest.StashKey[SearchState]()
+
+
+def _raw(config: pytest.Config, dest: str) -> tuple[Any, str, Path]:
+    cli = config.getoption(dest)
+    if cli is not None:
+        return cli, f"--{dest.replace('_', '-')}" if dest != "navsearch_budget" else "--budget", \
+            Path(config.invocation_params.dir)
+    return config.getini(dest), f"ini option {dest}", Path(config.rootpath)
+
+
+def _int(config: pytest.Config, dest: str, default: int, minimum: int, what: str) -> int:
+    raw, where, _ = _raw(config, dest)
+    if raw in ("", None):
+        return default
+    try:
+        value = int(str(raw).strip())
+    except ValueError:
+        raise pytest.UsageError(f"{where}: {what} must be a whole number, got {raw!r}") from None
+    if value < minimum:
+        raise pytest.UsageError(f"{where}: {what} must be >= {minimum}, got {value}"
+                                + (" (e.g. --budget 100)" if dest == "navsearch_budget" else ""))
+    return value
+
+
+def read_search_settings(config: pytest.Config) -> SearchSettings:
+    from ..search.engine import STRATEGIES
+
+    raw, _, _ = _raw(config, "navsearch")
+    names = list(dict.fromkeys(n.strip() for n in (raw or []) if n and n.strip()))
+    budget = _int(config, "navsearch_budget", DEFAULT_BUDGET, 1, "the budget (simulations per search)")
+    seed = _int(config, "navsearch_seed", 0, 0, "the search seed")
+    raw, where, _ = _raw(config, "navsearch_strategy")
+    strategy = (str(raw).strip() or "evolve").lower()
+    if strategy not in STRATEGIES:
+        raise pytest.UsageError(f"{where}: unknown strategy {raw!r}; use one of {', '.join(STRATEGIES)}")
+    shrink = _int(config, "navsearch_shrink_budget", DEFAULT_SHRINK_BUDGET, 0, "the shrink budget")
+    raw, where, base = _raw(config, "nav_regressions_dir")
+    raw = str(raw).strip() or DEFAULT_OUT
+    out = Path(os.path.expanduser(raw))
+    out = out if out.is_absolute() else base / out
+    if out.exists() and not out.is_dir():
+        raise pytest.UsageError(f"{where}: {raw!r} exists and is not a folder; give a folder for the frozen failures")
+    raw, where, base = _raw(config, "navsearch_junit")
+    raw = str(raw or "").strip()
+    junit = None
+    if raw:
+        junit = Path(os.path.expanduser(raw))
+        junit = junit if junit.is_absolute() else base / junit
+        if junit.is_dir():
+            raise pytest.UsageError(f"{where}: {raw!r} is a folder; give a file name such as navsearch.xml")
+    return SearchSettings(names, budget, seed, strategy, shrink, out, junit)
+
+
+def _scenario_files(folder: Path) -> list[Path]:
+    return sorted(p for p in folder.glob("*.y*ml") if p.suffix in (".yaml", ".yml"))
+
+
+def find_seed(name: str, scenario_paths: tuple[Path, ...], rootdir: Path) -> Path:
+    """The seed file for ``name``: NAME.yaml / NAME.yml in a scenario folder, or a file path."""
+    as_path = Path(os.path.expanduser(name))
+    for candidate in (as_path, rootdir / as_path):
+        if candidate.suffix in (".yaml", ".yml") and candidate.is_file():
+            return candidate
+    for folder in scenario_paths:
+        for ext in (".yaml", ".yml"):
+            if (folder / f"{name}{ext}").is_file():
+                return folder / f"{name}{ext}"
+    available = sorted({p.stem for folder in scenario_paths if folder.is_dir() for p in _scenario_files(folder)})
+    where = ", ".join(str(p) for p in scenario_paths) or "(none configured)"
+    raise pytest.UsageError(
+        f"--navsearch {name}: no seed scenario named {name!r} in {where}. "
+        + (f"Available: {', '.join(available)}. " if available else "No scenario files there. ")
+        + "Give one of these names, a path to a scenario file, or add the folder to the ini option "
+          "nav_scenario_paths.")
+
+
+def _make_job(name: str, path: Path) -> Job:
+    from ..core.errors import NavScenarioError
+    from ..scenario.loader import load_scenario
+    from ..search.space import SearchSpace, invalid_reason
+
+    try:
+        seed = load_scenario(path)
+        if not seed.name:
+            import dataclasses
+            seed = dataclasses.replace(seed, name=path.stem)
+        space = SearchSpace(seed)
+    except NavScenarioError as exc:
+        raise pytest.UsageError(f"--navsearch {name}: {exc}") from None
+    reason = invalid_reason(seed)
+    if reason is not None:
+        raise pytest.UsageError(f"--navsearch {name}: the seed {path} is itself not a valid test "
+                                f"({reason}): fix the seed so the robot can reach the goal")
+    if not space.params:
+        raise pytest.UsageError(f"--navsearch {name}: the search space of {path} is empty (every part "
+                                f"is frozen or has bounds [0, 0]); widen its search: bounds")
+    return Job(name, path, seed, space)
+
+
+def pytest_sessionstart(session: pytest.Session) -> None:
+    """Check the search options and seeds before anything runs (after the core plugin)."""
+    config = session.config
+    settings = read_search_settings(config)
+    if not settings.names:
+        return
+    from .state import get_state
+
+    core = get_state(config)
+    jobs = {}
+    for name in settings.names:
+        path = find_seed(name, core.settings.scenario_paths, Path(config.rootpath))
+        jobs[name] = _make_job(name, path)
+    config.stash[STATE_KEY] = SearchState(settings, jobs, hasattr(config, "workerinput"))
+
+
+# -- items ------------------------------------------------------------------------------------------
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection(session: pytest.Session) -> Any:
+    """With --navsearch: the session's items are the searches (no scenario collection)."""
+    state = session.config.stash.get(STATE_KEY, None)
+    if state is None:
+        return None
+    config = session.config
+    items = [NavSearchItem.from_parent(session, name=f"navsearch[{name}]", nodeid=f"navsearch[{name}]",
+                                       job_name=name) for name in state.jobs]
+    config.hook.pytest_collectreport(report=pytest.CollectReport(session.nodeid, "passed", None, items))
+    config.hook.pytest_collection_modifyitems(session=session, config=config, items=items)
+    session.items = items
+    session.testscollected = len(items)
+    config.hook.pytest_collection_finish(session=session)
+    return True
+
+
+class NavSearchItem(pytest.Item):
+    """One search around one seed against the session's subject. Passes when the search ran;
+    what it found is in the summary and the files written."""
+
+    def __init__(self, *, job_name: str, **kwargs: Any):
+        super().__init__(**kwargs)
+        self.job_name = job_name
+        self.navsearch_payload: dict[str, Any] | None = None
+
+    def runtest(self) -> None:
+        from ..search.engine import run_search
+        from .state import get_state
+
+        core = get_state(self.config)
+        state = self.config.stash[STATE_KEY]
+        s, job = state.settings, state.jobs[self.job_name]
+        subject = core.subject.spec or core.subject.label
+        report = run_search(job.seed, core.subject.factory, budget=s.budget, seed_value=s.seed,
+                            strategy=s.strategy, shrink_budget=s.shrink_budget, space=job.space,
+                            subject=subject, episode_seed=core.settings.seed,
+                            progress=None if state.is_worker else _Progress(self.config, job.name, s.budget))
+        self.navsearch_payload = report_to_payload(report)
+        if report.interrupted and report.stop_reason.startswith("interrupted"):
+            self.session.shouldstop = (f"navsearch {job.name} was cut short by Ctrl-C after "
+                                       f"{report.sims_used} of {report.budget} simulations; "
+                                       f"failures found so far were kept")
+
+    def reportinfo(self) -> tuple[Path, int | None, str]:
+        job = self.config.stash[STATE_KEY].jobs[self.job_name]
+        return job.path, None, f"navsearch {self.job_name}"
+
+    def repr_failure(self, excinfo: pytest.ExceptionInfo[BaseException], style: Any = None) -> Any:
+        from ..core.errors import NavScenarioError
+        if isinstance(excinfo.value, NavScenarioError):
+            return f"navsearch {self.job_name}: {excinfo.value}"
+        return super().repr_failure(excinfo)
+
+
+class _Progress:
+    """Live progress in a serial run: one rewritten line on a terminal, else a line per 10 %."""
+
+    def __init__(self, config: pytest.Config, name: str, budget: int):
+        self.tr = config.pluginmanager.get_plugin("terminalreporter")
+        self.name, self.budget = name, budget
+        self.step = max(1, budget // 10)
+        self.last_failures = 0
+        self.tty = bool(self.tr is not None and getattr(self.tr, "isatty", False))
+        self.started = False
+
+    def __call__(self, report: Any) -> None:
+        if self.tr is None:
+            return
+        n, nf = report.sims_used, len(report.failures)
+        best = report.best_clearance
+        line = (f"navsearch {self.name}: {n}/{self.budget} sims, {nf} failure(s), best clearance "
+                f"{best:.3f} m" if math.isfinite(best) else
+                f"navsearch {self.name}: {n}/{self.budget} sims, {nf} failure(s)")
+        if report.shrink_sims:
+            line += f", shrinking ({report.shrink_sims} sims)"
+        if self.tty:
+            if not self.started:
+                self.tr.ensure_newline()
+                self.started = True
+            self.tr.rewrite(line, erase=True)
+        elif n % self.step == 0 and not report.shrink_sims or nf != self.last_failures:
+            self.tr.ensure_newline()
+            self.tr.write_line(line)
+        self.last_failures = nf
+
+
+# -- data across processes -------------------------------------------------------------------------
+def report_to_payload(report: Any) -> dict[str, Any]:
+    """SearchReport as plain data (crosses from xdist workers); offsets kept as exact floats."""
+    def cand(c):
+        return {"sim": c.sim, "phase": c.phase, "origin": c.origin, "offsets": list(c.offsets),
+                "outcome": c.outcome, "clearance": c.clearance if math.isfinite(c.clearance) else None,
+                "culprit": c.culprit, "message": c.message,
+                "metrics": {k: (v if not isinstance(v, float) or math.isfinite(v) else None)
+                            for k, v in c.metrics.items()},
+                "scenario_hash": c.scenario_hash, "wall_time": c.wall_time}
+    index = {id(c): i for i, c in enumerate(report.candidates)}
+    return {
+        "seed_name": report.seed_name, "seed_source": report.seed_source, "subject": report.subject,
+        "subject_version": report.subject_version, "strategy": report.strategy,
+        "seed_value": report.seed_value, "budget": report.budget, "shrink_budget": report.shrink_budget,
+        "params": report.params, "sims_used": report.sims_used, "shrink_sims": report.shrink_sims,
+        "discarded": dict(report.discarded), "skipped": report.skipped, "interrupted": report.interrupted,
+        "stop_reason": report.stop_reason, "wall_time": report.wall_time,
+        "episode_seed": report.episode_seed,
+        "candidates": [cand(c) for c in report.candidates],
+        "failures": [{"found": index[id(f.found)], "shrunk": index[id(f.shrunk)],
+                      "shrink_sims": f.shrink_sims, "note": f.note} for f in report.failures],
+    }
+
+
+def payload_to_report(data: dict[str, Any], space: Any) -> Any:
+    """Inverse of report_to_payload; candidate scenarios are rebuilt from the seed + offsets."""
+    from ..search.engine import Candidate, Failure, SearchReport
+
+    cands = []
+    for c in data["candidates"]:
+        offsets = tuple(float(v) for v in c["offsets"])
+        metrics = {k: (math.nan if v is None else v) for k, v in c["metrics"].items()}
+        cands.append(Candidate(c["sim"], c["phase"], c["origin"], offsets, c["outcome"],
+                               math.nan if c["clearance"] is None else c["clearance"], c["culprit"],
+                               c["message"], metrics, c["scenario_hash"], c["wall_time"], space.apply(offsets)))
+    fields = {k: data[k] for k in ("seed_name", "seed_source", "subject", "subject_version", "strategy",
+                                   "seed_value", "budget", "shrink_budget", "params", "sims_used",
+                                   "shrink_sims", "discarded", "interrupted", "stop_reason", "wall_time",
+                                   "episode_seed")}
+    report = SearchReport(**fields)
+    report.skipped = data.get("skipped", 0)
+    report.candidates = cands
+    report.failures = [Failure(cands[f["found"]], cands[f["shrunk"]], f["shrink_sims"], f["note"])
+                       for f in data["failures"]]
+    return report
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) -> Any:
+    report = yield
+    payload = getattr(item, "navsearch_payload", None)
+    if call.when == "call" and payload is not None:
+        report.navsearch = payload  # type: ignore[attr-defined]
+        item.navsearch_payload = None  # type: ignore[attr-defined]
+    return report
+
+
+def pytest_runtest_logreport(report: pytest.TestReport) -> None:
+    """Controller: write the frozen failures and the search log of a finished search."""
+    payload = getattr(report, "navsearch", None)
+    if payload is None or report.when != "call":
+        return
+    config = _CONFIGS[-1] if _CONFIGS else None
+    if config is None or hasattr(config, "workerinput"):
+        return
+    state = config.stash.get(STATE_KEY, None)
+    if state is None:
+        return
+    from ..search.freeze import freeze_failures, write_search_log
+
+    job = next(j for j in state.jobs.values() if j.seed.name == payload["seed_name"])
+    search = payload_to_report(payload, job.space)
+    entry: dict[str, Any] = {"report": search, "job": job, "files": [], "log": None, "error": ""}
+    try:
+        entry["files"] = freeze_failures(search, job.space, state.settings.out, root=config.rootpath)
+        entry["log"] = write_search_log(search, job.space, state.settings.out)
+    except Exception as exc:  # never lose the summary: say what could not be written
+        entry["error"] = f"could not write the frozen failures under {state.settings.out}: {type(exc).__name__}: {exc}"
+    state.done.append(entry)
+    state.junit_items.append((search, job.space))
+
+
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    state = session.config.stash.get(STATE_KEY, None)
+    if state is None or state.is_worker or state.settings.junit is None or not state.junit_items:
+        return
+    from ..search.freeze import write_junit
+    write_junit(state.junit_items, state.settings.junit)
+
+
+def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pytest.Config) -> None:
+    state = config.stash.get(STATE_KEY, None)
+    if state is None or state.is_worker:
+        return
+    tr = terminalreporter
+    tr.write_sep("=", "navsearch summary")
+    ran = {e["job"].name for e in state.done}
+    for entry in state.done:
+        for line in format_entry(entry, config):
+            tr.write_line(line)
+    for name in state.jobs:
+        if name not in ran:
+            tr.write_line(f"{name}: no result (the search item failed, see above, or the session "
+                          f"stopped before it)")
+    if state.settings.junit is not None and state.junit_items:
+        tr.write_line(f"JUnit file of the generated suite: {state.settings.junit}")
+
+
+def _rel(config: pytest.Config, path: Path) -> str:
+    try:
+        return Path(path).resolve().relative_to(Path(config.rootpath).resolve()).as_posix()
+    except ValueError:
+        return str(path)
+
+
+def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
+    r = entry["report"]
+    by = ", ".join(f"{k} {v}" for k, v in sorted(r.failures_by_outcome().items())) or "none"
+    disc = ", ".join(f"{k} {v}" for k, v in sorted(r.discarded.items()))
+    best = r.best_clearance
+    version = f" {r.subject_version}" if r.subject_version else ""
+    lines = [f"{r.seed_name} vs {r.subject}{version} ({r.strategy}, search seed {r.seed_value}): "
+             f"{r.sims_used}/{r.budget} sims, {r.discarded_total} discarded" + (f" ({disc})" if disc else "")
+             + f", {len(r.failures)} distinct failure(s) ({by}), best clearance "
+             + (f"{best:.3f} m" if math.isfinite(best) else "n/a")
+             + f", {r.shrink_sims} shrink sims, {r.wall_time:.1f} s"]
+    if r.skipped:
+        lines.append(f"  {r.skipped} candidate(s) repeating a simulated one or next to a known failure were "
+                     f"redrawn without simulating them")
+    if r.interrupted:
+        lines.append(f"  CUT SHORT: {r.stop_reason or 'interrupted'}; the failures found so far are kept "
+                     f"(unshrunk ones are frozen as found)")
+    elif r.stop_reason:
+        lines.append(f"  stopped early: {r.stop_reason}")
+    for f in entry["files"]:
+        state = "new " if f.new else "kept"
+        c = f.clearance
+        lines.append(f"  {state} {_rel(config, f.path)}  {f.outcome}, clearance "
+                     + (f"{c:.3f} m" if math.isfinite(c) else "n/a") + ("" if f.new else " (already frozen)"))
+    if entry["log"] is not None:
+        lines.append(f"  log  {_rel(config, entry['log'])}")
+    if entry["error"]:
+        lines.append(f"  ERROR {entry['error']}")
+    return lines

@@ -1,0 +1,32 @@
+"""Per-session state of the core plugin, kept in ``config.stash`` (no module globals)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import pytest
+
+if TYPE_CHECKING:  # kept out of plugin load: subject.py needs the planner module (numpy)
+    from .options import Settings
+    from ..subjects.resolve import Subject
+
+
+@dataclass
+class NavState:
+    settings: Settings
+    subject: Subject
+    is_worker: bool
+    records: list[dict[str, Any]] = field(default_factory=list)   # controller: results records
+    failed_artifacts: list[str] = field(default_factory=list)      # controller: folders written
+    bad_scenario_files: int = 0   # scenario files that failed to load (collection errors)
+
+
+STATE_KEY = pytest.StashKey[NavState]()
+
+
+def get_state(config: pytest.Config) -> NavState:
+    try:
+        return config.stash[STATE_KEY]
+    except KeyError:
+        raise RuntimeError("pytest-navscenario is not configured in this session "
+                           "(is the plugin loaded? -p pytest_navscenario.plugin)") from None

@@ -1,0 +1,9 @@
+"""Report: what a run tells its users.
+
+In: episode results and results-file records. Out: the results file (JSON Lines, one record per
+episode), the terminal summary with confidence intervals, comparisons of two runs (rates, McNemar,
+fixed and broken lists, JUnit), plots, and the self-contained HTML reports.
+
+Read first: ``results_file.py`` (the record format), then ``summary.py``, ``compare.py``,
+``plots.py``, ``html.py`` (rendered from ``templates/``), ``stats.py``, ``flaky.py``, ``rerun.py``.
+"""

@@ -1,0 +1,500 @@
+"""Pictures engineers debug with: one episode's trajectory, the same scenario under A and B,
+and the two-sided bar chart of a comparison.
+
+matplotlib is imported only inside these functions (this module imports cheaply), and only its
+object-oriented API with the Agg canvas is used (no pyplot, no global state, no display): safe on
+headless CI machines and when called repeatedly from a pytest session.
+
+Trajectory plot contents: obstacles (grey, named), the shortest collision-free path (dashed),
+the area the robot's footprint swept (light band, the "thick line") and its outline to scale
+every ``outline_every`` seconds, the centre path coloured by speed with a colour bar and time
+labels, start / waypoints / goal (with its tolerance circle), the point of minimum clearance
+and the narrowest obstacle gap with their values, the collision or safety stop, a grid in
+metres, equal aspect and the outcome in the title.
+"""
+from __future__ import annotations
+
+import io
+import math
+import os
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Sequence
+
+import numpy as np
+
+from ..scenario.geometry import footprint_polygon, footprint_polygons, obstacle_polygon
+from ..verdict.result import EpisodeResult
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+    from .compare import Comparison
+
+OUTCOME_COLOURS = {"success": "#2e7d32", "collision": "#c62828", "safety-stop": "#ef6c00",
+                   "timeout": "#6a1b9a", "subject-error": "#37474f"}
+A_COLOUR, B_COLOUR = "#7f9fbf", "#1f4e79"
+SPEED_CMAP = "viridis"
+MAX_NAMED_OBSTACLES = 40   # more obstacles than this: only the ones involved are named
+MAX_GAP_SEARCH = 200       # touching obstacles: look for the narrowest real gap among at most this many
+
+
+def _figure(width: float, height: float, constrained: bool = True) -> "Figure":
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height), dpi=100, layout="constrained" if constrained else None)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def png_bytes(fig: "Figure", dpi: int = 100) -> bytes:
+    """The figure as PNG bytes (for embedding in HTML)."""
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    return buf.getvalue()
+
+
+def save_figure(fig: "Figure", path: str | os.PathLike, dpi: int = 100) -> Path:
+    """Write the figure as PNG atomically (a temporary file, then a rename); return the path."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_bytes(png_bytes(fig, dpi))
+    os.replace(tmp, path)
+    return path
+
+
+# ------------------------------------------------------------------------------ trajectory plot
+
+def _speed(result: EpisodeResult) -> np.ndarray:
+    vel = np.asarray(result.trajectory.velocity, dtype=float).reshape(-1, 3)
+    return np.hypot(vel[:, 0], vel[:, 1])
+
+
+def _pose_at(result: EpisodeResult, time: float) -> np.ndarray | None:
+    traj = result.trajectory
+    if not len(traj.t) or not math.isfinite(time):
+        return None
+    i = int(np.clip(np.searchsorted(traj.t, time), 0, len(traj.t) - 1))
+    return np.asarray(traj.pose[i], dtype=float)
+
+
+def _gap(scenario: Any, metrics: Any) -> tuple[float, str, str]:
+    """The narrowest obstacle gap to mark: the metric's (paths.min_obstacle_gap), unless obstacles
+    touch (gap 0, e.g. walls meeting at a corner), then the narrowest real passage between two
+    obstacles that do not touch."""
+    names = (metrics.min_gap_obstacles or "").split("|")
+    if len(names) == 2 and math.isfinite(metrics.min_obstacle_gap):
+        gap = (float(metrics.min_obstacle_gap), names[0], names[1])
+    else:
+        from ..verdict.paths import min_obstacle_gap
+        gap = min_obstacle_gap(scenario)
+    if gap[0] > 1e-6 or not 3 <= len(scenario.obstacles) <= MAX_GAP_SEARCH:
+        return gap
+    polys = [obstacle_polygon(o) for o in scenario.obstacles]
+    best = (math.inf, "", "")
+    for i in range(len(polys)):
+        for j in range(i + 1, len(polys)):
+            d = polys[i].distance(polys[j])
+            if 1e-6 < d < best[0]:
+                best = (d, scenario.obstacles[i].name, scenario.obstacles[j].name)
+    return best
+
+
+def speed_norm(results: Sequence[EpisodeResult]):
+    """One colour scale for several plots (side by side plots must share it)."""
+    from matplotlib.colors import Normalize
+
+    top = max([float(_speed(r).max()) for r in results if len(r.trajectory.t)] + [0.0])
+    limit = max([r.scenario.robot.limits.max_speed for r in results] + [top, 0.1])
+    return Normalize(0.0, limit)
+
+
+def _extent(result: EpisodeResult, margin: float = 0.8) -> tuple[float, float, float, float]:
+    s = result.scenario
+    xs = [s.mission.start.x, s.mission.goal.x] + [w.x for w in s.mission.waypoints]
+    ys = [s.mission.start.y, s.mission.goal.y] + [w.y for w in s.mission.waypoints]
+    for obs in s.obstacles:
+        x0, y0, x1, y1 = obstacle_polygon(obs).bounds
+        xs += [x0, x1]
+        ys += [y0, y1]
+    if len(result.trajectory.t):
+        pose = np.asarray(result.trajectory.pose)
+        xs += [float(pose[:, 0].min()), float(pose[:, 0].max())]
+        ys += [float(pose[:, 1].min()), float(pose[:, 1].max())]
+    return min(xs) - margin, max(xs) + margin, min(ys) - margin, max(ys) + margin
+
+
+def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
+                 outline_every: float | None = None, title: str | None = None,
+                 legend: bool = False) -> Any:
+    """Draw one episode on ``ax``; return the speed colour mapping (for a colour bar) or None."""
+    import shapely
+    from matplotlib.collections import LineCollection, PolyCollection
+    from matplotlib.patches import Circle
+    from matplotlib.patches import Polygon as MplPolygon
+    from matplotlib.ticker import MultipleLocator
+
+    s, m, traj = result.scenario, result.metrics, result.trajectory
+    fp = s.robot.footprint
+    halo = dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8)
+
+    # Collections, not one patch each: patches re-run autoscaling per patch (slow); limits are set below.
+    polys = [obstacle_polygon(obs) for obs in s.obstacles]
+    ax.add_collection(PolyCollection([np.asarray(p.exterior.coords) for p in polys], closed=True,
+                                     facecolors="#9e9e9e", edgecolors="#424242", linewidths=1.0,
+                                     zorder=2), autolim=False)
+    # every name on small maps; on big ones (imported maps) only the obstacles the story is about
+    involved = {m.min_clearance_obstacle, *(m.min_gap_obstacles or "").split("|"),
+                result.collision.obstacle if result.collision else "",
+                result.safety_stop.obstacle if result.safety_stop else ""}
+    for obs, poly in zip(s.obstacles, polys):
+        if len(polys) > MAX_NAMED_OBSTACLES and obs.name not in involved:
+            continue
+        ax.annotate(obs.name, (poly.centroid.x, poly.centroid.y), ha="center", va="center",
+                    fontsize=7, zorder=8, bbox=halo)
+
+    try:
+        from ..verdict.paths import shortest_path
+        best = shortest_path(s)
+    except ImportError:  # pragma: no cover
+        best = None
+    if best is not None:
+        pts = np.asarray(best.points)
+        ax.plot(pts[:, 0], pts[:, 1], ls="--", lw=1.0, color="#616161", zorder=3,
+                label=f"shortest path {best.length:.1f} m")
+
+    mapping = None
+    if len(traj.t) >= 2:
+        pose = np.asarray(traj.pose, dtype=float)
+        speed = _speed(result)
+        t = np.asarray(traj.t, dtype=float)
+        duration = float(t[-1] - t[0])
+        # the swept area (the "thick line"), then outlines to scale every outline_every seconds
+        # a footprint every 5 cm of travel or 10 degrees of turn is enough for the union (fast)
+        step = max(1, len(pose) // 1000)
+        swept = shapely.union_all(footprint_polygons(fp, pose[_thin(pose, step, 0.05, 10.0)]))
+        rings = [np.asarray(g.exterior.coords) for g in getattr(swept, "geoms", [swept]) if not g.is_empty]
+        ax.add_collection(PolyCollection(rings, closed=True, facecolors="#90caf9", edgecolors="none",
+                                         alpha=0.35, zorder=1, label="swept by the footprint"),
+                          autolim=False)
+        every = outline_every or _nice_step(max(0.5, duration / 25.0))
+        marks = np.searchsorted(t, np.arange(t[0], t[-1] + 1e-9, every))
+        marks = _spread(pose, np.unique(np.append(np.clip(marks, 0, len(t) - 1), len(t) - 1)), 0.25)
+        outlines = [np.asarray(p.exterior.coords) for p in footprint_polygons(fp, pose[marks])]
+        ax.add_collection(PolyCollection(outlines, closed=True, facecolors="none", edgecolors="#1565c0",
+                                         linewidths=0.6, alpha=0.55, zorder=4,
+                                         label=f"footprint every {every:g} s"), autolim=False)
+        # centre path coloured by speed
+        stride = max(1, len(pose) // 2000)
+        xy = pose[::stride, :2]
+        segs = np.stack([xy[:-1], xy[1:]], axis=1)
+        from matplotlib.colors import Normalize
+        lc = LineCollection(segs, cmap=SPEED_CMAP, norm=norm or Normalize(0, max(0.1, speed.max())),
+                            lw=2.5, zorder=6)
+        lc.set_array(speed[::stride][:-1])
+        ax.add_collection(lc, autolim=False)
+        mapping = lc
+        # time labels along the path
+        tick = _nice_step(duration / 6.0)
+        ticks = np.arange(tick, t[-1], tick)
+        idx = np.clip(np.searchsorted(t, ticks), 0, len(t) - 1)
+        keep = set(_spread(pose, idx, 0.4).tolist())
+        for tt, i in zip(ticks, idx):
+            if i not in keep:  # the robot stood still: one label is enough
+                continue
+            ax.plot(*pose[i, :2], "o", ms=2.5, color="black", zorder=7)
+            ax.annotate(f"{tt:g}s", pose[i, :2], xytext=(4, -8), textcoords="offset points",
+                        fontsize=6, color="#212121", zorder=8)
+
+    mission = s.mission
+    ax.plot(mission.start.x, mission.start.y, marker="o", ms=8, color="#2e7d32", zorder=9, ls="none",
+            label="start")
+    for k, w in enumerate(mission.waypoints, 1):
+        ax.plot(w.x, w.y, marker="D", ms=6, color="#f9a825", zorder=9, ls="none",
+                label="waypoints" if k == 1 else None)
+        ax.annotate(str(k), (w.x, w.y), xytext=(5, 5), textcoords="offset points", fontsize=7)
+    ax.add_patch(Circle((mission.goal.x, mission.goal.y), mission.goal_tolerance.position,
+                        fill=False, ls=":", ec="#2e7d32", zorder=5))
+    ax.plot(mission.goal.x, mission.goal.y, marker="*", ms=13, color="#2e7d32", zorder=9, ls="none",
+            label="goal")
+
+    # minimum clearance: the segment between footprint and obstacle at that moment
+    if math.isfinite(m.min_clearance) and m.min_clearance_obstacle:
+        p = _pose_at(result, m.min_clearance_time)
+        if p is None:
+            p = np.array([m.min_clearance_x, m.min_clearance_y, math.radians(mission.start.yaw)])
+        try:
+            from shapely.ops import nearest_points
+            a, b = nearest_points(footprint_polygon(fp, *p),
+                                  obstacle_polygon(s.obstacle(m.min_clearance_obstacle)))
+            ax.plot([a.x, b.x], [a.y, b.y], color="#d50000", lw=2, zorder=10)
+            ax.plot([a.x], [a.y], marker="o", ms=5, color="#d50000", zorder=10)
+            ax.add_patch(MplPolygon(np.asarray(footprint_polygon(fp, *p).exterior.coords), closed=True,
+                                    fill=False, ec="#d50000", lw=1.2, zorder=10))
+            # label on the free side: from the obstacle towards the robot
+            d = np.array([a.x - b.x, a.y - b.y])
+            d = d / np.linalg.norm(d) if np.linalg.norm(d) > 1e-9 else np.array([-0.7, 0.7])
+            ax.annotate(f"min clearance {m.min_clearance:.2f} m\n(t={m.min_clearance_time:.1f} s)",
+                        (a.x, a.y), xytext=tuple(28 * d), textcoords="offset points", fontsize=7,
+                        ha="right" if d[0] < 0 else "left", va="top" if d[1] < 0 else "bottom",
+                        color="#d50000", zorder=11, bbox=halo,
+                        arrowprops=dict(arrowstyle="-", color="#d50000", lw=0.6))
+        except KeyError:
+            pass
+
+    # narrowest obstacle-obstacle gap
+    gap, na, nb = _gap(s, m)
+    if math.isfinite(gap) and na and nb:
+        try:
+            from shapely.ops import nearest_points
+            a, b = nearest_points(obstacle_polygon(s.obstacle(na)), obstacle_polygon(s.obstacle(nb)))
+            ax.annotate("", (a.x, a.y), (b.x, b.y), zorder=10,
+                        arrowprops=dict(arrowstyle="<->", color="#ff6f00", lw=1.3, shrinkA=0, shrinkB=0))
+            ax.annotate(f"gap {gap:.2f} m", ((a.x + b.x) / 2, (a.y + b.y) / 2), xytext=(0, -7),
+                        textcoords="offset points", ha="center", va="top", fontsize=7, color="#e65100",
+                        zorder=11, bbox=halo)
+        except KeyError:
+            pass
+
+    if result.collision is not None:
+        c = result.collision
+        ax.plot(c.x, c.y, marker="X", ms=12, color="#b71c1c", mec="white", zorder=12, ls="none",
+                label=f"collision t={c.time:.1f} s")
+    if result.safety_stop is not None:
+        p = _pose_at(result, result.safety_stop.time)
+        if p is not None:
+            ax.plot(p[0], p[1], marker="8", ms=11, color="#ef6c00", mec="white", zorder=12, ls="none",
+                    label=f"safety stop t={result.safety_stop.time:.1f} s")
+
+    x0, x1, y0, y1 = _extent(result)
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
+    ax.set_aspect("equal", adjustable="box")
+    span = max(x1 - x0, y1 - y0)
+    major = _nice_step(span / 8.0)
+    ax.xaxis.set_major_locator(MultipleLocator(major))
+    ax.yaxis.set_major_locator(MultipleLocator(major))
+    ax.grid(True, which="major", color="#bdbdbd", lw=0.6, zorder=0)
+    ax.set_axisbelow(True)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    if legend:
+        ax.legend(loc="best", fontsize=7, framealpha=0.85)
+    outcome = result.outcome.value
+    ax.set_title(title if title is not None else episode_title(result), fontsize=9,
+                 color=OUTCOME_COLOURS.get(outcome, "black"))
+    return mapping
+
+
+def _nice_step(raw: float) -> float:
+    """1, 2 or 5 times a power of ten, at least raw."""
+    if not raw > 0 or not math.isfinite(raw):
+        return 1.0
+    exp = math.floor(math.log10(raw))
+    for f in (1, 2, 5, 10):
+        if f * 10 ** exp >= raw:
+            return f * 10 ** exp
+    return 10 ** (exp + 1)
+
+
+def _thin(pose: np.ndarray, step: int, min_move: float, min_turn_deg: float) -> np.ndarray:
+    """Indices (every ``step``-th pose, first and last kept) at least ``min_move`` m or
+    ``min_turn_deg`` degrees apart from the previous kept one."""
+    idx = np.arange(0, len(pose), step)
+    if idx[-1] != len(pose) - 1:
+        idx = np.append(idx, len(pose) - 1)
+    kept = [0]
+    px, py, pyaw = pose[0]
+    turn = math.radians(min_turn_deg)
+    for i in idx[1:]:
+        x, y, yaw = pose[i]
+        if (x - px) ** 2 + (y - py) ** 2 >= min_move ** 2 or abs((yaw - pyaw + math.pi) % (2 * math.pi) - math.pi) >= turn:
+            kept.append(int(i))
+            px, py, pyaw = x, y, yaw
+    if kept[-1] != len(pose) - 1:
+        kept.append(len(pose) - 1)
+    return np.asarray(kept)
+
+
+def _spread(pose: np.ndarray, idx: np.ndarray, min_move: float) -> np.ndarray:
+    """Keep the indices whose pose moved at least ``min_move`` m (or turned 30 degrees) since the
+    last kept one, and the last: a robot that stands still gets one outline, not a pile."""
+    if len(idx) == 0:
+        return idx
+    kept = [int(idx[0])]
+    for i in idx[1:]:
+        last = pose[kept[-1]]
+        turn = abs((pose[i, 2] - last[2] + math.pi) % (2 * math.pi) - math.pi)
+        if math.hypot(pose[i, 0] - last[0], pose[i, 1] - last[1]) >= min_move or turn >= math.radians(30):
+            kept.append(int(i))
+    if kept[-1] != int(idx[-1]) and len(idx) > 1:
+        kept.append(int(idx[-1]))
+    return np.asarray(kept)
+
+
+def episode_title(result: EpisodeResult, prefix: str = "", width: int = 60) -> str:
+    """Name, outcome and subject, then the outcome's message wrapped to ``width`` characters."""
+    import textwrap
+
+    s = result.scenario
+    name = s.name + (f" [{s.family}]" if s.family and s.family != s.name else "")
+    subject = result.subject + (f" {result.subject_version}" if result.subject_version else "")
+    message = textwrap.shorten(result.message, 2 * width, placeholder="...")
+    wrapped = textwrap.fill(message, width, break_on_hyphens=False) if message else ""
+    head = textwrap.fill(f"{prefix}{name}: {result.outcome.value.upper()} ({subject})", width,
+                         break_on_hyphens=False)
+    return head + (f"\n{wrapped}" if wrapped else "")
+
+
+# Fixed layout in inches (no constrained layout: it re-measures every text and costs ~40 % of a plot).
+_LEFT, _GAP, _RIGHT, _TOP, _BOTTOM = 0.75, 0.35, 2.1, 0.85, 1.25
+_CBAR_H, _CBAR_Y = 0.14, 0.42
+
+
+def _figsize(results: Sequence[EpisodeResult], panels: int) -> tuple[float, float]:
+    """Figure size (inches) for ``panels`` maps side by side, each with the maps' aspect ratio."""
+    pw, ph = _panel_size(results)
+    return _LEFT + panels * pw + (panels - 1) * _GAP + _RIGHT, _BOTTOM + ph + _TOP
+
+
+def _panel_size(results: Sequence[EpisodeResult]) -> tuple[float, float]:
+    boxes = [_extent(r) for r in results]
+    w = max(b[1] for b in boxes) - min(b[0] for b in boxes)
+    h = max(b[3] for b in boxes) - min(b[2] for b in boxes)
+    aspect = w / max(h, 1e-6)
+    ph = 6.0
+    pw = float(np.clip(ph * aspect, 2.6, 9.0 if len(results) == 1 else 6.5))
+    ph = float(np.clip(pw / aspect, 2.6, 7.0))
+    return round(pw, 2), round(ph, 2)
+
+
+def _map_figure(results: Sequence[EpisodeResult]) -> tuple["Figure", list["Axes"], "Axes"]:
+    """A figure with one map panel per result (shared axes), and an axes for the speed colour bar."""
+    n = len(results)
+    pw, ph = _panel_size(results)
+    fw, fh = _figsize(results, n)
+    fig = _figure(fw, fh, constrained=False)
+    axes: list[Axes] = []
+    for k in range(n):
+        rect = ((_LEFT + k * (pw + _GAP)) / fw, _BOTTOM / fh, pw / fw, ph / fh)
+        ax = fig.add_axes(rect, sharex=axes[0] if axes else None, sharey=axes[0] if axes else None)
+        if k:
+            ax.tick_params(labelleft=False)
+        axes.append(ax)
+    span = n * pw + (n - 1) * _GAP
+    cw = min(span, 5.0)
+    cax = fig.add_axes(((_LEFT + (span - cw) / 2) / fw, _CBAR_Y / fh, cw / fw, _CBAR_H / fh))
+    return fig, axes, cax
+
+
+def _figure_legend(fig: "Figure", axes: Sequence["Axes"]) -> None:
+    """One legend for all panels, right of the maps so it never hides the goal or an obstacle."""
+    seen: dict[str, Any] = {}
+    for ax in axes:
+        for handle, label in zip(*ax.get_legend_handles_labels()):
+            seen.setdefault(label, handle)
+    if seen:
+        fw, fh = fig.get_size_inches()
+        fig.legend(list(seen.values()), list(seen), loc="upper left", fontsize=7, frameon=False,
+                   bbox_to_anchor=((fw - _RIGHT + 0.1) / fw, 1 - _TOP / fh))
+
+
+def _colorbar(fig: "Figure", mapping: Any, cax: "Axes") -> None:
+    if mapping is None:
+        cax.set_visible(False)
+        return
+    fig.colorbar(mapping, cax=cax, orientation="horizontal", label="speed (m/s)")
+
+
+def trajectory_figure(result: EpisodeResult, *, outline_every: float | None = None) -> "Figure":
+    """One episode: the figure (see the module docstring for what it shows)."""
+    fig, (ax,), cax = _map_figure([result])
+    width = max(30, int((_panel_size([result])[0] + 1.0) / 0.075))  # title may overhang the map a bit
+    mapping = draw_episode(ax, result, outline_every=outline_every, title=episode_title(result, width=width))
+    _figure_legend(fig, [ax])
+    _colorbar(fig, mapping, cax)
+    return fig
+
+
+def save_trajectory(result: EpisodeResult, path: str | os.PathLike, **kwargs: Any) -> Path:
+    """Write the trajectory plot of one episode as PNG (100 dpi, sized to the map)."""
+    return save_figure(trajectory_figure(result, **kwargs), path)
+
+
+def comparison_figure(a: EpisodeResult, b: EpisodeResult, labels: tuple[str, str] = ("A", "B")) -> "Figure":
+    """The same scenario under A and B side by side, same axes and the same speed colours."""
+    fig, axes, cax = _map_figure([a, b])
+    norm = speed_norm([a, b])
+    mapping = None
+    # outlines as dense as the shorter run needs (where a robot stood still they are thinned anyway)
+    every = _nice_step(max(0.5, min(a.trajectory.duration or 1e9, b.trajectory.duration or 1e9, 100.0) / 25.0))
+    width = max(30, int(_panel_size([a, b])[0] / 0.075))  # characters per title line, one panel
+    for ax, res, label in zip(axes, (a, b), labels):
+        mapping = draw_episode(ax, res, norm=norm, outline_every=every,
+                               title=episode_title(res, prefix=f"{label}: ", width=width)) or mapping
+    boxes = [_extent(r) for r in (a, b)]  # the shared axes must show both runs whole
+    axes[0].set_xlim(min(x[0] for x in boxes), max(x[1] for x in boxes))
+    axes[0].set_ylim(min(x[2] for x in boxes), max(x[3] for x in boxes))
+    axes[1].set_ylabel("")
+    _figure_legend(fig, axes)
+    _colorbar(fig, mapping, cax)
+    return fig
+
+
+def save_comparison(a: EpisodeResult, b: EpisodeResult, path: str | os.PathLike,
+                    labels: tuple[str, str] = ("A", "B")) -> Path:
+    """Write the side-by-side plot of one scenario under A and B as PNG (100 dpi)."""
+    return save_figure(comparison_figure(a, b, labels), path)
+
+
+# ------------------------------------------------------------------------------- bar chart
+
+def bars_figure(cmp: "Comparison") -> "Figure":
+    """The paper's two-sided bar chart: per family, success rate up and safety-stop rate down,
+    A beside B, with 95 % Wilson intervals as error bars and n under each family."""
+    rows = list(cmp.families) + ([cmp.overall] if len(cmp.families) > 1 else [])
+    fig = _figure(max(6.0, 1.5 + 1.3 * len(rows)), 5.5)
+    ax = fig.add_subplot()
+    x = np.arange(len(rows), dtype=float)
+    width = 0.38
+    for side, offset, colour, name, subject in (("a", -width / 2, A_COLOUR, "A", cmp.a_subject),
+                                                ("b", width / 2, B_COLOUR, "B", cmp.b_subject)):
+        for key, sign, hatch in (("success", 1, None), ("safety-stop", -1, "///")):
+            rates = [getattr(r, side)[key] for r in rows]
+            vals = np.array([0.0 if rt.n == 0 else 100 * rt.rate for rt in rates])
+            err = np.array([[100 * (rt.rate - rt.low) if rt.n else 0 for rt in rates],
+                            [100 * (rt.high - rt.rate) if rt.n else 0 for rt in rates]])
+            err = np.maximum(err, 0.0)  # rounding: a 0 % rate's Wilson low can be 1e-17
+            if sign < 0:
+                err = err[::-1]
+            label = f"{name} {key} ({subject})" if len(subject) < 40 else f"{name} {key}"
+            ax.bar(x + offset, sign * vals, width, color=colour, hatch=hatch, ec="white" if hatch else colour,
+                   label=label, yerr=err, capsize=3, error_kw=dict(lw=0.8, ecolor="#424242"), zorder=3)
+            for xi, v in zip(x + offset, vals):
+                ax.annotate(f"{v:.0f}%", (xi, sign * v), xytext=(0, 3 if sign > 0 else -3),
+                            textcoords="offset points", ha="center", va="bottom" if sign > 0 else "top",
+                            fontsize=7, zorder=4, bbox=dict(boxstyle="square,pad=0.1", fc="white",
+                                                            ec="none", alpha=0.7))
+    if not rows or not cmp.pairs:
+        ax.text(0.5, 0.5, "no comparable scenario pairs:\nsee the 'only in A / only in B / not comparable' lists",
+                transform=ax.transAxes, ha="center", va="center", fontsize=10, color="#c62828")
+    ax.axhline(0, color="black", lw=0.8)
+    ax.set_xticks(x, [f"{r.family}\nn={r.n}" + (f"\np={r.mcnemar_p:.2g}" if r.n else "") for r in rows],
+                  fontsize=8)
+    ax.set_ylim(-115, 115)
+    ticks = np.arange(-100, 101, 25)
+    ax.set_yticks(ticks, [f"{abs(t)}" for t in ticks])
+    ax.set_ylabel("safety-stop %   |   success %")
+    ax.grid(True, axis="y", color="#e0e0e0", zorder=0)
+    ax.set_title(f"Success (up) and safety-stop (down) per family, A vs B\n"
+                 f"A = {cmp.a_subject}   B = {cmp.b_subject}   (error bars: 95 % Wilson; p: McNemar)",
+                 fontsize=9)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=2, frameon=False)
+    return fig
+
+
+def save_bars(cmp: "Comparison", path: str | os.PathLike) -> Path:
+    """Write the two-sided bar chart of a comparison as PNG."""
+    return save_figure(bars_figure(cmp), path)

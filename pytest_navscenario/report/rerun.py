@@ -1,0 +1,74 @@
+"""Re-running a compared pair: replay one record of a results file against its subject, and
+draw two runs of the same scenario side by side."""
+from __future__ import annotations
+
+import os
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .compare import Comparison
+
+
+def rerun_record(rec: dict[str, Any], subject: str | None = None, *, root: str | os.PathLike = ".") -> Any:
+    """Run a record's scenario again, as it was run: the file at ``root/rec["path"]`` (refused if
+    its content hash differs from the record's), the record's episode seed, and ``subject`` (default:
+    the record's subject). Returns the EpisodeResult. Raises NavScenarioError in plain words."""
+    import dataclasses
+    from pathlib import Path
+
+    from ..core.errors import NavScenarioError
+    from ..scenario.loader import load_scenario
+    from ..harness.runner import run_scenario
+    from ..scenario.model import content_hash
+
+    path = Path(root) / rec.get("path", "")
+    if not rec.get("path") or not path.is_file():
+        raise NavScenarioError(f"{rec['nodeid']}: scenario file {str(path)!r} not found (give the pytest "
+                               f"rootdir of that run with --root)")
+    scenario = load_scenario(path)
+    if content_hash(scenario) != rec["scenario_hash"]:
+        raise NavScenarioError(f"{rec['nodeid']}: {path} changed since the run (scenario_hash "
+                               f"{content_hash(scenario)}, the record has {rec['scenario_hash']}); "
+                               f"cannot re-run it as it was")
+    spec = subject or rec.get("subject")
+    # the record's effective seed as the scenario's own seed: run_scenario then uses exactly it
+    scenario = dataclasses.replace(scenario, simulation=dataclasses.replace(scenario.simulation,
+                                                                            seed=int(rec.get("seed") or 0)))
+    try:
+        return run_scenario(scenario, spec)
+    except NavScenarioError as exc:
+        raise NavScenarioError(f"{rec['nodeid']}: cannot re-run with subject {spec!r}: {exc} (records "
+                               f"name the planner, which may not be importable: pass --a-subject / "
+                               f"--b-subject)") from None
+
+
+def rerun_side_by_side(cmp: Comparison, folder: str | os.PathLike, *, root: str | os.PathLike = ".",
+                       limit: int = 10, a_subject: str | None = None,
+                       b_subject: str | None = None) -> tuple[list[str], list[str]]:
+    """Re-run the scenarios B broke (then those it fixed) under A and B and write one side-by-side
+    plot per scenario into ``folder``. Returns (files written, problems: one line each)."""
+    from pathlib import Path
+
+    from ..core.files import folder_name
+    from ..core.errors import NavScenarioError
+    from .plots import save_comparison
+
+    written: list[str] = []
+    problems: list[str] = []
+    for pair in (cmp.broke + cmp.fixed)[:max(0, limit)]:
+        try:
+            ra = rerun_record(pair.a, a_subject, root=root)
+            rb = rerun_record(pair.b, b_subject, root=root)
+        except NavScenarioError as exc:
+            problems.append(str(exc))
+            continue
+        for side, rec, res in (("A", pair.a, ra), ("B", pair.b, rb)):
+            if res.outcome.value != rec["outcome"]:
+                problems.append(f"{pair.label}: {side} re-run gave {res.outcome.value}, the results file says "
+                                f"{rec['outcome']} (another planner version, or a nondeterministic planner?)")
+        name = folder_name(pair.nodeid) + (f"-r{pair.repeat}" if pair.repeat else "") + ".png"
+        out = save_comparison(ra, rb, Path(folder) / name,
+                              labels=(f"A ({a_subject or pair.a.get('subject')})",
+                                      f"B ({b_subject or pair.b.get('subject')})"))
+        written.append(str(out))
+    return written, problems

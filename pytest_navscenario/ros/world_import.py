@@ -1,0 +1,352 @@
+"""``navscenario import``: other tools' worlds as scenarios.
+
+* ``navscenario import aerialist test.yaml -o s.yaml``: an Aerialist test definition. Its
+  ``simulation.obstacles`` come in two encodings, both read: a list of
+  ``{size: {l, w, h}, position: {x, y, z, r}}`` mappings, or a flat list
+  ``[l, w, h, x, y, z, r, ...]`` (seven numbers per box). Boxes are centred on their position,
+  ``r`` is the yaw in degrees (our YAML unit too, so it is copied unchanged).
+* ``navscenario import sdf world.world --start x,y,yaw --goal x,y,yaw -o s.yaml``: a Gazebo SDF
+  world. The box and cylinder collision geometry of static models becomes obstacles, with the
+  model, link and collision poses composed (a world ``<state>`` pose overrides the model's,
+  as Gazebo does on load). Planes are ignored; everything else (meshes, spheres, includes,
+  tilted shapes, non-static models) is listed in a warning, never dropped silently.
+
+Also home of ``write_seed``, which every importer uses to write its scenario file.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import tempfile
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ..core.errors import NavScenarioError
+from ..scenario.model import BoxObstacle, CylinderObstacle, Mission, Obstacle, Pose, Scenario
+
+
+class WorldImportError(NavScenarioError):
+    """An external world file cannot be imported (not the format, missing field, bad value)."""
+
+
+# ------------------------------------------------------------------ writing seeds
+
+def write_seed(scenario: Scenario, out: str | Path, *, extra_files: dict[str, str] | None = None,
+               force: bool = False) -> Path:
+    """Write ``scenario`` as YAML at ``out`` (plus ``extra_files``: name -> text, beside it).
+
+    Every file is written to a temporary name first and renamed only when all are complete,
+    so a failure leaves no partial output. Refuses to replace an existing file unless ``force``.
+    """
+    from ..core.errors import ScenarioError
+    from ..scenario.loader import loads_scenario
+    from ..scenario.dump import dump_scenario
+
+    out = Path(out)
+    targets = {out: None, **{out.parent / name: text for name, text in (extra_files or {}).items()}}
+    if not force:
+        existing = [str(p) for p in targets if p.exists()]
+        if existing:
+            raise WorldImportError(f"{', '.join(existing)}: already exists; choose another -o or pass --force")
+    if not scenario.name:
+        import dataclasses
+        scenario = dataclasses.replace(scenario, name=out.stem)
+    text = dump_scenario(scenario)
+    try:
+        loads_scenario(text)  # what a user will load must load: catch it here, before writing
+    except ScenarioError as exc:
+        raise WorldImportError(f"{out}: not written, the imported scenario is invalid: {exc}") from None
+    targets[out] = text
+    out.parent.mkdir(parents=True, exist_ok=True)
+    staged: list[tuple[str, Path]] = []
+    try:
+        for path, text in targets.items():
+            fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+            staged.append((tmp, path))
+            with os.fdopen(fd, "w", encoding="utf-8") as fh:
+                fh.write(text)
+        for tmp, path in staged:
+            os.replace(tmp, path)
+    finally:
+        for tmp, _ in staged:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+    return out
+
+
+def parse_pose(text: str, option: str) -> Pose:
+    """``x,y,yaw`` (metres, metres, degrees) -> Pose, with an error naming the option."""
+    try:
+        parts = [float(v) for v in text.split(",")]
+    except ValueError:
+        parts = []
+    if len(parts) not in (2, 3) or not all(math.isfinite(v) for v in parts):
+        raise WorldImportError(f"{option} {text!r}: expected x,y,yaw (metres, metres, degrees), e.g. {option} 0,0,90")
+    return Pose(parts[0], parts[1], parts[2] if len(parts) == 3 else 0.0)
+
+
+def _num(v: float, nd: int = 4) -> float:
+    return float(round(float(v), nd)) + 0.0
+
+
+# ------------------------------------------------------------------ Aerialist
+
+def aerialist_obstacles(path: str | Path) -> list[BoxObstacle]:
+    """The boxes of an Aerialist test YAML (both encodings); errors name file, line and field."""
+    import yaml
+
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise WorldImportError(f"{path}: no such file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise WorldImportError(f"{path}: cannot read: {exc}") from None
+    try:
+        node = yaml.compose(text)
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f":{mark.line + 1}" if mark else ""
+        raise WorldImportError(f"{path}{where}: not valid YAML ({getattr(exc, 'problem', exc)})") from None
+
+    def line_of(*keys: Any) -> str:
+        cur = node
+        for key in keys:
+            if isinstance(cur, yaml.MappingNode):
+                cur = next((v for k, v in cur.value if k.value == key), None)
+            elif isinstance(cur, yaml.SequenceNode) and isinstance(key, int) and key < len(cur.value):
+                cur = cur.value[key]
+            else:
+                cur = None
+            if cur is None:
+                return ""
+        return f":{cur.start_mark.line + 1}"
+
+    if not isinstance(data, dict) or not isinstance(data.get("simulation"), dict):
+        raise WorldImportError(f"{path}: not an Aerialist test: no 'simulation' mapping "
+                           f"(expected simulation.obstacles)")
+    obstacles = data["simulation"].get("obstacles")
+    if obstacles is None:
+        return []
+    if not isinstance(obstacles, list):
+        raise WorldImportError(f"{path}{line_of('simulation', 'obstacles')}: simulation.obstacles must be a list")
+    boxes: list[BoxObstacle] = []
+
+    def number(value: Any, field_name: str, *keys: Any) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise WorldImportError(f"{path}{line_of(*keys)}: {field_name}: expected a number, got {value!r}"
+                               + (" (a template placeholder?)" if isinstance(value, str) else ""))
+        return float(value)
+
+    if obstacles and not isinstance(obstacles[0], dict):
+        if len(obstacles) % 7:
+            raise WorldImportError(f"{path}{line_of('simulation', 'obstacles')}: simulation.obstacles as a flat list "
+                               f"needs 7 numbers per box (l,w,h,x,y,z,r), got {len(obstacles)} values")
+        for i in range(0, len(obstacles), 7):
+            vals = [number(v, f"simulation.obstacles[{i + j}]", "simulation", "obstacles", i + j)
+                    for j, v in enumerate(obstacles[i:i + 7])]
+            boxes.append(_aerialist_box(path, len(boxes), *vals))
+        return boxes
+    for i, ob in enumerate(obstacles):
+        keys = ("simulation", "obstacles", i)
+        if not isinstance(ob, dict) or not isinstance(ob.get("size"), dict) or not isinstance(ob.get("position"), dict):
+            raise WorldImportError(f"{path}{line_of(*keys)}: simulation.obstacles[{i}]: expected "
+                               f"{{size: {{l, w, h}}, position: {{x, y, z, r}}}}")
+        size, pos = ob["size"], ob["position"]
+        vals = []
+        for part, name in (("size", "l"), ("size", "w"), ("size", "h"), ("position", "x"),
+                           ("position", "y"), ("position", "z"), ("position", "r")):
+            src = size if part == "size" else pos
+            if name not in src:
+                if name in ("z", "r"):
+                    vals.append(0.0)
+                    continue
+                raise WorldImportError(f"{path}{line_of(*keys, part)}: simulation.obstacles[{i}].{part}.{name} is missing")
+            vals.append(number(src[name], f"simulation.obstacles[{i}].{part}.{name}", *keys, part, name))
+        boxes.append(_aerialist_box(path, i, *vals))
+    return boxes
+
+
+def _aerialist_box(path: Path, i: int, l: float, w: float, h: float, x: float, y: float, z: float,
+                   r: float) -> BoxObstacle:
+    if l <= 0 or w <= 0 or h <= 0:
+        raise WorldImportError(f"{path}: simulation.obstacles[{i}]: size must be > 0, got l={l} w={w} h={h}")
+    return BoxObstacle(name=f"box{i + 1}", x=_num(x), y=_num(y), length=_num(l), width=_num(w),
+                       yaw=_num(r), height=_num(h))
+
+
+# ------------------------------------------------------------------ SDF
+
+@dataclass
+class SdfWorld:
+    obstacles: list[Obstacle]
+    warnings: list[str] = field(default_factory=list)
+    ignored_planes: int = 0
+    names: set[str] = field(default_factory=set)
+
+
+def _pose6(elem: ET.Element | None, where: str, path: Path) -> tuple[float, ...]:
+    if elem is None or not (elem.text or "").strip():
+        return (0.0,) * 6
+    try:
+        vals = [float(v) for v in elem.text.split()]
+    except ValueError:
+        vals = []
+    if elem.get("rotation_format", "euler_rpy") != "euler_rpy":
+        raise WorldImportError(f"{path}: {where}: <pose rotation_format={elem.get('rotation_format')!r}> is not "
+                               f"supported; write the rotation as 'x y z roll pitch yaw'")
+    if len(vals) != 6:
+        raise WorldImportError(f"{path}: {where}: <pose> must hold 6 numbers 'x y z roll pitch yaw', got {elem.text.strip()!r}")
+    if (elem.get("degrees") or "").strip().lower() in ("true", "1"):  # SDF 1.9: angles in degrees
+        vals[3:] = [math.radians(v) for v in vals[3:]]
+    return tuple(vals)
+
+
+def _compose(a: tuple[float, ...], b: tuple[float, ...]) -> tuple[float, ...]:
+    """Planar composition of a then b (x, y, z, roll, pitch, yaw); roll/pitch just add up and
+    are only used to detect tilted geometry."""
+    c, s = math.cos(a[5]), math.sin(a[5])
+    return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], a[2] + b[2],
+            a[3] + b[3], a[4] + b[4], a[5] + b[5])
+
+
+def _floats(elem: ET.Element | None, n: int, where: str, path: Path) -> list[float]:
+    try:
+        vals = [float(v) for v in (elem.text or "").split()] if elem is not None else []
+    except ValueError:
+        vals = []
+    if len(vals) != n:
+        raise WorldImportError(f"{path}: {where}: expected {n} number(s), got {None if elem is None else elem.text!r}")
+    return vals
+
+
+def sdf_obstacles(path: str | Path) -> SdfWorld:
+    """Box and cylinder collisions of the static models of an SDF world (see module docstring)."""
+    path = Path(path)
+    try:
+        root = ET.parse(path).getroot()
+    except FileNotFoundError:
+        raise WorldImportError(f"{path}: no such file") from None
+    except ET.ParseError as exc:
+        raise WorldImportError(f"{path}:{exc.position[0]}: not an SDF world: not well-formed XML ({exc})") from None
+    except OSError as exc:
+        raise WorldImportError(f"{path}: cannot read: {exc}") from None
+    world = root.find("world") if root.tag == "sdf" else None
+    if world is None:
+        raise WorldImportError(f"{path}: not an SDF world: expected <sdf><world>..., found <{root.tag}>")
+    state = world.find("state")
+    state_poses = {m.get("name"): m.find("pose") for m in (state.findall("model") if state is not None else [])}
+    out = SdfWorld(obstacles=[])
+    for inc in world.findall("include"):
+        uri = (inc.findtext("uri") or "?").strip()
+        out.warnings.append(f"<include> {uri}: included models are not resolved (not imported)")
+    for tag in ("actor", "population"):
+        for elem in world.findall(tag):
+            out.warnings.append(f"<{tag}> {elem.get('name', '?')}: moving or generated models are not "
+                                f"supported (not imported)")
+    tilt = math.radians(1.0)
+    for model in world.findall("model"):
+        _model(path, model, (0.0,) * 6, state_poses, out, tilt, top=True)
+    return out
+
+
+def _model(path: Path, model: ET.Element, parent: tuple[float, ...], state_poses: dict, out: SdfWorld,
+           tilt: float, top: bool) -> None:
+    mname = model.get("name", "?")
+    pose_elem = state_poses.get(mname) if top and state_poses.get(mname) is not None else model.find("pose")
+    mpose = _compose(parent, _pose6(pose_elem, f"model {mname}", path))
+    static = (model.findtext("static") or "0").strip().lower() in ("1", "true")
+    for inner in model.findall("model"):
+        _model(path, inner, mpose, {}, out, tilt, top=False)
+    for inc in model.findall("include"):
+        uri = (inc.findtext("uri") or "?").strip()
+        out.warnings.append(f"model {mname}: <include> {uri}: included models are not resolved (not imported)")
+    for link in model.findall("link"):
+        lname = link.get("name", "?")
+        lpose = _compose(mpose, _pose6(link.find("pose"), f"model {mname} link {lname}", path))
+        for col in link.findall("collision"):
+            cname = col.get("name", "?")
+            where = f"model {mname} link {lname} collision {cname}"
+            geom = col.find("geometry")
+            shape = next(iter(geom), None) if geom is not None else None
+            if shape is None:
+                out.warnings.append(f"{where}: no geometry (not imported)")
+                continue
+            if shape.tag == "plane":
+                out.ignored_planes += 1
+                continue
+            if not static:
+                out.warnings.append(f"{where}: {shape.tag} of a non-static model (not imported)")
+                continue
+            cpose = _compose(lpose, _pose6(col.find("pose"), where, path))
+            if shape.tag not in ("box", "cylinder"):
+                out.warnings.append(f"{where}: {shape.tag} geometry cannot be represented (not imported)")
+                continue
+            if abs(cpose[3]) > tilt or abs(cpose[4]) > tilt:
+                out.warnings.append(f"{where}: {shape.tag} tilted (roll {math.degrees(cpose[3]):.1f}, "
+                                    f"pitch {math.degrees(cpose[4]):.1f} deg) cannot be represented (not imported)")
+                continue
+            name = mname if mname not in out.names else f"{mname}/{lname}/{cname}"
+            out.names.add(name)
+            if shape.tag == "box":
+                sx, sy, sz = _floats(shape.find("size"), 3, f"{where} box size", path)
+                out.obstacles.append(BoxObstacle(name=name, x=_num(cpose[0]), y=_num(cpose[1]), length=_num(sx),
+                                                 width=_num(sy), yaw=_num(math.degrees(cpose[5]), 3),
+                                                 height=_num(sz)))
+            else:
+                (r,) = _floats(shape.find("radius"), 1, f"{where} cylinder radius", path)
+                (length,) = _floats(shape.find("length"), 1, f"{where} cylinder length", path)
+                out.obstacles.append(CylinderObstacle(name=name, x=_num(cpose[0]), y=_num(cpose[1]),
+                                                      radius=_num(r), height=_num(length)))
+
+
+# ------------------------------------------------------------------ CLI
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("format", choices=("aerialist", "sdf"), help="aerialist test YAML or Gazebo SDF world")
+    p.add_argument("file", help="the file to import")
+    p.add_argument("-o", "--output", required=True, help="scenario YAML to write")
+    p.add_argument("--start", default=None, help="start pose x,y,yaw (m, m, degrees); "
+                   "required for sdf, default 0,0,90 for aerialist (the paper's 10 m task)")
+    p.add_argument("--goal", default=None, help="goal pose x,y,yaw; required for sdf, default 0,10,90 for aerialist")
+    p.add_argument("--timeout", type=float, default=30.0, help="mission timeout, s (default 30)")
+    p.add_argument("--name", default="", help="scenario name (default: the output file's stem)")
+    p.add_argument("--force", action="store_true", help="overwrite an existing output file")
+
+
+def run(args: argparse.Namespace) -> int:
+    src = Path(args.file)
+    notes: list[str] = []
+    if args.format == "aerialist":
+        obstacles: list[Obstacle] = list(aerialist_obstacles(src))
+        start = parse_pose(args.start or "0,0,90", "--start")
+        goal = parse_pose(args.goal or "0,10,90", "--goal")
+        if not args.start or not args.goal:
+            notes.append("Aerialist missions are drone flight plans: using start/goal "
+                         f"{start.x},{start.y} -> {goal.x},{goal.y} (set --start/--goal)")
+    else:
+        if not args.start or not args.goal:
+            raise WorldImportError(f"{src}: an SDF world has no mission: pass --start x,y,yaw and --goal x,y,yaw")
+        start, goal = parse_pose(args.start, "--start"), parse_pose(args.goal, "--goal")
+        world = sdf_obstacles(src)
+        obstacles = world.obstacles
+        if world.ignored_planes:
+            notes.append(f"{world.ignored_planes} plane(s) ignored (the ground)")
+        for w in world.warnings:
+            print(f"navscenario import: warning: {src}: {w}", file=sys.stderr)
+        if world.warnings:
+            print(f"navscenario import: warning: {len(world.warnings)} element(s) of {src} not imported "
+                  f"(listed above)", file=sys.stderr)
+    scenario = Scenario(mission=Mission(start=start, goal=goal, timeout=args.timeout),
+                        obstacles=tuple(obstacles), name=args.name,
+                        description=f"Imported from {args.format} file {src.name}.")
+    write_seed(scenario, args.output, force=args.force)
+    for note in notes:
+        print(f"navscenario import: {note}")
+    print(f"navscenario import: {len(obstacles)} obstacle(s) -> wrote {args.output}")
+    return 0

@@ -1,0 +1,29 @@
+"""Scenario: the test case as data.
+
+In: YAML text or files (or plain dicts). Out: a frozen ``Scenario`` (robot, mission, obstacles,
+simulation settings, marks, search bounds), validated with ``file:line: field: message (fix: ...)``
+errors, and YAML that loads back to the same value.
+
+Read first: ``model.py`` (the dataclasses and their units), then ``loader.py`` (validation),
+``dump.py`` (writing), ``yaml_tree.py`` (the line-tracking YAML reader), ``geometry.py``
+(footprints and obstacle outlines as shapely polygons).
+"""
+from .model import (  # noqa: F401  (the model is the public face of this package)
+    SCHEMA_VERSION,
+    BoxObstacle,
+    CylinderObstacle,
+    Footprint,
+    GoalTolerance,
+    Lidar,
+    Limits,
+    Mark,
+    Mission,
+    Obstacle,
+    Pose,
+    Reference,
+    Robot,
+    Safety,
+    Scenario,
+    Simulation,
+    content_hash,
+)

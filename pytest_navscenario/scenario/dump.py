@@ -1,0 +1,122 @@
+"""Writing scenarios: the plain dict form with the documented key order, YAML text whose floats
+round-trip exactly (``load(dump(s)) == s``), and atomic saving to a file."""
+from __future__ import annotations
+
+import datetime
+import os
+from typing import Any, Mapping
+
+import yaml
+
+from ..core.files import atomic_write_text
+from .loader import LIDAR_KEYS, LIMITS_KEYS
+from .model import BoxObstacle, Mark, Obstacle, Pose, Scenario
+
+
+def _f(value: Any) -> float:
+    return float(value)
+
+
+def _pose_dict(pose: Pose) -> dict[str, Any]:
+    return {"x": _f(pose.x), "y": _f(pose.y), "yaw": _f(pose.yaw)}
+
+
+def _plain(value: Any) -> Any:
+    """Free-form data as safe_dump-able plain types (numpy scalars, tuples, mappings)."""
+    if isinstance(value, Mapping):
+        return {(_plain(k) if not isinstance(k, str) else k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if type(value).__module__ == "numpy" and hasattr(value, "tolist"):  # numpy scalars and arrays
+        return _plain(value.tolist())
+    if isinstance(value, (datetime.date, datetime.time)):  # free-form data keeps dates as text
+        return value.isoformat()
+    return value
+
+
+def _mark_entry(mark: Mark) -> Any:
+    if mark.args and mark.kwargs:
+        raise ValueError(f"mark {mark.name!r} has both positional and keyword arguments, which the "
+                         f"scenario format cannot express; use keyword arguments only")
+    if mark.kwargs:
+        return {mark.name: _plain(dict(mark.kwargs))}
+    if not mark.args:
+        return mark.name
+    if len(mark.args) == 1 and not isinstance(mark.args[0], (list, tuple, Mapping)) and mark.args[0] is not None:
+        return {mark.name: _plain(mark.args[0])}
+    return {mark.name: _plain(list(mark.args))}
+
+
+def _obstacle_dict(obs: Obstacle) -> dict[str, Any]:
+    if isinstance(obs, BoxObstacle):
+        return {"type": "box", "name": obs.name, "x": _f(obs.x), "y": _f(obs.y), "length": _f(obs.length),
+                "width": _f(obs.width), "yaw": _f(obs.yaw), "height": _f(obs.height)}
+    return {"type": "cylinder", "name": obs.name, "x": _f(obs.x), "y": _f(obs.y), "radius": _f(obs.radius),
+            "height": _f(obs.height)}
+
+
+def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
+    """The scenario as plain data in the documented key order. Physical settings (robot, mission,
+    obstacles, simulation) are always written in full, so a saved file does not depend on defaults;
+    empty metadata (description, marks, reference, search, provenance) is left out."""
+    s = scenario
+    out: dict[str, Any] = {"version": int(s.version)}
+    if s.name:
+        out["name"] = s.name
+    if s.family:
+        out["family"] = s.family
+    if s.description:
+        out["description"] = s.description
+    if s.marks:
+        out["marks"] = [_mark_entry(m) for m in s.marks]
+    r = s.robot
+    fp = r.footprint
+    footprint: dict[str, Any] = {"shape": fp.shape}
+    if fp.shape == "circle":
+        footprint["radius"] = _f(fp.radius)
+    else:
+        footprint.update(length=_f(fp.length), width=_f(fp.width))
+    lim, lid, saf = r.limits, r.lidar, r.safety
+    out["robot"] = {
+        "footprint": footprint,
+        "drive": r.drive,
+        "limits": {k: _f(getattr(lim, k)) for k in LIMITS_KEYS},
+        "lidar": {"beams": int(lid.beams), **{k: _f(getattr(lid, k)) for k in LIDAR_KEYS[1:]}},
+        "safety": {"enabled": bool(saf.enabled), "horizon": _f(saf.horizon), "margin": _f(saf.margin)},
+    }
+    m = s.mission
+    mission: dict[str, Any] = {"start": _pose_dict(m.start), "goal": _pose_dict(m.goal)}
+    if m.waypoints:
+        mission["waypoints"] = [_pose_dict(w) for w in m.waypoints]
+    tol: dict[str, Any] = {"position": _f(m.goal_tolerance.position)}
+    if m.goal_tolerance.yaw is not None:
+        tol["yaw"] = _f(m.goal_tolerance.yaw)
+    mission.update(goal_tolerance=tol, waypoint_tolerance=_f(m.waypoint_tolerance), timeout=_f(m.timeout))
+    out["mission"] = mission
+    out["obstacles"] = [_obstacle_dict(o) for o in s.obstacles]
+    sim = s.simulation
+    out["simulation"] = {"timestep": _f(sim.timestep), "control_rate": _f(sim.control_rate), "seed": int(sim.seed)}
+    if s.reference is not None:
+        if s.reference.file is not None:
+            out["reference"] = {"file": str(s.reference.file)}
+        else:
+            out["reference"] = {"points": [[_f(t), _f(x), _f(y)] for t, x, y in s.reference.points]}
+    if s.search is not None:
+        out["search"] = _plain(dict(s.search))
+    if s.provenance is not None:
+        out["provenance"] = _plain(dict(s.provenance))
+    return out
+
+
+_Dumper: type = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
+
+
+def dump_scenario(scenario: Scenario) -> str:
+    """YAML text of the scenario (safe YAML, block style, documented key order); exact round trip."""
+    return yaml.dump(scenario_to_dict(scenario), Dumper=_Dumper, sort_keys=False, default_flow_style=False,
+                     allow_unicode=True, width=100)
+
+
+def save_scenario(scenario: Scenario, path: str | os.PathLike) -> None:
+    """Write the scenario to ``path`` atomically (never a half-written file)."""
+    atomic_write_text(path, dump_scenario(scenario))

@@ -1,0 +1,768 @@
+"""Scenario YAML: load and validate, with file:line errors (writing is in dump.py).
+
+    load_scenario(path)                 -> Scenario   name/family default to file stem / folder name
+    loads_scenario(text, source=None, *, name=None, family=None) -> Scenario
+    scenario_from_dict(data, source=None) -> Scenario
+    check_scenario(scenario)                          semantic checks only (for generated scenarios)
+    looks_like_scenario(text_or_mapping) -> bool      cheap test for collectors
+    SCENARIO_LIMITS                                   the documented limits for hostile files
+
+Every problem raises ``ScenarioError`` naming the file, the line, the dotted field and a fix.
+Parsing has ``yaml.safe_load`` semantics (see ``yaml_tree``), plus one convenience: an unquoted
+number in exponent form that YAML 1.1 reads as a string (``1e-3``, ``2.5e3``) is accepted where a
+number is expected.
+"""
+from __future__ import annotations
+
+import difflib
+import math
+import numbers
+import os
+import re
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any, Mapping
+
+
+from ..core.errors import ScenarioError
+from .model import (
+    SCHEMA_VERSION,
+    BoxObstacle,
+    CylinderObstacle,
+    Footprint,
+    GoalTolerance,
+    Lidar,
+    Limits,
+    Mark,
+    Mission,
+    Obstacle,
+    Pose,
+    Reference,
+    Robot,
+    Safety,
+    Scenario,
+    Simulation,
+)
+from .yaml_tree import YMap, YNode, YScalar, YSeq, describe, from_plain, parse_yaml, to_plain
+
+SUPPORTED_VERSIONS = (SCHEMA_VERSION,)
+
+#: Limits that keep hostile or absurd files from hanging or crashing a run (documented in the README).
+SCENARIO_LIMITS: Mapping[str, float] = MappingProxyType({
+    "max_file_bytes": 5_000_000,       # a scenario file larger than this is refused unread
+    "max_depth": 64,                    # YAML nesting levels
+    "max_nodes": 500_000,               # YAML values after expanding aliases (alias bombs)
+    "max_obstacles": 5_000,
+    "max_waypoints": 1_000,
+    "max_reference_points": 50_000,
+    "max_abs_value": 1e6,               # any coordinate, size, time or angle (m, s, deg)
+    "max_lidar_beams": 10_000,
+    "max_episode_steps": 10_000_000,    # timeout / timestep
+    "max_name_length": 200,
+})
+
+_LIST_LIMITS = {"obstacles": (int(SCENARIO_LIMITS["max_obstacles"]), "obstacles")}  # refused while parsing
+_REQUIRED = object()
+_NUMBER_WORD = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)[eE][-+]?\d+")  # 1e-3: a string in YAML 1.1
+_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+
+TOP_KEYS = ("version", "name", "family", "description", "marks", "robot", "mission", "obstacles",
+            "simulation", "reference", "search", "provenance")
+ROBOT_KEYS = ("footprint", "drive", "limits", "lidar", "safety")
+FOOTPRINT_KEYS = ("shape", "length", "width", "radius")
+LIMITS_KEYS = ("max_speed", "max_lateral_speed", "max_yaw_rate", "max_accel", "max_yaw_accel")
+LIDAR_KEYS = ("beams", "fov", "range_min", "range_max", "noise_sigma", "dropout")
+SAFETY_KEYS = ("enabled", "horizon", "margin")
+MISSION_KEYS = ("start", "goal", "waypoints", "goal_tolerance", "waypoint_tolerance", "timeout")
+POSE_KEYS = ("x", "y", "yaw")
+TOLERANCE_KEYS = ("position", "yaw")
+BOX_KEYS = ("type", "name", "x", "y", "length", "width", "yaw", "height")
+CYLINDER_KEYS = ("type", "name", "x", "y", "radius", "height")
+SIMULATION_KEYS = ("timestep", "control_rate", "seed")
+REFERENCE_KEYS = ("file", "points")
+DRIVES = ("omni", "diff")
+SHAPES = ("box", "circle")
+OBSTACLE_TYPES = ("box", "cylinder")
+_KEY_HOMES = (("", TOP_KEYS), ("robot", ROBOT_KEYS), ("robot.footprint", FOOTPRINT_KEYS),
+              ("robot.limits", LIMITS_KEYS), ("robot.lidar", LIDAR_KEYS), ("robot.safety", SAFETY_KEYS),
+              ("mission", MISSION_KEYS), ("mission.goal_tolerance", TOLERANCE_KEYS), ("simulation", SIMULATION_KEYS),
+              ("obstacles[]", BOX_KEYS + CYLINDER_KEYS), ("reference", REFERENCE_KEYS))
+_ALIASES = {  # common synonyms -> the spelling the format uses (for the hint)
+    "omnidirectional": "omni", "holonomic": "omni", "differential": "diff", "diff-drive": "diff",
+    "rectangle": "box", "rect": "box", "cuboid": "box", "square": "box", "cyl": "cylinder",
+    "circle": "cylinder", "disc": "cylinder", "disk": "cylinder", "round": "circle",
+}
+
+
+# --------------------------------------------------------------------------- reading helpers
+
+class _Ctx:
+    """Where we are: the source file (for messages) and the line of every field read."""
+
+    def __init__(self, source: str | None):
+        self.source = source
+        self.lines: dict[str, int | None] = {}
+
+    def fail(self, message: str, field: str | None, line: int | None, hint: str | None = None) -> ScenarioError:
+        return ScenarioError(message, path=self.source, line=line, field=field, hint=hint)
+
+
+def _did_you_mean(word: Any, options: tuple[str, ...]) -> str:
+    text = str(word)
+    alias = _ALIASES.get(text.lower())
+    if alias in options:
+        return f"did you mean '{alias}'?"
+    match = difflib.get_close_matches(text.lower(), options, n=1, cutoff=0.6)
+    if match:
+        return f"did you mean '{match[0]}'?"
+    return "use one of: " + ", ".join(options)
+
+
+def _unknown_key_hint(key: Any, keys: tuple[str, ...], path: str) -> str:
+    """Did-you-mean among this section's keys, else where the key belongs if it is known elsewhere."""
+    text = str(key)
+    if not difflib.get_close_matches(text.lower(), keys, n=1, cutoff=0.6):
+        homes = [home for home, section_keys in _KEY_HOMES
+                 if text in section_keys and home != path and not (home == "obstacles[]" and path.startswith("obstacles["))]
+        if homes:
+            return f"'{text}' belongs under '{homes[0]}'" + (f" (or '{homes[1]}')" if len(homes) > 1 else "")
+    return _did_you_mean(key, keys)
+
+
+def _join(path: str, key: str) -> str:
+    return f"{path}.{key}" if path else key
+
+
+class _Section:
+    """A YAML mapping with a known set of keys; typed getters that raise located errors."""
+
+    def __init__(self, ctx: _Ctx, node: YNode | None, path: str, keys: tuple[str, ...], *,
+                 line: int | None = None, what: str = "a mapping"):
+        self.ctx, self.path, self.keys = ctx, path, keys
+        if not isinstance(node, YMap):
+            raise ctx.fail(f"expected {what}, got {describe(node) if node is not None else 'nothing'}",
+                           path or None, node.line if node is not None and node.line else line,
+                           f"write it as 'key: value' lines with keys from: {', '.join(keys)}")
+        self.node = node
+        self.line = line if line is not None else node.line
+        for key, (key_line, _) in node.items.items():
+            if key not in keys:
+                raise ctx.fail(f"unknown key {str(key)!r}", _join(path, str(key)), key_line,
+                               _unknown_key_hint(key, keys, path))
+
+    def has(self, key: str) -> bool:
+        return key in self.node.items
+
+    def get(self, key: str) -> YNode | None:
+        item = self.node.items.get(key)
+        if item is None:
+            return None
+        field = _join(self.path, key)
+        self.ctx.lines[field] = item[0] if item[0] is not None else item[1].line
+        return item[1]
+
+    def line_of(self, key: str) -> int | None:
+        item = self.node.items.get(key)
+        if item is None:
+            return self.line
+        return item[0] if item[0] is not None else item[1].line
+
+    def missing(self, key: str, example: str) -> ScenarioError:
+        return self.ctx.fail(f"missing required field '{key}'", _join(self.path, key), self.line,
+                             f"add '{example}'" + (f" under '{self.path}'" if self.path else ""))
+
+    def number(self, key: str, default: Any = _REQUIRED, *, low: float | None = None,
+               low_open: bool = False, high: float | None = None, example: str | None = None) -> float:
+        node = self.get(key)
+        if node is None or (isinstance(node, YScalar) and node.value is None and default is None):
+            if default is _REQUIRED:
+                raise self.missing(key, example or f"{key}: <number>")
+            return default
+        return _number(self.ctx, node, _join(self.path, key), self.line_of(key), low=low,
+                       low_open=low_open, high=high)
+
+    def integer(self, key: str, default: Any, *, low: int, high: int) -> int:
+        node = self.get(key)
+        if node is None:
+            if default is _REQUIRED:
+                raise self.missing(key, f"{key}: <whole number>")
+            return default
+        field, line = _join(self.path, key), self.line_of(key)
+        value = node.value if isinstance(node, YScalar) else None
+        if isinstance(value, numbers.Real) and not isinstance(value, numbers.Integral) and math.isfinite(value) \
+                and float(value).is_integer():
+            value = int(value)
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+            raise self.ctx.fail(f"expected a whole number, got {describe(node)}", field, line,
+                                f"write a whole number between {low} and {high}")
+        if not low <= value <= high:
+            raise self.ctx.fail(f"must be between {low} and {high}, got {value}", field, line,
+                                f"write a whole number from {low} to {high}")
+        return int(value)
+
+    def string(self, key: str, default: Any, *, nonempty: bool = True) -> str:
+        node = self.get(key)
+        if node is None or (isinstance(node, YScalar) and node.value is None):  # 'description:' = absent
+            return default
+        field, line = _join(self.path, key), self.line_of(key)
+        value = node.value if isinstance(node, YScalar) else None
+        if not isinstance(value, str):
+            raise self.ctx.fail(f"expected a string, got {describe(node)}", field, line,
+                                "quote it, e.g. " + f"{key}: \"text\"")
+        if nonempty and not value.strip():
+            raise self.ctx.fail("must not be empty", field, line, f"write a {key} or remove the line")
+        return value
+
+    def boolean(self, key: str, default: bool) -> bool:
+        node = self.get(key)
+        if node is None:
+            return default
+        value = node.value if isinstance(node, YScalar) else None
+        if not isinstance(value, bool):
+            raise self.ctx.fail(f"expected true or false, got {describe(node)}", _join(self.path, key),
+                                self.line_of(key), "write true or false")
+        return value
+
+    def choice(self, key: str, options: tuple[str, ...], default: Any) -> str:
+        node = self.get(key)
+        if node is None:
+            if default is _REQUIRED:
+                raise self.missing(key, f"{key}: {options[0]}")
+            return default
+        value = node.value if isinstance(node, YScalar) else None
+        if value not in options:
+            raise self.ctx.fail(f"unknown {key} {describe(node)}", _join(self.path, key), self.line_of(key),
+                                _did_you_mean(value if value is not None else "", options))
+        return value
+
+    def section(self, key: str, keys: tuple[str, ...], what: str) -> _Section | None:
+        node = self.get(key)
+        if node is None or (isinstance(node, YScalar) and node.value is None):
+            return None
+        return _Section(self.ctx, node, _join(self.path, key), keys, line=self.line_of(key), what=what)
+
+    def sequence(self, key: str, limit: int, what: str) -> list[YNode]:
+        node = self.get(key)
+        if node is None or (isinstance(node, YScalar) and node.value is None):
+            return []
+        field, line = _join(self.path, key), self.line_of(key)
+        if not isinstance(node, YSeq):
+            raise self.ctx.fail(f"expected a list of {what}, got {describe(node)}", field, line,
+                                "write one '- ...' entry per item")
+        if len(node.items) > limit:
+            raise self.ctx.fail(f"{len(node.items)} {what} is more than the limit of {limit}", field, line,
+                                "split the scenario, or thin it out (see SCENARIO_LIMITS)")
+        return node.items
+
+
+def _number(ctx: _Ctx, node: YNode, field: str, line: int | None, *, low: float | None = None,
+            low_open: bool = False, high: float | None = None) -> float:
+    """A finite float from a YAML number (ints allowed, bools refused), within bounds."""
+    line = node.line if node.line is not None else line
+    value = node.value if isinstance(node, YScalar) else None
+    if isinstance(value, str) and isinstance(node, YScalar) and node.plain and _NUMBER_WORD.fullmatch(value):
+        value = float(value)
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ctx.fail(f"expected a number, got {describe(node)}", field, line,
+                       "write a plain number such as 1.5 (no quotes, no units)")
+    bound = SCENARIO_LIMITS["max_abs_value"]
+    if isinstance(value, numbers.Integral) and abs(value) > bound:  # also ints too big for a float
+        shown = str(value) if len(str(value)) < 30 else f"a {len(str(abs(value)))}-digit number"
+        raise ctx.fail(f"{shown} is beyond the supported magnitude of {bound:g}", field, line,
+                       "scenario values are metres, seconds and degrees of a ground robot; check the value")
+    number = float(value)
+    if not math.isfinite(number):
+        raise ctx.fail(f"must be a finite number, got {describe(YScalar(number, line))}", field, line,
+                       "write an ordinary number")
+    if abs(number) > bound:
+        raise ctx.fail(f"{number!r} is beyond the supported magnitude of {bound:g}", field, line,
+                       "scenario values are metres, seconds and degrees of a ground robot; check the value")
+    if low is not None and (number < low or (low_open and number == low)):
+        need = f"> {low:g}" if low_open else f">= {low:g}"
+        raise ctx.fail(f"must be {need}, got {number!r}", field, line,
+                       "sizes, times and rates must be positive" if low_open else f"write a value {need}")
+    if high is not None and number > high:
+        raise ctx.fail(f"must be <= {high:g}, got {number!r}", field, line,
+                       f"write a value from {low:g} to {high:g}" if low is not None else f"write at most {high:g}")
+    return number
+
+
+# --------------------------------------------------------------------------- sections
+
+def _robot(ctx: _Ctx, top: _Section) -> Robot:
+    sec = top.section("robot", ROBOT_KEYS, "the robot settings (a mapping)")
+    if sec is None:
+        return Robot()
+    fp = Footprint()
+    f = sec.section("footprint", FOOTPRINT_KEYS, "the footprint (a mapping)")
+    if f is not None:
+        shape = f.choice("shape", SHAPES, "box")
+        wrong = ("radius",) if shape == "box" else ("length", "width")
+        for key in wrong:
+            if f.has(key):
+                raise ctx.fail(f"'{key}' does not apply to shape: {shape}", _join(f.path, key), f.line_of(key),
+                               f"remove '{key}'" + (", or set shape: circle" if shape == "box" else
+                                                    ", or set shape: box"))
+        if shape == "box":
+            fp = Footprint("box", length=f.number("length", 0.9, low=0, low_open=True),
+                           width=f.number("width", 0.5, low=0, low_open=True))
+        else:
+            fp = Footprint("circle", radius=f.number("radius", 0.3, low=0, low_open=True))
+    drive = sec.choice("drive", DRIVES, "omni")
+    limits = Limits()
+    s = sec.section("limits", LIMITS_KEYS, "the velocity limits (a mapping)")
+    if s is not None:
+        d = Limits()
+        limits = Limits(max_speed=s.number("max_speed", d.max_speed, low=0, low_open=True),
+                        max_lateral_speed=s.number("max_lateral_speed", d.max_lateral_speed, low=0),
+                        max_yaw_rate=s.number("max_yaw_rate", d.max_yaw_rate, low=0, low_open=True),
+                        max_accel=s.number("max_accel", d.max_accel, low=0, low_open=True),
+                        max_yaw_accel=s.number("max_yaw_accel", d.max_yaw_accel, low=0, low_open=True))
+    lidar = Lidar()
+    s = sec.section("lidar", LIDAR_KEYS, "the lidar settings (a mapping)")
+    if s is not None:
+        d = Lidar()
+        beams = s.integer("beams", d.beams, low=1, high=int(SCENARIO_LIMITS["max_lidar_beams"]))
+        range_min = s.number("range_min", d.range_min, low=0)
+        range_max = s.number("range_max", d.range_max, low=0, low_open=True)
+        if range_max <= range_min:
+            raise ctx.fail(f"range_max ({range_max!r} m) must be greater than range_min ({range_min!r} m)",
+                           _join(s.path, "range_max"), s.line_of("range_max"), "raise range_max")
+        lidar = Lidar(beams=beams, fov=s.number("fov", d.fov, low=0, low_open=True, high=360.0),
+                      range_min=range_min, range_max=range_max,
+                      noise_sigma=s.number("noise_sigma", d.noise_sigma, low=0),
+                      dropout=s.number("dropout", d.dropout, low=0, high=1.0))
+    safety = Safety()
+    s = sec.section("safety", SAFETY_KEYS, "the safety layer settings (a mapping)")
+    if s is not None:
+        d = Safety()
+        safety = Safety(enabled=s.boolean("enabled", d.enabled),
+                        horizon=s.number("horizon", d.horizon, low=0, low_open=True),
+                        margin=s.number("margin", d.margin, low=0))
+    return Robot(footprint=fp, drive=drive, limits=limits, lidar=lidar, safety=safety)
+
+
+def _pose(ctx: _Ctx, node: YNode | None, path: str, line: int | None, what: str) -> Pose:
+    sec = _Section(ctx, node, path, POSE_KEYS, line=line, what=f"{what} as a mapping {{x, y, yaw}}")
+    return Pose(x=sec.number("x", example="x: 0.0"), y=sec.number("y", example="y: 0.0"),
+                yaw=sec.number("yaw", 0.0))
+
+
+def _mission(ctx: _Ctx, top: _Section) -> Mission:
+    if not top.has("mission"):
+        raise top.missing("mission", "mission: {start: {x: 0, y: 0}, goal: {x: 0, y: 10}}")
+    sec = top.section("mission", MISSION_KEYS, "the mission (a mapping)")
+    if sec is None:
+        raise ctx.fail("the mission is empty", "mission", top.line_of("mission"),
+                       "give at least start and goal poses")
+    poses = {}
+    for key in ("start", "goal"):
+        if not sec.has(key):
+            raise sec.missing(key, f"{key}: {{x: 0.0, y: 0.0, yaw: 90.0}}")
+        poses[key] = _pose(ctx, sec.get(key), f"mission.{key}", sec.line_of(key), f"the {key} pose")
+    waypoints = []
+    items = sec.sequence("waypoints", int(SCENARIO_LIMITS["max_waypoints"]), "waypoints")
+    for i, item in enumerate(items):
+        ctx.lines[f"mission.waypoints[{i}]"] = item.line
+        waypoints.append(_pose(ctx, item, f"mission.waypoints[{i}]", item.line or sec.line_of("waypoints"),
+                               "a waypoint"))
+    tolerance = GoalTolerance()
+    t = sec.section("goal_tolerance", TOLERANCE_KEYS, "the goal tolerance (a mapping {position, yaw})")
+    if t is not None:
+        tolerance = GoalTolerance(position=t.number("position", tolerance.position, low=0, low_open=True),
+                                  yaw=t.number("yaw", None, low=0, low_open=True, high=180.0))
+    d = Mission(start=poses["start"], goal=poses["goal"])
+    return Mission(start=poses["start"], goal=poses["goal"], waypoints=tuple(waypoints),
+                   goal_tolerance=tolerance,
+                   waypoint_tolerance=sec.number("waypoint_tolerance", d.waypoint_tolerance, low=0, low_open=True),
+                   timeout=sec.number("timeout", d.timeout, low=0, low_open=True))
+
+
+def _obstacles(ctx: _Ctx, top: _Section) -> tuple[Obstacle, ...]:
+    items = top.sequence("obstacles", int(SCENARIO_LIMITS["max_obstacles"]), "obstacles")
+    given: dict[str, int] = {}
+    parsed: list[tuple[str, _Section, str | None]] = []
+    for i, item in enumerate(items):
+        path = f"obstacles[{i}]"
+        line = item.line or top.line_of("obstacles")
+        if not isinstance(item, YMap):
+            raise ctx.fail(f"expected an obstacle mapping, got {describe(item)}", path, line,
+                           "write '- {type: box, x: 1.0, y: 2.0, length: 1.0, width: 1.0}'")
+        type_item = item.items.get("type")
+        if type_item is None:
+            raise ctx.fail("missing required field 'type'", f"{path}.type", line,
+                           "add 'type: box' or 'type: cylinder'")
+        kind = type_item[1].value if isinstance(type_item[1], YScalar) else None
+        if kind not in OBSTACLE_TYPES:
+            raise ctx.fail(f"unknown obstacle type {describe(type_item[1])}", f"{path}.type",
+                           type_item[0] or line, _did_you_mean(kind if kind is not None else "", OBSTACLE_TYPES))
+        keys, other_keys, other = ((BOX_KEYS, CYLINDER_KEYS, "cylinder") if kind == "box"
+                                   else (CYLINDER_KEYS, BOX_KEYS, "box"))
+        for key, (key_line, _) in item.items.items():
+            if key not in keys and key in other_keys:
+                raise ctx.fail(f"'{key}' does not apply to type: {kind} (it is a {other} key)", f"{path}.{key}",
+                               key_line or line, f"remove '{key}', or set type: {other}")
+        sec = _Section(ctx, item, path, keys, line=line)
+        name = sec.string("name", None)
+        if name is not None:
+            _check_name(ctx, name, f"{path}.name", sec.line_of("name"))
+            if name in given:
+                first = given[name]
+                raise ctx.fail(f"name {name!r} is already used by obstacles[{first}]", f"{path}.name",
+                               sec.line_of("name"), "obstacle names must be unique; rename one of them")
+            given[name] = i
+        parsed.append((kind, sec, name))
+    taken = set(given)
+    counters = {"box": 0, "cylinder": 0}
+    result: list[Obstacle] = []
+    for kind, sec, name in parsed:
+        if name is None:  # generated: box1, box2, cyl1 ... skipping names already given
+            prefix = "box" if kind == "box" else "cyl"
+            while True:
+                counters[kind] += 1
+                name = f"{prefix}{counters[kind]}"
+                if name not in taken:
+                    break
+            taken.add(name)
+        x = sec.number("x", example="x: 0.0")
+        y = sec.number("y", example="y: 0.0")
+        height = sec.number("height", 1.0, low=0, low_open=True)
+        if kind == "box":
+            result.append(BoxObstacle(name=name, x=x, y=y,
+                                      length=sec.number("length", low=0, low_open=True, example="length: 1.0"),
+                                      width=sec.number("width", low=0, low_open=True, example="width: 1.0"),
+                                      yaw=sec.number("yaw", 0.0), height=height))
+        else:
+            result.append(CylinderObstacle(name=name, x=x, y=y, height=height,
+                                           radius=sec.number("radius", low=0, low_open=True,
+                                                             example="radius: 0.5")))
+    return tuple(result)
+
+
+def _check_name(ctx: _Ctx, name: str, field: str, line: int | None, *, file_name: bool = False) -> None:
+    """Names are one-line labels; scenario names and families also name files (no path tricks)."""
+    limit = int(SCENARIO_LIMITS["max_name_length"])
+    if len(name) > limit:
+        raise ctx.fail(f"is {len(name)} characters long, more than {limit}", field, line, "shorten it")
+    if any(ch in name for ch in "\n\r\t\x00"):
+        raise ctx.fail("must be one line without tabs", field, line, "remove the line breaks")
+    if file_name and (any(ch in name for ch in "/\\") or name.strip() in (".", "..")):
+        raise ctx.fail(f"{name!r} cannot be used: scenario names and families become file and folder names",
+                       field, line, "use letters, digits, '-', '_' and '.', without '/' or '\\'")
+
+
+def _simulation(ctx: _Ctx, top: _Section) -> Simulation:
+    sec = top.section("simulation", SIMULATION_KEYS, "the simulation settings (a mapping)")
+    if sec is None:
+        return Simulation()
+    d = Simulation()
+    return Simulation(timestep=sec.number("timestep", d.timestep, low=0, low_open=True, high=1.0),
+                      control_rate=sec.number("control_rate", d.control_rate, low=0, low_open=True, high=1000.0),
+                      seed=sec.integer("seed", d.seed, low=0, high=2**63 - 1))
+
+
+def _reference(ctx: _Ctx, top: _Section) -> Reference | None:
+    sec = top.section("reference", REFERENCE_KEYS, "the reference trajectory (a mapping {file | points})")
+    if sec is None:
+        return None
+    if sec.has("file") == sec.has("points"):
+        raise ctx.fail("give exactly one of 'file' or 'points'", "reference", sec.line,
+                       "file: path/to/trajectory.csv (relative to this file), or points: [[t, x, y], ...]")
+    if sec.has("file"):
+        return Reference(file=sec.string("file", None))
+    rows = sec.sequence("points", int(SCENARIO_LIMITS["max_reference_points"]), "reference points")
+    points = []
+    last_t = -math.inf
+    for i, row in enumerate(rows):
+        field = f"reference.points[{i}]"
+        line = row.line or sec.line_of("points")
+        if not isinstance(row, YSeq) or len(row.items) != 3:
+            raise ctx.fail(f"expected a row [t, x, y], got {describe(row)}"
+                           + (f" with {len(row.items)} values" if isinstance(row, YSeq) else ""), field, line,
+                           "write each point as [t, x, y] (seconds, metres, metres)")
+        t, x, y = (_number(ctx, v, f"{field}[{j}]", line) for j, v in enumerate(row.items))
+        if t <= last_t:
+            raise ctx.fail(f"time {t!r} s does not increase (previous point at {last_t!r} s)", f"{field}[0]",
+                           line, "sort the points by time; times must be strictly increasing")
+        last_t = t
+        points.append((t, x, y))
+    return Reference(points=tuple(points))
+
+
+def _marks(ctx: _Ctx, top: _Section) -> tuple[Mark, ...]:
+    items = top.sequence("marks", 1000, "marks")
+    marks = []
+    for i, item in enumerate(items):
+        field, line = f"marks[{i}]", item.line or top.line_of("marks")
+        if isinstance(item, YScalar) and isinstance(item.value, str):
+            name, value = item.value, None
+        elif isinstance(item, YMap) and len(item.items) == 1:
+            (name, (_, value)), = item.items.items()
+        else:
+            raise ctx.fail(f"expected a mark name or a one-key mapping, got {describe(item)}", field, line,
+                           "write e.g. 'slow', '{xfail: {reason: known}}', '{skip: why}' or '{mymark: [a, b]}'")
+        if not isinstance(name, str) or not _IDENT.match(name):
+            raise ctx.fail(f"mark name {name!r} is not a valid Python identifier", field, line,
+                           "use letters, digits and underscores, e.g. slow or known_failure")
+        args: tuple[Any, ...] = ()
+        kwargs: dict[str, Any] = {}
+        if isinstance(value, YMap):
+            kwargs = _free(ctx, value, field)
+            bad = [k for k in kwargs if not isinstance(k, str) or not _IDENT.match(k)]
+            if bad:
+                raise ctx.fail(f"mark keyword {bad[0]!r} is not a valid Python identifier", field, line,
+                               "keywords are names such as reason or strict")
+        elif isinstance(value, YSeq):
+            args = tuple(_free(ctx, value, field))
+        elif value is not None and not (isinstance(value, YScalar) and value.value is None):
+            args = (_free(ctx, value, field),)
+        marks.append(Mark(name=name, args=args, kwargs=kwargs))
+    return tuple(marks)
+
+
+def _mapping(ctx: _Ctx, top: _Section, key: str) -> Mapping[str, Any] | None:
+    node = top.get(key)
+    if node is None or (isinstance(node, YScalar) and node.value is None):
+        return None
+    if not isinstance(node, YMap):
+        raise ctx.fail(f"expected a mapping, got {describe(node)}", key, top.line_of(key),
+                       f"write '{key}:' followed by indented 'key: value' lines")
+    return _free(ctx, node, key)
+
+
+_PLAIN_TYPES = (str, bool, int, float, type(None))
+
+
+def _free(ctx: _Ctx, node: YNode, field: str) -> Any:
+    """Free-form data (search, provenance, mark arguments) as plain Python values. Only strings,
+    numbers, booleans, null, lists and mappings: these cross to xdist workers and into JSON
+    unchanged (YAML dates and !!binary would not), so anything else is refused here."""
+    def check(n: YNode, path: str) -> None:
+        if isinstance(n, YScalar):
+            if not isinstance(n.value, _PLAIN_TYPES):
+                raise ctx.fail(f"{describe(n)} is not supported in free-form data", path, n.line,
+                               "quote it to keep it as text; free-form data holds text, numbers, true/false, null, lists and mappings")
+        elif isinstance(n, YSeq):
+            for i, item in enumerate(n.items):
+                check(item, f"{path}[{i}]")
+        else:
+            for key, (_, item) in n.items.items():
+                if not isinstance(key, _PLAIN_TYPES):
+                    raise ctx.fail(f"key {key!r} is not supported in free-form data", path, n.line,
+                                   "use text keys")
+                check(item, f"{path}.{key}")
+    check(node, field)
+    return to_plain(node)
+
+
+# --------------------------------------------------------------------------- semantic checks
+
+def _steps_per_tick(sim: Simulation) -> float:
+    return 1.0 / (sim.timestep * sim.control_rate)
+
+
+def check_scenario(scenario: Scenario, *, _ctx: _Ctx | None = None) -> None:
+    """Checks across fields: whole physics steps per tick, episode length, start/goal/waypoints clear
+    of obstacles. Run by the loader; call it on scenarios built in code (e.g. generated layouts)."""
+    ctx = _ctx or _Ctx(scenario.source)
+    lines = ctx.lines
+    sim = scenario.simulation
+    steps = _steps_per_tick(sim)
+    if steps > 1e6:
+        raise ctx.fail(f"timestep {sim.timestep!r} s and control_rate {sim.control_rate!r} Hz give "
+                       f"{steps:.3g} physics steps per control tick", "simulation.control_rate",
+                       lines.get("simulation.control_rate", lines.get("simulation")),
+                       "raise the control rate (planner ticks per second)")
+    if steps < 1 - 1e-9 or abs(steps - round(steps)) > 1e-6 * max(1.0, steps):
+        whole = max(1, round(steps))
+        raise ctx.fail(f"timestep {sim.timestep!r} s and control_rate {sim.control_rate!r} Hz give "
+                       f"{steps:.4g} physics steps per control tick; it must be a whole number",
+                       "simulation.control_rate", lines.get("simulation.control_rate", lines.get("simulation")),
+                       f"e.g. control_rate: {1.0 / (sim.timestep * whole):g} ({whole} steps of {sim.timestep:g} s)")
+    episode_steps = scenario.mission.timeout / sim.timestep
+    if episode_steps > SCENARIO_LIMITS["max_episode_steps"]:
+        raise ctx.fail(f"timeout {scenario.mission.timeout!r} s at timestep {sim.timestep!r} s is "
+                       f"{episode_steps:.3g} physics steps, more than {SCENARIO_LIMITS['max_episode_steps']:g}",
+                       "mission.timeout", lines.get("mission.timeout", lines.get("mission")),
+                       "shorten the timeout or lengthen the timestep")
+    if scenario.obstacles:
+        _check_clear(scenario, ctx)
+
+
+def _check_clear(scenario: Scenario, ctx: _Ctx) -> None:
+    """Start and goal footprints and waypoints must not touch an obstacle (names the first one)."""
+    from shapely.geometry import Point
+
+    from .geometry import footprint_polygon, footprint_radius, obstacle_polygon
+
+    mission = scenario.mission
+    fp = scenario.robot.footprint
+    checks = [("start", mission.start, footprint_radius(fp), "the robot's footprint at the start"),
+              ("goal", mission.goal, footprint_radius(fp), "the robot's footprint at the goal")]
+    checks += [(f"waypoints[{i}]", wp, 0.0, f"waypoint {i}") for i, wp in enumerate(mission.waypoints)]
+    # Cheap bounding-circle test first, so thousands of obstacles cost microseconds, not polygons.
+    bounds = [(o.x, o.y, math.hypot(o.length, o.width) / 2.0 if isinstance(o, BoxObstacle) else o.radius)
+              for o in scenario.obstacles]
+    for key, pose, reach, what in checks:
+        near = [i for i, (x, y, r) in enumerate(bounds) if math.hypot(x - pose.x, y - pose.y) <= r + reach + 1e-9]
+        if not near:
+            continue
+        shape = (footprint_polygon(fp, pose.x, pose.y, pose.yaw_rad) if reach else Point(pose.x, pose.y))
+        for i in near:
+            obs = scenario.obstacles[i]
+            if shape.intersects(obstacle_polygon(obs)):
+                field = f"mission.{key}"
+                what_moves = "start" if key == "start" else "goal" if key == "goal" else "waypoint"
+                raise ctx.fail(f"{what} ({pose.x:g}, {pose.y:g}) overlaps obstacle {obs.name!r}", field,
+                               ctx.lines.get(field, ctx.lines.get("mission")),
+                               f"move the {what_moves} or obstacle {obs.name!r} so they are clear")
+
+
+# --------------------------------------------------------------------------- public API
+
+def _build(root: YNode | None, ctx: _Ctx, name: str | None, family: str | None) -> Scenario:
+    if root is None or (isinstance(root, YScalar) and root.value is None):
+        raise ctx.fail("the scenario is empty", None, 1,
+                       "a scenario needs at least 'version: 1' and a 'mission:' with start and goal")
+    if not isinstance(root, YMap):
+        raise ctx.fail(f"the top level must be a mapping of scenario fields, got {describe(root)}", None,
+                       root.line, "start the file with 'version: 1' followed by 'mission:' etc.")
+    # The version decides the schema, so check it before anything else.
+    version_item = root.items.get("version")
+    if version_item is None:
+        raise ctx.fail("missing required field 'version'", "version", root.line,
+                       f"add 'version: {SCHEMA_VERSION}' as the first line")
+    vnode = version_item[1]
+    version = vnode.value if isinstance(vnode, YScalar) else None
+    if isinstance(version, bool) or version not in SUPPORTED_VERSIONS:
+        raise ctx.fail(f"unsupported version {describe(vnode)}; this pytest-navscenario reads version(s) "
+                       f"{', '.join(map(str, SUPPORTED_VERSIONS))}", "version", version_item[0] or vnode.line,
+                       f"write 'version: {SCHEMA_VERSION}' (or upgrade pytest-navscenario for newer files)")
+    top = _Section(ctx, root, "", TOP_KEYS)
+    lines = ctx.lines
+    for key in TOP_KEYS:
+        if top.has(key):
+            lines[key] = top.line_of(key)
+    scenario_name = top.string("name", name or "")
+    if scenario_name:
+        _check_name(ctx, scenario_name, "name", top.line_of("name"), file_name=True)
+    scenario_family = top.string("family", family or "", nonempty=False)
+    if scenario_family:
+        _check_name(ctx, scenario_family, "family", top.line_of("family"), file_name=True)
+    scenario = Scenario(
+        version=int(version),
+        name=scenario_name,
+        family=scenario_family,
+        description=top.string("description", "", nonempty=False),
+        marks=_marks(ctx, top),
+        robot=_robot(ctx, top),
+        mission=_mission(ctx, top),
+        obstacles=_obstacles(ctx, top),
+        simulation=_simulation(ctx, top),
+        reference=_reference(ctx, top),
+        search=_mapping(ctx, top, "search"),
+        provenance=_mapping(ctx, top, "provenance"),
+        source=ctx.source,
+    )
+    check_scenario(scenario, _ctx=ctx)
+    return scenario
+
+
+def loads_scenario(text: str | bytes, source: str | os.PathLike | None = None, *,
+                   name: str | None = None, family: str | None = None) -> Scenario:
+    """Parse and validate scenario YAML text. ``name``/``family`` apply when the YAML has none."""
+    src = os.fspath(source) if source is not None else None
+    if isinstance(text, (bytes, bytearray)):
+        text = _decode(bytes(text), src)
+    if not isinstance(text, str):
+        raise ScenarioError(f"expected YAML text, got {type(text).__name__}", path=src,
+                            hint="pass the file's text, or use load_scenario(path)")
+    if len(text) > SCENARIO_LIMITS["max_file_bytes"]:
+        raise ScenarioError(f"the text is {len(text)} characters, more than the limit of "
+                            f"{SCENARIO_LIMITS['max_file_bytes']:g}", path=src, hint="this is not a scenario file")
+    ctx = _Ctx(src)
+    root = parse_yaml(text, src, max_depth=int(SCENARIO_LIMITS["max_depth"]),
+                      max_nodes=int(SCENARIO_LIMITS["max_nodes"]), list_limits=_LIST_LIMITS)
+    return _build(root, ctx, name, family)
+
+
+def scenario_from_dict(data: Mapping[str, Any], source: str | os.PathLike | None = None) -> Scenario:
+    """Validate a plain mapping (as safe_load would give) into a Scenario; errors have no lines."""
+    src = os.fspath(source) if source is not None else None
+    if not isinstance(data, Mapping):
+        raise ScenarioError(f"expected a mapping of scenario fields, got {type(data).__name__}", path=src,
+                            hint="pass a dict with 'version' and 'mission' keys")
+    try:
+        root = from_plain(data, max_depth=int(SCENARIO_LIMITS["max_depth"]),
+                          max_nodes=int(SCENARIO_LIMITS["max_nodes"]), source=src)
+    except RecursionError:
+        raise ScenarioError("the mapping nests too deeply", path=src) from None
+    return _build(root, _Ctx(src), None, None)
+
+
+def _decode(data: bytes, source: str | None) -> str:
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise ScenarioError(f"not UTF-8 text: byte 0x{data[exc.start]:02x} cannot be decoded", path=source,
+                            line=line, hint="is this a binary file? save the scenario as UTF-8 text") from None
+
+
+def load_scenario(path: str | os.PathLike) -> Scenario:
+    """Load a scenario file; its name defaults to the file stem, its family to the folder name."""
+    p = Path(path)
+    src = os.fspath(path)
+    limit = int(SCENARIO_LIMITS["max_file_bytes"])
+    try:
+        with open(p, "rb") as fh:
+            data = fh.read(limit + 1)
+    except FileNotFoundError:
+        raise ScenarioError("no such scenario file", path=src, hint="check the path and the file name") from None
+    except IsADirectoryError:
+        raise ScenarioError("is a directory, not a scenario file", path=src,
+                            hint="pass a .yaml file inside it") from None
+    except OSError as exc:
+        raise ScenarioError(f"cannot read the file: {exc.strerror or exc}", path=src) from None
+    if p.is_dir():  # pragma: no cover - some platforms open directories
+        raise ScenarioError("is a directory, not a scenario file", path=src, hint="pass a .yaml file inside it")
+    if len(data) > limit:
+        raise ScenarioError(f"the file is larger than the limit of {limit} bytes", path=src,
+                            hint="scenario files are small; is this the right file?")
+    text = _decode(data, src)
+    return loads_scenario(text, src, name=p.stem, family=p.absolute().parent.name)
+
+
+def resolve_path(scenario: Scenario, relative: str | os.PathLike) -> Path:
+    """A path written in a scenario (reference file, bag, map), resolved against the scenario's folder."""
+    rel = Path(relative)
+    if rel.is_absolute() or not scenario.source:
+        return rel
+    return Path(scenario.source).parent / rel
+
+
+def looks_like_scenario(text_or_mapping: str | bytes | Mapping[str, Any]) -> bool:
+    """Cheap test (no YAML parsing) whether a text or mapping is meant to be a scenario: a top-level
+    ``version`` key and a ``mission`` key, or a near miss such as ``mision`` or ``obstacles``, so a
+    scenario with a typo is collected and reported instead of silently skipped."""
+    if isinstance(text_or_mapping, Mapping):
+        keys = {str(k) for k in text_or_mapping}
+    else:
+        text = text_or_mapping
+        if isinstance(text, (bytes, bytearray)):
+            text = bytes(text[:1_000_000]).decode("utf-8", errors="replace")
+        if not isinstance(text, str):
+            return False
+        keys = set(_TOP_KEY.findall(text))
+    if "version" not in keys:
+        return False
+    return bool(keys & {"mission", "obstacles", "robot"}) or bool(
+        difflib.get_close_matches("mission", [k.lower() for k in keys], n=1, cutoff=0.75))
+
+
+_TOP_KEY = re.compile(r"^(?:---[ \t]*\n)?[\"']?([A-Za-z_][\w-]*)[\"']?[ \t]*:", re.M)
+
+
+# --------------------------------------------------------------------------- dumping
+
+

@@ -1,0 +1,29 @@
+"""Search: find scenarios near a seed that make the planner fail, shrink them, freeze them.
+
+In: a seed ``Scenario`` (its ``search:`` section bounds the space) and a way to run an episode.
+Out: a ``SearchReport`` (every candidate simulated, the distinct failures, each shrunk toward the
+seed) and frozen scenario files with provenance, which are ordinary regression scenarios.
+
+Read first: ``space.py`` (what may change, by how much, and which candidates are valid), then
+``engine.py`` (the strategies and shrinking, driven by Hypothesis) and ``freeze.py`` (writing).
+
+Names are imported lazily so that importing this package stays cheap.
+"""
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+_EXPORTS = {name: "engine" for name in (
+    "run_search", "shrink_failure", "Candidate", "Failure", "SearchReport", "STRATEGIES",
+    "is_duplicate", "is_near_failure")}
+_EXPORTS.update(SearchSpace="space", scenarios_around="space", invalid_reason="space",
+                freeze_failures="freeze", write_search_log="freeze")
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str) -> Any:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(f".{module}", __name__), name)

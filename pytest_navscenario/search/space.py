@@ -1,0 +1,313 @@
+"""The search space around a seed scenario, and the public Hypothesis strategy over it.
+
+A candidate is the seed plus a vector of *offsets*, one per mutable parameter (obstacle
+dx/dy, size change, yaw change; optionally start, goal and waypoint offsets). An all-zero
+vector is the seed itself, so when Hypothesis shrinks offsets toward zero it shrinks a
+failure toward the hand-written seed: the minimal failure is the smallest change to the
+seed that still fails.
+
+Defaults can be overridden in the seed's YAML ``search:`` mapping::
+
+    search:
+      obstacle_dx: 0.5          # m: offsets drawn from [-0.5, 0.5]; or a pair [lo, hi]
+      obstacle_dy: [-0.2, 0.5]
+      obstacle_size: [-0.1, 0.3]  # m added to box length/width and cylinder radius
+      obstacle_yaw: 30          # degrees (boxes only)
+      start_dx: 0               # 0 (the default) = the start is not mutated
+      start_dy: 0
+      start_yaw: 0
+      goal_dx: 0
+      goal_dy: 0
+      goal_yaw: 0
+      waypoint_dx: 0            # every waypoint gets its own dx/dy offsets
+      waypoint_dy: 0
+      min_size: 0.05            # m: sizes never shrink below this
+      frozen: [wall_left, start]  # obstacle names, start, goal, waypoints, waypoints[i]
+
+Every bound must contain 0 (the seed lies in the space); ``[lo, hi]`` with lo > hi is
+inverted and lo == hi != 0 is empty: both are errors naming the seed file and field.
+"""
+from __future__ import annotations
+
+import difflib
+import math
+from dataclasses import dataclass, replace
+from typing import Any, Mapping, Sequence
+
+from ..core.errors import ScenarioError
+from ..scenario.model import BoxObstacle, CylinderObstacle, Pose, Scenario
+
+DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {
+    "obstacle_dx": (-0.5, 0.5),
+    "obstacle_dy": (-0.5, 0.5),
+    "obstacle_size": (-0.1, 0.3),
+    "obstacle_yaw": (-30.0, 30.0),
+    "start_dx": (0.0, 0.0),
+    "start_dy": (0.0, 0.0),
+    "start_yaw": (0.0, 0.0),
+    "goal_dx": (0.0, 0.0),
+    "goal_dy": (0.0, 0.0),
+    "goal_yaw": (0.0, 0.0),
+    "waypoint_dx": (0.0, 0.0),
+    "waypoint_dy": (0.0, 0.0),
+}
+OTHER_KEYS = ("frozen", "min_size")
+KNOWN_KEYS = tuple(DEFAULT_BOUNDS) + OTHER_KEYS
+DEFAULT_MIN_SIZE = 0.05
+POSITION_DECIMALS = 4   # candidate values are rounded (0.1 mm, 0.0001 deg) so YAML is short and exact
+
+
+@dataclass(frozen=True)
+class Param:
+    """One mutable parameter: ``name`` such as ``obstacles.box2.dx``, offset range [lo, hi]."""
+    name: str
+    part: str        # "obstacle:<name>", "start", "goal", "waypoints[i]"
+    attr: str        # dx, dy, size, yaw
+    lo: float
+    hi: float
+
+    @property
+    def width(self) -> float:
+        return self.hi - self.lo
+
+
+class SearchSpace:
+    """The mutable parameters of one seed and how to turn an offset vector into a Scenario."""
+
+    def __init__(self, seed: Scenario, overrides: Mapping[str, Any] | None = None):
+        self.seed = seed
+        merged: dict[str, Any] = dict(seed.search or {})
+        merged.update(overrides or {})
+        self.bounds, self.frozen, self.min_size = _validate(seed, merged)
+        self.params: tuple[Param, ...] = tuple(self._build_params())
+        self.index = {p.name: i for i, p in enumerate(self.params)}
+
+    # -- construction -------------------------------------------------------------------
+    def _build_params(self):
+        def rng(key):
+            lo, hi = self.bounds[key]
+            return (lo, hi) if (lo, hi) != (0.0, 0.0) else None
+
+        for obs in self.seed.obstacles:
+            if obs.name in self.frozen:
+                continue
+            attrs = ["dx", "dy", "size"] + (["yaw"] if isinstance(obs, BoxObstacle) else [])
+            for attr in attrs:
+                r = rng(f"obstacle_{attr}")
+                if r:
+                    yield Param(f"obstacles.{obs.name}.{attr}", f"obstacle:{obs.name}", attr, *r)
+        mission = self.seed.mission
+        for part in ("start", "goal"):
+            if part in self.frozen:
+                continue
+            for attr in ("dx", "dy", "yaw"):
+                r = rng(f"{part}_{attr}")
+                if r:
+                    yield Param(f"mission.{part}.{attr}", part, attr, *r)
+        if "waypoints" not in self.frozen:
+            for i in range(len(mission.waypoints)):
+                part = f"waypoints[{i}]"
+                if part in self.frozen:
+                    continue
+                for attr in ("dx", "dy"):
+                    r = rng(f"waypoint_{attr}")
+                    if r:
+                        yield Param(f"mission.{part}.{attr}", part, attr, *r)
+
+    # -- use ------------------------------------------------------------------------------
+    def __len__(self) -> int:
+        return len(self.params)
+
+    def zero(self) -> tuple[float, ...]:
+        return (0.0,) * len(self.params)
+
+    def clip(self, offsets: Sequence[float]) -> tuple[float, ...]:
+        return tuple(min(p.hi, max(p.lo, float(v))) for p, v in zip(self.params, offsets))
+
+    def normalised_distance(self, a: Sequence[float], b: Sequence[float]) -> float:
+        """Largest per-parameter difference as a fraction of that parameter's range (0..1)."""
+        return max((abs(x - y) / p.width for p, x, y in zip(self.params, a, b) if p.width > 0),
+                   default=0.0)
+
+    def as_mapping(self, offsets: Sequence[float]) -> dict[str, float]:
+        """Non-zero offsets by parameter name (what the search log and provenance show)."""
+        return {p.name: round(float(v), POSITION_DECIMALS)
+                for p, v in zip(self.params, offsets) if v != 0}
+
+    def apply(self, offsets: Sequence[float]) -> Scenario:
+        """The seed with ``offsets`` added (values rounded; sizes clamped to ``min_size``)."""
+        if len(offsets) != len(self.params):
+            raise ValueError(f"expected {len(self.params)} offsets for this space, got {len(offsets)}")
+        by_part: dict[str, dict[str, float]] = {}
+        for p, v in zip(self.params, offsets):
+            if v:
+                by_part.setdefault(p.part, {})[p.attr] = float(v)
+        obstacles = []
+        for obs in self.seed.obstacles:
+            d = by_part.get(f"obstacle:{obs.name}")
+            obstacles.append(_mutate_obstacle(obs, d, self.min_size) if d else obs)
+        m = self.seed.mission
+        start = _mutate_pose(m.start, by_part.get("start"))
+        goal = _mutate_pose(m.goal, by_part.get("goal"))
+        waypoints = tuple(_mutate_pose(w, by_part.get(f"waypoints[{i}]"))
+                          for i, w in enumerate(m.waypoints))
+        mission = replace(m, start=start, goal=goal, waypoints=waypoints)
+        return replace(self.seed, obstacles=tuple(obstacles), mission=mission)
+
+    def describe(self) -> str:
+        return ", ".join(f"{p.name} in [{p.lo:g}, {p.hi:g}]" for p in self.params) or "(nothing to mutate)"
+
+
+def _r(value: float) -> float:
+    out = round(value, POSITION_DECIMALS)
+    return 0.0 if out == 0 else out  # no -0.0 in YAML
+
+
+def _mutate_pose(pose: Pose, d: Mapping[str, float] | None) -> Pose:
+    if not d:
+        return pose
+    yaw = pose.yaw + d.get("yaw", 0.0)
+    yaw = (yaw + 180.0) % 360.0 - 180.0 if "yaw" in d else pose.yaw
+    x = _r(pose.x + d["dx"]) if "dx" in d else pose.x
+    y = _r(pose.y + d["dy"]) if "dy" in d else pose.y
+    return Pose(x, y, _r(yaw) if "yaw" in d else pose.yaw)
+
+
+def _mutate_obstacle(obs, d: Mapping[str, float], min_size: float):
+    x = _r(obs.x + d["dx"]) if "dx" in d else obs.x
+    y = _r(obs.y + d["dy"]) if "dy" in d else obs.y
+    ds = d.get("size", 0.0)
+    if isinstance(obs, BoxObstacle):
+        return replace(obs, x=x, y=y,
+                       length=_r(max(min_size, obs.length + ds)) if ds else obs.length,
+                       width=_r(max(min_size, obs.width + ds)) if ds else obs.width,
+                       yaw=_r(obs.yaw + d["yaw"]) if "yaw" in d else obs.yaw)
+    if isinstance(obs, CylinderObstacle):
+        return replace(obs, x=x, y=y,
+                       radius=_r(max(min_size / 2, obs.radius + ds / 2)) if ds else obs.radius)
+    raise TypeError(f"unknown obstacle type {type(obs).__name__}")
+
+
+# -- validation ------------------------------------------------------------------------------
+def _line_of(seed: Scenario, field: str) -> int | None:
+    """1-based line of ``field`` inside the seed file's ``search:`` block (best effort)."""
+    import re
+    from pathlib import Path
+
+    key = field.split("[")[0]
+    try:
+        lines = Path(seed.source).read_text(encoding="utf-8").splitlines() if seed.source else []
+    except (OSError, UnicodeDecodeError):
+        return None
+    in_search = False
+    for no, line in enumerate(lines, 1):
+        if re.match(r"^search\s*:", line):
+            in_search = True
+        elif in_search and re.match(r"^\S", line):
+            in_search = False
+        if in_search and re.search(rf"(^|[\s{{,]){re.escape(key)}\s*:", line):
+            return no
+    return None
+
+
+def _err(seed: Scenario, field: str, message: str, hint: str) -> ScenarioError:
+    return ScenarioError(message, path=seed.source or seed.name or None, line=_line_of(seed, field),
+                         field=f"search.{field}", hint=hint)
+
+
+def _number(seed, key, v) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        raise _err(seed, key, f"must be a finite number, got {v!r}", f"write e.g. {key}: 0.5")
+    return float(v)
+
+
+def _validate(seed: Scenario, mapping: Mapping[str, Any]):
+    bounds = dict(DEFAULT_BOUNDS)
+    for key, value in mapping.items():
+        if key not in KNOWN_KEYS:
+            close = difflib.get_close_matches(str(key), KNOWN_KEYS, n=1)
+            hint = f"did you mean {close[0]!r}?" if close else f"known keys: {', '.join(KNOWN_KEYS)}"
+            raise _err(seed, str(key), "unknown search setting", hint)
+        if key in OTHER_KEYS:
+            continue
+        if isinstance(value, (list, tuple)):
+            if len(value) != 2:
+                raise _err(seed, key, f"a range needs exactly two numbers [lo, hi], got {list(value)!r}",
+                           f"write e.g. {key}: [-0.5, 0.5]")
+            lo, hi = _number(seed, key, value[0]), _number(seed, key, value[1])
+        else:
+            half = _number(seed, key, value)
+            if half < 0:
+                raise _err(seed, key, f"a single number is a half-width and must be >= 0, got {half:g}",
+                           f"write {key}: {-half:g} (meaning [{half:g}, {-half:g}])")
+            lo, hi = -half, half
+        if lo > hi:
+            raise _err(seed, key, f"inverted bounds [{lo:g}, {hi:g}] (lo > hi)", f"write [{hi:g}, {lo:g}]")
+        if lo == hi and lo != 0:
+            raise _err(seed, key, f"empty bounds [{lo:g}, {hi:g}]: no room to search",
+                       "give a range containing 0, e.g. [-0.5, 0.5], or 0 to leave it fixed")
+        if not lo <= 0 <= hi:
+            raise _err(seed, key, f"bounds [{lo:g}, {hi:g}] do not contain 0, so the seed itself is "
+                       "outside the search space", f"offsets are relative to the seed: use e.g. [{min(lo, 0):g}, {max(hi, 0):g}]")
+        bounds[key] = (lo, hi)
+    frozen_raw = mapping.get("frozen", ()) or ()
+    if isinstance(frozen_raw, str):
+        frozen_raw = [frozen_raw]
+    if not isinstance(frozen_raw, (list, tuple)):
+        raise _err(seed, "frozen", f"must be a list of part names, got {frozen_raw!r}",
+                   "write e.g. frozen: [wall_left, start]")
+    parts = [o.name for o in seed.obstacles] + ["start", "goal", "waypoints"] + [
+        f"waypoints[{i}]" for i in range(len(seed.mission.waypoints))]
+    for i, name in enumerate(frozen_raw):
+        if name not in parts:
+            close = difflib.get_close_matches(str(name), parts, n=1)
+            hint = f"did you mean {close[0]!r}?" if close else f"parts of this seed: {', '.join(parts)}"
+            raise _err(seed, f"frozen[{i}]", f"{name!r} is not an obstacle or mission part of this seed", hint)
+    min_size = _number(seed, "min_size", mapping.get("min_size", DEFAULT_MIN_SIZE))
+    if min_size <= 0:
+        raise _err(seed, "min_size", f"must be > 0, got {min_size:g}", "write e.g. min_size: 0.05")
+    return bounds, frozenset(frozen_raw), min_size
+
+
+# -- validity before simulation -------------------------------------------------------------
+def invalid_reason(scenario: Scenario) -> str | None:
+    """Why a candidate is not a test (a broken scenario, not a planner failure), or None.
+
+    Obstacles covering the start or goal footprint, or no collision-free path for the
+    footprint at all (``paths.path_exists``).
+    """
+    from ..scenario.geometry import footprint_polygon, obstacle_polygon
+
+    m, fp = scenario.mission, scenario.robot.footprint
+    start = footprint_polygon(fp, m.start.x, m.start.y, m.start.yaw_rad)
+    goal = footprint_polygon(fp, m.goal.x, m.goal.y, m.goal.yaw_rad)
+    for obs in scenario.obstacles:
+        poly = obstacle_polygon(obs)
+        if poly.intersects(start):
+            return f"start-blocked:{obs.name}"
+        if poly.intersects(goal):
+            return f"goal-blocked:{obs.name}"
+    from ..verdict.paths import path_exists
+    if not path_exists(scenario):
+        return "no-path"
+    return None
+
+
+# -- Hypothesis -----------------------------------------------------------------------------
+def offsets_strategy(space: SearchSpace):
+    """Hypothesis strategy of offset vectors (tuples); shrinks toward all zeros = the seed."""
+    from hypothesis import strategies as st
+
+    return st.tuples(*(st.floats(p.lo, p.hi, allow_nan=False, allow_infinity=False,
+                                 allow_subnormal=False) for p in space.params))
+
+
+def scenarios_around(seed: Scenario, space: SearchSpace | None = None):
+    """Public Hypothesis strategy: Scenarios near ``seed`` (validity not checked; use
+    ``invalid_reason`` with ``assume`` if your test needs valid ones)::
+
+        @given(scenarios_around(load_scenario("scenarios/boxes1.yaml")))
+        def test_never_collides(scenario): ...
+    """
+    space = space if space is not None else SearchSpace(seed)
+    return offsets_strategy(space).map(space.apply)

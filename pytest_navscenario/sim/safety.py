@@ -1,0 +1,192 @@
+"""The collision safety layer, as on the real robot.
+
+Each control tick it takes the robot's *measured* velocity (a constant twist), predicts the footprint
+swept over ``safety.horizon`` seconds, grows it by ``safety.margin`` and halts the robot if the sweep
+touches an obstacle. A robot standing still never triggers it, and neither does one that is already
+within the margin of an obstacle but moving parallel to it or away from it (only approaching counts).
+
+How, and what it costs: bounding circles make the common case (nothing within reach of the farthest
+any footprint point can travel over the horizon) about a microsecond of plain Python. Otherwise the
+footprint is sampled along the constant-twist arc every ``SAMPLE_SPACING`` of point motion and its
+exact distance to each nearby obstacle is computed in one vectorised numpy pass (box-box: vertex to
+rectangle both ways plus a separating-axis overlap test; circles analytically).
+Sampling can make the layer halt up to half a sample spacing early (1 cm; more only when a point
+travels over ``MAX_SAMPLES * SAMPLE_SPACING`` = 1.28 m within the horizon), never late. Same shapes as
+geometry.py (boxes and true circles), without building shapely polygons in the loop.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from ..scenario.geometry import footprint_radius
+from ..scenario.model import BoxObstacle, Scenario
+
+SAMPLE_SPACING = 0.02   # m: the most any footprint point moves between two sweep samples
+MAX_SAMPLES = 64
+
+
+def twist_poses(x: float, y: float, yaw: float, vx: float, vy: float, wz: float,
+                times: np.ndarray) -> np.ndarray:
+    """Poses (n, 3) reached from (x, y, yaw) after ``times`` holding the robot-frame twist (vx, vy, wz).
+
+    Exact arcs: the displacement over T is T * sinc(wz T / 2) * R(yaw + wz T / 2) (vx, vy).
+    """
+    times = np.asarray(times, dtype=float)
+    half = wz * times / 2.0
+    scale = times * np.sinc(half / math.pi)   # np.sinc(u) = sin(pi u) / (pi u)
+    mid = yaw + half
+    c, s = np.cos(mid), np.sin(mid)
+    out = np.empty((len(times), 3))
+    out[:, 0] = x + scale * (c * vx - s * vy)
+    out[:, 1] = y + scale * (s * vx + c * vy)
+    out[:, 2] = yaw + wz * times
+    return out
+
+
+def _rect_distance(px: np.ndarray, py: np.ndarray, hx: Any, hy: Any) -> np.ndarray:
+    """Distance from points (px, py), given in a rectangle's own frame, to the rectangle of half
+    sizes (hx, hy); 0 inside."""
+    qx = np.maximum(np.abs(px) - hx, 0.0)
+    qy = np.maximum(np.abs(py) - hy, 0.0)
+    return np.hypot(qx, qy)
+
+
+class SafetyLayer:
+    """Per-model safety geometry; ``check`` is called once per tick with the measured state."""
+
+    def __init__(self, scenario: Scenario):
+        safety = scenario.robot.safety
+        self.horizon = float(safety.horizon)
+        self.margin = float(safety.margin)
+        fp = scenario.robot.footprint
+        self.circle_robot = fp.shape == "circle"
+        self.robot_r = float(fp.radius) if self.circle_robot else 0.0
+        self.hl, self.hw = fp.length / 2.0, fp.width / 2.0
+        self.robot_corners = np.array([(self.hl, self.hw), (-self.hl, self.hw),
+                                       (-self.hl, -self.hw), (self.hl, -self.hw)])
+        self.robot_radius = footprint_radius(fp)
+        obstacles = scenario.obstacles
+        self.names = [o.name for o in obstacles]
+        n = len(obstacles)
+        self.is_box = np.array([isinstance(o, BoxObstacle) for o in obstacles], dtype=bool)
+        self.centres = np.array([(o.x, o.y) for o in obstacles], dtype=float).reshape(n, 2)
+        yaw = np.array([math.radians(o.yaw) if isinstance(o, BoxObstacle) else 0.0 for o in obstacles])
+        self.cos, self.sin = np.cos(yaw), np.sin(yaw)
+        self.half = np.array([(o.length / 2.0, o.width / 2.0) if isinstance(o, BoxObstacle)
+                              else (0.0, 0.0) for o in obstacles], dtype=float).reshape(n, 2)
+        self.obs_r = np.array([0.0 if isinstance(o, BoxObstacle) else o.radius for o in obstacles])
+        # world corners of box obstacles (n, 4, 2); cylinders: their centre repeated
+        local = np.stack([self.half * sign for sign in ((1, 1), (-1, 1), (-1, -1), (1, -1))], axis=1)
+        self.corners = np.empty((n, 4, 2))
+        self.corners[..., 0] = self.centres[:, None, 0] + self.cos[:, None] * local[..., 0] \
+            - self.sin[:, None] * local[..., 1]
+        self.corners[..., 1] = self.centres[:, None, 1] + self.sin[:, None] * local[..., 0] \
+            + self.cos[:, None] * local[..., 1]
+        self.bound = np.hypot(self.half[:, 0], self.half[:, 1]) + self.obs_r
+        self._shape = list(zip(self.centres[:, 0].tolist(), self.centres[:, 1].tolist(),
+                               self.cos.tolist(), self.sin.tolist(), self.half[:, 0].tolist(),
+                               self.half[:, 1].tolist(), self.obs_r.tolist()))
+        self._circles = (list(zip(range(n), self.centres[:, 0].tolist(), self.centres[:, 1].tolist(),
+                                  self.bound.tolist())) if n <= 32 else None)
+
+    def distances(self, poses: np.ndarray, idx: np.ndarray) -> np.ndarray:
+        """Exact footprint-obstacle distances (0 on overlap) for poses (k, 3) and obstacles ``idx``:
+        an array (k, len(idx))."""
+        X, Y = poses[:, 0:1], poses[:, 1:2]
+        C, S = np.cos(poses[:, 2:3]), np.sin(poses[:, 2:3])
+        cx, cy = self.centres[idx, 0], self.centres[idx, 1]
+        oc, os_ = self.cos[idx], self.sin[idx]
+        hx, hy = self.half[idx, 0], self.half[idx, 1]
+        if self.circle_robot:
+            # robot centre into each obstacle frame; boxes: point-rectangle, cylinders: half = 0
+            dx, dy = X - cx, Y - cy
+            d = _rect_distance(dx * oc + dy * os_, -dx * os_ + dy * oc, hx, hy)
+            return np.maximum(d - self.obs_r[idx] - self.robot_r, 0.0)
+        # obstacle corners (cylinders: centre) into each sample's robot frame
+        ox = self.corners[idx, :, 0][None] - X[:, :, None]     # (k, m, 4)
+        oy = self.corners[idx, :, 1][None] - Y[:, :, None]
+        Cn, Sn = C[:, :, None], S[:, :, None]
+        rx, ry = ox * Cn + oy * Sn, -ox * Sn + oy * Cn
+        d = _rect_distance(rx, ry, self.hl, self.hw).min(axis=2)
+        d = np.maximum(d - self.obs_r[idx], 0.0)
+        box = self.is_box[idx]
+        if box.any():
+            # robot corners into each box obstacle's frame
+            wx = X + C * self.robot_corners[:, 0] - S * self.robot_corners[:, 1]   # (k, 4)
+            wy = Y + S * self.robot_corners[:, 0] + C * self.robot_corners[:, 1]
+            bi = idx[box]
+            dx = wx[:, None, :] - self.centres[bi, 0][None, :, None]              # (k, b, 4)
+            dy = wy[:, None, :] - self.centres[bi, 1][None, :, None]
+            bc, bs = self.cos[bi][None, :, None], self.sin[bi][None, :, None]
+            bx, by = dx * bc + dy * bs, -dx * bs + dy * bc
+            hx, hy = self.half[bi, 0][None, :, None], self.half[bi, 1][None, :, None]
+            d2 = _rect_distance(bx, by, hx, hy)
+            db = np.minimum(d[:, box], d2.min(axis=2))
+            # crossing rectangles (no corner inside the other): separating-axis test, 0 on overlap
+            rxb, ryb = rx[:, box], ry[:, box]
+            overlap = ((rxb.min(axis=2) <= self.hl) & (rxb.max(axis=2) >= -self.hl)
+                       & (ryb.min(axis=2) <= self.hw) & (ryb.max(axis=2) >= -self.hw)
+                       & (bx.min(axis=2) <= hx[..., 0]) & (bx.max(axis=2) >= -hx[..., 0])
+                       & (by.min(axis=2) <= hy[..., 0]) & (by.max(axis=2) >= -hy[..., 0]))
+            db[overlap] = 0.0
+            d[:, box] = db
+        return d
+
+    def check(self, x: float, y: float, yaw: float, vx: float, vy: float, wz: float) -> str | None:
+        """The name of the obstacle the predicted sweep would hit, or None (robot may go on)."""
+        speed = math.hypot(vx, vy)
+        # No point of the footprint moves farther than this over the horizon.
+        travel = (speed + abs(wz) * self.robot_radius) * self.horizon
+        n = int(min(MAX_SAMPLES, max(1, math.ceil(travel / SAMPLE_SPACING))))
+        threshold = self.margin + travel / n / 2.0       # half a sample spacing: sampling never misses
+        reach = self.robot_radius + threshold + travel
+        if self._circles is not None:       # few obstacles: plain Python beats numpy's overhead
+            hypot = math.hypot
+            near = [j for j, cx, cy, r in self._circles if hypot(cx - x, cy - y) - r < reach]
+        else:
+            gap = np.hypot(self.centres[:, 0] - x, self.centres[:, 1] - y) - self.bound
+            near = np.flatnonzero(gap < reach).tolist()
+        if not near:
+            return None
+        # Tier 2, a cheap lower bound: the obstacle lies in the half-plane behind its point q
+        # nearest to the robot's centre, so the robot is at least (|p - q| - the robot's extent
+        # towards it) away now; over the horizon that shrinks at most by the approach along u,
+        # the velocity's turning (speed |wz| t^2 / 2) and the extent's growth (R |wz| t).
+        # Rules out e.g. corridor walls beside the robot.
+        c, s = math.cos(yaw), math.sin(yaw)
+        hl, hw, rr = self.hl, self.hw, self.robot_r
+        h = self.horizon
+        wvx, wvy = c * vx - s * vy, s * vx + c * vy
+        turning = abs(wz) * h * (speed * h / 2.0 + self.robot_radius)
+        limit = self.margin
+        close = []
+        for j in near:
+            cx, cy, oc, os_, hx, hy, r = self._shape[j]
+            dx, dy = x - cx, y - cy
+            px, py = dx * oc + dy * os_, -dx * os_ + dy * oc        # robot centre, obstacle frame
+            qx = px - (hx if px > hx else (-hx if px < -hx else px))
+            qy = py - (hy if py > hy else (-hy if py < -hy else py))
+            gap = math.hypot(qx, qy)
+            if gap > r:
+                ux, uy = (qx * oc - qy * os_) / gap, (qx * os_ + qy * oc) / gap   # world direction
+                extent = rr if self.circle_robot else hl * abs(ux * c + uy * s) + hw * abs(uy * c - ux * s)
+                if gap - r - extent + min(0.0, h * (wvx * ux + wvy * uy)) - turning > limit:
+                    continue
+            close.append(j)
+        if not close:
+            return None
+        near = close
+        poses = twist_poses(x, y, yaw, vx, vy, wz, np.linspace(0.0, self.horizon, n + 1))
+        idx = np.asarray(near)
+        dist = self.distances(poses, idx)                            # (n + 1, m)
+        now, future = dist[0], dist[1:]
+        # hit: a future sample within the threshold, or (already within it) any approach at all
+        hit = np.where(now > threshold, future <= threshold, future < now - 1e-9)
+        if not hit.any():
+            return None
+        first = np.where(hit.any(axis=0), hit.argmax(axis=0), n + 1)  # earliest sample per obstacle
+        order = np.lexsort((future.min(axis=0), first))
+        return self.names[int(idx[order[0]])]

@@ -1,0 +1,74 @@
+"""The subject under test for a pytest session: where it came from, its factory, its check.
+
+Resolution order: the ``pytest_navscenario_make_subject`` hook (a conftest.py), then
+``--nav-subject`` / ini ``nav_subject``, then the built-in default (planner.DEFAULT_SUBJECT).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import pytest
+
+from .loading import BUILTIN_SUBJECTS, DEFAULT_SUBJECT, load_subject
+
+
+@dataclass
+class Subject:
+    """What the session tests. ``spec`` is the string a user passes to ``--nav-subject`` to get
+    the same subject again (None when a conftest hook provides it); ``origin`` says where it was set."""
+    spec: str | None
+    origin: str                        # "--nav-subject", "ini nav_subject", "built-in default", "hook"
+    _factory: Callable[[], Any] | None = field(default=None, repr=False)
+
+    @property
+    def label(self) -> str:
+        if self.spec is None:
+            return f"{getattr(self._factory, '__qualname__', repr(self._factory))} (from the " \
+                   f"pytest_navscenario_make_subject hook)"
+        if self.origin == "built-in default":
+            return f"{self.spec} (built-in default; set --nav-subject or ini nav_subject)"
+        kind = "built-in" if self.spec in BUILTIN_SUBJECTS else self.origin
+        return f"{self.spec} ({kind})"
+
+    @property
+    def factory(self) -> Callable[[], Any]:
+        """The zero-argument planner factory (loaded on first use). Raises SubjectLoadError."""
+        if self._factory is None:
+            self._factory = load_subject(self.spec or DEFAULT_SUBJECT)
+        return self._factory
+
+    @property
+    def runner_arg(self) -> Any:
+        """What to pass to run_scenario: the spec string when there is one (so results name the
+        subject as the user wrote it, e.g. "dwa"), else the hook's factory."""
+        return self.spec if self.spec is not None else self.factory
+
+    def new(self) -> Any:
+        """A fresh planner instance."""
+        return self.factory()
+
+    def check(self) -> None:
+        """Load the subject and make one planner; SubjectLoadError if it breaks the protocol."""
+        from .loading import make_planner
+        make_planner(self.runner_arg)
+
+
+def resolve_subject(config: pytest.Config, spec: str | None, origin: str) -> Subject:
+    """Ask the hook first, then use ``spec`` (from option/ini), else the built-in default."""
+    try:
+        provided = config.hook.pytest_navscenario_make_subject(config=config)
+    except Exception as exc:
+        raise pytest.UsageError(f"navscenario: the pytest_navscenario_make_subject hook raised "
+                                f"{type(exc).__name__}: {exc}") from exc
+    if provided is not None:
+        if isinstance(provided, str):
+            return Subject(spec=provided.strip(), origin="pytest_navscenario_make_subject hook")
+        if not callable(provided):
+            raise pytest.UsageError(
+                f"pytest_navscenario_make_subject returned {type(provided).__name__} {provided!r}; "
+                f"return a zero-argument factory or class, a 'package.module:Attribute' string, or None")
+        return Subject(spec=None, origin="hook", _factory=provided)
+    if spec:
+        return Subject(spec=spec, origin=origin)
+    return Subject(spec=DEFAULT_SUBJECT, origin="built-in default")

@@ -1,0 +1,70 @@
+"""The oracle: which outcome an episode had and one line saying why.
+
+A pure function of the scenario, the recorded trajectory and the events the simulation
+reported (collision, safety stop, planner failure). Precedence, first match wins:
+subject-error, collision, safety-stop, timeout, success. Success needs the goal reached
+(after every waypoint, the runner decides that) within ``mission.timeout``.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..sim.trajectory import Collision, SafetyStop, SubjectFailure, Trajectory
+from .result import Outcome
+from ..scenario.model import Scenario
+
+MAX_MESSAGE = 300  # characters of a planner's own error message kept in the one-line summary
+
+
+def classify(scenario: Scenario, trajectory: Trajectory, *, collision: Collision | None,
+             safety_stop: SafetyStop | None, subject_failure: SubjectFailure | None,
+             goal_reached: bool) -> tuple[Outcome, str]:
+    """Return ``(outcome, message)`` for one episode; the message is one line for a failure report."""
+    if subject_failure is not None:
+        return Outcome.SUBJECT_ERROR, (
+            f"planner error at tick {subject_failure.tick} (t={subject_failure.time:.2f} s): "
+            f"{_one_line(subject_failure.message)}")
+    if collision is not None:
+        return Outcome.COLLISION, (
+            f"collision with '{collision.obstacle}' at t={collision.time:.2f} s "
+            f"(depth {max(collision.depth, 0.0) * 1000:.0f} mm) at ({collision.x:.2f}, {collision.y:.2f})")
+    if safety_stop is not None:
+        return Outcome.SAFETY_STOP, (
+            f"safety stop at t={safety_stop.time:.2f} s: predicted to hit "
+            f"'{safety_stop.obstacle}' at {safety_stop.speed:.2f} m/s")
+    duration = trajectory.duration
+    timeout = scenario.mission.timeout
+    if goal_reached and duration <= timeout:
+        return Outcome.SUCCESS, f"success in {duration:.1f} s"
+    return Outcome.TIMEOUT, _timeout_message(scenario, trajectory, goal_reached)
+
+
+def _timeout_message(scenario: Scenario, trajectory: Trajectory, goal_reached: bool) -> str:
+    mission = scenario.mission
+    duration = trajectory.duration
+    if goal_reached:  # reached, but too late
+        return f"timeout: goal reached after {duration:.1f} s, later than the {mission.timeout:.1f} s allowed"
+    pose = np.asarray(trajectory.pose)
+    if len(pose):
+        dist = math.hypot(float(pose[-1, 0]) - mission.goal.x, float(pose[-1, 1]) - mission.goal.y)
+        where = f", {dist:.2f} m from the goal"
+    else:
+        where = ""
+    n_wp = len(mission.waypoints)
+    passed = f" ({len(trajectory.waypoint_times)} of {n_wp} waypoints passed)" if n_wp else ""
+    if duration < timeout_floor(mission.timeout, scenario.simulation.timestep):
+        # The episode ended early without an event: say so instead of pretending the clock ran out.
+        return f"timeout: episode ended at {duration:.1f} s without reaching the goal{where}{passed}"
+    return f"timeout after {duration:.1f} s{where}{passed}"
+
+
+def timeout_floor(timeout: float, timestep: float) -> float:
+    """The earliest time at which an episode counts as having run out its clock (one step of slack)."""
+    return timeout - 1.5 * timestep
+
+
+def _one_line(text: str) -> str:
+    line = " ".join(str(text).split())
+    return line if len(line) <= MAX_MESSAGE else line[: MAX_MESSAGE - 3] + "..."

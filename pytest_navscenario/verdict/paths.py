@@ -1,0 +1,437 @@
+"""Shortest collision-free paths for the robot's footprint, and exact planar distances.
+
+Two jobs that share one small geometry kernel:
+
+* ``shortest_path(scenario)``: the shortest path from the start through the waypoints (in
+  order) to the goal that keeps the footprint clear of every obstacle. The yardstick of the
+  path-efficiency and deviation metrics, and the search's validity check (``path_exists``).
+* exact, vectorised distances between boxes, circles and "rounded boxes" (used for the
+  clearance metric and ``min_obstacle_gap``).
+
+Inflation choice (configuration space). Each obstacle is grown by the footprint's half
+WIDTH for a box footprint (radius for a circle) and the robot centre is treated as a point.
+For a box robot this is the optimistic bound: the robot can drive lengthwise through any gap
+wider than itself, which is how a legged robot passes a door; turning in place near an
+obstacle may still need more room. Growing by the half diagonal instead would declare doors
+the robot really fits through impassable.
+
+The grown shapes are exact Minkowski sums (a box grows into a rounded box, a cylinder into a
+bigger circle) whose round parts are replaced by *circumscribed* polygons: straight sides keep
+the exact inflation, corners bulge out by at most ``INFLATION_TOLERANCE`` (1 cm). The path is
+therefore never closer than the inflation radius to an obstacle, and at most ~1 cm longer per
+corner it wraps than the true optimum. Gaps narrower than ``robot width + 2 x tolerance`` at a
+rounded corner may be judged closed.
+
+Algorithm: reduced visibility graph (only edges tangent to the convex grown polygons at their
+ends) + A*, vectorised with numpy. Results are cached on the exact inputs (footprint,
+start, waypoints, goal, obstacles): hashing those frozen dataclasses costs ~3 us where
+``content_hash`` costs ~0.3 ms, and the answer does not depend on anything else.
+"""
+from __future__ import annotations
+
+import heapq
+import math
+from collections import OrderedDict
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..scenario.model import BoxObstacle, CylinderObstacle, Footprint, Obstacle, Scenario
+
+INFLATION_TOLERANCE = 0.01   # m: how far polygonised round parts may bulge beyond the true shape
+CACHE_SIZE = 4096            # scenarios remembered by shortest_path / min_obstacle_gap
+_TOL = 1e-9                  # m: touching counts as free (a path may graze a grown obstacle)
+
+
+@dataclass(frozen=True, eq=False)
+class ShortestPath:
+    """A collision-free path for the footprint's centre: total ``length`` (m) and its
+    vertices ``points`` ((k, 2) read-only array, start first, goal last)."""
+    length: float
+    points: np.ndarray
+
+
+# --------------------------------------------------------------------------------------------
+# Geometry kernel: rounded boxes (box core with half extents hl, hw, rotated, plus radius rho).
+# A box obstacle has rho = 0, a cylinder hl = hw = 0 and rho = its radius; the same for the robot.
+
+
+@dataclass(frozen=True, eq=False)
+class Shapes:
+    """Obstacles (or any set of rounded boxes) as parallel numpy arrays."""
+    names: tuple[str, ...]
+    x: np.ndarray
+    y: np.ndarray
+    cos: np.ndarray
+    sin: np.ndarray
+    hl: np.ndarray
+    hw: np.ndarray
+    rho: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+
+def obstacle_shapes(obstacles: Sequence[Obstacle]) -> Shapes:
+    """Rounded-box arrays of the obstacles (cached: the search asks for the same ones often)."""
+    key = tuple(obstacles)
+    hit = _SHAPES_CACHE.get(key)
+    if hit is None:
+        hit = _build_shapes(key)
+        _remember(_SHAPES_CACHE, key, hit)
+    return hit
+
+
+def _build_shapes(obstacles: tuple[Obstacle, ...]) -> Shapes:
+    rows = []
+    for obs in obstacles:
+        if isinstance(obs, BoxObstacle):
+            yaw = math.radians(obs.yaw)
+            rows.append((obs.x, obs.y, math.cos(yaw), math.sin(yaw), obs.length / 2, obs.width / 2, 0.0))
+        elif isinstance(obs, CylinderObstacle):
+            rows.append((obs.x, obs.y, 1.0, 0.0, 0.0, 0.0, obs.radius))
+        else:
+            raise TypeError(f"unknown obstacle type {type(obs).__name__} (expected a box or a cylinder)")
+    arr = np.array(rows, dtype=float).reshape(-1, 7)
+    cols = [np.ascontiguousarray(arr[:, i]) for i in range(7)]
+    for c in cols:
+        c.setflags(write=False)
+    return Shapes(tuple(o.name for o in obstacles), *cols)
+
+
+def footprint_core(footprint: Footprint) -> tuple[float, float, float]:
+    """(half length, half width, rounding radius) of the footprint as a rounded box."""
+    if footprint.shape == "circle":
+        return 0.0, 0.0, float(footprint.radius)
+    return footprint.length / 2.0, footprint.width / 2.0, 0.0
+
+
+def point_box_distance(px, py, bx, by, bc, bs, bhl, bhw):
+    """Distance from points to solid rotated boxes (0 inside); all arguments broadcast."""
+    dx = px - bx
+    dy = py - by
+    u = np.abs(dx * bc + dy * bs) - bhl
+    v = np.abs(dy * bc - dx * bs) - bhw
+    return np.hypot(np.maximum(u, 0.0), np.maximum(v, 0.0))
+
+
+def box_box_distance(ax, ay, ac, as_, ahl, ahw, bx, by, bc, bs, bhl, bhw):
+    """Distance between solid rotated boxes (0 when they touch or overlap); broadcasts.
+
+    Separating-axis test for overlap; for disjoint convex polygons the distance is attained
+    at a vertex of one of them, so it is the least vertex-to-box distance both ways.
+    Degenerate boxes (zero extents) are points, which makes this work for circles too.
+    """
+    dx = bx - ax
+    dy = by - ay
+    cab = np.abs(ac * bc + as_ * bs)
+    sab = np.abs(as_ * bc - ac * bs)
+    separated = ((np.abs(dx * ac + dy * as_) > ahl + bhl * cab + bhw * sab)
+                 | (np.abs(dy * ac - dx * as_) > ahw + bhl * sab + bhw * cab)
+                 | (np.abs(dx * bc + dy * bs) > bhl + ahl * cab + ahw * sab)
+                 | (np.abs(dy * bc - dx * bs) > bhw + ahl * sab + ahw * cab))
+    best = None
+    for sx, sy in ((1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)):
+        avx = ax + sx * ahl * ac - sy * ahw * as_
+        avy = ay + sx * ahl * as_ + sy * ahw * ac
+        bvx = bx + sx * bhl * bc - sy * bhw * bs
+        bvy = by + sx * bhl * bs + sy * bhw * bc
+        d = np.minimum(point_box_distance(avx, avy, bx, by, bc, bs, bhl, bhw),
+                       point_box_distance(bvx, bvy, ax, ay, ac, as_, ahl, ahw))
+        best = d if best is None else np.minimum(best, d)
+    return np.where(separated, best, 0.0)
+
+
+def shape_pair_distance(a: Shapes, ia, b: Shapes, ib) -> np.ndarray:
+    """Exact distances between rounded boxes ``a[ia]`` and ``b[ib]`` (index arrays), 0 on overlap."""
+    core = box_box_distance(a.x[ia], a.y[ia], a.cos[ia], a.sin[ia], a.hl[ia], a.hw[ia],
+                            b.x[ib], b.y[ib], b.cos[ib], b.sin[ib], b.hl[ib], b.hw[ib])
+    return np.maximum(core - a.rho[ia] - b.rho[ib], 0.0)
+
+
+# --------------------------------------------------------------------------------------------
+# Obstacle-obstacle gap
+
+
+def min_obstacle_gap(scenario: Scenario) -> tuple[float, str, str]:
+    """The narrowest gap between two obstacles: ``(distance m, name a, name b)``, 0 when they
+    touch or overlap; ``(inf, "", "")`` with fewer than two obstacles. Exact (true circles)."""
+    key = tuple(scenario.obstacles)
+    hit = _GAP_CACHE.get(key)
+    if hit is None:
+        hit = _min_gap(obstacle_shapes(key))
+        _remember(_GAP_CACHE, key, hit)
+    return hit
+
+
+def _min_gap(shapes: Shapes) -> tuple[float, str, str]:
+    if len(shapes) < 2:
+        return math.inf, "", ""
+    i, j = np.triu_indices(len(shapes), 1)
+    d = shape_pair_distance(shapes, i, shapes, j)
+    k = int(np.argmin(d))
+    return float(d[k]), shapes.names[i[k]], shapes.names[j[k]]
+
+
+# --------------------------------------------------------------------------------------------
+# Shortest path
+
+
+def inflation_radius(footprint: Footprint) -> float:
+    """How much obstacles grow for the path search: half the width of a box footprint (the
+    robot drives lengthwise through gaps), the radius of a circle. See the module docstring."""
+    return float(footprint.radius) if footprint.shape == "circle" else footprint.width / 2.0
+
+
+def inflated_polygon(obs: Obstacle, r: float, tol: float = INFLATION_TOLERANCE) -> np.ndarray:
+    """Counter-clockwise vertices ((m, 2) array) of a convex polygon containing ``obs`` grown
+    by ``r``: exact on straight sides, round parts circumscribed within ``tol``."""
+    grown = _grow((obs,), r, tol)
+    return grown.verts[0, : grown.sizes[0]].copy()
+
+
+@dataclass(frozen=True, eq=False)
+class _Grown:
+    """Grown obstacles as padded arrays: polygon j has ``sizes[j]`` vertices ``verts[j]``
+    (padding repeats the last one), edge i of it is the half-plane normals[j, i] . p <= offsets[j, i],
+    ``prev``/``after`` the neighbouring vertices, and a bounding circle (centre, radius)."""
+    verts: np.ndarray
+    prev: np.ndarray
+    after: np.ndarray
+    normals: np.ndarray
+    offsets: np.ndarray
+    sizes: np.ndarray
+    centre: np.ndarray
+    radius: np.ndarray
+
+
+def _grow(obstacles: Sequence[Obstacle], r: float, tol: float = INFLATION_TOLERANCE) -> _Grown:
+    groups = []  # (verts (g, m, 2), normals (g, m, 2), offsets (g, m), centre (g, 2), radius (g,))
+    boxes = [o for o in obstacles if isinstance(o, BoxObstacle)]
+    if boxes:
+        q = 1 if r <= 0 else int(np.clip(math.ceil((math.pi / 2) / (2 * math.acos(r / (r + tol)))), 1, 8))
+        step = (math.pi / 2) / q
+        i = np.arange(4 * q)
+        corner = np.array([(1.0, -1.0), (1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0)])[i // q]    # (m, 2)
+        vang = -math.pi / 2 + (i + 0.5) * step
+        nang = -math.pi / 2 + (i + 1) * step
+        arc = (max(r, 0.0) / math.cos(step / 2)) * np.column_stack([np.cos(vang), np.sin(vang)])
+        lnorm = np.column_stack([np.cos(nang), np.sin(nang)])
+        b = np.array([(o.x, o.y, o.length / 2, o.width / 2, math.radians(o.yaw)) for o in boxes])
+        local = corner[None] * b[:, None, 2:4] + arc[None]                               # (g, m, 2)
+        c, s_ = np.cos(b[:, 4])[:, None], np.sin(b[:, 4])[:, None]
+        verts = np.stack([b[:, 0:1] + c * local[..., 0] - s_ * local[..., 1],
+                          b[:, 1:2] + s_ * local[..., 0] + c * local[..., 1]], axis=-1)
+        normals = np.stack([c * lnorm[:, 0] - s_ * lnorm[:, 1], s_ * lnorm[:, 0] + c * lnorm[:, 1]], axis=-1)
+        offsets = (normals * verts).sum(-1)
+        radius = np.sqrt((local ** 2).sum(-1)).max(1)
+        groups.append((verts, normals, offsets, b[:, :2], radius))
+    cyls = [o for o in obstacles if isinstance(o, CylinderObstacle)]
+    by_count: dict[int, list[CylinderObstacle]] = {}
+    for o in cyls:
+        big = o.radius + r
+        n = int(np.clip(math.ceil(math.pi / math.acos(big / (big + tol))), 8, 64))
+        by_count.setdefault(n, []).append(o)
+    for n, group in by_count.items():
+        cb = np.array([(o.x, o.y, o.radius + r) for o in group])
+        j = np.arange(n)
+        vdir = np.column_stack([np.cos((j + 0.5) * 2 * math.pi / n), np.sin((j + 0.5) * 2 * math.pi / n)])
+        ndir = np.column_stack([np.cos((j + 1.0) * 2 * math.pi / n), np.sin((j + 1.0) * 2 * math.pi / n)])
+        rad = cb[:, 2] / math.cos(math.pi / n)
+        verts = cb[:, None, :2] + rad[:, None, None] * vdir[None]
+        normals = np.broadcast_to(ndir, (len(group), n, 2))
+        offsets = (normals * cb[:, None, :2]).sum(-1) + cb[:, 2:3]
+        groups.append((verts, normals, offsets, cb[:, :2], rad))
+    mmax = max(g[0].shape[1] for g in groups)
+
+    def pad(a: np.ndarray) -> np.ndarray:
+        extra = mmax - a.shape[1]
+        return a if extra == 0 else np.concatenate([a, np.repeat(a[:, -1:], extra, axis=1)], axis=1)
+
+    verts = np.concatenate([pad(g[0]) for g in groups])
+    return _Grown(
+        verts=verts,
+        prev=np.concatenate([pad(np.roll(g[0], 1, axis=1)) for g in groups]),
+        after=np.concatenate([pad(np.roll(g[0], -1, axis=1)) for g in groups]),
+        normals=np.concatenate([pad(g[1]) for g in groups]),
+        offsets=np.concatenate([pad(g[2]) for g in groups]),
+        sizes=np.concatenate([np.full(len(g[0]), g[0].shape[1]) for g in groups]),
+        centre=np.concatenate([g[3] for g in groups]),
+        radius=np.concatenate([g[4] for g in groups]),
+    )
+
+
+def shortest_path(scenario: Scenario) -> ShortestPath | None:
+    """Shortest collision-free path of the footprint's centre from the start through every
+    waypoint (in order) to the goal, or None if there is none (a wall closes the way, or a
+    mission point lies inside a grown obstacle). Cached; ~1 ms for ten obstacles uncached."""
+    m = scenario.mission
+    return path_through(scenario, [(m.start.x, m.start.y), *((w.x, w.y) for w in m.waypoints),
+                                   (m.goal.x, m.goal.y)])
+
+
+def path_through(scenario: Scenario, stops: Sequence[tuple[float, float]]) -> ShortestPath | None:
+    """Shortest collision-free path for the scenario's footprint through ``stops`` (x, y) in
+    order, among the scenario's obstacles; None if there is none. Cached like shortest_path."""
+    stops = tuple((float(x), float(y)) for x, y in stops)
+    key = (scenario.robot.footprint, stops, tuple(scenario.obstacles))
+    try:
+        return _PATH_CACHE[key]
+    except KeyError:
+        pass
+    result = _plan(np.array(stops, dtype=float).reshape(-1, 2), scenario.obstacles,
+                   inflation_radius(scenario.robot.footprint))
+    _remember(_PATH_CACHE, key, result)
+    return result
+
+
+def path_exists(scenario: Scenario) -> bool:
+    """True if the footprint can get from the start through the waypoints to the goal."""
+    return shortest_path(scenario) is not None
+
+
+def clear_caches() -> None:
+    """Forget cached paths, gaps and shapes (for benchmarks measuring the uncached cost)."""
+    _PATH_CACHE.clear()
+    _GAP_CACHE.clear()
+    _SHAPES_CACHE.clear()
+
+
+def _plan(stops: np.ndarray, obstacles: Sequence[Obstacle], r: float) -> ShortestPath | None:
+    if not obstacles:
+        return _make_path(stops)
+    g = _grow(obstacles, r)
+    k, mmax = g.offsets.shape
+
+    def inside(points: np.ndarray) -> np.ndarray:  # (n, k): strictly inside polygon j
+        proj = np.einsum("kmc,nc->nkm", g.normals, points)
+        return (proj < g.offsets[None] - 1e-7).all(axis=2)
+
+    if inside(stops).any():
+        return None
+    if _segments_free(stops[:-1], stops[1:], g).all():    # nothing in the way: straight legs
+        return _make_path(stops)
+    # nodes: the mission stops, then the polygon vertices not buried inside another polygon
+    valid = np.arange(mmax)[None, :] < g.sizes[:, None]
+    owner = np.broadcast_to(np.arange(k)[:, None], valid.shape)[valid]
+    allv = g.verts[valid]
+    buried = inside(allv)
+    buried[np.arange(len(allv)), owner] = False
+    keep = ~buried.any(axis=1)
+    ns = len(stops)
+    nodes = np.concatenate([stops, allv[keep]])
+    prev = np.concatenate([stops, g.prev[valid][keep]])
+    after = np.concatenate([stops, g.after[valid][keep]])
+    # reduced visibility graph: at a polygon vertex an edge must be tangent to its polygon
+    # (both neighbours on one side of it); tangent[i, j] for the end at node i
+    x, y = nodes[:, 0], nodes[:, 1]
+    ea, eb = prev - nodes, after - nodes
+    fa = x[None, :] * ea[:, 1:2] - y[None, :] * ea[:, 0:1] - (x * ea[:, 1] - y * ea[:, 0])[:, None]
+    fb = x[None, :] * eb[:, 1:2] - y[None, :] * eb[:, 0:1] - (x * eb[:, 1] - y * eb[:, 0])[:, None]
+    d2 = (x[None, :] - x[:, None]) ** 2 + (y[None, :] - y[:, None]) ** 2
+    scale = np.sqrt((ea * ea).sum(1) * (eb * eb).sum(1))[:, None]
+    tangent = fa * fb >= -1e-12 * scale * d2
+    i, j = np.nonzero(np.triu(tangent & tangent.T, 1))
+    p, q = nodes[i], nodes[j]
+    free = _segments_free(p, q, g)
+    i, j = i[free], j[free]
+    length = np.sqrt(d2[i, j])
+    adj: list[list[tuple[int, float]]] = [[] for _ in range(len(nodes))]
+    for a, b, w in zip(i.tolist(), j.tolist(), length.tolist()):
+        adj[a].append((b, w))
+        adj[b].append((a, w))
+    route = [0]
+    for leg in range(ns - 1):
+        hops = _astar(adj, nodes, leg, leg + 1)
+        if hops is None:
+            return None
+        route.extend(hops[1:])
+    return _make_path(nodes[route])
+
+
+def _segments_free(p: np.ndarray, q: np.ndarray, g: _Grown) -> np.ndarray:
+    """For each segment p->q: does it stay out of the interior of every grown polygon?
+    Broad phase on bounding circles, then the separating-axis test (polygon edge normals and
+    the segment's own normal): first against the circle each segment cuts deepest (which
+    blocks most blocked segments), then the survivors against all their candidates."""
+    d = q - p
+    seg2 = np.maximum((d * d).sum(1), 1e-300)
+    rx = g.centre[None, :, 0] - p[:, 0:1]                                  # (e, k)
+    ry = g.centre[None, :, 1] - p[:, 1:2]
+    t = np.clip((rx * d[:, 0:1] + ry * d[:, 1:2]) / seg2[:, None], 0.0, 1.0)
+    gx, gy = rx - t * d[:, 0:1], ry - t * d[:, 1:2]
+    depth = (g.radius[None, :] - 1e-7) ** 2 - (gx * gx + gy * gy)         # > 0: may be blocked
+    free = np.ones(len(p), dtype=bool)
+    if len(p) > 64 and g.radius.size > 1:
+        first = np.argmax(depth, axis=1)
+        e = np.nonzero(depth[np.arange(len(p)), first] > 0)[0]
+        free[e[_blocked(p[e], q[e], d[e], seg2[e], g, first[e])]] = False
+        depth[~free] = -1.0
+    e, jj = np.nonzero(depth > 0)
+    if len(e):
+        free[e[_blocked(p[e], q[e], d[e], seg2[e], g, jj)]] = False
+    return free
+
+
+def _blocked(pp, qq, dd, seg2, g: _Grown, jj) -> np.ndarray:
+    """Separating-axis test of segments pp->qq against polygons jj: True where they cut the interior."""
+    nrm, off, vv = g.normals[jj], g.offsets[jj], g.verts[jj]              # (c, m, ...)
+    sep_poly = (((nrm[..., 0] * pp[:, 0:1] + nrm[..., 1] * pp[:, 1:2]) >= off - _TOL)
+                & ((nrm[..., 0] * qq[:, 0:1] + nrm[..., 1] * qq[:, 1:2]) >= off - _TOL)).any(1)
+    side = dd[:, 0:1] * (vv[..., 1] - pp[:, 1:2]) - dd[:, 1:2] * (vv[..., 0] - pp[:, 0:1])
+    slack = _TOL * np.sqrt(seg2)[:, None]
+    sep_line = (side >= -slack).all(1) | (side <= slack).all(1)
+    return ~(sep_poly | sep_line)
+
+
+def _astar(adj: list[list[tuple[int, float]]], nodes: np.ndarray, src: int, dst: int) -> list[int] | None:
+    """Shortest hop sequence src -> dst (A* with the straight-line distance, which is exact
+    Dijkstra order for this consistent heuristic), or None if dst is unreachable."""
+    gx, gy = float(nodes[dst, 0]), float(nodes[dst, 1])
+    xs, ys = nodes[:, 0].tolist(), nodes[:, 1].tolist()
+    cost = {src: 0.0}
+    back: dict[int, int] = {}
+    heap = [(math.hypot(xs[src] - gx, ys[src] - gy), 0.0, src)]
+    done = set()
+    while heap:
+        _, du, u = heapq.heappop(heap)
+        if u in done:
+            continue
+        if u == dst:
+            path = [u]
+            while u != src:
+                u = back[u]
+                path.append(u)
+            return path[::-1]
+        done.add(u)
+        for v, w in adj[u]:
+            nd = du + w
+            if nd < cost.get(v, math.inf):
+                cost[v] = nd
+                back[v] = u
+                heapq.heappush(heap, (nd + math.hypot(xs[v] - gx, ys[v] - gy), nd, v))
+    return None
+
+
+def _make_path(points: np.ndarray) -> ShortestPath:
+    pts = np.array(points, dtype=float).reshape(-1, 2)
+    if len(pts) > 1:  # drop repeated points (a waypoint equal to the start, ...)
+        step = np.hypot(*np.diff(pts, axis=0).T)
+        pts = pts[np.concatenate([[True], step > 0])]
+    pts.setflags(write=False)
+    length = float(np.hypot(*np.diff(pts, axis=0).T).sum()) if len(pts) > 1 else 0.0
+    return ShortestPath(length, pts)
+
+
+# --------------------------------------------------------------------------------------------
+
+_PATH_CACHE: OrderedDict[Any, ShortestPath | None] = OrderedDict()
+_GAP_CACHE: OrderedDict[Any, tuple[float, str, str]] = OrderedDict()
+_SHAPES_CACHE: OrderedDict[Any, Shapes] = OrderedDict()
+
+
+def _remember(cache: OrderedDict, key: Any, value: Any) -> None:
+    cache[key] = value
+    if len(cache) > CACHE_SIZE:
+        cache.popitem(last=False)
