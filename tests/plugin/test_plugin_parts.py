@@ -19,7 +19,7 @@ from pytest_navscenario.report.results_file import read_results
 from pytest_navscenario.harness.runner import run_scenario
 from pytest_navscenario.report.summary import format_summary
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 WALL_SCENARIO = """
 version: 1

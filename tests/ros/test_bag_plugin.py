@@ -10,7 +10,7 @@ from pytest_navscenario.scenario.loader import load_scenario
 from pytest_navscenario.scenario.dump import dump_scenario
 
 PLUGIN = ["-p", "pytest_navscenario.plugin"]
-SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
+SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 
 
 def _texts() -> tuple[str, str]:

@@ -18,7 +18,7 @@ from pytest_navscenario.ros.map_import import map_obstacles, merge_rectangles
 from pytest_navscenario.scenario.model import BoxObstacle, CylinderObstacle
 from pytest_navscenario.ros.world_import import aerialist_obstacles, sdf_obstacles
 
-DATA = Path(__file__).resolve().parent / "data"
+DATA = Path(__file__).resolve().parents[1] / "data"
 
 
 # ------------------------------------------------------------------ Aerialist

@@ -19,7 +19,7 @@ from pytest_navscenario.scenario.loader import load_scenario
 from pytest_navscenario.harness.runner import run_scenario
 from pytest_navscenario.scenario.model import BoxObstacle, CylinderObstacle
 
-SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
+SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 
 
 @pytest.fixture(scope="module")

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from pytest_navscenario import cli
 
-SEEDS_DIR = Path(__file__).resolve().parent.parent / "scenarios"
+SEEDS_DIR = Path(__file__).resolve().parents[2] / "scenarios"
 
 
 def test_run_prints_outcome_message_and_metrics_and_exits_0_on_success(capsys):

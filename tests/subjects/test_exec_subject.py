@@ -16,7 +16,7 @@ from pytest_navscenario.subjects.loading import load_subject
 from pytest_navscenario.verdict.result import Outcome
 from pytest_navscenario.scenario.model import BoxObstacle, Mission, Pose, Scenario
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 VECTOR_FIELD = ROOT / "examples" / "external" / "vector_field.py"
 
 

@@ -318,7 +318,7 @@ def test_round_trip_of_generated_scenarios_is_exact(s):
 def test_readme_example_loads_and_round_trips():
     """The complete example in the README's format section is a valid scenario."""
     from pathlib import Path
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
     section = readme.split("<!-- section:scenario-format -->", 1)[1].split("<!-- /section:scenario-format -->")[0]
     example = section.split("```yaml\n", 1)[1].split("```", 1)[0]
     s = loads_scenario(example, "README.md")

@@ -9,7 +9,7 @@ import pytest
 
 from pytest_navscenario.cli import main
 
-DATA = Path(__file__).resolve().parent / "data"
+DATA = Path(__file__).resolve().parents[1] / "data"
 TB3 = DATA / "fuse_turtlebot3.bag"
 
 

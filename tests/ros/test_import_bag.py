@@ -15,9 +15,9 @@ from pytest_navscenario.cli import main
 from pytest_navscenario.scenario.loader import load_scenario
 from pytest_navscenario.scenario.model import BoxObstacle, CylinderObstacle
 
-DATA = Path(__file__).resolve().parent / "data"
+DATA = Path(__file__).resolve().parents[1] / "data"
 TB3 = DATA / "fuse_turtlebot3.bag"
-SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
+SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 
 
 @pytest.fixture(scope="module")

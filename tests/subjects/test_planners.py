@@ -19,7 +19,7 @@ from pytest_navscenario.verdict.result import Outcome
 from pytest_navscenario.harness.runner import run_scenario
 from pytest_navscenario.scenario.model import BoxObstacle, Footprint, GoalTolerance, Limits, Mission, Pose, Robot, Scenario
 
-SEEDS_DIR = Path(__file__).resolve().parent.parent / "scenarios"
+SEEDS_DIR = Path(__file__).resolve().parents[2] / "scenarios"
 SEEDS = ["boxes1", "boxes2", "corridor", "cylinders", "L-corridor"]
 
 
