@@ -79,16 +79,16 @@ class NodeReport:
 
 def probe_node(subject: Any, cwd: str | None) -> dict[str, Any]:
     """Runs on a node: can it load the subject? Which versions does it have?"""
-    import numpy
+    from importlib.metadata import version
 
     import pytest_navscenario
     info: dict[str, Any] = {"host": socket.gethostname(), "error": "",
                             "versions": {"python": sys.version.split()[0],
-                                         "pytest-navscenario": pytest_navscenario.__version__,
-                                         "numpy": numpy.__version__}}
+                                         "pytest-navscenario": pytest_navscenario.__version__}}
     try:
-        import mujoco
-        info["versions"]["mujoco"] = mujoco.__version__
+        for dist in ("mujoco", "numpy"):
+            info["versions"][dist] = version(dist)
+        from ..sim import episode  # noqa: F401  (the simulation loads: MuJoCo and numpy import)
         spec = subject.strip() if isinstance(subject, str) else None
         if spec is not None and spec.startswith("exec:"):
             info["error"] = _exec_missing(spec[len("exec:"):].strip(), cwd)

@@ -6,8 +6,8 @@ file, artifacts and the summary. This module holds the core hooks only; the work
 modules: ``options.py`` (every option and its ini twin), ``state.py`` (session state in
 ``config.stash``), ``collect.py``, ``payload.py``, ``artifacts.py``, ``fixtures.py`` (``nav_run``,
 ``nav_subject``), ``hookspecs.py`` (new hooks), and the feature plugins ``search.py``
-(``--navsearch``), ``reports.py`` (plots, HTML, baseline gate) and ``bags.py`` (``--nav-bag``),
-registered through ``pytest_plugins``.
+(``--navsearch``), ``reports.py`` (plots, HTML, baseline gate), ``bags.py`` (``--nav-bag``) and
+``parallel.py`` (``--nav-ray``: episodes as Ray tasks), registered through ``pytest_plugins``.
 
 Heavy modules (the loader, the runner and MuJoCo) are imported only when a scenario is collected
 or run, so that loading the plugin into an unrelated pytest run stays cheap. With xdist, workers
@@ -30,6 +30,7 @@ pytest_plugins = [
     "pytest_navscenario.plugin.search",
     "pytest_navscenario.plugin.reports",
     "pytest_navscenario.plugin.bags",
+    "pytest_navscenario.plugin.parallel",
 ]
 
 WORKER_SEED_KEY = "navscenario_seed"

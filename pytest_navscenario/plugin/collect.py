@@ -137,18 +137,35 @@ class ScenarioItem(pytest.Item):
         self.scenario = scenario
         self.repeat = repeat          # --nav-repeat index: 0 .. N-1
         self.nav_result: Any = None   # the EpisodeResult, until the call report has taken it
+        self.nav_pending: Any = None  # with --nav-ray: the submitted episode (dispatch.Pending)
 
     @property
     def rel_path(self) -> str:
         return rel_path(self.config, self.path)
 
-    def runtest(self) -> None:
-        from ..harness.runner import run_scenario
+    def episode_job(self, keep_trajectory: str) -> Any:
+        """This item's episode as a dispatch job (what runtest runs in place without --nav-ray)."""
+        import os
+
+        from ..dispatch.jobs import EpisodeJob
 
         state = get_state(self.config)
-        result = run_scenario(self.scenario, state.subject.runner_arg,
-                              seed=repeat_seed(state.settings.seed, self.repeat),
-                              tick_limit=state.settings.tick_limit)
+        return EpisodeJob(self.scenario, state.subject.runner_arg,
+                          seed=repeat_seed(state.settings.seed, self.repeat),
+                          tick_limit=state.settings.tick_limit, keep_trajectory=keep_trajectory,
+                          cwd=os.getcwd())
+
+    def runtest(self) -> None:
+        pending, self.nav_pending = self.nav_pending, None
+        if pending is not None:   # submitted at the start of the run loop (--nav-ray)
+            result = pending.result()
+        else:
+            from ..harness.runner import run_scenario
+
+            state = get_state(self.config)
+            result = run_scenario(self.scenario, state.subject.runner_arg,
+                                  seed=repeat_seed(state.settings.seed, self.repeat),
+                                  tick_limit=state.settings.tick_limit)
         self.nav_result = result
         m = result.metrics
         self.user_properties.extend([

@@ -8,6 +8,7 @@ pytest.UsageError saying which option and how to fix it.
 from __future__ import annotations
 
 import os
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -40,6 +41,12 @@ OPTIONS = (
     ("--nav-repeat", "nav_repeat",
      "run each scenario N times with different noise seeds (repeat 0 keeps the run's seed) and "
      "report the scenarios whose outcomes differ (flaky) with per-outcome counts. Default 1."),
+    ("--nav-ray", "nav_ray",
+     "run the episodes as Ray tasks (needs pip install \"pytest-navscenario[ray]\"): 'auto' starts "
+     "a local Ray instance (with -n N: N CPUs, else every core), HOST:PORT joins a running cluster "
+     "(`ray start --head` prints the address). Items still report one per scenario in the usual "
+     "order, with the same results as a serial run. Every node must have pytest-navscenario and "
+     "the subject; this is checked before any episode. Default: none."),
 )
 
 
@@ -47,7 +54,8 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("navscenario", "navigation scenarios (pytest-navscenario)")
     helps = {ini: text for _, ini, text in OPTIONS}
     metavars = {"nav_subject": "SPEC", "nav_seed": "N", "nav_results": "PATH", "nav_artifacts": "DIR",
-                "nav_summary": "yes|no", "nav_tick_limit": "SECONDS", "nav_repeat": "N"}
+                "nav_summary": "yes|no", "nav_tick_limit": "SECONDS", "nav_repeat": "N",
+                "nav_ray": "auto|HOST:PORT"}
     for opt, ini, text in OPTIONS:
         group.addoption(opt, dest=ini, default=None, metavar=metavars[ini], help=text + f" [ini: {ini}]")
     parser.addini("nav_subject", helps["nav_subject"], default="")
@@ -57,6 +65,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addini("nav_summary", helps["nav_summary"], default="yes")
     parser.addini("nav_tick_limit", helps["nav_tick_limit"], default=str(DEFAULT_TICK_LIMIT))
     parser.addini("nav_repeat", helps["nav_repeat"], default="1")
+    parser.addini("nav_ray", helps["nav_ray"], default="")
     parser.addini("nav_scenario_glob",
                   "file name patterns of scenario files (space separated); files matching them are "
                   "collected when they are a YAML mapping with 'version' and 'mission' keys "
@@ -78,6 +87,7 @@ class Settings:
     repeat: int                       # episodes per scenario (>= 1)
     globs: tuple[str, ...]
     scenario_paths: tuple[Path, ...]
+    ray: str | None = None            # --nav-ray: "auto" or "HOST:PORT"; None: no Ray
 
 
 def _value(config: pytest.Config, name: str) -> tuple[str, str, Path]:
@@ -159,4 +169,22 @@ def read_settings(config: pytest.Config) -> Settings:
                                 f"10000, got {raw!r} (e.g. --nav-repeat=10)")
     return Settings(subject_spec=subject, seed=seed, results=results, artifacts=artifacts,
                     summary=summary, tick_limit=tick_limit, repeat=repeat, globs=globs,
-                    scenario_paths=paths)
+                    scenario_paths=paths, ray=read_ray_address(config))
+
+
+_HOST_PORT = re.compile(r"^(ray://)?[A-Za-z0-9_.\-]+:[0-9]{1,5}$|^(ray://)?\[[0-9A-Fa-f:]+\]:[0-9]{1,5}$")
+
+
+def read_ray_address(config: pytest.Config) -> str | None:
+    """--nav-ray / ini nav_ray: "auto", "HOST:PORT" or None (off). UsageError otherwise."""
+    raw, where, _ = _value(config, "nav_ray")
+    value = raw.strip()
+    if value.lower() in ("", "none", "no", "off"):
+        return None
+    if value.lower() == "auto":
+        return "auto"
+    if not _HOST_PORT.match(value):
+        raise pytest.UsageError(f"{where}: expected 'auto' (start a local Ray instance) or the address "
+                                f"of a running Ray cluster as HOST:PORT (e.g. 10.0.0.5:6379, printed by "
+                                f"`ray start --head`), got {raw!r}")
+    return value

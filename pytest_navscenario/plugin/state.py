@@ -19,6 +19,8 @@ class NavState:
     records: list[dict[str, Any]] = field(default_factory=list)   # controller: results records
     failed_artifacts: list[str] = field(default_factory=list)      # controller: folders written
     bad_scenario_files: int = 0   # scenario files that failed to load (collection errors)
+    executor: Any = None          # controller with --nav-ray: where episodes run (dispatch/)
+    executor_notes: list[str] = field(default_factory=list)       # header lines about it
 
 
 STATE_KEY = pytest.StashKey[NavState]()
