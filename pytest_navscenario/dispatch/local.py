@@ -193,12 +193,15 @@ class ProcessExecutor:
         if not cancel:
             pool.shutdown(wait=True)
             return
+        procs = list((getattr(pool, "_processes", None) or {}).values())   # gone after shutdown
         pool.shutdown(wait=False, cancel_futures=True)
-        for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        for proc in procs:
             try:
                 proc.kill()
             except Exception:
                 pass
+        for proc in procs:
+            proc.join(timeout=5)
 
 
 def make_local_executor(workers: int | None) -> SerialExecutor | ProcessExecutor:

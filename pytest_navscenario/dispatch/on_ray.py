@@ -171,7 +171,8 @@ class RayExecutor:
         here = probe_node(None, None)["versions"]
         problems, warnings = [], []
         for n in self.nodes:
-            name = f"{n.get('NodeManagerHostname', '?')} ({n.get('NodeManagerAddress', '?')})"
+            name = (f"{n.get('NodeManagerHostname', '?')} ({n.get('NodeManagerAddress', '?')}, "
+                    f"node id {str(n['NodeID'])[:8]})")
             try:
                 info = self.ray.get(refs[n["NodeID"]], timeout=PROBE_TIMEOUT)
             except Exception as exc:
