@@ -99,7 +99,8 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     origin = "--nav-subject" if config.getoption("nav_subject") else "ini nav_subject"
     subject = resolve_subject(config, settings.subject_spec, origin)
     config.stash[STATE_KEY] = NavState(settings=settings, subject=subject, is_worker=worker)
-    if not worker and subject.origin != "built-in default":
+    # With --nav-ray the subject need only load on the nodes: parallel.py checks each of them.
+    if not worker and subject.origin != "built-in default" and settings.ray is None:
         try:
             subject.check()
         except SubjectLoadError as exc:
