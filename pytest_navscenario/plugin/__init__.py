@@ -177,6 +177,32 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) ->
     return report
 
 
+_PACKED = "$navscenario-json"
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_report_to_serializable(config: pytest.Config, report: Any) -> Any:
+    """xdist worker: send ``report.nav`` as one JSON string. execnet serialises nested dicts
+    element by element in Python (~0.18 ms per payload to write, 0.23 ms to read); one string
+    costs ~0.1 + 0.09 ms, on the workers and on the controller that all workers report to."""
+    data = yield
+    nav = data.get("nav") if isinstance(data, dict) else None
+    if isinstance(nav, dict):
+        import json
+        data["nav"] = {_PACKED: json.dumps(nav, separators=(",", ":"))}   # NaN/inf kept (allow_nan)
+    return data
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_report_from_serializable(config: pytest.Config, data: Any) -> Any:
+    """Controller: unpack what pytest_report_to_serializable packed (before the report is built)."""
+    nav = data.get("nav") if isinstance(data, dict) else None
+    if isinstance(nav, dict) and _PACKED in nav:
+        import json
+        data["nav"] = json.loads(nav[_PACKED])
+    return (yield)
+
+
 @pytest.hookimpl(trylast=True)
 def pytest_runtest_logreport(report: pytest.TestReport) -> None:
     """Once every plugin has seen an episode (and an xdist worker has sent it), keep only its
