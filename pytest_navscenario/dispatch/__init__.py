@@ -15,7 +15,7 @@ import importlib
 from typing import Any
 
 _EXPORTS = {"EpisodeJob": "jobs", "run_job": "jobs", "Pending": "jobs",
-            "SerialExecutor": "local", "ProcessExecutor": "local", "make_local_executor": "local",
+            "SubjectFactory": "jobs", "SerialExecutor": "local", "ProcessExecutor": "local", "make_local_executor": "local",
             "RayExecutor": "on_ray", "RaySetupError": "on_ray"}
 __all__ = sorted(_EXPORTS)
 

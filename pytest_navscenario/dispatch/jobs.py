@@ -1,5 +1,6 @@
-"""What crosses to a worker and back: an ``EpisodeJob`` out, a compact ``EpisodeResult`` (or the
-episode's exception) back, and ``Pending``, the handle every executor returns per job.
+"""What crosses to a worker and back: a job out (an ``EpisodeJob``, or any picklable object with
+``run()`` and ``restore(outcome)``, such as the search's candidate jobs), a compact result (or the
+job's exception) back, and ``Pending``, the handle every executor returns per job.
 
 Compact: the worker drops the scenario from the result (the caller already holds it and puts it
 back) and, unless asked for, the trajectory (the bulk: ~60-400 KiB per episode, against ~2 KiB
@@ -40,6 +41,18 @@ class EpisodeJob:
     def __post_init__(self) -> None:
         if self.keep_trajectory not in KEEP_CHOICES:
             raise ValueError(f"keep_trajectory must be one of {KEEP_CHOICES}, got {self.keep_trajectory!r}")
+
+    def run(self) -> EpisodeResult:
+        """Worker side: the episode, compacted for the way back."""
+        from ..harness.runner import run_scenario
+
+        result = run_scenario(self.scenario, _subject_for(self), seed=self.seed, tick_limit=self.tick_limit)
+        return compact(result, self.keep_trajectory)
+
+    def restore(self, result: EpisodeResult) -> EpisodeResult:
+        """Caller side: put the scenario back."""
+        result.scenario = self.scenario
+        return result
 
 
 @dataclass
@@ -85,20 +98,42 @@ def worker_name() -> str:
 
 
 # -- worker side ----------------------------------------------------------------------------------
-_EXEC_FACTORIES: dict[tuple[str, str], Callable[[], Any]] = {}
+_FACTORIES: dict[tuple[str, str | None], Callable[[], Any]] = {}
+
+
+def _factory(spec: str, cwd: str | None) -> Callable[[], Any]:
+    """The planner factory of a spec, loaded once per process; an ``exec:`` program is resolved
+    in and started in ``cwd`` (so it is started once per process and reused)."""
+    key = (spec.strip(), cwd)
+    factory = _FACTORIES.get(key)
+    if factory is None:
+        if key[0].startswith("exec:"):
+            from ..subjects.external import exec_factory
+            factory = exec_factory(key[0][len("exec:"):].strip(), cwd=cwd)
+        else:
+            from ..subjects.loading import load_subject
+            factory = load_subject(key[0])
+        _FACTORIES[key] = factory
+    return factory
+
+
+@dataclass(frozen=True)
+class SubjectFactory:
+    """A picklable planner factory for a subject spec: whichever process calls it loads the spec
+    (once) and makes a fresh planner. What a worker gets instead of a loaded class or closure."""
+    spec: str
+    cwd: str | None = None
+
+    def __call__(self) -> Any:
+        return _factory(self.spec, self.cwd)()
 
 
 def _subject_for(job: EpisodeJob) -> Any:
-    """What run_scenario gets: the spec itself, except ``exec:`` with a ``cwd``, which becomes a
-    factory bound to that folder (one per process, so the program is started once and reused)."""
+    """What run_scenario gets: the spec itself (so results name it as written), except
+    ``exec:`` with a ``cwd``, which becomes a factory bound to that folder."""
     spec = job.subject
     if isinstance(spec, str) and spec.strip().startswith("exec:") and job.cwd:
-        key = (spec.strip(), job.cwd)
-        factory = _EXEC_FACTORIES.get(key)
-        if factory is None:
-            from ..subjects.external import exec_factory
-            factory = _EXEC_FACTORIES[key] = exec_factory(key[0][len("exec:"):].strip(), cwd=job.cwd)
-        return factory
+        return _factory(spec, job.cwd)
     return spec
 
 
@@ -110,41 +145,33 @@ def compact(result: EpisodeResult, keep: str) -> EpisodeResult:
     return result
 
 
-def run_job(job: EpisodeJob) -> EpisodeResult | EpisodeError:
-    """Run one job here and return its compact result, or its exception as an EpisodeError
-    (never raises, so a pool or Ray never mistakes an episode's error for a lost worker)."""
-    from ..harness.runner import run_scenario
-
+def run_job(job: Any) -> Any:
+    """Run one job here (``job.run()``) and return its result, or its exception as an
+    EpisodeError (never raises, so a pool or Ray never mistakes an episode's error for a lost
+    worker)."""
     try:
-        result = run_scenario(job.scenario, _subject_for(job), seed=job.seed, tick_limit=job.tick_limit)
+        return job.run()
     except Exception as exc:
         return EpisodeError.capture(exc)
-    return compact(result, job.keep_trajectory)
 
 
-def run_jobs(jobs: list[EpisodeJob]) -> list[EpisodeResult | EpisodeError]:
-    """Several jobs in one call (one task or one pool call for a chunk of short episodes)."""
-    return [run_job(job) for job in jobs]
-
-
-def restore(job: EpisodeJob, outcome: EpisodeResult | EpisodeError) -> EpisodeResult:
-    """Caller side: raise the episode's exception, or put the job's scenario back."""
+def restore(job: Any, outcome: Any) -> Any:
+    """Caller side: raise the job's exception, or let the job complete its result."""
     if isinstance(outcome, EpisodeError):
         raise outcome.exception()
-    outcome.scenario = job.scenario
-    return outcome
+    return job.restore(outcome)
 
 
 class Pending:
-    """The handle of one submitted job. ``result()`` waits for it and returns the EpisodeResult
-    or raises the exception the episode raised."""
+    """The handle of one submitted job. ``result()`` waits for it and returns the result (an
+    EpisodeResult for an EpisodeJob) or raises the exception the job raised."""
 
-    def __init__(self, job: EpisodeJob, wait: Callable[[], EpisodeResult | EpisodeError]):
+    def __init__(self, job: Any, wait: Callable[[], Any]):
         self.job = job
         self._wait = wait
-        self._outcome: EpisodeResult | EpisodeError | None = None
+        self._outcome: Any = None
 
-    def result(self) -> EpisodeResult:
+    def result(self) -> Any:
         if self._outcome is None:
             self._outcome = self._wait()
             self._wait = None  # type: ignore[assignment]  # drop the future / object ref

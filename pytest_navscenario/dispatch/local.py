@@ -56,10 +56,10 @@ class SerialExecutor:
     workers = 1
     description = "this process"
 
-    def submit(self, jobs: Sequence[EpisodeJob]) -> list[Pending]:
+    def submit(self, jobs: Sequence[Any]) -> list[Pending]:
         return [Pending(job, lambda job=job: run_job(job)) for job in jobs]
 
-    def map(self, jobs: Sequence[EpisodeJob]) -> list[EpisodeResult]:
+    def map(self, jobs: Sequence[Any]) -> list[Any]:
         return [p.result() for p in self.submit(jobs)]
 
     def close(self, cancel: bool = False) -> None:
@@ -134,7 +134,7 @@ class ProcessExecutor:
                 f"{exc}); make the pytest_navscenario_make_subject hook return a module-level class "
                 f"or function, or a 'package.module:Attribute' string") from None
 
-    def submit(self, jobs: Sequence[EpisodeJob]) -> list[Pending]:
+    def submit(self, jobs: Sequence[Any]) -> list[Pending]:
         pool = self._ensure_pool()
         pendings = []
         for job in jobs:
@@ -144,7 +144,7 @@ class ProcessExecutor:
             pendings.append(Pending(job, lambda slot=slot: self._wait(slot)))
         return pendings
 
-    def map(self, jobs: Sequence[EpisodeJob]) -> list[EpisodeResult]:
+    def map(self, jobs: Sequence[Any]) -> list[Any]:
         return [p.result() for p in self.submit(jobs)]
 
     def _wait(self, slot: _Slot) -> Any:

@@ -194,7 +194,7 @@ class RayExecutor:
         return warnings
 
     # -- jobs -------------------------------------------------------------------------------------
-    def submit(self, jobs: Sequence[EpisodeJob]) -> list[Pending]:
+    def submit(self, jobs: Sequence[Any]) -> list[Pending]:
         pendings = []
         for job in jobs:
             key, self._next = self._next, self._next + 1
@@ -202,7 +202,7 @@ class RayExecutor:
             pendings.append(Pending(job, lambda key=key: self._wait(key)))
         return pendings
 
-    def map(self, jobs: Sequence[EpisodeJob]) -> list[EpisodeResult]:
+    def map(self, jobs: Sequence[Any]) -> list[Any]:
         return [p.result() for p in self.submit(jobs)]
 
     def _wait(self, key: int) -> Any:
