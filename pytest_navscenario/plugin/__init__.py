@@ -16,7 +16,6 @@ gathers the records and writes every file, so workers never race on one.
 """
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -225,8 +224,12 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
     try:
         write_results(state.settings.results, annotate_repeats(state.records))
     except OSError as exc:
-        sys.stderr.write(f"navscenario: cannot write the results file {state.settings.results}: {exc}\n")
-        session.exitstatus = pytest.ExitCode.INTERNAL_ERROR
+        # Said in the terminal summary, on a line of its own. The run fails: a CI job whose
+        # results are lost must not pass (the gate that reads them later would see nothing).
+        state.results_error = (f"navscenario: cannot write the results file {state.settings.results}: "
+                               f"{exc}; no results were written")
+        if session.exitstatus == pytest.ExitCode.OK:   # a failing run's own status stays (1, 2, ...)
+            session.exitstatus = pytest.ExitCode.INTERNAL_ERROR
 
 
 def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pytest.Config) -> None:
@@ -245,7 +248,9 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
         tr.write_sep("=", "navscenario flaky scenarios")
         for line in format_flaky(state.records).splitlines():
             tr.write_line(line)
-    if state.settings.results is not None and not config.option.collectonly:
+    if state.results_error is not None:
+        tr.write_line(state.results_error, red=True, bold=True)
+    elif state.settings.results is not None and not config.option.collectonly:
         tr.write_line(f"navscenario: wrote {len(state.records)} record(s) to {state.settings.results}")
     if state.failed_artifacts:
         tr.write_line(f"navscenario: artifacts of {len(state.failed_artifacts)} failing item(s) in "
