@@ -29,6 +29,8 @@ from typing import Any
 
 import pytest
 
+from .options import ini_type, ini_value
+
 PLOT_CHOICES = ("failed", "all", "none")
 MODE_CHOICES = ("fail", "warn")
 DEFAULT_PLOTS_DIR = "nav-plots"
@@ -90,12 +92,11 @@ REPORT_KEY = pytest.StashKey[ReportState]()
 
 def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("navscenario", "navigation scenarios (pytest-navscenario)")
-    metavars = {"nav_baseline": "PATH", "nav_baseline_mode": "{" + ",".join(MODE_CHOICES) + "}",
-                "nav_baseline_subject": "SPEC", "nav_plots": "{" + ",".join(PLOT_CHOICES) + "}",
-                "nav_plots_max": "N", "nav_plots_dir": "DIR", "nav_html": "PATH"}
     for opt, ini, default, text in OPTIONS:
-        group.addoption(opt, dest=ini, default=None, metavar=metavars[ini], help=f"{text} [ini: {ini}]")
-        parser.addini(ini, text, default=default)
+        group.addoption(opt, dest=ini, default=None, metavar=ini.split("_", 1)[1].upper(),
+                        help=f"{text} [ini: {ini}]")
+        kind = ini_type("int") if ini == "nav_plots_max" else "string"   # its real type (issue 15)
+        parser.addini(ini, text, type=kind, default=default)
 
 
 def _value(config: pytest.Config, name: str) -> tuple[str, str, Path]:
@@ -103,7 +104,7 @@ def _value(config: pytest.Config, name: str) -> tuple[str, str, Path]:
     cli = config.getoption(name)
     if cli is not None:
         return str(cli).strip(), f"--{name.replace('_', '-')}", Path(config.invocation_params.dir)
-    return str(config.getini(name)).strip(), f"ini option {name}", Path(config.rootpath)
+    return str(ini_value(config, name)).strip(), f"ini option {name}", Path(config.rootpath)
 
 
 def _path(raw: str, base: Path) -> Path:
