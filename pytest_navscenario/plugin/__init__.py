@@ -130,6 +130,12 @@ def pytest_report_header(config: pytest.Config) -> list[str]:
     return lines
 
 
+def pytest_ignore_collect(collection_path: Path, config: pytest.Config) -> bool | None:
+    """The plugin's own output folders (artifacts, plots, bags) are never collected."""
+    from .collect import ignore_output_folder
+    return ignore_output_folder(collection_path, config)
+
+
 def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> Any:
     from .collect import collect_file
     return collect_file(file_path, parent)
