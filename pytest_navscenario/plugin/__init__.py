@@ -47,10 +47,20 @@ class XdistHooks:
         if state is not None:
             node.workerinput[WORKER_SEED_KEY] = state.settings.seed
 
+    def pytest_testnodedown(self, node: Any, error: Any) -> None:
+        """Controller: the workers collected; take over their list of skipped YAML files."""
+        from .skipped import WORKER_KEY
+        from .state import STATE_KEY
+        state = node.config.stash.get(STATE_KEY, None)
+        sent = getattr(node, "workeroutput", {}).get(WORKER_KEY)
+        if state is not None and sent:
+            state.not_scenarios.extend((p, r) for p, r in sent["files"])
+            state.scenario_folders.update(sent["folders"])
+
 
 def pytest_configure(config: pytest.Config) -> None:
     config.pluginmanager.register(Controller(config), "navscenario-controller")
-    if config.pluginmanager.hasplugin("xdist"):
+    if config.pluginmanager.hasplugin("xdist") or config.pluginmanager.hasplugin("xdist.plugin"):  # -p xdist.plugin
         config.pluginmanager.register(XdistHooks(), "navscenario-xdist")
     _stop_gracefully_on_sigterm(config)
 
@@ -221,6 +231,10 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
     from .state import STATE_KEY
     config = session.config
     state = config.stash.get(STATE_KEY, None)
+    if state is not None and state.is_worker and (state.not_scenarios or state.scenario_folders):
+        from .skipped import WORKER_KEY
+        config.workeroutput[WORKER_KEY] = {  # type: ignore[attr-defined]
+            "files": [list(f) for f in state.not_scenarios], "folders": sorted(state.scenario_folders)}
     if state is None or state.is_worker or state.settings.results is None:
         return
     if config.option.collectonly:  # nothing ran: keep an existing results file
@@ -239,9 +253,15 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
 
 
 def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pytest.Config) -> None:
+    from .collect import rel_path
     from .state import STATE_KEY
     state = config.stash.get(STATE_KEY, None)
-    if state is None or state.is_worker or not state.records and state.settings.results is None:
+    if state is None or state.is_worker:
+        return
+    from .skipped import summary_lines
+    for line in summary_lines(state, lambda p: rel_path(config, p), config.getoption("verbose") > 0):
+        terminalreporter.write_line(line)
+    if not state.records and state.settings.results is None:
         return
     tr = terminalreporter
     if state.settings.summary and state.records:

@@ -42,17 +42,32 @@ def looks_like_scenario_text(text: str | bytes) -> bool:
 
 def collect_file(file_path: Path, parent: pytest.Collector) -> "ScenarioFile | None":
     """The ``pytest_collect_file`` implementation (called for every file pytest visits)."""
-    globs = get_state(parent.config).settings.globs
+    state = get_state(parent.config)
     name = file_path.name
-    if not any(fnmatch.fnmatch(name, g) for g in globs):
+    if not any(fnmatch.fnmatch(name, g) for g in state.settings.globs):
         return None
+    if _named_on_command_line(parent.config, file_path):   # the loader says what is wrong with it
+        state.scenario_folders.add(str(file_path.parent))
+        return ScenarioFile.from_parent(parent, path=file_path)
     try:
         data = file_path.read_bytes()
     except OSError:
         return None  # unreadable: pytest cannot use it either; nothing suggests it is a scenario
     if not looks_like_scenario_text(data):
+        from .skipped import add_skipped, why_not_a_scenario
+        reason = why_not_a_scenario(data)
+        if reason is not None:
+            add_skipped(state, file_path, reason)
         return None
+    state.scenario_folders.add(str(file_path.parent))
     return ScenarioFile.from_parent(parent, path=file_path)
+
+
+def _named_on_command_line(config: pytest.Config, path: Path) -> bool:
+    """True if ``path`` is a file given on the command line (``pytest s/x.yaml``, or ``::name``)."""
+    base = Path(config.invocation_params.dir)
+    return any(Path(os.path.abspath(base / arg.split("::")[0])) == Path(os.path.abspath(path))
+               for arg in config.args)
 
 
 def output_folders(config: pytest.Config) -> list[Path]:

@@ -7,6 +7,8 @@ import shutil
 
 import pytest
 
+import pytest_navscenario.plugin.payload  # noqa: F401  (numpy: in-process runs cannot import it afresh)
+
 from pytest_navscenario.scenario.loader import load_scenario  # noqa: F401  (see test_ini_types.py)
 
 PLUGIN = ["-p", "pytest_navscenario.plugin", "--nav-plots=none"]
