@@ -68,21 +68,14 @@ def pytest_configure(config: pytest.Config) -> None:
 def _stop_gracefully_on_sigterm(config: pytest.Config) -> None:
     """SIGTERM (a CI job cancelled, ``kill``) ends the run like Ctrl-C: pytest's own interruption
     path, so the results file, frozen failures and the summary of what finished are still written.
-    Only in the controller's main thread, and only when nobody else handles SIGTERM."""
-    import signal
-    import threading
+    SIGTERM only in the controller, and only when nobody else handles it. Both Ctrl-C and SIGTERM
+    raise core.interrupts.UserInterrupt, so that a planner's own ``raise KeyboardInterrupt`` or
+    ``sys.exit()`` can be told apart from the user's and ends only its episode (issue 15)."""
+    from ..core.interrupts import install
 
-    if _is_worker(config) or threading.current_thread() is not threading.main_thread():
-        return
-    if signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
-        return
-
-    def on_sigterm(signum: int, frame: Any) -> None:
-        signal.signal(signal.SIGTERM, signal.SIG_DFL)  # a second SIGTERM kills at once
-        raise KeyboardInterrupt("SIGTERM")
-
-    signal.signal(signal.SIGTERM, on_sigterm)
-    config.add_cleanup(lambda: signal.signal(signal.SIGTERM, signal.SIG_DFL))
+    restore = install(sigterm=not _is_worker(config))
+    if restore is not None:
+        config.add_cleanup(restore)
 
 
 def _is_worker(config: pytest.Config) -> bool:
