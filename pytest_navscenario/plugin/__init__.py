@@ -101,8 +101,9 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     subject = resolve_subject(config, settings.subject_spec, origin)
     config.stash[STATE_KEY] = NavState(settings=settings, subject=subject, is_worker=worker)
     if not worker and subject.origin != "built-in default":
+        distributed = bool(getattr(config.option, "numprocesses", None))   # xdist workers run episodes
         try:
-            subject.check()
+            subject.check(keep_running=not distributed)
         except SubjectLoadError as exc:
             raise pytest.UsageError(f"navscenario: {exc}") from None
     if not worker and settings.results is not None:

@@ -221,7 +221,8 @@ class ScenarioItem(pytest.Item):
         state = get_state(self.config)
         result = run_scenario(self.scenario, state.subject.runner_arg,
                               seed=repeat_seed(state.settings.seed, self.repeat),
-                              tick_limit=state.settings.tick_limit)
+                              tick_limit=state.settings.tick_limit,
+                              reset_timeout=state.settings.reset_timeout)
         self.nav_result = result
         m = result.metrics
         self.user_properties.extend([

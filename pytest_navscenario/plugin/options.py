@@ -18,6 +18,7 @@ DEFAULT_GLOB = ["*.yaml", "*.yml"]
 DEFAULT_SCENARIO_PATHS = ["scenarios"]
 DEFAULT_ARTIFACTS = "nav-artifacts"
 DEFAULT_TICK_LIMIT = 1.0
+DEFAULT_RESET_TIMEOUT = 10.0   # = subjects.external.RESET_TIMEOUT (not imported: plugin load stays light)
 
 # (option, ini name, help); used for --help, the ini registration and the README table.
 OPTIONS = (
@@ -38,6 +39,10 @@ OPTIONS = (
     ("--nav-tick-limit", "nav_tick_limit",
      "seconds one planner tick (act) may take; a slower or hanging planner ends the episode as a "
      "subject-error and the next item runs. Default 1; 0 or none: no limit."),
+    ("--nav-reset-timeout", "nav_reset_timeout",
+     "seconds an external (exec:) planner may take to answer reset, its start-up included; after "
+     "one reset timed out, the later items of that planner fail at once with the same message. "
+     "Default 10."),
     ("--nav-repeat", "nav_repeat",
      "run each scenario N times with different noise seeds (repeat 0 keeps the run's seed) and "
      "report the scenarios whose outcomes differ (flaky) with per-outcome counts. Default 1."),
@@ -70,7 +75,8 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("navscenario", "navigation scenarios (pytest-navscenario)")
     helps = {ini: text for _, ini, text in OPTIONS}
     metavars = {"nav_subject": "SPEC", "nav_seed": "N", "nav_results": "PATH", "nav_artifacts": "DIR",
-                "nav_summary": "yes|no", "nav_tick_limit": "SECONDS", "nav_repeat": "N"}
+                "nav_summary": "yes|no", "nav_tick_limit": "SECONDS", "nav_repeat": "N",
+                "nav_reset_timeout": "SECONDS"}
     for opt, ini, text in OPTIONS:
         group.addoption(opt, dest=ini, default=None, metavar=metavars[ini], help=text + f" [ini: {ini}]")
     parser.addini("nav_subject", helps["nav_subject"], default="")
@@ -81,6 +87,8 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addini("nav_tick_limit", helps["nav_tick_limit"], type=ini_type("float"),
                   default=DEFAULT_TICK_LIMIT)
     parser.addini("nav_repeat", helps["nav_repeat"], type=ini_type("int"), default=1)
+    parser.addini("nav_reset_timeout", helps["nav_reset_timeout"], type=ini_type("float"),
+                  default=DEFAULT_RESET_TIMEOUT)
     parser.addini("nav_scenario_glob",
                   "file name patterns of scenario files (space separated); files matching them are "
                   "collected when they are a YAML mapping with 'version' and 'mission' keys "
@@ -102,11 +110,13 @@ class Settings:
     repeat: int                       # episodes per scenario (>= 1)
     globs: tuple[str, ...]
     scenario_paths: tuple[Path, ...]
+    reset_timeout: float = DEFAULT_RESET_TIMEOUT   # s an exec: planner may take to answer reset
 
 
 _EXPECTED = {"nav_seed": "a whole number >= 0", "nav_summary": "yes or no (true or false)",
              "nav_tick_limit": "seconds >= 0 (0: no limit)",
-             "nav_repeat": "a whole number of runs per scenario from 1 to 10000"}
+             "nav_repeat": "a whole number of runs per scenario from 1 to 10000",
+             "nav_reset_timeout": "seconds > 0"}
 
 
 def _value(config: pytest.Config, name: str) -> tuple[str, str, Path]:
@@ -189,6 +199,14 @@ def read_settings(config: pytest.Config) -> Settings:
     if not 1 <= repeat <= 10_000:
         raise pytest.UsageError(f"{where}: expected a whole number of runs per scenario from 1 to "
                                 f"10000, got {raw!r} (e.g. --nav-repeat=10)")
+    raw, where, _ = _value(config, "nav_reset_timeout")
+    try:
+        reset_timeout = float(raw.strip())
+    except ValueError:
+        reset_timeout = -1.0
+    if not 0 < reset_timeout < float("inf"):
+        raise pytest.UsageError(f"{where}: expected seconds > 0 for an external planner to answer "
+                                f"reset, got {raw!r} (e.g. --nav-reset-timeout=30)")
     return Settings(subject_spec=subject, seed=seed, results=results, artifacts=artifacts,
                     summary=summary, tick_limit=tick_limit, repeat=repeat, globs=globs,
-                    scenario_paths=paths)
+                    scenario_paths=paths, reset_timeout=reset_timeout)
