@@ -215,6 +215,15 @@ class ScenarioItem(pytest.Item):
     def rel_path(self) -> str:
         return rel_path(self.config, self.path)
 
+    def setup(self) -> None:
+        """A scenario no planner can pass (or that passes without one) is an error of this item,
+        not a failure of the planner (issue 15): verdict/feasibility.py, ~free (paths are cached)."""
+        from ..verdict.feasibility import impassable_reason
+        reason = impassable_reason(self.scenario)
+        if reason is not None:
+            from ..core.errors import ImpassableScenarioError
+            raise ImpassableScenarioError(f"{self.rel_path}: {reason}")
+
     def runtest(self) -> None:
         from ..harness.runner import run_scenario
 
