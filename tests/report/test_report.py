@@ -49,6 +49,7 @@ import sys
 def pytest_unconfigure(config):
     if not hasattr(config, "workerinput"):
         print("MATPLOTLIB-IMPORTED:", "matplotlib" in sys.modules)
+        print("JINJA2-IMPORTED:", "jinja2" in sys.modules)
 '''
 
 OK = "version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 2, y: 0}, timeout: 10}\n"
@@ -122,6 +123,7 @@ def test_regression_gate_fails_the_session(runs):
     assert "reproduce: pytest scenarios/crash.yaml::crash --nav-subject=straight:Straight --nav-seed=0" in out
     assert "only in A (" in out and "scenarios/gone.yaml::gone" in out
     assert "MATPLOTLIB-IMPORTED: True" in out
+    assert "JINJA2-IMPORTED: True" in out
     assert "1 side-by-side plot(s) of regressions (baseline | this run)" in out
     # the "baseline" re-run is the same straight planner: it crashes too, and the run says so
     assert ("scenarios/crash.yaml::crash: the baseline's subject 'straight:Straight' re-run gave collision, "
@@ -142,6 +144,7 @@ def test_default_passing_run_does_not_import_matplotlib(runs):
     code, out, root = runs["pass"]
     assert code == 0, out
     assert "MATPLOTLIB-IMPORTED: False" in out
+    assert "JINJA2-IMPORTED: False" in out           # the templates are loaded only to write a report
     assert not list(root.rglob("*.png"))
 
 
