@@ -5,7 +5,8 @@ Options (each with an ini twin)::
     --nav-baseline=A.jsonl        compare this run with a results file of an earlier run; the
                                   comparison goes into the terminal summary
     --nav-baseline-mode=fail|warn fail (default): the session fails when this run broke a scenario
-                                  the baseline passed; warn: only report it
+                                  the baseline passed, or when none of its scenario runs could be
+                                  compared with the baseline; warn: only report it
     --nav-baseline-subject=SPEC   re-run the baseline's subject on each regression for a side-by-side
                                   plot (default: the subject its records name)
     --nav-plots=failed|all|none   trajectory plots of failing items (default), of every item, or none
@@ -39,7 +40,8 @@ OPTIONS = (
      "the comparison is added to the terminal summary"),
     ("--nav-baseline-mode", "nav_baseline_mode", "fail",
      "what a regression against --nav-baseline does: fail (default: the session fails when a scenario "
-     "the baseline passed fails now) or warn (report only)"),
+     "the baseline passed fails now, or when no scenario run could be compared with the baseline) or "
+     "warn (report only)"),
     ("--nav-baseline-subject", "nav_baseline_subject", "",
      "the baseline's subject spec, to re-run it for side-by-side plots of regressions (default: the "
      "subject named in the baseline's records; built-in names work as they are)"),
@@ -83,6 +85,7 @@ class ReportState:
     comparison: Any = None
     html_written: Path | None = None
     gate_failed: bool = False
+    nothing_compared: str | None = None       # why no scenario run was compared with the baseline
 
 
 REPORT_KEY = pytest.StashKey[ReportState]()
@@ -326,7 +329,9 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
         if seed is not None:
             state.comparison.extra_args = f"--nav-seed={seed}"
         state.comparison.command_prefix = _cd_rootdir(config)
-        if state.comparison.has_regressions and s.mode == "fail":
+        if not config.option.collectonly:
+            state.nothing_compared = _nothing_compared(state.comparison)
+        if (state.comparison.has_regressions or state.nothing_compared) and s.mode == "fail":
             state.gate_failed = True
             if session.exitstatus == pytest.ExitCode.OK:
                 session.exitstatus = pytest.ExitCode.TESTS_FAILED
@@ -335,6 +340,24 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
             _write_html(config, state)
         except Exception as exc:
             state.plot_errors.append(f"HTML report {s.html}: {type(exc).__name__}: {exc}")
+
+
+def _nothing_compared(cmp: Any) -> str | None:
+    """Why no scenario run of this session could be compared with the baseline (None when one
+    was): a run of another suite, or one that missed the baseline's scenarios, must not pass the
+    regression gate as "no regression"."""
+    if cmp.pairs:
+        return None
+    shared = len(cmp.not_comparable)
+    n_base = len(cmp.only_a) + shared
+    if not n_base:
+        return f"the baseline {cmp.a_name} has no records"
+    if shared:
+        why = (f"the {shared} scenario run(s) this run shares with it changed since it was written "
+               f"(another scenario_hash)")
+    else:
+        why = f"this run ran none of its {n_base} scenario run(s)"
+    return why + (f" ({len(cmp.only_b)} run now, not in it)" if cmp.only_b else "")
 
 
 def _write_html(config: pytest.Config, state: ReportState) -> None:
@@ -375,6 +398,13 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
         for line in text.splitlines():
             tr.write_line(line)
         n = len(state.comparison.broke)
+        why = state.nothing_compared
+        if why and state.settings.mode == "fail":
+            tr.write_line(f"navscenario: FAILED the regression gate: nothing was compared with the baseline: "
+                          f"{why} (--nav-baseline-mode=warn to only report this)", red=True, bold=True)
+        elif why:
+            tr.write_line(f"navscenario: warning: nothing was compared with the baseline: {why} "
+                          f"(--nav-baseline-mode=warn)", yellow=True, bold=True)
         if n and state.settings.mode == "fail":
             tr.write_line(f"navscenario: FAILED the regression gate: {n} scenario(s) the baseline passed "
                           f"fail now (--nav-baseline-mode=warn to only report this)", red=True, bold=True)

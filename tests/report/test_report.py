@@ -228,3 +228,39 @@ def test_gate_exit_status_with_pytester(pytester: pytest.Pytester, monkeypatch, 
     assert result.ret == status
     result.assert_outcomes(passed=1, xfailed=1)
     result.stdout.fnmatch_lines(["*B broke (regressions: A passed, B failed) (1):*"])
+
+
+@pytest.mark.parametrize("mode, status", [("fail", pytest.ExitCode.TESTS_FAILED), ("warn", pytest.ExitCode.OK)])
+def test_gate_fails_when_the_run_ran_none_of_the_baselines_scenarios(pytester: pytest.Pytester, monkeypatch,
+                                                                     mode, status):
+    """--nav-baseline whose scenarios this run did not run (another suite, a selection that
+    missed them): nothing was compared, which is no evidence of no regression."""
+    monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
+    pytester.syspathinsert()
+    pytester.makepyfile(straight=PLANNER)
+    pytester.mkdir("scenarios")
+    (pytester.path / "scenarios" / "ok.yaml").write_text(OK)
+    write_results(pytester.path / "base.jsonl", [record(pytester.path, "scenarios/gone.yaml", "success"),
+                                                 record(pytester.path, "scenarios/other.yaml", "success")])
+    result = pytester.runpytest_inprocess("-p", "pytest_navscenario.plugin", "scenarios", SUBJECT,
+                                          "--nav-baseline=base.jsonl", f"--nav-baseline-mode={mode}",
+                                          "--nav-plots=none")
+    assert result.ret == status
+    result.assert_outcomes(passed=1)
+    verdict = "FAILED the regression gate" if mode == "fail" else "warning"
+    result.stdout.fnmatch_lines([f"navscenario: {verdict}: nothing was compared with the baseline: this run "
+                                 f"ran none of its 2 scenario run(s) (1 run now, not in it)*"])
+
+
+def test_gate_fails_on_an_empty_baseline(pytester: pytest.Pytester, monkeypatch):
+    monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
+    pytester.syspathinsert()
+    pytester.makepyfile(straight=PLANNER)
+    pytester.mkdir("scenarios")
+    (pytester.path / "scenarios" / "ok.yaml").write_text(OK)
+    (pytester.path / "base.jsonl").write_text("")
+    result = pytester.runpytest_inprocess("-p", "pytest_navscenario.plugin", "scenarios", SUBJECT,
+                                          "--nav-baseline=base.jsonl", "--nav-plots=none")
+    assert result.ret == pytest.ExitCode.TESTS_FAILED
+    result.stdout.fnmatch_lines(["navscenario: FAILED the regression gate: nothing was compared with the "
+                                 "baseline: the baseline * has no records*"])
