@@ -58,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
                                                  if u.record is not None]
         entries = [Entry(record=r, reproduce=cmp.record_command(r)) for r in b_records]
         bars = png_bytes(bars_figure(cmp)) if cmp.pairs else None
-        write_html(args.html, entries, template="compare_report.html.j2", title=f"navscenario compare: {cmp.b_subject} vs {cmp.a_subject}",
+        write_html(args.html, entries, template="compare_report.html.j2", title=f"navscenario compare: {cmp.a_subject} → {cmp.b_subject}",
                    comparison=cmp, bars_png=bars, info=[f"A: {args.a}", f"B: {args.b}"])
         print(f"HTML report written to {args.html}")
     if args.side_by_side:

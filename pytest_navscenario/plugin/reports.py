@@ -76,6 +76,7 @@ class ReportState:
     records: list[dict[str, Any]] = field(default_factory=list)
     plots: dict[tuple[str, int], Path | bytes] = field(default_factory=dict)  # (nodeid, repeat) -> file or PNG
     views: dict[tuple[str, int], dict[str, Any]] = field(default_factory=dict)  # for the HTML's viewer
+    xfailed: dict[tuple[str, int], str] = field(default_factory=dict)  # expected failures: xfail reason
     side_by_side: dict[tuple[str, int], Path | bytes] = field(default_factory=dict)  # regressions: A | B
     baseline_index: dict[tuple[str, int], dict[str, Any]] = field(default_factory=dict)
     bad_baseline_subjects: set[str] = field(default_factory=set)
@@ -220,6 +221,8 @@ def pytest_navscenario_episode_report(config: pytest.Config, report: pytest.Test
     rec = payload["record"]
     state.records.append(rec)
     failed = rec["outcome"] != "success"
+    if report.skipped and getattr(report, "wasxfail", None) is not None:  # xfailed: an expected failure
+        state.xfailed[(rec["nodeid"], int(rec.get("repeat") or 0))] = str(report.wasxfail)
     make, to_file = _wants_plot(state.settings, failed)
     if not make:  # (without a trajectory in the payload the plot still shows layout and markers)
         return
@@ -373,7 +376,8 @@ def _write_html(config: pytest.Config, state: ReportState) -> None:
         side_png = side.read_bytes() if isinstance(side, Path) and side.is_file() else (
             side if isinstance(side, bytes) else None)
         entries.append(Entry(record=rec, plot_png=png, reproduce=_reproduce(config, rec),
-                             view=state.views.get(key), compare_png=side_png))
+                             view=state.views.get(key), compare_png=side_png,
+                             xfail_reason=state.xfailed.get(key)))
     bars = None
     if state.comparison is not None and state.comparison.pairs:
         from ..report.plots import bars_figure, png_bytes

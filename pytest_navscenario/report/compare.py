@@ -365,7 +365,7 @@ def to_junit_xml(cmp: Comparison) -> str:
         tc = TestCase(name=u.label, classname=f"navscenario.compare.{u.family or 'default'}")
         tc.add_skipped_info(message=u.reason)
         cases.append(tc)
-    suite = TestSuite(f"navscenario compare: {cmp.b_subject} vs {cmp.a_subject}", cases)
+    suite = TestSuite(f"navscenario compare: {cmp.a_subject} -> {cmp.b_subject}", cases)
     return to_xml_report_string([suite])
 
 

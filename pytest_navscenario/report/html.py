@@ -42,10 +42,17 @@ class Entry:
     reproduce: str = ""
     view: dict[str, Any] | None = None   # view_data(result): the interactive time-slider view
     compare_png: bytes | None = None     # a regression: the scenario under the baseline | this run
+    xfail_reason: str | None = None      # marked xfail and failed as expected (pytest's wasxfail)
 
     @property
     def failed(self) -> bool:
+        """The outcome is not success (expected or not)."""
         return self.record["outcome"] != "success"
+
+    @property
+    def expected_failure(self) -> bool:
+        """A failure pytest counted as xfailed: shown apart, not counted among the failures."""
+        return self.failed and self.xfail_reason is not None
 
     @property
     def anchor(self) -> str:
@@ -178,13 +185,16 @@ def build_html(entries: Sequence[Entry], *, title: str = "navscenario report",
     (``run_report.html.j2``, or ``compare_report.html.j2`` for ``navscenario compare --html``)."""
     records = [e.record for e in entries]
     counts = Counter(r["outcome"] for r in records)
+    expected = [e for e in entries if e.expected_failure]
+    overview = ", ".join(f"{counts[o]} {o}" for o in OUTCOMES if counts[o]) or "no scenario ran"
+    if expected:
+        overview += f" ({len(expected)} expected to fail: xfail)"
     return _environment().get_template(template).render(
         title=title, info=list(info), records=records, entries=list(entries),
-        stamp=_dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
-        overview=", ".join(f"{counts[o]} {o}" for o in OUTCOMES if counts[o]) or "no scenario ran",
+        stamp=_dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"), overview=overview,
         summary=_summary(records), cmp=comparison, comparison=_comparison(comparison), bars_png=bars_png,
-        metrics=METRICS, failures=[e for e in entries if e.failed],
-        passing=[e for e in entries if not e.failed and e.plot_png])
+        metrics=METRICS, failures=[e for e in entries if e.failed and not e.expected_failure],
+        expected=expected, passing=[e for e in entries if not e.failed and e.plot_png])
 
 
 def write_html(path: str | os.PathLike, entries: Sequence[Entry], **kwargs: Any) -> Path:

@@ -145,6 +145,8 @@ def test_junit_one_case_per_scenario_failing_on_regressions(files, tmp_path):
     skipped = [c.get("name") for c in cases if c.find("skipped") is not None]
     assert failed == ["scenarios/boxes/b1.yaml::b1"] and skipped == ["scenarios/boxes/extra.yaml::extra"]
     assert "--nav-subject=new" in ET.tostring(cases[0], encoding="unicode")
+    suite_el = ET.parse(out).getroot().find(".//testsuite")
+    assert suite_el.get("name") == "navscenario compare: dwa -> dwa, new"   # A -> B (B mixes two subjects)
 
 
 def test_side_by_side_reruns_regressions_with_both_subjects(tmp_path, capsys):
@@ -189,6 +191,8 @@ def test_html_comparison_report(files, tmp_path):
     assert 'id="comparison"' in page and "B broke (A passed, B failed) (1)" in page
     assert page.count("data:image/png;base64,") == 1       # the bar chart
     assert "pytest scenarios/boxes/b1.yaml::b1 --nav-subject=new" in page
+    # the comparison is A (baseline) -> B (candidate): the title says it in that order
+    assert "<title>navscenario compare: dwa → dwa, new</title>" in page and "new vs dwa" not in page
 
 
 def test_subject_errors_get_their_own_column():

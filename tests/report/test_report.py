@@ -170,6 +170,10 @@ def test_html_report_is_self_contained_with_one_entry_per_failure(runs):
     assert "HTML report written to" in out
     assert page.count('<section class="failure"') == 1
     assert 'data-outcome="collision"' in page and 'data-family="scenarios"' in page
+    # crash is marked xfail: an expected failure, shown apart, not counted as a failure
+    assert "<h2>Failures (0)</h2>" in page and "<h2>Expected failures (xfail) (1)</h2>" in page
+    assert "expected to fail (xfail): known to crash" in page
+    assert "2 scenario run(s): 1 success, 1 collision (1 expected to fail: xfail)" in page
     assert page.count("data:image/png;base64,") == 3         # the failure's plot, side by side, bar chart
     assert "The same scenario under the baseline and now:" in page
     assert not re.search(r"(src|href)=\"(https?:)?//", page)  # nothing fetched from a server
@@ -264,3 +268,22 @@ def test_gate_fails_on_an_empty_baseline(pytester: pytest.Pytester, monkeypatch)
     assert result.ret == pytest.ExitCode.TESTS_FAILED
     result.stdout.fnmatch_lines(["navscenario: FAILED the regression gate: nothing was compared with the "
                                  "baseline: the baseline * has no records*"])
+
+
+def test_html_counts_expected_failures_apart(tmp_path):
+    from pytest_navscenario.report.html import Entry, write_html
+
+    def rec(nodeid, outcome):
+        return {"nodeid": nodeid, "family": "f", "outcome": outcome, "message": outcome, "metrics": {},
+                "repeat": 0, "seed": 1, "subject": "x"}
+    entries = [Entry(rec("a", "collision")), Entry(rec("b", "timeout"), xfail_reason="known <slow>"),
+               Entry(rec("c", "success"))]
+    page = write_html(tmp_path / "r.html", entries).read_text()
+    assert "<h2>Failures (1)</h2>" in page and "<h2>Expected failures (xfail) (1)</h2>" in page
+    assert "3 scenario run(s): 1 success, 1 timeout, 1 collision (1 expected to fail: xfail)" in page
+    failures, expected = page.split("<h2>Expected failures (xfail)")
+    assert 'data-nodeid="a"' in failures and 'data-nodeid="b"' not in failures
+    assert 'data-nodeid="b"' in expected and "expected to fail (xfail): known &lt;slow&gt;" in expected
+    assert '<a href="#f-' in page.split('id="runs"')[1].split("</table>")[0]   # both linked from the table
+    plain = write_html(tmp_path / "p.html", entries[:1]).read_text()
+    assert "Expected failures" not in plain and "expected to fail" not in plain
