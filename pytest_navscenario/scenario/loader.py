@@ -709,8 +709,9 @@ def _decode(data: bytes, source: str | None) -> str:
                             line=line, hint="is this a binary file? save the scenario as UTF-8 text") from None
 
 
-def load_scenario(path: str | os.PathLike) -> Scenario:
-    """Load a scenario file; its name defaults to the file stem, its family to the folder name."""
+def load_scenario(path: str | os.PathLike, *, family: str | None = None) -> Scenario:
+    """Load a scenario file; its name defaults to the file stem, its family to ``family`` (by
+    default the folder's name) when the YAML has no ``family:``."""
     p = Path(path)
     src = os.fspath(path)
     limit = int(SCENARIO_LIMITS["max_file_bytes"])
@@ -730,7 +731,7 @@ def load_scenario(path: str | os.PathLike) -> Scenario:
         raise ScenarioError(f"the file is larger than the limit of {limit} bytes", path=src,
                             hint="scenario files are small; is this the right file?")
     text = _decode(data, src)
-    return loads_scenario(text, src, name=p.stem, family=p.absolute().parent.name)
+    return loads_scenario(text, src, name=p.stem, family=p.absolute().parent.name if family is None else family)
 
 
 def resolve_path(scenario: Scenario, relative: str | os.PathLike) -> Path:
