@@ -287,3 +287,18 @@ def test_html_counts_expected_failures_apart(tmp_path):
     assert '<a href="#f-' in page.split('id="runs"')[1].split("</table>")[0]   # both linked from the table
     plain = write_html(tmp_path / "p.html", entries[:1]).read_text()
     assert "Expected failures" not in plain and "expected to fail" not in plain
+
+
+def test_expected_failures_apart_under_xdist(pytester: pytest.Pytester, monkeypatch):
+    """xdist workers send the report with its xfail mark: the controller's page still knows."""
+    monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
+    pytester.makepyfile(straight=PLANNER)
+    pytester.mkdir("scenarios")
+    (pytester.path / "scenarios" / "ok.yaml").write_text(OK)
+    (pytester.path / "scenarios" / "crash.yaml").write_text(CRASH)
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(pytester.path), os.environ.get("PYTHONPATH", "")]))
+    result = pytester.runpytest_subprocess("-p", "pytest_navscenario.plugin", "-p", "xdist.plugin", "-n", "2",
+                                           "scenarios", SUBJECT, "--nav-html=r.html")
+    assert result.ret == pytest.ExitCode.OK
+    page = (pytester.path / "r.html").read_text()
+    assert "<h2>Failures (0)</h2>" in page and "<h2>Expected failures (xfail) (1)</h2>" in page
