@@ -9,7 +9,7 @@ The pytest options are read by calling the plugin's own ``pytest_addoption`` hoo
 module and every feature plugin it lists in ``pytest_plugins``) with a recording parser, so what
 is documented is exactly what the plugin registers: flag, metavar, help, ini twin and default.
 The CLI is read from the argparse parser that ``navscenario`` itself builds (``build_parser``).
-An unknown marker stops the build. ``tests/docs/test_reference.py`` checks that every option a
+An unknown marker stops the build. ``tests/docs/test_docs_reference.py`` checks that every option a
 real pytest session gets from the plugin appears here.
 """
 from __future__ import annotations
@@ -111,7 +111,7 @@ def escape(text: str) -> str:
 def _ini_default(ini: Ini) -> str:
     default = ini.default
     if default is _NOTSET or default in ("", None, []):
-        return "none"
+        return "not set"
     if isinstance(default, (list, tuple)):
         return " ".join(str(v) for v in default)
     return str(default)
@@ -137,7 +137,8 @@ def pytest_options_markdown() -> str:
     lines: list[str] = []
     dests = set()
     for group in parser.groups.values():
-        lines += [f"## {escape(group.description or group.name)}", ""]
+        title = group.description or group.name
+        lines += [f"## {escape(title[:1].upper() + title[1:])}", ""]
         for option in group.options:
             dests.add(option.dest)
             lines += _option_block(option, parser.inis)
@@ -156,7 +157,7 @@ def pytest_options_markdown() -> str:
 
 def _usage(parser: argparse.ArgumentParser) -> str:
     old = os.environ.get("COLUMNS")
-    os.environ["COLUMNS"] = "100"            # argparse wraps at the terminal width: fix it
+    os.environ["COLUMNS"] = "80"             # argparse wraps at the terminal width: fix it
     try:
         return parser.format_usage().strip()
     finally:
