@@ -130,3 +130,17 @@ def test_readme_links_point_at_files_that_exist():
     assert any(t.startswith("docs/") for t in relative)
     missing = [t for t in relative if not (ROOT / t).exists()]
     assert not missing, f"README links to missing files: {missing}"
+
+
+def test_tutorial_planner_is_a_working_planner(tmp_path, monkeypatch):
+    """The tutorial's `mynav.py` passes check_planner and behaves as the page says on boxes1/boxes2."""
+    from pytest_navscenario import Outcome, check_planner, load_scenario, run_scenario
+    page = (ROOT / "docs" / "tutorial" / "own-planner.md").read_text(encoding="utf-8")
+    code = page.split('```python title="mynav.py"\n', 1)[1].split("```", 1)[0]
+    (tmp_path / "mynav_tutorial.py").write_text(code)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    check = check_planner("mynav_tutorial:StopAndGo")
+    assert check.ok, str(check)
+    from mynav_tutorial import StopAndGo
+    assert run_scenario(load_scenario(ROOT / "scenarios/boxes1.yaml"), StopAndGo).outcome is Outcome.SUCCESS
+    assert run_scenario(load_scenario(ROOT / "scenarios/boxes2.yaml"), StopAndGo).outcome is Outcome.SAFETY_STOP
