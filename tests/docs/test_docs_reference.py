@@ -144,3 +144,11 @@ def test_tutorial_planner_is_a_working_planner(tmp_path, monkeypatch):
     from mynav_tutorial import StopAndGo
     assert run_scenario(load_scenario(ROOT / "scenarios/boxes1.yaml"), StopAndGo).outcome is Outcome.SUCCESS
     assert run_scenario(load_scenario(ROOT / "scenarios/boxes2.yaml"), StopAndGo).outcome is Outcome.SAFETY_STOP
+
+
+def test_python_api_page_names_every_public_name():
+    """Every name the package exports is on the Python API page (a new export without docs fails)."""
+    import pytest_navscenario
+    page = (ROOT / "docs" / "reference" / "python-api.md").read_text(encoding="utf-8")
+    missing = [name for name in pytest_navscenario.__all__ if name != "__version__" and name not in page]
+    assert not missing, f"public names missing from docs/reference/python-api.md: {missing}"
