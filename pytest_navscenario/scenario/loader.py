@@ -451,6 +451,18 @@ def _check_name(ctx: _Ctx, name: str, field: str, line: int | None, *, file_name
                        field, line, "use letters, digits, '-', '_' and '.', without '/' or '\\'")
 
 
+def _check_family(ctx: _Ctx, family: str, line: int | None) -> None:
+    """A family is a name, or a relative folder path such as ``examples/scenarios`` (what the pytest
+    plugin names the families of two folders with the same name): each part a name, no climbing."""
+    _check_name(ctx, family, "family", line)
+    parts = family.split("/")
+    if "\\" in family or any(not p.strip() or p.strip() in (".", "..") for p in parts):
+        raise ctx.fail(f"{family!r} cannot be used: a family is a name or a relative folder path "
+                               f"(scenario names and families become file and folder names)", "family",
+                       line, "use names of letters, digits, '-', '_' and '.', separated by '/' "
+                             "(e.g. examples/scenarios), without '..' or '\\'")
+
+
 def _simulation(ctx: _Ctx, top: _Section) -> Simulation:
     sec = top.section("simulation", SIMULATION_KEYS, "the simulation settings (a mapping)")
     if sec is None:
@@ -648,7 +660,7 @@ def _build(root: YNode | None, ctx: _Ctx, name: str | None, family: str | None) 
         _check_name(ctx, scenario_name, "name", top.line_of("name"), file_name=True)
     scenario_family = top.string("family", family or "", nonempty=False)
     if scenario_family:
-        _check_name(ctx, scenario_family, "family", top.line_of("family"), file_name=True)
+        _check_family(ctx, scenario_family, top.line_of("family"))
     scenario = Scenario(
         version=int(version),
         name=scenario_name,

@@ -65,3 +65,26 @@ def test_a_selection_does_not_rename_a_family(project):
 def test_same_names_under_xdist(project):
     assert families(project, ".", "-p", "xdist.plugin", "-n", "2")["examples/scenarios/b.yaml"] == \
         "examples/scenarios"
+
+
+def test_a_path_family_survives_plots_artifacts_and_reloading(project):
+    """The family travels with the scenario (report.nav, artifacts' scenario.yaml): a family named
+    by a path must load again, so the failing item's plot is drawn and its artifact re-runs."""
+    from pytest_navscenario.scenario.loader import load_scenario
+
+    (project.path / "examples" / "scenarios" / "slow.yaml").write_text(OK.replace("timeout: 10", "timeout: 0.3"))
+    result = project.runpytest_inprocess("-p", "pytest_navscenario.plugin", ".", "--nav-html=r.html")
+    result.assert_outcomes(passed=5, failed=1)
+    assert "could not draw" not in result.stdout.str()
+    assert 'data-family="examples/scenarios"' in (project.path / "r.html").read_text()
+    (copy,) = (project.path / "nav-artifacts").glob("*/scenario.yaml")
+    assert load_scenario(copy).family == "examples/scenarios"
+
+
+@pytest.mark.parametrize("family", ["a/../b", "../x", "a//b", "a\\\\b", "/abs"])
+def test_a_family_path_may_not_climb_or_be_absolute(family):
+    from pytest_navscenario.core.errors import ScenarioError
+    from pytest_navscenario.scenario.loader import loads_scenario
+
+    with pytest.raises(ScenarioError, match="family"):
+        loads_scenario(OK + f'family: "{family}"\n')
