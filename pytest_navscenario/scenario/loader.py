@@ -458,7 +458,7 @@ def _check_family(ctx: _Ctx, family: str, line: int | None) -> None:
     parts = family.split("/")
     if "\\" in family or any(not p.strip() or p.strip() in (".", "..") for p in parts):
         raise ctx.fail(f"{family!r} cannot be used: a family is a name or a relative folder path "
-                               f"(scenario names and families become file and folder names)", "family",
+                       f"(scenario names and families become file and folder names)", "family",
                        line, "use names of letters, digits, '-', '_' and '.', separated by '/' "
                              "(e.g. examples/scenarios), without '..' or '\\'")
 
