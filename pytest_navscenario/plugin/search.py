@@ -19,6 +19,9 @@ import pytest
 DEFAULT_BUDGET = 100
 DEFAULT_SHRINK_BUDGET = 40
 DEFAULT_OUT = "scenarios/regressions"
+STRATEGY_NAMES = ("evolve", "random")   # = search.engine.STRATEGIES (not imported: plugin load stays light)
+# new ini name -> its old name, still read (the new name wins; both set and different is an error)
+INI_ALIASES = {"navsearch_out": "nav_regressions_dir"}
 
 # (option, dest / ini name, metavar, help)
 OPTIONS = (
@@ -31,13 +34,13 @@ OPTIONS = (
     ("--navsearch-seed", "navsearch_seed", "N",
      "random seed of the search (integer >= 0, default 0); the same seed, subject and budget "
      "repeat a search exactly."),
-    ("--navsearch-strategy", "navsearch_strategy", "NAME",
+    ("--navsearch-strategy", "navsearch_strategy", "{" + ",".join(STRATEGY_NAMES) + "}",
      "evolve (default: Hypothesis-driven, exploits the best layouts so far) or random "
      "(uniform sampling over the same space, as a baseline)."),
     ("--navsearch-shrink-budget", "navsearch_shrink_budget", "N",
      f"simulations allowed to shrink each distinct failure toward the seed, on top of the "
      f"budget (default {DEFAULT_SHRINK_BUDGET}; 0 = keep failures as found)."),
-    ("--navsearch-out", "nav_regressions_dir", "DIR",
+    ("--navsearch-out", "navsearch_out", "DIR",
      f"folder for frozen failures, one subfolder per seed, plus each search's log "
      f"(default {DEFAULT_OUT})."),
     ("--navsearch-junit", "navsearch_junit", "PATH",
@@ -49,9 +52,12 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("navsearch", "navigation failure search (pytest-navscenario)")
     for opt, dest, metavar, text in OPTIONS:
         kwargs: dict[str, Any] = {"action": "append"} if dest == "navsearch" else {}
-        group.addoption(opt, dest=dest, default=None, metavar=metavar, help=f"{text} [ini: {dest}]", **kwargs)
+        ini = f"[ini: {dest}" + (f"; old name {INI_ALIASES[dest]} still read]" if dest in INI_ALIASES else "]")
+        group.addoption(opt, dest=dest, default=None, metavar=metavar, help=f"{text} {ini}", **kwargs)
         parser.addini(dest, text, type="args" if dest == "navsearch" else "string",
                       default=[] if dest == "navsearch" else "")
+    for new, old in INI_ALIASES.items():
+        parser.addini(old, f"old name of {new}, still read ({new} wins when both are set)", default="")
 
 
 _CONFIGS: list[pytest.Config] = []   # the running session's config (a stack: pytester nests runs)
@@ -103,7 +109,14 @@ def _raw(config: pytest.Config, dest: str) -> tuple[Any, str, Path]:
     if cli is not None:
         return cli, f"--{dest.replace('_', '-')}" if dest != "navsearch_budget" else "--budget", \
             Path(config.invocation_params.dir)
-    return config.getini(dest), f"ini option {dest}", Path(config.rootpath)
+    value, old = config.getini(dest), INI_ALIASES.get(dest)
+    old_value = str(config.getini(old)).strip() if old else ""
+    if old_value and str(value).strip() and str(value).strip() != old_value:
+        raise pytest.UsageError(f"ini options {dest} = {value!r} and {old} = {old_value!r} disagree; "
+                                f"{old} is the old name of {dest}: keep only {dest}")
+    if old_value and not str(value).strip():
+        return old_value, f"ini option {old}", Path(config.rootpath)
+    return value, f"ini option {dest}", Path(config.rootpath)
 
 
 def _int(config: pytest.Config, dest: str, default: int, minimum: int, what: str) -> int:
@@ -132,7 +145,7 @@ def read_search_settings(config: pytest.Config) -> SearchSettings:
     if strategy not in STRATEGIES:
         raise pytest.UsageError(f"{where}: unknown strategy {raw!r}; use one of {', '.join(STRATEGIES)}")
     shrink = _int(config, "navsearch_shrink_budget", DEFAULT_SHRINK_BUDGET, 0, "the shrink budget")
-    raw, where, base = _raw(config, "nav_regressions_dir")
+    raw, where, base = _raw(config, "navsearch_out")
     raw = str(raw).strip() or DEFAULT_OUT
     out = Path(os.path.expanduser(raw))
     out = out if out.is_absolute() else base / out
