@@ -20,8 +20,7 @@ DEFAULT_BUDGET = 100
 DEFAULT_SHRINK_BUDGET = 40
 DEFAULT_OUT = "scenarios/regressions"
 STRATEGY_NAMES = ("evolve", "random")   # = search.engine.STRATEGIES (not imported: plugin load stays light)
-# new ini name -> its old name, still read (the new name wins; both set and different is an error)
-INI_ALIASES = {"navsearch_out": "nav_regressions_dir"}
+OLD_OUT_INI = "nav_regressions_dir"     # the old name of the ini option navsearch_out, still read
 
 # (option, dest / ini name, metavar, help)
 OPTIONS = (
@@ -42,7 +41,7 @@ OPTIONS = (
      f"budget (default {DEFAULT_SHRINK_BUDGET}; 0 = keep failures as found)."),
     ("--navsearch-out", "navsearch_out", "DIR",
      f"folder for frozen failures, one subfolder per seed, plus each search's log "
-     f"(default {DEFAULT_OUT})."),
+     f"(default {DEFAULT_OUT}; the ini option's old name {OLD_OUT_INI} is still read)."),
     ("--navsearch-junit", "navsearch_junit", "PATH",
      "also write the generated suite (every simulated candidate) as a JUnit XML file."),
 )
@@ -52,12 +51,12 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("navsearch", "navigation failure search (pytest-navscenario)")
     for opt, dest, metavar, text in OPTIONS:
         kwargs: dict[str, Any] = {"action": "append"} if dest == "navsearch" else {}
-        ini = f"[ini: {dest}" + (f"; old name {INI_ALIASES[dest]} still read]" if dest in INI_ALIASES else "]")
-        group.addoption(opt, dest=dest, default=None, metavar=metavar, help=f"{text} {ini}", **kwargs)
+        group.addoption(opt, dest=dest, default=None, metavar=metavar, help=f"{text} [ini: {dest}]", **kwargs)
         parser.addini(dest, text, type="args" if dest == "navsearch" else "string",
                       default=[] if dest == "navsearch" else "")
-    for new, old in INI_ALIASES.items():
-        parser.addini(old, f"old name of {new}, still read ({new} wins when both are set)", default="")
+
+    parser.addini(OLD_OUT_INI, "old name of navsearch_out, still read (navsearch_out wins when both "
+                  "are set to the same folder; different folders are a usage error)", default="")
 
 
 _CONFIGS: list[pytest.Config] = []   # the running session's config (a stack: pytester nests runs)
@@ -109,14 +108,7 @@ def _raw(config: pytest.Config, dest: str) -> tuple[Any, str, Path]:
     if cli is not None:
         return cli, f"--{dest.replace('_', '-')}" if dest != "navsearch_budget" else "--budget", \
             Path(config.invocation_params.dir)
-    value, old = config.getini(dest), INI_ALIASES.get(dest)
-    old_value = str(config.getini(old)).strip() if old else ""
-    if old_value and str(value).strip() and str(value).strip() != old_value:
-        raise pytest.UsageError(f"ini options {dest} = {value!r} and {old} = {old_value!r} disagree; "
-                                f"{old} is the old name of {dest}: keep only {dest}")
-    if old_value and not str(value).strip():
-        return old_value, f"ini option {old}", Path(config.rootpath)
-    return value, f"ini option {dest}", Path(config.rootpath)
+    return config.getini(dest), f"ini option {dest}", Path(config.rootpath)
 
 
 def _int(config: pytest.Config, dest: str, default: int, minimum: int, what: str) -> int:
@@ -133,6 +125,22 @@ def _int(config: pytest.Config, dest: str, default: int, minimum: int, what: str
     return value
 
 
+def _out_raw(config: pytest.Config) -> tuple[Any, str, Path]:
+    """--navsearch-out, else the ini option navsearch_out, else its old name nav_regressions_dir;
+    the two ini names set to different folders is a usage error."""
+    raw, where, base = _raw(config, "navsearch_out")
+    if config.getoption("navsearch_out") is not None:
+        return raw, where, base
+    old = str(config.getini(OLD_OUT_INI)).strip()
+    if old and str(raw).strip() and str(raw).strip() != old:
+        raise pytest.UsageError(f"ini options navsearch_out = {str(raw).strip()!r} and {OLD_OUT_INI} = "
+                                f"{old!r} disagree; {OLD_OUT_INI} is the old name of navsearch_out: "
+                                f"keep only navsearch_out")
+    if old and not str(raw).strip():
+        return old, f"ini option {OLD_OUT_INI}", base
+    return raw, where, base
+
+
 def read_search_settings(config: pytest.Config) -> SearchSettings:
     from ..search.engine import STRATEGIES
 
@@ -145,7 +153,7 @@ def read_search_settings(config: pytest.Config) -> SearchSettings:
     if strategy not in STRATEGIES:
         raise pytest.UsageError(f"{where}: unknown strategy {raw!r}; use one of {', '.join(STRATEGIES)}")
     shrink = _int(config, "navsearch_shrink_budget", DEFAULT_SHRINK_BUDGET, 0, "the shrink budget")
-    raw, where, base = _raw(config, "navsearch_out")
+    raw, where, base = _out_raw(config)
     raw = str(raw).strip() or DEFAULT_OUT
     out = Path(os.path.expanduser(raw))
     out = out if out.is_absolute() else base / out
