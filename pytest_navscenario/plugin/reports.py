@@ -94,7 +94,8 @@ def pytest_addoption(parser: pytest.Parser) -> None:
                 "nav_baseline_subject": "SPEC", "nav_plots": "{" + ",".join(PLOT_CHOICES) + "}",
                 "nav_plots_max": "N", "nav_plots_dir": "DIR", "nav_html": "PATH"}
     for opt, ini, default, text in OPTIONS:
-        group.addoption(opt, dest=ini, default=None, metavar=metavars[ini], help=f"{text} [ini: {ini}]")
+        group.addoption(opt, dest=ini, default=None, metavar=metavars[ini],
+                        help=f"{text} [ini: {ini}]")
         parser.addini(ini, text, default=default)
 
 
