@@ -25,18 +25,18 @@ EPILOG = ("Run 'navscenario COMMAND --help' for a command's arguments. Whole sui
 # name -> (module, one-line purpose for the command list)
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "run": ("pytest_navscenario.cli.run",
-            "run one scenario file against a planner and print the outcome and metrics"),
+            "run one scenario against a planner; print outcome and metrics"),
     "check-planner": ("pytest_navscenario.cli.run",
                       "check that a planner keeps the protocol: reset/act signatures, finite "
                       "commands, read-only observations, determinism, tick time"),
     "compare": ("pytest_navscenario.cli.compare",
-                "compare two results files (A = baseline, B = candidate): regressions, fixes, CI gate"),
+                "compare two results files (A baseline, B candidate), CI gate"),
     "from-bag": ("pytest_navscenario.ros.bag_import",
-                 "build a seed scenario from a ROS 1 / ROS 2 bag (odometry and laser scans)"),
+                 "build a seed scenario from a ROS 1 / ROS 2 bag"),
     "from-map": ("pytest_navscenario.ros.map_import",
-                 "build a seed scenario from a map_server occupancy grid (map YAML and image)"),
+                 "build a seed scenario from a map_server occupancy grid"),
     "import": ("pytest_navscenario.ros.world_import",
-               "import another tool's world as a scenario: Aerialist test YAML or Gazebo SDF world"),
+               "import an Aerialist test or a Gazebo SDF world as a scenario"),
 }
 
 # name -> the description at the top of the subcommand's own --help
