@@ -55,6 +55,11 @@ OPTIONS = (
      "write one self-contained HTML report (summary, comparison, every failure's plot) to this file"),
 )
 
+# accepted values in braces, or a unit (N, PATH, DIR, SPEC), as every option of the plugin shows it
+METAVARS = {"nav_baseline": "PATH", "nav_baseline_mode": "{" + ",".join(MODE_CHOICES) + "}",
+            "nav_baseline_subject": "SPEC", "nav_plots": "{" + ",".join(PLOT_CHOICES) + "}",
+            "nav_plots_max": "N", "nav_plots_dir": "DIR", "nav_html": "PATH"}
+
 
 @dataclass
 class ReportSettings:
@@ -90,12 +95,8 @@ REPORT_KEY = pytest.StashKey[ReportState]()
 
 def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("navscenario", "navigation scenarios (pytest-navscenario)")
-    metavars = {"nav_baseline": "PATH", "nav_baseline_mode": "{" + ",".join(MODE_CHOICES) + "}",
-                "nav_baseline_subject": "SPEC", "nav_plots": "{" + ",".join(PLOT_CHOICES) + "}",
-                "nav_plots_max": "N", "nav_plots_dir": "DIR", "nav_html": "PATH"}
     for opt, ini, default, text in OPTIONS:
-        group.addoption(opt, dest=ini, default=None, metavar=metavars[ini],
-                        help=f"{text} [ini: {ini}]")
+        group.addoption(opt, dest=ini, default=None, metavar=METAVARS[ini], help=f"{text} [ini: {ini}]")
         parser.addini(ini, text, default=default)
 
 
