@@ -57,9 +57,10 @@ OPTIONS = (
      "write one self-contained HTML report (summary, comparison, every failure's plot) to this file"),
 )
 
-METAVARS = {"nav_baseline": "FILE", "nav_baseline_mode": "fail|warn", "nav_baseline_subject": "SPEC",
-            "nav_plots": "failed|all|none", "nav_plots_max": "N", "nav_plots_dir": "DIR",
-            "nav_html": "FILE"}
+# accepted values in braces, or a unit (N, PATH, DIR, SPEC), as every option of the plugin shows it
+METAVARS = {"nav_baseline": "PATH", "nav_baseline_mode": "{" + ",".join(MODE_CHOICES) + "}",
+            "nav_baseline_subject": "SPEC", "nav_plots": "{" + ",".join(PLOT_CHOICES) + "}",
+            "nav_plots_max": "N", "nav_plots_dir": "DIR", "nav_html": "PATH"}
 
 
 @dataclass
