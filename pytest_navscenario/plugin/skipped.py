@@ -69,7 +69,7 @@ def summary_lines(state: Any, rel: Any, verbose: bool) -> list[str]:
         return []
     n = len(found)
     lines = [f"navscenario: {n} YAML file{'s' if n != 1 else ''} beside scenarios "
-             f"{'are' if n != 1 else 'is'} not scenarios (empty, binary or not a mapping)"
+             f"{'are not scenarios' if n != 1 else 'is not a scenario'} (empty, binary or not a mapping)"
              + ("" if verbose else "; -v lists them")]
     if verbose:
         lines += [f"  {rel(Path(p))}: {r}" for p, r in found]

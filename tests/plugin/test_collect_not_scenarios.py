@@ -69,5 +69,5 @@ def test_xdist_workers_send_the_count_to_the_controller(project):
     (project.path / "s" / "empty.yaml").write_text("")
     result = project.runpytest_subprocess(*PLUGIN, "-p", "xdist.plugin", "-n", "2", "-v", "s")
     result.assert_outcomes(passed=1)
-    result.stdout.fnmatch_lines(["navscenario: 1 YAML file beside scenarios is not scenarios*",
+    result.stdout.fnmatch_lines(["navscenario: 1 YAML file beside scenarios is not a scenario (empty, binary or not a mapping)",
                                  "  s/empty.yaml: empty*"])
