@@ -37,6 +37,7 @@ class EpisodeJob:
     tick_limit: float | None = None
     keep_trajectory: str = "all"
     cwd: str | None = None
+    reset_timeout: float | None = None    # s an exec: planner may take to answer reset (None: its default)
 
     def __post_init__(self) -> None:
         if self.keep_trajectory not in KEEP_CHOICES:
@@ -46,7 +47,8 @@ class EpisodeJob:
         """Worker side: the episode, compacted for the way back."""
         from ..harness.runner import run_scenario
 
-        result = run_scenario(self.scenario, _subject_for(self), seed=self.seed, tick_limit=self.tick_limit)
+        result = run_scenario(self.scenario, _subject_for(self), seed=self.seed, tick_limit=self.tick_limit,
+                              reset_timeout=self.reset_timeout)
         return compact(result, self.keep_trajectory)
 
     def restore(self, result: EpisodeResult) -> EpisodeResult:

@@ -105,9 +105,12 @@ def keep_trajectory(config: pytest.Config) -> str:
     return "failed" if want == "failed" or state.settings.artifacts is not None else "none"
 
 
-def _skipped(item: pytest.Item) -> bool:
-    """True if a skip mark will skip the item (so its episode is not worth running)."""
-    if item.get_closest_marker("skip") is not None:
+def _skipped(item: Any) -> bool:
+    """True if the item will not run its episode: a skip mark, or a scenario its setup rejects
+    as impassable (verdict/feasibility.py; cached, so asking twice is free)."""
+    from ..verdict.feasibility import impassable_reason
+
+    if item.get_closest_marker("skip") is not None or impassable_reason(item.scenario) is not None:
         return True
     if item.get_closest_marker("skipif") is None:
         return False

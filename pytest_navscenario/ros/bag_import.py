@@ -750,21 +750,22 @@ def _triple(text: str) -> tuple[float, float, float]:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("bag", help="ROS 1 .bag file, rosbag2 folder, or .mcap/.db3 file")
-    p.add_argument("-o", "--output", required=True, help="seed scenario YAML to write (an existing file is kept unless --force)")
-    p.add_argument("--start", type=float, default=None, help="window start, seconds after the first odometry message")
-    p.add_argument("--end", type=float, default=None, help="window end, seconds after the first odometry message")
-    p.add_argument("--odom-topic", default=None, help="nav_msgs/Odometry topic (default: found by type)")
-    p.add_argument("--scan-topic", default=None, help="sensor_msgs/LaserScan topic (default: found by type)")
+    p.add_argument("bag", metavar="PATH", help="ROS 1 .bag file, rosbag2 folder, or .mcap/.db3 file")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.yaml",
+                   help="seed scenario YAML to write (an existing file is kept unless --force)")
+    p.add_argument("--start", type=float, default=None, metavar="SECONDS", help="window start, seconds after the first odometry message")
+    p.add_argument("--end", type=float, default=None, metavar="SECONDS", help="window end, seconds after the first odometry message")
+    p.add_argument("--odom-topic", default=None, metavar="TOPIC", help="nav_msgs/Odometry topic (default: found by type)")
+    p.add_argument("--scan-topic", default=None, metavar="TOPIC", help="sensor_msgs/LaserScan topic (default: found by type)")
     p.add_argument("--laser-pose", type=_triple, default=None, metavar="X,Y,YAW",
-                   help="laser pose in the odometry child frame (m, m, degrees; write --laser-pose=-0.064,0,0 "
-                        "for a negative first value); default /tf_static, else estimated from the scans")
+                   help="laser pose in the odometry child frame (m, m, degrees; e.g. --laser-pose -0.064,0,0); "
+                        "default /tf_static, else estimated from the scans")
     p.add_argument("--path-as", choices=PATH_AS, default="waypoints",
                    help="driven path as decimated waypoints (default), a reference trajectory (CSV t,x,y beside "
                         "the seed, for the reference deviation metrics) or both")
-    p.add_argument("--robot-radius", type=float, default=0.15, metavar="M",
+    p.add_argument("--robot-radius", type=float, default=0.15, metavar="METRES",
                    help="the seed robot's circular footprint radius, m (default 0.15; edit the seed for a box)")
-    p.add_argument("--name", default="", help="scenario name (default: the output file's stem)")
+    p.add_argument("--name", default="", metavar="TEXT", help="scenario name (default: the output file's stem)")
     p.add_argument("--force", action="store_true", help="overwrite an existing output file")
 
 
