@@ -47,8 +47,8 @@ OPTIONS = (
      "run each scenario N times with different noise seeds (repeat 0 keeps the run's seed) and "
      "report the scenarios whose outcomes differ (flaky) with per-outcome counts. Default 1."),
     ("--nav-ray", "nav_ray",
-     "run the episodes as Ray tasks (needs pip install \"pytest-navscenario[ray]\"): 'auto' starts "
-     "a local Ray instance (with -n N: N CPUs, else every core), HOST:PORT joins a running cluster "
+     "run the episodes as Ray tasks (needs pip install \"pytest-navscenario[ray]\"): ADDRESS 'auto' "
+     "starts a local Ray instance (with -n N: N CPUs, else every core), HOST:PORT joins a running cluster "
      "(`ray start --head` prints the address). Items still report one per scenario in the usual "
      "order, with the same results as a serial run. Every node must have pytest-navscenario and "
      "the subject; this is checked before any episode. Default: none."),
@@ -83,7 +83,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     # a metavar shows the accepted values ({a,b}) or a unit (N, SECONDS, PATH, DIR, SPEC, NAME)
     metavars = {"nav_subject": "SPEC", "nav_seed": "N", "nav_results": "PATH", "nav_artifacts": "DIR",
                 "nav_summary": "{yes,no}", "nav_tick_limit": "SECONDS", "nav_repeat": "N",
-                "nav_reset_timeout": "SECONDS", "nav_ray": "{auto,HOST:PORT}"}
+                "nav_reset_timeout": "SECONDS", "nav_ray": "ADDRESS"}
     for opt, ini, text in OPTIONS:
         group.addoption(opt, dest=ini, default=None, metavar=metavars[ini], help=text + f" [ini: {ini}]")
     parser.addini("nav_subject", helps["nav_subject"], default="")

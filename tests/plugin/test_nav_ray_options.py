@@ -56,5 +56,5 @@ def test_the_ini_twin_is_checked_too(suite: pytest.Pytester):
 
 def test_help_describes_the_option_and_its_ini_twin(pytester: pytest.Pytester):
     out = " ".join(pytester.runpytest("--help").stdout.str().split())   # unwrap the help text
-    assert "--nav-ray={auto,HOST:PORT}" in out and "[ini: nav_ray]" in out
+    assert "--nav-ray=ADDRESS" in out and "[ini: nav_ray]" in out
     assert "nav_ray (string)" in out
