@@ -7,8 +7,7 @@ of their mean so that a candidate near two failure modes ranks above one near a 
 
 * time: 1 - duration / timeout (a success that needed 28 of 30 s is near a timeout);
 * clearance: min clearance / CLEARANCE_SCALE (near a collision);
-* safety: how far the smallest time-to-contact stayed above the safety layer's horizon
-  (near a safety stop);
+* safety: the smallest clearance of the poses the safety layer predicts (near a safety stop);
 * efficiency: path efficiency (a long detour is near a timeout too).
 
 A failure's robustness is -1 + progress / 2: failures rank before every success, and among
@@ -27,8 +26,8 @@ from typing import Any
 
 from .space import INSERT_PREFIX
 
-CLEARANCE_SCALE = 1.0   # m: clearance above this counts as fully safe
-SAFETY_SCALE = 3.0      # time-to-contact margin (in horizons above the horizon) counted as safe
+CLEARANCE_SCALE = 0.5   # m: clearance above this counts as fully safe
+SAFETY_SCALE = 0.3      # m: predicted clearance above the safety margin by this counts as safe
 MEAN_SHARE = 0.25       # weight of the mean margin beside the smallest one
 PLACE_BINS = 4          # route quarters
 PATH_POINTS = 40        # path samples kept per candidate for the placement operators
@@ -153,28 +152,30 @@ def _unit(v: float) -> float:
 
 
 def _safety_margin(res: Any, pose: Any) -> float | None:
-    """How far the smallest time-to-contact stayed above the safety horizon, in [0, 1]: the
-    centre's distance to each obstacle less the footprint's outer radius, over the speed."""
+    """How close the safety layer came to triggering, in [0, 1]: as the layer does, predict
+    each control tick's pose half a horizon and a full horizon ahead at the measured velocity;
+    the smallest clearance of those predicted poses, less the layer's margin, over
+    SAFETY_SCALE (0 = it would have stopped the robot)."""
     import numpy as np
-    from ..verdict.paths import footprint_core, obstacle_shapes
+    from ..verdict.paths import box_box_distance, footprint_core, obstacle_shapes
 
     sc = res.scenario
     safety = getattr(sc.robot, "safety", None)
-    if safety is None or not getattr(safety, "enabled", False) or not sc.obstacles or len(pose) < 2:
+    if safety is None or not getattr(safety, "enabled", False) or not sc.obstacles or len(pose) < 3:
         return None
-    horizon = float(safety.horizon) or 0.5
+    t = np.asarray(res.trajectory.t, dtype=float)
     vel = np.asarray(res.trajectory.velocity, dtype=float).reshape(-1, 3)
-    step = max(1, len(pose) // 300)
+    step = max(1, int(round(len(pose) / max(1.0, t[-1] * 10.0))))   # about 10 Hz
     p, v = pose[::step], vel[::step]
-    speed = np.hypot(v[:, 0], v[:, 1])
+    c, sn = np.cos(p[:, 2]), np.sin(p[:, 2])
+    wx, wy = c * v[:, 0] - sn * v[:, 1], sn * v[:, 0] + c * v[:, 1]
     s = obstacle_shapes(sc.obstacles)
     hl, hw, rho = footprint_core(sc.robot.footprint)
-    dx, dy = p[:, 0:1] - s.x, p[:, 1:2] - s.y
-    u = np.maximum(np.abs(dx * s.cos + dy * s.sin) - s.hl, 0.0)
-    w = np.maximum(np.abs(dy * s.cos - dx * s.sin) - s.hw, 0.0)
-    dist = (np.sqrt(u * u + w * w) - s.rho).min(axis=1) - (math.hypot(hl, hw) + rho)
-    moving = speed > 0.05
-    if not moving.any():
-        return 1.0
-    ttc = float((np.maximum(dist[moving], 0.0) / speed[moving]).min())
-    return _unit((ttc - horizon) / (SAFETY_SCALE * horizon))
+    best = np.inf
+    for h in (0.5 * safety.horizon, safety.horizon):
+        yaw = p[:, 2] + v[:, 2] * h
+        px, py = p[:, 0] + wx * h, p[:, 1] + wy * h
+        d = box_box_distance(px[:, None], py[:, None], np.cos(yaw)[:, None], np.sin(yaw)[:, None], hl, hw,
+                             s.x, s.y, s.cos, s.sin, s.hl, s.hw) - s.rho - rho
+        best = min(best, float(d.min()))
+    return _unit((best - safety.margin) / SAFETY_SCALE)

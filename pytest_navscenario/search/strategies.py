@@ -28,12 +28,14 @@ from .space import FLAG_ON, SearchSpace, invalid_reason
 GENERATION = 8                 # candidates per generation (evolve, random)
 MUTATION_SCALES = (0.05, 0.15, 0.3)   # Gaussian step sd as a fraction of the parameter's range
 OPERATORS = ("explore", "mutate", "place", "insert")
+MIN_SHARE = 0.15               # every usable operator keeps at least this share
 PICK_PENALTY = 0.1             # robustness added per earlier pick of an archive cell (novelty)
 FAILURE_FLOOR = -0.3           # failure cells compete for parenthood as if this robust
 HILLCLIMB_STEP = 0.25          # initial step, fraction of the range
 HILLCLIMB_MIN_STEP = 0.02      # a coordinate is done when its step is below this fraction
 HILLCLIMB_STALL = 8            # misses in a row on one obstacle: move to the next
 MAX_INVALID_FACTOR = 50
+STREAM_BITS = 32               # Hypothesis-drawn bits seeding each proposal's random stream
 
 
 class GaveUp(Exception):
@@ -112,12 +114,12 @@ class HillClimb:
         self.rnd = random.Random(seed_value)
         self.group = self.rnd.randrange(len(self.groups)) if seed_value else 0
         self.current: tuple[float, ...] = space.zero()
-        self.current_value = math.inf
+        self.current_value = self.seed_value_clearance = math.inf
         self.coord = 0
         self.misses = 0
         self.steps = self._fresh_steps()
         self.started = False
-        self.improvements: list[float] = []   # clearance after each accepted move (for tests)
+        self.climbs: list[list[float]] = [[]]   # clearance after each accepted move, per climb
 
     def _fresh_steps(self) -> dict[int, float]:
         return {i: HILLCLIMB_STEP * self.space.params[i].width for i in self.groups[self.group]}
@@ -126,7 +128,8 @@ class HillClimb:
         self.group = (self.group + 1) % len(self.groups)
         self.steps, self.coord, self.misses = self._fresh_steps(), 0, 0
         if restart:
-            self.current, self.current_value = self.space.zero(), math.inf
+            self.current, self.current_value = self.space.zero(), self.seed_value_clearance
+            self.climbs.append([])
 
     def ask(self, room: int) -> list[tuple[tuple[float, ...], str]]:
         if not self.started:
@@ -164,7 +167,7 @@ class HillClimb:
         if not scored:
             return
         if results[0].origin == "seed":
-            self.current_value = scored[0].clearance
+            self.current_value = self.seed_value_clearance = scored[0].clearance
             return
         best = min(scored, key=lambda c: c.clearance)
         i = self.groups[self.group][self.coord % len(self.groups[self.group])]
@@ -172,7 +175,7 @@ class HillClimb:
             self._next_group(restart=True)
         elif best.clearance < self.current_value:
             self.current, self.current_value = best.offsets, best.clearance
-            self.improvements.append(best.clearance)
+            self.climbs[-1].append(best.clearance)
             self.steps[i] = min(self.steps[i] * 1.5, self.space.params[i].width)
             self.misses = 0
         else:
@@ -225,11 +228,9 @@ class Evolve:
     def weights(self) -> list[float]:
         usable = {"explore": True, "mutate": bool(self.cells.elites),
                   "place": bool(self.cells.elites and self.movable), "insert": bool(self.cells.elites and self.slots)}
-        out = []
-        for op in OPERATORS:
-            tries, credit = self.stats[op]
-            out.append(max(0.1, (credit + 1.0) / (tries + 2.0)) if usable[op] else 0.0)
-        return out
+        rates = {op: (self.stats[op][1] + 1.0) / (self.stats[op][0] + 2.0) for op in OPERATORS if usable[op]}
+        total = sum(rates.values())
+        return [max(MIN_SHARE, rates[op] / total) if op in rates else 0.0 for op in OPERATORS]
 
     def ask(self, room: int) -> list[tuple[tuple[float, ...], str]]:
         self.generation += 1
@@ -254,15 +255,18 @@ class Evolve:
         total = sum(weights)
 
         def body(data):
-            ticket = data.draw(st.integers(0, 10**6 - 1), label="operator") / 10**6 * total
-            stream = data.draw(st.integers(0, 2**64 - 1), label="stream")
+            # 32 booleans, not an integer: Hypothesis mixes constants found in the loaded
+            # modules into integer draws, which would make the stream depend on what is imported
+            bits = data.draw(st.lists(st.booleans(), min_size=STREAM_BITS, max_size=STREAM_BITS), label="stream")
+            stream = sum(1 << i for i, b in enumerate(bits) if b)
+            rnd = random.Random(f"{self.seed_value}:{self.generation}:{attempt}:{len(out)}:{stream}")
+            ticket = rnd.random() * total   # not a Hypothesis integer: those favour small values
             op = OPERATORS[-1]
             for name, w in zip(OPERATORS, weights):
                 if ticket < w:
                     op = name
                     break
                 ticket -= w
-            rnd = random.Random(f"{self.seed_value}:{self.generation}:{attempt}:{len(out)}:{stream}")
             offsets = self.propose(op, rnd)
             if len(out) >= n or not self.admission.admit(offsets):
                 reject()
@@ -305,12 +309,18 @@ class Evolve:
         plus ``half``: where an obstacle would be met."""
         path = parent.path
         n = len(path)
-        if parent.closest and rnd.random() < 0.6 and all(math.isfinite(v) for v in parent.closest[1:]):
+        near = 0.2 if parent.failed else 0.6   # around a failure: look elsewhere along the path
+        if parent.closest and rnd.random() < near and all(math.isfinite(v) for v in parent.closest[1:]):
             _, cx, cy = parent.closest
             j0 = min(range(n), key=lambda j: (path[j][0] - cx) ** 2 + (path[j][1] - cy) ** 2)
             j = min(n - 1, j0 + rnd.randrange(0, max(2, n // 8)))
+        elif parent.failed and parent.signature and n >= 8:   # another quarter of the way: a new place
+            quarters = [q for q in range(4) if q != parent.signature[2]]
+            q = rnd.choice(quarters)
+            j = rnd.randrange(max(1, q * n // 4), max(2, (q + 1) * n // 4))
         else:
             j = rnd.randrange(max(1, n // 10), max(2, n - 1))
+        j = min(j, n - 1)
         a, b = path[max(0, j - 1)], path[min(n - 1, j + 1)]
         dx, dy = b[0] - a[0], b[1] - a[1]
         norm = math.hypot(dx, dy) or 1.0
@@ -352,13 +362,16 @@ class Evolve:
 
     def tell(self, results: Sequence[Any]) -> None:
         for cand in results:
-            new_cell = self.cells.add(cand)
+            before = self.cells.elites.get(cand.signature)
+            self.cells.add(cand)
             new_failure = cand.failed and cand.signature not in self.failure_signatures
             if cand.failed:
                 self.failure_signatures.add(cand.signature)
-            if cand.origin in self.stats:
+            improved = (not cand.failed and math.isfinite(cand.robustness)
+                        and (before is None or cand.robustness < before.robustness))
+            if cand.origin in self.stats:   # credit: new ways of failing, and moves toward failing
                 self.stats[cand.origin][0] += 1
-                self.stats[cand.origin][1] += (1.0 if new_cell else 0.0) + (3.0 if new_failure else 0.0)
+                self.stats[cand.origin][1] += (3.0 if new_failure else 0.0) + (0.5 if improved else 0.0)
 
 
 def _has(space: SearchSpace, group: Sequence[int], attr: str) -> bool:
