@@ -51,7 +51,17 @@ def one_search(args):
             "distinct_failures": len(r.failures), "failing_sims": sum(c.failed for c in search),
             "first_failure": r.first_failure or budget + 1, "best_clearance": r.best_clearance,
             "wall": time.perf_counter() - t0, "cpu": time.process_time() - c0,
-            "signatures": sorted({"/".join(map(str, f.found.signature)) for f in r.failures})}
+            "signatures": sorted({"/".join(map(str, f.found.signature)) for f in r.failures}),
+            "distinct_by_origin": _count(f.found.origin for f in r.failures),
+            "failing_by_origin": _count(c.origin for c in search if c.failed),
+            "tries_by_origin": _count(c.origin for c in search)}
+
+
+def _count(values) -> dict:
+    out: dict = {}
+    for v in values:
+        out[v] = out.get(v, 0) + 1
+    return out
 
 
 def _cell(rows, seed, strategy):

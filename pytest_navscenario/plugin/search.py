@@ -21,7 +21,7 @@ import pytest
 DEFAULT_BUDGET = 100
 DEFAULT_SHRINK_BUDGET = 40
 DEFAULT_OUT = "scenarios/regressions"
-DEFAULT_STUCK_AFTER = 10.0
+DEFAULT_STUCK_AFTER = 20.0
 
 # (option, dest / ini name, metavar, help)
 OPTIONS = (

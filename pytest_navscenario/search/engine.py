@@ -28,7 +28,8 @@ from .space import FLAG_ON, SearchSpace, invalid_reason, offsets_strategy
 STRATEGIES = ("evolve", "random", "hillclimb")
 DISTINCT_DISTANCE = 0.1    # kept for is_near_failure (fraction of each parameter's range)
 DEFAULT_SHRINK_BUDGET = 40
-DEFAULT_STUCK_AFTER = 10.0  # s without new ground covered: the episode ends as a stuck timeout
+DEFAULT_STUCK_AFTER = 20.0  # s without new ground covered: the episode ends as a stuck timeout (the
+                            # longest stall a robot recovered from in the examples: 14.5 s)
 MAX_INVALID_FACTOR = 50    # give up after budget * this many discarded candidates in a row
 
 

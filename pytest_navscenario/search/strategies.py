@@ -30,6 +30,7 @@ MUTATION_SCALES = (0.05, 0.15, 0.3)   # Gaussian step sd as a fraction of the pa
 OPERATORS = ("explore", "mutate", "place", "insert")
 MIN_SHARE = 0.15               # every usable operator keeps at least this share
 PICK_PENALTY = 0.03            # robustness added per earlier pick of an archive cell (novelty)
+NEAR_COPY = 0.5                # m: a failure's child whose culprit moved less (same quarter) is skipped
 FAILURE_FLOOR = -0.3           # failure cells compete for parenthood as if this robust
 HILLCLIMB_STEP = 0.25          # initial step, fraction of the range
 HILLCLIMB_MIN_STEP = 0.02      # a coordinate is done when its step is below this fraction
@@ -224,6 +225,7 @@ class Evolve:
                         and space.params[g[0]].part.startswith("obstacle:")]
         self.slots = [g for g in space.groups if space.params[g[0]].part.startswith("inserted[")]
         self.failure_signatures: set[tuple] = set()
+        self.route: Any = None
 
     def weights(self) -> list[float]:
         usable = {"explore": True, "mutate": bool(self.cells.elites),
@@ -267,7 +269,10 @@ class Evolve:
                     op = name
                     break
                 ticket -= w
-            offsets = self.propose(op, rnd)
+            offsets, parent = self.propose(op, rnd)
+            if parent is not None and self._repeats(parent, offsets):
+                self.report.skipped += 1   # would most likely fail the same way again
+                reject()
             if len(out) >= n or not self.admission.admit(offsets):
                 reject()
             out.append((offsets, op))
@@ -279,15 +284,37 @@ class Evolve:
         run()
         return out
 
-    def propose(self, op: str, rnd: random.Random) -> tuple[float, ...]:
+    def propose(self, op: str, rnd: random.Random) -> tuple[tuple[float, ...], Any]:
+        """(offsets, parent) of one proposal of operator ``op`` (parent None for exploration)."""
         if op == "explore" or not self.cells.elites:
-            return uniform(self.space, rnd)
+            return uniform(self.space, rnd), None
         parent = self.cells.pick(rnd)
         if op == "place" and parent.path:
-            return self._place(parent, rnd)
+            return self._place(parent, rnd), parent
         if op == "insert" and parent.path:
-            return self._insert(parent, rnd)
-        return self._mutate(parent, rnd)
+            return self._insert(parent, rnd), parent
+        return self._mutate(parent, rnd), parent
+
+    def _repeats(self, parent: Any, offsets: Sequence[float]) -> bool:
+        """A child of a failure that changes no parameter by 20 % of its range or more and
+        leaves the culprit in place (same quarter of the route, moved < NEAR_COPY) would most
+        likely fail the same way: a near-copy, not worth a simulation."""
+        if not parent.failed or not parent.culprit or self.space.normalised_distance(parent.offsets, offsets) >= 0.2:
+            return False
+        before, after = self.space.apply(parent.offsets), self.space.apply(offsets)
+        try:
+            a, b = before.obstacle(parent.culprit), after.obstacle(parent.culprit)
+        except KeyError:
+            return False   # the culprit is gone: something else will happen
+        route = self._route()
+        return (int(route.fraction(a.x, a.y) * 4) == int(route.fraction(b.x, b.y) * 4)
+                and math.hypot(a.x - b.x, a.y - b.y) < NEAR_COPY)
+
+    def _route(self) -> Any:
+        if self.route is None:
+            from .fitness import Route
+            self.route = Route(self.space.seed)
+        return self.route
 
     def _mutate(self, parent: Any, rnd: random.Random) -> tuple[float, ...]:
         space, offsets = self.space, list(parent.offsets)
@@ -303,29 +330,29 @@ class Evolve:
                 offsets[i] += rnd.gauss(0.0, 1.0) * scale * p.width
         return space.clip(offsets)
 
-    def _target(self, parent: Any, rnd: random.Random, half: float) -> tuple[float, float]:
-        """A point beside the parent's path, at or a moment after its closest approach (time-to-
-        impact placement) or anywhere along it, offset sideways by up to the robot's half width
-        plus ``half``: where an obstacle would be met."""
-        path = parent.path
+    def _target(self, parent: Any, rnd: random.Random, half: float, culprit: str) -> tuple[float, float]:
+        """A point beside the parent's path where an obstacle would be met, offset sideways by up
+        to 1.3 times the robot's half width plus ``half``: at or a moment after the closest
+        approach (time-to-impact placement), else anywhere along the path. Quarters of the route
+        where ``culprit`` already caused a known failure are avoided while others are left (a
+        new place, a new way of failing)."""
+        path, route = parent.path, self._route()
         n = len(path)
-        near = 0.2 if parent.failed else 0.6   # around a failure: look elsewhere along the path
-        if parent.closest and rnd.random() < near and all(math.isfinite(v) for v in parent.closest[1:]):
+        known = {sig[2] for sig in self.failure_signatures if sig[1] == culprit}
+        quarter = [min(3, int(route.fraction(x, y) * 4)) for x, y in path]
+        inner = range(max(1, n // 10), max(2, n - 1))
+        allowed = [j for j in inner if j < n and quarter[j] not in known] or [j for j in inner if j < n] or [0]
+        j = rnd.choice(allowed)
+        if parent.closest and rnd.random() < 0.6 and all(math.isfinite(v) for v in parent.closest[1:]):
             _, cx, cy = parent.closest
-            j0 = min(range(n), key=lambda j: (path[j][0] - cx) ** 2 + (path[j][1] - cy) ** 2)
-            j = min(n - 1, j0 + rnd.randrange(0, max(2, n // 8)))
-        elif parent.failed and parent.signature and n >= 8:   # another quarter of the way: a new place
-            quarters = [q for q in range(4) if q != parent.signature[2]]
-            q = rnd.choice(quarters)
-            j = rnd.randrange(max(1, q * n // 4), max(2, (q + 1) * n // 4))
-        else:
-            j = rnd.randrange(max(1, n // 10), max(2, n - 1))
-        j = min(j, n - 1)
+            j0 = min(range(n), key=lambda k: (path[k][0] - cx) ** 2 + (path[k][1] - cy) ** 2)
+            jc = min(n - 1, j0 + rnd.randrange(0, max(2, n // 8)))
+            j = jc if quarter[jc] not in known else j
         a, b = path[max(0, j - 1)], path[min(n - 1, j + 1)]
         dx, dy = b[0] - a[0], b[1] - a[1]
         norm = math.hypot(dx, dy) or 1.0
         fp = self.space.seed.robot.footprint
-        robot_half = (fp.width / 2 if fp.shape != "circle" else fp.radius) if hasattr(fp, "shape") else 0.3
+        robot_half = fp.radius if fp.shape == "circle" else fp.width / 2
         lateral = rnd.uniform(-1.3, 1.3) * (robot_half + half)
         return path[j][0] - dy / norm * lateral, path[j][1] + dx / norm * lateral
 
@@ -335,7 +362,7 @@ class Evolve:
         group = culprit[0] if culprit and rnd.random() < 0.5 else rnd.choice(self.movable)
         obs = space.seed.obstacle(space.params[group[0]].part.split(":", 1)[1])
         half = getattr(obs, "radius", None) or min(getattr(obs, "length", 0.5), getattr(obs, "width", 0.5)) / 2
-        tx, ty = self._target(parent, rnd, half)
+        tx, ty = self._target(parent, rnd, half, obs.name)
         for i in group:
             attr = space.params[i].attr
             if attr == "dx":
@@ -354,7 +381,7 @@ class Evolve:
         lo = space.limits.insert_size[0]
         values = {"on": 1.0, "size": rnd.uniform(0.0, space.limits.insert_size[1] - lo),
                   "yaw": rnd.uniform(-90.0, 90.0)}
-        tx, ty = self._target(parent, rnd, (lo + values["size"]) / 2)
+        tx, ty = self._target(parent, rnd, (lo + values["size"]) / 2, "inserted")
         values["x"], values["y"] = tx - (x0 + x1) / 2, ty - (y0 + y1) / 2
         for i in group:
             offsets[i] = values.get(space.params[i].attr, offsets[i])
