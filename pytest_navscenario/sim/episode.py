@@ -57,6 +57,9 @@ if mujoco.get_mju_user_warning() is None:   # leave a handler someone else insta
     mujoco.set_mju_user_warning(_on_mujoco_warning)
 
 
+STUCK_CELL = 0.25   # m: a robot that enters no new square of this size for stuck_after s is stuck
+
+
 def wrap_angle(a: float) -> float:
     """Angle in radians wrapped to [-pi, pi)."""
     return (a + math.pi) % TWO_PI - math.pi
@@ -257,7 +260,7 @@ class SimResult:
     safety_stop: SafetyStop | None = None
     subject_failure: SubjectFailure | None = None
     goal_reached: bool = False
-    end: str = ""              # "goal", "collision", "safety-stop", "subject-error", "timeout", "max-ticks"
+    end: str = ""              # "goal", "collision", "safety-stop", "subject-error", "timeout", "max-ticks", "stuck"
     ticks: int = 0             # planner ticks run
     timings: dict[str, float] = field(default_factory=dict)  # s: physics, rays, planner, safety, harness, total
 
@@ -423,12 +426,14 @@ class _Lidar:
 
 
 def simulate(scenario: Scenario, planner: Any, seed: int, max_ticks: int | None = None, *,
-             tick_limit: float | None = None) -> SimResult:
+             tick_limit: float | None = None, stuck_after: float | None = None) -> SimResult:
     """Run one episode of ``scenario`` against ``planner`` (an object with reset/act).
 
     Calls ``planner.reset(scenario)`` first. ``seed`` drives the lidar noise. ``max_ticks`` stops
     after that many planner ticks (for quick protocol checks). ``tick_limit`` (s) makes a slower
-    planner tick a subject failure. Raises SimulationDivergedError if the physics blows up.
+    planner tick a subject failure. ``stuck_after`` (s) ends the episode early (``end ==
+    "stuck"``, a timeout) when the robot has entered no new STUCK_CELL square for that long.
+    Raises SimulationDivergedError if the physics blows up.
     """
     t_start = time.perf_counter()
     world = compiled_world(scenario)
@@ -504,6 +509,9 @@ def simulate(scenario: Scenario, planner: Any, seed: int, max_ticks: int | None 
     i = 0       # physics step index of the current state
     tick = 0
     fn_act = getattr(planner, "act", None)
+    stuck_ticks = max(1, math.ceil(stuck_after / tick_dt - 1e-9)) if stuck_after else 0
+    visited: set[tuple[int, int]] = set()
+    last_new = 0
 
     if deadline is not None:
         deadline.__enter__()
@@ -547,6 +555,14 @@ def simulate(scenario: Scenario, planner: Any, seed: int, max_ticks: int | None 
             if tick >= n_ticks:
                 end = "timeout" if tick >= timeout_ticks else "max-ticks"
                 break
+            if stuck_ticks:
+                cell = (math.floor(x / STUCK_CELL), math.floor(y / STUCK_CELL))
+                if cell not in visited:
+                    visited.add(cell)
+                    last_new = tick
+                elif tick - last_new >= stuck_ticks:
+                    end = "stuck"
+                    break
 
             t0 = perf()
             c, s = math.cos(yaw), math.sin(yaw)
