@@ -75,7 +75,7 @@ class _Slot:
     attempts: int = 0
 
 
-_STARTED: Any = None   # worker side: where a worker says which job it has started
+_STARTED: Any = None   # worker side: the pipe end on which a worker says which job it started
 
 
 def _worker_init(started: Any) -> None:
@@ -90,8 +90,8 @@ def _worker_init(started: Any) -> None:
     Finalize(None, _shutdown_all, exitpriority=10)
 
 
-def _pool_run(key: int, job: EpisodeJob) -> Any:
-    _STARTED.put(key)
+def _pool_run(key: int, job: Any) -> Any:
+    _STARTED.send(key)   # a few bytes: one atomic pipe write, whichever worker writes at once
     return run_job(job)
 
 
@@ -106,7 +106,7 @@ class ProcessExecutor:
         self.start_method = start_method or default_start_method()
         self.description = f"{workers} local worker process(es) ({self.start_method})"
         self._pool: ProcessPoolExecutor | None = None
-        self._started: Any = None
+        self._started: Any = None               # reading end of the workers' "started" pipe
         self._generation = 0
         self._keys = itertools.count()
         self._open: dict[int, _Slot] = {}      # submitted, result not yet taken
@@ -116,9 +116,10 @@ class ProcessExecutor:
             ctx = multiprocessing.get_context(self.start_method)
             if self.start_method == "forkserver":
                 ctx.set_forkserver_preload(PRELOAD)
-            self._started = ctx.SimpleQueue()
+            # a plain pipe, not a SimpleQueue: its semaphore upsets the resource tracker at exit
+            self._started, writer = ctx.Pipe(duplex=False)
             self._pool = ProcessPoolExecutor(self.workers, mp_context=ctx, initializer=_worker_init,
-                                             initargs=(self._started,))
+                                             initargs=(writer,))
             self._generation += 1
         return self._pool
 
@@ -168,8 +169,8 @@ class ProcessExecutor:
         """The pool broke (a worker died): run every unfinished job again on a new pool; the jobs
         that had started count an attempt (the one that killed its worker is among them)."""
         started = set()
-        while self._started is not None and not self._started.empty():
-            started.add(self._started.get())
+        while self._started is not None and self._started.poll():
+            started.add(self._started.recv())
         old, self._pool = self._pool, None
         if old is not None:
             old.shutdown(wait=False, cancel_futures=True)

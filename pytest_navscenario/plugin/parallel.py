@@ -1,4 +1,7 @@
-"""``--nav-ray``: the scenario items' episodes run as Ray tasks, pytest still reports them.
+"""Where episodes run: ``--nav-ray`` (Ray tasks) and ``-n N`` next to ``--navsearch`` (local
+worker processes that evaluate each search's generations).
+
+``--nav-ray``: the scenario items' episodes run as Ray tasks, pytest still reports them.
 
 At the start of the run loop every scenario item's episode is submitted, in item order; each item
 then waits for its own result, so pytest reports one item per scenario in the usual order, with the
@@ -8,6 +11,11 @@ cannot load the subject is a UsageError naming the node and what it lacks.
 
 ``-n N`` (pytest-xdist) next to ``--nav-ray=auto`` gives the local Ray instance N CPUs instead of
 starting N pytest workers (Ray spreads the episodes; xdist workers would only wait on it).
+
+``-n N`` next to ``--navsearch`` runs the searches in this process, one after the other, each
+evaluating its generations on N local worker processes (``dispatch.ProcessExecutor``), instead of
+N xdist workers each running whole searches: one search then uses every core, the results are
+those of a serial run, and Ctrl-C keeps what each search found (this process writes the files).
 """
 from __future__ import annotations
 
@@ -19,6 +27,7 @@ import pytest
 from .state import STATE_KEY
 
 NUM_CPUS_KEY = pytest.StashKey[int]()
+SEARCH_WORKERS_KEY = pytest.StashKey[int]()
 
 
 def _numprocesses(config: pytest.Config) -> Any:
@@ -50,6 +59,10 @@ def pytest_configure(config: pytest.Config) -> None:
     from .options import read_ray_address
 
     address = read_ray_address(config)
+    if address is None and _wants_search(config) and _numprocesses(config) is not None:
+        n = take_over_xdist(config, "--navsearch")
+        config.stash[SEARCH_WORKERS_KEY] = n if n is not None else 0
+        return
     if address is None or _numprocesses(config) is None:
         return
     if address != "auto":
@@ -63,12 +76,34 @@ def pytest_configure(config: pytest.Config) -> None:
     config.stash[NUM_CPUS_KEY] = n
 
 
+def _wants_search(config: pytest.Config) -> bool:
+    try:
+        return bool(config.getoption("navsearch") or config.getini("navsearch"))
+    except ValueError:   # the search plugin is not loaded
+        return False
+
+
 def pytest_sessionstart(session: pytest.Session) -> None:
     """Controller with --nav-ray: start or join Ray and check every node (after the core plugin
-    has loaded and checked the subject). Nothing is started for --collect-only."""
+    has loaded and checked the subject). With --navsearch -n N: the local worker processes.
+    Nothing is started for --collect-only."""
     config = session.config
     state = config.stash.get(STATE_KEY, None)
-    if state is None or state.is_worker or state.settings.ray is None or config.option.collectonly:
+    if state is None or state.is_worker or config.option.collectonly:
+        return
+    workers = config.stash.get(SEARCH_WORKERS_KEY, 0)
+    if state.settings.ray is None and workers > 1:
+        from ..dispatch.local import ProcessExecutor
+
+        pool = ProcessExecutor(workers)
+        if state.subject.spec is None:   # a factory from the conftest hook travels by pickle
+            try:
+                pool.check_picklable(state.subject.factory)
+            except ValueError as exc:
+                raise pytest.UsageError(f"navscenario: -n {workers} with --navsearch: {exc}") from None
+        state.executor = pool
+        return
+    if state.settings.ray is None:
         return
     from ..dispatch.on_ray import RayExecutor, RaySetupError
 
@@ -90,8 +125,25 @@ def pytest_report_header(config: pytest.Config) -> list[str]:
     state = config.stash.get(STATE_KEY, None)
     if state is None or state.executor is None:
         return []
+    if state.settings.ray is None:
+        return [f"navsearch: each search evaluates its candidates on {state.executor.description} "
+                f"(-n {state.executor.workers}); searches run one after the other"]
     return [f"navscenario: episodes run as Ray tasks on {state.executor.description} (--nav-ray)"] + \
         [f"navscenario: WARNING {note}" for note in state.executor_notes]
+
+
+def search_subject_and_evaluator(config: pytest.Config) -> tuple[Any, Any]:
+    """(planner factory, evaluator) for run_search: the session's own factory and the serial
+    evaluator, or, with an executor, a factory every worker can load and its evaluator."""
+    state = config.stash[STATE_KEY]
+    if state.executor is None:
+        return state.subject.factory, None
+    from ..dispatch.jobs import SubjectFactory
+    from ..search.parallel import executor_evaluator
+
+    subject = state.subject
+    factory = SubjectFactory(subject.spec, os.getcwd()) if subject.spec is not None else subject.factory
+    return factory, executor_evaluator(state.executor)
 
 
 def keep_trajectory(config: pytest.Config) -> str:
