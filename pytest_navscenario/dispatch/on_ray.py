@@ -11,14 +11,14 @@ reports versions, so a node that cannot run the episodes is named up front, with
 """
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import shlex
 import shutil
 import socket
 import sys
-from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Any, Iterator, Sequence
 
 from .jobs import EpisodeError, EpisodeJob, Pending, run_job
 from ..verdict.result import EpisodeResult
@@ -69,12 +69,20 @@ def _reachable(address: str) -> None:
             f"check the host and port, or use --nav-ray=auto for a local instance") from None
 
 
-@dataclass
-class NodeReport:
-    node: str                     # "host (ip)"
-    cpus: float
-    error: str = ""
-    versions: dict[str, str] = field(default_factory=dict)
+@contextlib.contextmanager
+def _own_sigterm() -> Iterator[None]:
+    """Keep this process's SIGTERM handler across ray.init, which installs one that exits at once
+    (the plugin's handler ends the run like Ctrl-C, so what finished is written)."""
+    import signal
+    import threading
+
+    main = threading.current_thread() is threading.main_thread()
+    before = signal.getsignal(signal.SIGTERM) if main else None
+    try:
+        yield
+    finally:
+        if main and before is not None:
+            signal.signal(signal.SIGTERM, before)
 
 
 def probe_node(subject: Any, cwd: str | None) -> dict[str, Any]:
@@ -136,14 +144,16 @@ class RayExecutor:
                                     f"{here}; use that address or --nav-ray=auto")
         elif address == "auto":
             paths = os.pathsep.join(p for p in sys.path if p and os.path.isdir(p))
-            ray.init(address="local", num_cpus=num_cpus, include_dashboard=False, log_to_driver=False,
-                     logging_level=logging.WARNING,
-                     runtime_env={"env_vars": {"PYTHONPATH": paths + os.pathsep + "${PYTHONPATH}"}})
+            with _own_sigterm():
+                ray.init(address="local", num_cpus=num_cpus, include_dashboard=False, log_to_driver=False,
+                         logging_level=logging.WARNING,
+                         runtime_env={"env_vars": {"PYTHONPATH": paths + os.pathsep + "${PYTHONPATH}"}})
             self._owned = True
         else:
             _reachable(address)
             try:
-                ray.init(address=address, log_to_driver=False, logging_level=logging.WARNING)
+                with _own_sigterm():
+                    ray.init(address=address, log_to_driver=False, logging_level=logging.WARNING)
             except Exception as exc:
                 raise RaySetupError(f"--nav-ray={address}: cannot join the Ray cluster there: "
                                     f"{type(exc).__name__}: {exc}") from None

@@ -3,6 +3,12 @@ items report in the usual order with the results, and artifacts, of a serial run
 from __future__ import annotations
 
 import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -12,20 +18,50 @@ ray = pytest.importorskip("ray")
 # Imported here, before pytester's in-process runs snapshot sys.modules (numpy cannot load twice).
 import pytest_navscenario.dispatch.on_ray  # noqa: E402,F401
 import pytest_navscenario.harness.runner  # noqa: E402,F401
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "search"))   # test_search, test_search_parallel
 from ray_fixtures import item_lines, planners_on_worker_path, restore_pythonpath, write_suite  # noqa: E402
+
+
+SEARCH_DIR = Path(__file__).resolve().parents[1] / "search"
 
 
 @pytest.fixture(scope="module")
 def planners(tmp_path_factory: pytest.TempPathFactory):
     folder = tmp_path_factory.mktemp("ray-planners")
     old = planners_on_worker_path(folder)
+    (folder / "straight_planner.py").write_text((SEARCH_DIR / "straight_planner.py").read_text() + SLOW)
     (folder / "victim.pid").write_text("0")   # no kill in this module: the victim does not sleep
+    # a test instance that another pytest process on this machine may join without a token
+    old_auth = os.environ.get("RAY_AUTH_MODE")
+    os.environ["RAY_AUTH_MODE"] = "disabled"
     ray.init(address="local", num_cpus=2, include_dashboard=False, log_to_driver=False)
     try:
         yield folder
     finally:
         ray.shutdown()
         restore_pythonpath(old)
+        if old_auth is None:
+            os.environ.pop("RAY_AUTH_MODE", None)
+        else:
+            os.environ["RAY_AUTH_MODE"] = old_auth
+
+
+SLOW = '''
+
+class SlowStraight(Straight):
+    """5 ms per tick: a search long enough to interrupt."""
+    def act(self, obs):
+        import time
+        time.sleep(0.005)
+        return super().act(obs)
+'''
+
+
+def search_project(pytester: pytest.Pytester) -> None:
+    from test_search import SEED_YAML
+    (pytester.path / "scenarios").mkdir()
+    (pytester.path / "scenarios" / "crate.yaml").write_text(SEED_YAML.replace("name: crate\n", ""))
+    pytester.makeini("[pytest]\nnav_scenario_paths = scenarios\n")
 
 
 def records(path: Path) -> list[dict]:
@@ -62,3 +98,47 @@ def test_an_unreachable_cluster_is_a_usage_error_before_any_episode(pytester: py
     err = result.stderr.str()
     assert "no Ray cluster answers at 127.0.0.1:1" in err and "ray start --head --port=1" in err
     assert "passed" not in result.stdout.str() and "failed" not in result.stdout.str()   # nothing ran
+
+
+def test_a_search_on_ray_writes_what_a_serial_run_writes(pytester: pytest.Pytester, planners: Path, monkeypatch):
+    from test_search_parallel import files, log_without_times, without_timestamps
+    monkeypatch.syspath_prepend(str(planners))
+    search_project(pytester)
+    args = ["-p", "no:cacheprovider", "--nav-subject=straight_planner:Straight", "--navsearch", "crate",
+            "--budget", "30", "--navsearch-seed", "5"]
+    serial = pytester.runpytest(*args, "--navsearch-out", "serial")
+    on_ray = pytester.runpytest(*args, "--nav-ray=auto", "--navsearch-out", "ray")
+    assert serial.ret == on_ray.ret == 0, on_ray.stdout.str()
+    a, b = files(pytester.path / "serial"), files(pytester.path / "ray")
+    assert sorted(a) == sorted(b) and len(a) >= 2
+    for name in a:
+        if name.endswith("search-log.jsonl"):
+            assert log_without_times(a[name]) == log_without_times(b[name])
+        else:
+            assert without_timestamps(a[name]) == without_timestamps(b[name]), name
+
+
+def test_interrupting_a_search_on_ray_keeps_what_it_found(pytester: pytest.Pytester, planners: Path):
+    search_project(pytester)
+    address = ray.get_runtime_context().gcs_address     # the module's instance, joined by a new pytest
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(planners), os.environ.get("PYTHONPATH", "")]))
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "pytest", "-p", "no:cacheprovider", f"--nav-ray={address}",
+         "--nav-subject=straight_planner:SlowStraight", "--navsearch", "crate", "--budget", "300"],
+        cwd=pytester.path, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    assert proc.stdout is not None
+    seen, deadline = "", time.monotonic() + 120
+    while time.monotonic() < deadline:
+        line = proc.stdout.readline()
+        seen += line
+        if re.search(r"navsearch crate: \d+/300 sims, [1-9]\d* distinct failure", line) or not line:
+            break
+    proc.send_signal(signal.SIGTERM)
+    out = seen + proc.communicate(timeout=120)[0]
+    assert proc.returncode == pytest.ExitCode.INTERRUPTED, out[-3000:]
+    assert "CUT SHORT: interrupted" in out
+    sims = int(re.search(r"\): (\d+)/300 sims", out).group(1))
+    folder = pytester.path / "scenarios" / "regressions" / "crate"
+    log = [json.loads(line) for line in (folder / "search-log.jsonl").read_text().splitlines()]
+    assert 0 < sims < 300 and len([r for r in log if r["phase"] == "search"]) == sims
+    assert sorted(folder.glob("crate-*.yaml")), out[-3000:]
