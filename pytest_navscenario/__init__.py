@@ -12,6 +12,7 @@ glue at the top down to the scenario model (imports only point down, checked in 
 
     plugin/  cli/          pytest hooks, options, items; the ``navscenario`` console script
     search/  report/  ros/ failure search and freezing; results, compare, plots, HTML; bags, imports
+    dispatch/              batches of episodes on this machine's cores or as Ray tasks
     harness/               run one scenario against one subject; the planner conformance check
     verdict/               oracle (outcome), metrics, shortest paths, the episode result
     sim/                   MuJoCo world, control loop, lidar, safety layer (the only mujoco user)
