@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import os
 import signal
+import sys
 import threading
 import time
 from pathlib import Path
@@ -20,12 +21,17 @@ import pytest_navscenario.harness.runner  # noqa: E402,F401
 from ray_fixtures import SUITE, item_lines, planners_on_worker_path, restore_pythonpath, write_suite  # noqa: E402
 
 
+SEARCH_DIR = Path(__file__).resolve().parents[1] / "search"
+sys.path.insert(0, str(SEARCH_DIR))   # test_search, test_search_parallel
+
+
 @pytest.fixture(scope="module")
 def cluster(tmp_path_factory: pytest.TempPathFactory):
     from ray.cluster_utils import Cluster
 
     folder = tmp_path_factory.mktemp("cluster-planners")
     old = planners_on_worker_path(folder)
+    (folder / "straight_planner.py").write_text((SEARCH_DIR / "straight_planner.py").read_text())
     nodes = Cluster(initialize_head=True, head_node_args={"num_cpus": 1, "include_dashboard": False})
     try:
         nodes.add_node(num_cpus=1)
@@ -99,3 +105,25 @@ def test_nodes_that_cannot_load_the_subject_are_named_before_any_episode(pyteste
     assert "pip install it on each node" in err
     after = (folder / "resets.log").read_text() if (folder / "resets.log").exists() else ""
     assert after == before                                                 # no episode ran
+
+
+def test_a_search_on_two_nodes_writes_what_a_serial_run_writes(pytester: pytest.Pytester, cluster, monkeypatch):
+    from test_search import SEED_YAML
+    from test_search_parallel import files, log_without_times, without_timestamps
+    address, folder = cluster
+    monkeypatch.syspath_prepend(str(folder))       # the serial run loads the subject here
+    (pytester.path / "scenarios").mkdir()
+    (pytester.path / "scenarios" / "crate.yaml").write_text(SEED_YAML.replace("name: crate\n", ""))
+    pytester.makeini("[pytest]\nnav_scenario_paths = scenarios\n")
+    args = ["-p", "no:cacheprovider", "--nav-subject=straight_planner:Straight", "--navsearch", "crate",
+            "--budget", "24", "--navsearch-seed", "2"]
+    serial = pytester.runpytest(*args, "--navsearch-out", "serial")
+    on_ray = pytester.runpytest(*args, f"--nav-ray={address}", "--navsearch-out", "ray")
+    assert serial.ret == on_ray.ret == 0, on_ray.stdout.str()
+    a, b = files(pytester.path / "serial"), files(pytester.path / "ray")
+    assert sorted(a) == sorted(b) and len(a) >= 2
+    for name in a:
+        if name.endswith("search-log.jsonl"):
+            assert log_without_times(a[name]) == log_without_times(b[name])
+        else:
+            assert without_timestamps(a[name]) == without_timestamps(b[name]), name

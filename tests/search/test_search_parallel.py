@@ -111,3 +111,10 @@ def test_interrupting_a_search_under_n2_keeps_what_it_found(project: pytest.Pyte
     notes = [f.read_text() for f in frozen]
     assert any("not shrunk: the search was interrupted" in text for text in notes) or \
         any(r["phase"] == "shrink" for r in log)            # interrupted while shrinking: the rest are
+
+
+def test_a_negative_worker_count_is_a_usage_error(project: pytest.Pytester):
+    result = project.runpytest("-p", "no:cacheprovider", "--nav-subject=straight_planner:Straight",
+                               "--navsearch", "crate", "-n", "-1")
+    assert result.ret == pytest.ExitCode.USAGE_ERROR
+    assert "-n -1: the number of worker processes must be 0 or more" in result.stderr.str()
