@@ -95,6 +95,16 @@ def _pool_run(key: int, job: Any) -> Any:
     return run_job(job)
 
 
+class _Warm:
+    """A job that does nothing: submitted to start the workers ahead of the first real batch."""
+
+    def run(self) -> None:
+        return None
+
+    def restore(self, outcome: None) -> None:
+        return None
+
+
 class ProcessExecutor:
     """Jobs on ``workers`` local worker processes (created on the first submit, reused)."""
 
@@ -122,6 +132,11 @@ class ProcessExecutor:
                                              initargs=(writer,))
             self._generation += 1
         return self._pool
+
+    def warm(self) -> None:
+        """Start the workers now, in the background (the forkserver imports the simulation once,
+        ~0.5-1.5 s), so that they are ready when the first batch comes."""
+        self.submit([_Warm() for _ in range(self.workers)])
 
     def check_picklable(self, subject: Any) -> None:
         """ValueError if ``subject`` cannot be sent to a worker (e.g. a lambda from a hook)."""

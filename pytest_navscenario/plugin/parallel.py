@@ -102,6 +102,7 @@ def pytest_sessionstart(session: pytest.Session) -> None:
             except ValueError as exc:
                 raise pytest.UsageError(f"navscenario: -n {workers} with --navsearch: {exc}") from None
         state.executor = pool
+        pool.warm()   # the workers start while pytest collects and the search sets up
         return
     if state.settings.ray is None:
         return
