@@ -102,6 +102,7 @@ def pytest_sessionstart(session: pytest.Session) -> None:
             except ValueError as exc:
                 raise pytest.UsageError(f"navscenario: -n {workers} with --navsearch: {exc}") from None
         state.executor = pool
+        config.add_cleanup(lambda: pool.close(cancel=True))   # also if a later check stops the run
         pool.warm()   # the workers start while pytest collects and the search sets up
         return
     if state.settings.ray is None:
@@ -114,6 +115,7 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     except RaySetupError as exc:
         raise pytest.UsageError(f"navscenario: {exc}") from None
     state.executor = executor
+    config.add_cleanup(lambda: executor.close(cancel=True))   # also if a later check stops the run
     try:
         state.executor_notes = executor.check_nodes(state.subject.runner_arg, os.getcwd())
     except RaySetupError as exc:
