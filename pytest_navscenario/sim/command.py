@@ -94,22 +94,20 @@ class Drive:
 
     def __init__(self, robot: Robot, tick_dt: float):
         limits = robot.limits
-        self.max_v = limits.max_speed
-        self.max_vy = limits.max_lateral_speed if robot.drive == "omni" else 0.0
-        self.max_w = math.radians(limits.max_yaw_rate)
-        self.dv = limits.max_accel * tick_dt
-        self.dw = math.radians(limits.max_yaw_accel) * tick_dt
-        self.vx = self.vy = self.wz = 0.0     # the setpoint, robot frame
+        # (max vx, max vy, max wz, largest setpoint change per tick in v, in wz): one tuple, read
+        # with one attribute load per tick
+        self.limits = (limits.max_speed, limits.max_lateral_speed if robot.drive == "omni" else 0.0,
+                       math.radians(limits.max_yaw_rate), limits.max_accel * tick_dt,
+                       math.radians(limits.max_yaw_accel) * tick_dt)
+        self.current = (0.0, 0.0, 0.0)     # the setpoint (vx, vy, wz), robot frame
 
     def setpoint(self, vx: float, vy: float, wz: float) -> tuple[float, float, float]:
         """The new setpoint for the command (vx, vy, wz)."""
-        max_v, max_vy, max_w, dv, dw = self.max_v, self.max_vy, self.max_w, self.dv, self.dw
+        max_v, max_vy, max_w, dv, dw = self.limits
         vx = max_v if vx > max_v else (-max_v if vx < -max_v else vx)
         vy = max_vy if vy > max_vy else (-max_vy if vy < -max_vy else vy)
         wz = max_w if wz > max_w else (-max_w if wz < -max_w else wz)
-        sp_vx, sp_vy, sp_wz = self.vx, self.vy, self.wz
-        sp_vx += min(dv, max(-dv, vx - sp_vx))
-        sp_vy += min(dv, max(-dv, vy - sp_vy))
-        sp_wz += min(dw, max(-dw, wz - sp_wz))
-        self.vx, self.vy, self.wz = sp_vx, sp_vy, sp_wz
-        return sp_vx, sp_vy, sp_wz
+        sp_vx, sp_vy, sp_wz = self.current
+        self.current = sp = (sp_vx + min(dv, max(-dv, vx - sp_vx)), sp_vy + min(dv, max(-dv, vy - sp_vy)),
+                             sp_wz + min(dw, max(-dw, wz - sp_wz)))
+        return sp
