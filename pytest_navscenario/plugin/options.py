@@ -18,7 +18,7 @@ DEFAULT_SCENARIO_PATHS = ["scenarios"]
 DEFAULT_ARTIFACTS = "nav-artifacts"
 DEFAULT_TICK_LIMIT = 1.0
 
-# (option, ini name, help); used for --help, the ini registration and the README table.
+# (option, ini name, help); used for --help, the ini registration and the docs (docs/reference/options.md).
 OPTIONS = (
     ("--nav-subject", "nav_subject",
      "planner under test: 'package.module:Attribute' (a class or zero-argument factory) or a "

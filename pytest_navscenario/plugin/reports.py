@@ -55,6 +55,10 @@ OPTIONS = (
      "write one self-contained HTML report (summary, comparison, every failure's plot) to this file"),
 )
 
+METAVARS = {"nav_baseline": "FILE", "nav_baseline_mode": "fail|warn", "nav_baseline_subject": "SPEC",
+            "nav_plots": "failed|all|none", "nav_plots_max": "N", "nav_plots_dir": "DIR",
+            "nav_html": "FILE"}
+
 
 @dataclass
 class ReportSettings:
@@ -91,8 +95,7 @@ REPORT_KEY = pytest.StashKey[ReportState]()
 def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("navscenario", "navigation scenarios (pytest-navscenario)")
     for opt, ini, default, text in OPTIONS:
-        group.addoption(opt, dest=ini, default=None, metavar=ini.split("_", 1)[1].upper(),
-                        help=f"{text} [ini: {ini}]")
+        group.addoption(opt, dest=ini, default=None, metavar=METAVARS[ini], help=f"{text} [ini: {ini}]")
         parser.addini(ini, text, default=default)
 
 

@@ -47,7 +47,7 @@ from .yaml_tree import YMap, YNode, YScalar, YSeq, describe, from_plain, parse_y
 
 SUPPORTED_VERSIONS = (SCHEMA_VERSION,)
 
-#: Limits that keep hostile or absurd files from hanging or crashing a run (documented in the README).
+#: Limits that keep hostile or absurd files from hanging or crashing a run (documented in docs/reference/scenario-format.md).
 SCENARIO_LIMITS: Mapping[str, float] = MappingProxyType({
     "max_file_bytes": 5_000_000,       # a scenario file larger than this is refused unread
     "max_depth": 64,                    # YAML nesting levels
