@@ -20,7 +20,7 @@ from typing import Any
 _EXPORTS = {name: "world" for name in (
     "compiled_world", "clear_model_cache", "build_spec", "model_xml", "World", "steps_per_tick",
     "wrap_angle", "LIDAR_HEIGHT", "ROBOT_HEIGHT", "ROBOT_MASS", "TRACKING_TAU", "FORCE_HEADROOM",
-    "MODEL_CACHE_SIZE")}
+    "MODEL_CACHE_SIZE", "TWO_PI")}
 _EXPORTS.update(simulate="episode", SimResult="episode", Episode="episode", STILL="episode",
                 validate_command="command", lidar_angles="lidar",
                 SafetyLayer="safety", TickDeadline="deadline", PlannerTimeout="deadline",

@@ -172,7 +172,8 @@ class Episode:
     # ------------------------------------------------------------ the episode
 
     def run(self) -> SimResult:
-        """Start, then tick until a step ends the episode; the MjData goes back to the pool."""
+        """Start, then tick until a step ends the episode (call once); the MjData goes back to the
+        pool."""
         deadline = self.deadline
         if deadline is not None:
             deadline.__enter__()
@@ -183,7 +184,8 @@ class Episode:
             except EpisodeOver as over:
                 self.end = over.reason
             if self.warn_count.any():   # the authoritative per-data counters, once per episode
-                raise SimulationDivergedError(divergence_message(self.scenario, self.data, self.i * self.dt))
+                raise SimulationDivergedError(
+                    divergence_message(self.scenario, self.data, self.i * self.dt))
         finally:
             if deadline is not None:
                 deadline.__exit__(None, None, None)
@@ -316,7 +318,8 @@ class Episode:
         m, d, world = self.model, self.data, self.world
         qpos, qvel, pose_buf, qvel_buf = self.qpos, self.qvel, self.pose_buf, self.qvel_buf
         step = mujoco.mj_step
-        self.ctrl[:] = setpoint
+        ctrl = self.ctrl
+        ctrl[0], ctrl[1], ctrl[2] = setpoint     # three scalar writes: cheaper than ctrl[:] = tuple
         t0 = perf_counter()
         collision = None
         mujoco.mj_step2(m, d)

@@ -446,3 +446,19 @@ def test_a_graze_between_two_ticks_is_caught_by_the_per_step_contact_check():
                    Constant((0.5, -0.5, 0.0)), 0)
     assert hit.end == "collision" and hit.collision.obstacle == "pin"
     assert hit.collision.time == pytest.approx(free.trajectory.t[overlap][0])
+
+
+def test_every_name_of_the_old_flat_sim_module_still_resolves():
+    # before 0.2, pytest_navscenario.sim was one module; user code importing its public names from
+    # pytest_navscenario.sim keeps working through the package's lazy exports
+    import pytest_navscenario.sim as sim
+
+    old = ("FORCE_HEADROOM", "LIDAR_HEIGHT", "MODEL_CACHE_SIZE", "ROBOT_HEIGHT", "ROBOT_MASS", "STILL",
+           "SimResult", "TRACKING_TAU", "TWO_PI", "World", "build_spec", "clear_model_cache",
+           "compiled_world", "lidar_angles", "model_xml", "simulate", "steps_per_tick",
+           "validate_command", "wrap_angle")
+    for name in old:
+        assert getattr(sim, name) is not None, name
+    assert sim.simulate is simulate and sim.lidar_angles is lidar_angles
+    with pytest.raises(AttributeError, match="see its modules episode, world, lidar"):
+        sim.no_such_name  # noqa: B018
