@@ -72,6 +72,7 @@ class Lidar:
         self.angles = angles.view()              # read-only, like its base
         self.beams = beams = len(angles)
         self.rot = np.zeros((3, 3))              # world dirs = local dirs @ rot (one matmul)
+        self.rot_flat = self.rot.reshape(-1)     # written through: 1-D indices are the cheapest
         self.dirs = np.zeros((beams, 3))
         self.dirs_flat = self.dirs.reshape(-1)
         self.pnt = np.array([0.0, 0.0, LIDAR_HEIGHT])
@@ -92,10 +93,10 @@ class Lidar:
         """Ranges (read-only float32) of the robot at (x, y) with heading (cos, sin) = (c, s),
         recorded as row ``tick``; no return reads as range_max."""
         dist, rmin, rmax = self.dist, self.range_min, self.range_max
-        rot = self.rot
-        rot[0, 0] = rot[1, 1] = c     # four scalar writes: cheaper than one from a nested tuple
-        rot[0, 1], rot[1, 0] = s, -s
-        np.dot(self.local_dirs, rot, out=self.dirs)
+        rot = self.rot_flat
+        rot[0] = rot[4] = c           # four scalar writes: cheaper than one from a nested tuple
+        rot[1], rot[3] = s, -s        # (rot = [[c, s, 0], [-s, c, 0], [0, 0, 0]])
+        np.dot(self.local_dirs, self.rot, out=self.dirs)
         pnt = self.pnt
         pnt[0], pnt[1] = x, y
         if self.beams:
