@@ -7,9 +7,11 @@ the planner; then each control tick it observes (true state, mission progress, l
 the safety layer, asks the planner to act (under the tick deadline, command validated, drive
 limits), records, and steps the physics one step at a time with a contact check after each step.
 
-The loop is the hot path of every suite and search (~10 us of it per tick): each step is a method
-whose hot values are bound to locals, per-tick facts go into lists, physics-rate states into
-preallocated arrays, and the planner sees read-only views of rows written once.
+The loop is the hot path of every suite and search (besides MuJoCo and the planner, ~10 us a tick):
+each step is a method that binds its hot values to locals; per-tick facts go into lists,
+physics-rate states into preallocated arrays, and the planner sees read-only views of rows written
+once. ``benchmarks/bench_episode.py`` measures it, ``benchmarks/check_bit_identical.py`` checks that
+a change to it keeps every trajectory's bits.
 """
 from __future__ import annotations
 
@@ -67,14 +69,14 @@ class MissionProgress:
     def __init__(self, mission: Mission):
         wps = np.array([[w.x, w.y] for w in mission.waypoints], dtype=float).reshape(-1, 2)
         wps.flags.writeable = False
-        self._points = [tuple(p) for p in wps.tolist()]
+        self._points = wps.tolist()         # [x, y] of the waypoints not passed yet
         self._all = wps
         self.left = wps[0:]                 # the waypoints still to pass (read-only, for the planner)
         self.passed_at: list[float] = []    # when each waypoint was passed
         goal = np.array([mission.goal.x, mission.goal.y, mission.goal.yaw_rad])
         goal.flags.writeable = False
         self.goal = goal                    # (x, y, yaw) read-only, for the planner
-        self._gx, self._gy, self._gyaw = float(goal[0]), float(goal[1]), float(goal[2])
+        self._gx, self._gy, self._gyaw = goal.tolist()
         self._pos_tol = mission.goal_tolerance.position
         yaw_tol = mission.goal_tolerance.yaw
         self._yaw_tol = None if yaw_tol is None else math.radians(yaw_tol)
