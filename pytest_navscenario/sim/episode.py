@@ -170,6 +170,8 @@ class Episode:
         readonly = self.seen.view()
         readonly.flags.writeable = False
         self.seen_pose, self.seen_vel = readonly[:, :3], readonly[:, 3:]
+        self.stepping = (self.model, self.data, self.ctrl, self.qpos, self.qvel, self.pose_buf,
+                         self.qvel_buf)
 
     # ------------------------------------------------------------ the episode
 
@@ -317,10 +319,8 @@ class Episode:
         right after it) and advances; a last mj_step1 checks the tick's final state. spt + 1 calls
         instead of 2 * spt; the physics is the same as mj_step's.
         """
-        m, d, world = self.model, self.data, self.world
-        qpos, qvel, pose_buf, qvel_buf = self.qpos, self.qvel, self.pose_buf, self.qvel_buf
+        m, d, ctrl, qpos, qvel, pose_buf, qvel_buf = self.stepping   # one attribute load a tick
         step = mujoco.mj_step
-        ctrl = self.ctrl
         ctrl[0], ctrl[1], ctrl[2] = setpoint     # three scalar writes: cheaper than ctrl[:] = tuple
         t0 = perf_counter()
         collision = None
@@ -331,7 +331,7 @@ class Episode:
         for _ in range(self.spt - 1):
             step(m, d)
             if d.ncon:   # contacts of state i (the data has moved on to i + 1: not recorded)
-                collision = world.first_collision(d, self.obstacles, i * self.dt)
+                collision = self.world.first_collision(d, self.obstacles, i * self.dt)
                 if collision is not None:
                     break
             i += 1
@@ -340,7 +340,7 @@ class Episode:
         else:
             mujoco.mj_step1(m, d)
             if d.ncon:
-                collision = world.first_collision(d, self.obstacles, i * self.dt)
+                collision = self.world.first_collision(d, self.obstacles, i * self.dt)
         self.i = i
         self.t_physics += perf_counter() - t0
         if collision is not None:
