@@ -1,0 +1,65 @@
+"""The ``navscenario from-bag`` command line: its arguments and what it writes."""
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .reading import PATH_AS
+from .seed import scenario_from_bag
+
+
+def _triple(text: str) -> tuple[float, float, float]:
+    try:
+        parts = [float(v) for v in text.split(",")]
+    except ValueError:
+        parts = []
+    if len(parts) != 3 or not all(math.isfinite(v) for v in parts):
+        raise argparse.ArgumentTypeError(f"expected x,y,yaw (metres, metres, degrees), got {text!r}")
+    return parts[0], parts[1], parts[2]
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("bag", help="ROS 1 .bag file, rosbag2 folder, or .mcap/.db3 file")
+    p.add_argument("-o", "--output", required=True, help="seed scenario YAML to write (an existing file is kept unless --force)")
+    p.add_argument("--start", type=float, default=None, help="window start, seconds after the first odometry message")
+    p.add_argument("--end", type=float, default=None, help="window end, seconds after the first odometry message")
+    p.add_argument("--odom-topic", default=None, help="nav_msgs/Odometry topic (default: found by type)")
+    p.add_argument("--scan-topic", default=None, help="sensor_msgs/LaserScan topic (default: found by type)")
+    p.add_argument("--laser-pose", type=_triple, default=None, metavar="X,Y,YAW",
+                   help="laser pose in the odometry child frame (m, m, degrees; write --laser-pose=-0.064,0,0 "
+                        "for a negative first value); default /tf_static, else the first /tf transforms, else guessed "
+                        "from the scans among the common mountings (turned 0, 90, 180, -90 degrees)")
+    p.add_argument("--path-as", choices=PATH_AS, default="waypoints",
+                   help="driven path as decimated waypoints (default), a reference trajectory (CSV t,x,y beside "
+                        "the seed, for the reference deviation metrics) or both")
+    p.add_argument("--robot-radius", type=float, default=0.15, metavar="M",
+                   help="the seed robot's circular footprint radius, m (default 0.15; edit the seed for a box)")
+    p.add_argument("--name", default="", help="scenario name (default: the output file's stem)")
+    p.add_argument("--force", action="store_true", help="overwrite an existing output file")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..world_import import write_seed
+    out = Path(args.output)
+    csv_name = f"{out.stem}.reference.csv"
+    seed = scenario_from_bag(args.bag, odom_topic=args.odom_topic, scan_topic=args.scan_topic,
+                             start=args.start, end=args.end, laser_pose=args.laser_pose,
+                             path_as=args.path_as, reference_file=csv_name, name=args.name,
+                             robot_radius=args.robot_radius)
+    extra = {}
+    if args.path_as != "waypoints":
+        extra[csv_name] = reference_csv(seed.path)
+    write_seed(seed.scenario, out, extra_files=extra, force=args.force)
+    for note in seed.notes:
+        print(f"navscenario from-bag: {note}")
+    print(f"navscenario from-bag: wrote {out}" + (f" and {out.parent / csv_name}" if extra else ""))
+    return 0
+
+
+def reference_csv(rows: np.ndarray) -> str:
+    """The reference trajectory file: a ``t,x,y`` header and one row per odometry message."""
+    lines = ["t,x,y"] + [f"{t:.3f},{x:.4f},{y:.4f}" for t, x, y in rows]
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,197 @@
+"""Building the seed: start, goal, driven path, limits, lidar and robot from what was read and fitted."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ...scenario.model import (
+    CylinderObstacle,
+    Footprint,
+    GoalTolerance,
+    Lidar,
+    Limits,
+    Mission,
+    Obstacle,
+    Pose,
+    Reference,
+    Robot,
+    Scenario,
+)
+from .mount import GUESS_TRIED, estimate_mount, laser_mount
+from .obstacles import FitSettings, _r, fit_obstacles, occupied_clusters
+from .projection import grid_returns
+from .reading import PATH_AS, BagData, BagImportError, read_bag
+
+
+def _peak_rates(od: np.ndarray, window: float = 0.5) -> tuple[float, float]:
+    """98th-percentile speed (m/s) and yaw rate (rad/s) over ``window``-second steps (odometry
+    jitter makes per-message differences useless for limits)."""
+    if len(od) < 2 or od[-1, 0] - od[0, 0] <= 0:
+        return 0.0, 0.0
+    t = np.arange(od[0, 0], od[-1, 0], window / 5)
+    if len(t) < 6:
+        return 0.0, 0.0
+    x, y = np.interp(t, od[:, 0], od[:, 1]), np.interp(t, od[:, 0], od[:, 2])
+    yaw = np.interp(t, od[:, 0], np.unwrap(od[:, 3]))
+    speed = np.hypot(x[5:] - x[:-5], y[5:] - y[:-5]) / window
+    rate = np.abs(yaw[5:] - yaw[:-5]) / window
+    return float(np.percentile(speed, 98)), float(np.percentile(rate, 98))
+
+
+@dataclass
+class BagSeed:
+    """The importer's result: the scenario, the driven path (t, x, y) and what to tell the user."""
+    scenario: Scenario
+    path: np.ndarray
+    notes: list[str]
+    mount: tuple[float, float, float] | None = None
+
+
+def decimate_path(xy: np.ndarray, tolerance: float = 0.15, min_spacing: float = 0.5) -> np.ndarray:
+    """Waypoints that follow the driven path within ``tolerance`` (Douglas-Peucker), no two
+    closer than ``min_spacing``; excludes the first and last point (start and goal)."""
+    from shapely.geometry import LineString
+    if len(xy) < 3:
+        return np.zeros((0, 2))
+    simple = np.asarray(LineString(xy).simplify(tolerance, preserve_topology=False).coords)
+    pts = [simple[0]]
+    for p in simple[1:-1]:
+        if np.hypot(*(p - pts[-1])) >= min_spacing:
+            pts.append(p)
+    inner = np.asarray(pts[1:])
+    if len(inner) and np.hypot(*(inner[-1] - simple[-1])) < min_spacing:
+        inner = inner[:-1]
+    return inner.reshape(-1, 2)
+
+
+def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_topic: str | None = None,
+                      start: float | None = None, end: float | None = None,
+                      laser_pose: tuple[float, float, float] | None = None,
+                      path_as: str = "waypoints", reference_file: str | None = None,
+                      name: str = "", robot_radius: float = 0.15,
+                      settings: FitSettings = FitSettings()) -> BagSeed:
+    """Build a seed scenario from a bag (see the package docstring). ``laser_pose`` is x, y (m),
+    yaw (degrees) of the laser in the robot's base frame; ``robot_radius`` the seed's circular
+    footprint (m); ``reference_file`` is the CSV name
+    written into ``scenario.reference`` when ``path_as`` is ``"reference"`` or ``"both"``
+    (waypoints to drive the loop and the reference to measure how closely the run replays it)."""
+    if not (math.isfinite(robot_radius) and 0 < robot_radius <= 5):
+        raise BagImportError(f"--robot-radius must be a length in (0, 5] m, got {robot_radius}")
+    if path_as not in PATH_AS:
+        raise BagImportError(f"--path-as must be one of {', '.join(PATH_AS)}, got {path_as!r}")
+    data = read_bag(path, odom_topic=odom_topic, scan_topic=scan_topic, start=start, end=end)
+    notes = list(data.notes)
+    obstacles: list[Obstacle] = []
+    mount = None
+    if data.scan_topic is not None:
+        mount, how = choose_mount(data, laser_pose)
+        notes.append(f"laser {data.scan_frame} at x={mount[0]:.3f} y={mount[1]:.3f} "
+                     f"yaw={math.degrees(mount[2]):.1f} deg in {data.base_frame}, {how}")
+        obstacles = _obstacles_from_scans(data, mount, settings, notes)
+        check_path_free(data, obstacles, robot_radius, how)
+    scenario, summary = _scenario(data, obstacles, path_as, reference_file, name, robot_radius)
+    notes.append(summary)
+    od = data.odom
+    path_rows = np.stack([od[:, 0] - od[0, 0], od[:, 1], od[:, 2]], axis=1)
+    return BagSeed(scenario=scenario, path=path_rows, notes=notes, mount=mount)
+
+
+def choose_mount(data: BagData, laser_pose: tuple[float, float, float] | None) -> tuple[tuple[float, float, float], str]:
+    """The laser's mounting (x, y, yaw rad) and where it came from: ``--laser-pose``, /tf_static,
+    the first /tf transforms, else guessed from the scans."""
+    if laser_pose is not None:
+        return (laser_pose[0], laser_pose[1], math.radians(laser_pose[2])), "from --laser-pose"
+    mount = laser_mount(data)
+    if mount is not None:
+        return mount, "from /tf_static"
+    if data.first_tf:
+        mount = laser_mount(data, "/tf")
+        if mount is not None:
+            return mount, "from the first /tf transforms (no /tf_static)"
+    return estimate_mount(data), (f"guessed: estimated from the scans (no transform {data.base_frame} -> {data.scan_frame} "
+                                  f"on /tf_static or /tf; tried {GUESS_TRIED}); pass --laser-pose=X,Y,YAW "
+                                  f"(m, m, degrees) to give it")
+
+
+def _obstacles_from_scans(data: BagData, mount, settings: FitSettings, notes: list[str]) -> list[Obstacle]:
+    grid = grid_returns(data, mount, settings.res)
+    clusters, dropped = occupied_clusters(grid, link=settings.link)
+    obstacles = fit_obstacles(clusters, settings, free_xy=data.odom[:, 1:3])
+    n_cyl = sum(isinstance(o, CylinderObstacle) for o in obstacles)
+    notes.append(f"{len(data.scan_t)} scans, {grid.returns} returns -> {len(clusters)} clusters -> "
+                 f"{n_cyl} cylinders, {len(obstacles) - n_cyl} boxes"
+                 + (f" ({dropped} specks of < 3 cells ignored as noise)" if dropped else ""))
+    return obstacles
+
+
+def check_path_free(data: BagData, obstacles: list[Obstacle], radius: float, how: str) -> None:
+    """Raise when a fitted obstacle overlaps the robot's footprint at the start, the goal or a pose
+    it drove through: the robot was there, so the laser's mounting (or pose) is wrong, and the
+    error says where the mounting came from and how to give it."""
+    import shapely
+
+    from ...scenario.geometry import obstacle_polygon
+
+    if not obstacles:
+        return
+    od = data.odom
+    step = np.hypot(*np.diff(od[:, 1:3], axis=0).T).cumsum()
+    keep = np.r_[0, np.nonzero(np.diff(np.floor(step / 0.05)) > 0)[0] + 1, len(od) - 1]
+    pts = shapely.points(od[keep, 1:3])
+    for o in obstacles:
+        hit = shapely.distance(obstacle_polygon(o), pts) < radius - 1e-3
+        if hit.any():
+            k = keep[int(np.argmax(hit))]
+            where = "the start" if k == 0 else "the goal" if k == len(od) - 1 else "the driven path"
+            raise BagImportError(
+                f"{data.path}: the obstacles fitted from {data.scan_topic} overlap the robot's footprint "
+                f"(radius {radius} m) on {where} (t={od[k, 0]:.1f} s, x={od[k, 1]:.2f}, y={od[k, 2]:.2f}: "
+                f"{o.name}), where the robot drove: the laser mounting is likely wrong. It was {how}. "
+                f"Give it with --laser-pose=X,Y,YAW (the laser in {data.base_frame}, from the robot's URDF), "
+                f"or a smaller --robot-radius if the robot is smaller")
+
+
+def _scenario(data: BagData, obstacles: list[Obstacle], path_as: str, reference_file: str | None,
+              name: str, robot_radius: float) -> tuple[Scenario, str]:
+    """The seed scenario from the odometry window and the obstacles, and a one-line summary."""
+    od = data.odom
+    start_pose = Pose(_r(od[0, 1]), _r(od[0, 2]), _r(math.degrees(od[0, 3]), 2))
+    goal_pose = Pose(_r(od[-1, 1]), _r(od[-1, 2]), _r(math.degrees(od[-1, 3]), 2))
+    length = float(np.hypot(*np.diff(od[:, 1:3], axis=0).T).sum())
+    duration = float(od[-1, 0] - od[0, 0])
+    waypoints: tuple[Pose, ...] = ()
+    reference = None
+    if path_as in ("waypoints", "both"):
+        waypoints = tuple(Pose(_r(x), _r(y)) for x, y in decimate_path(od[:, 1:3]))
+    if path_as in ("reference", "both"):
+        reference = Reference(file=reference_file or "reference.csv")
+    robot = _robot(data, robot_radius)
+    limits = robot.limits
+    timeout = _r(max(30.0, math.ceil(max(duration, length / max(limits.max_speed, 0.1)) * 2.0 + 10.0)), 1)
+    scenario = Scenario(
+        mission=Mission(start=start_pose, goal=goal_pose, waypoints=waypoints,
+                        goal_tolerance=GoalTolerance(position=0.3), timeout=timeout),
+        obstacles=tuple(obstacles), robot=robot, reference=reference, name=name,
+        description=(f"Seed from {Path(data.path).name}: {data.odom_topic} ({length:.1f} m in {duration:.1f} s)"
+                     + (f", obstacles from {data.scan_topic}" if data.scan_topic else ", no obstacles (no scans)")
+                     + f"; frame {data.odom_frame}."),
+    )
+    summary = (f"path {length:.1f} m in {duration:.1f} s: "
+               + ", ".join(([f"{len(waypoints)} waypoints"] if path_as != "reference" else [])
+                           + ([f"reference trajectory of {len(od)} poses"] if path_as != "waypoints" else [])))
+    return scenario, summary
+
+
+def _robot(data: BagData, robot_radius: float) -> Robot:
+    """A circular robot with limits 20 % above the recorded peaks and the bag's laser."""
+    speed, yaw_rate = _peak_rates(data.odom)
+    # 20 % above the real peak speed, rounded up to 0.05 m/s: headroom for the planner
+    limits = Limits(max_speed=_r(max(0.2, math.ceil(speed * 1.2 * 20) / 20), 2),
+                    max_yaw_rate=_r(max(30.0, math.ceil(math.degrees(yaw_rate) * 1.2 / 5) * 5), 1))
+    lidar = Lidar(beams=min(len(data.scan_angles), 360) if data.scan_topic else 72,
+                  range_max=_r(data.range_max if data.scan_topic and math.isfinite(data.range_max) else 8.0, 2),
+                  range_min=_r(data.range_min if data.scan_topic else 0.05, 3))
+    return Robot(footprint=Footprint(shape="circle", radius=robot_radius), drive="diff", limits=limits, lidar=lidar)
