@@ -48,7 +48,6 @@ def estimate_mount(data: BagData, res: float = 0.02) -> tuple[float, float, floa
     base frame (TurtleBot3 Waffle: -0.064 m) smears round obstacles into rings, a laser turned
     backwards mirrors the world around the robot.
     """
-    best = None
     sub = slice(None, None, max(1, len(data.scan_t) // 150))  # 150 scans suffice to compare
     part = BagData(path=data.path, odom_topic=data.odom_topic, odom_frame=data.odom_frame,
                    base_frame=data.base_frame, odom=data.odom, scan_t=data.scan_t[sub],
