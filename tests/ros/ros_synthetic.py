@@ -127,3 +127,94 @@ def loop_drive(n: int = 300, dt: float = 0.1, radius: float = 2.0) -> np.ndarray
     t = np.arange(n) * dt
     a = t * (2 * math.pi / (n * dt))
     return np.stack([t, radius * np.cos(a), radius * np.sin(a), a + math.pi / 2], 1)
+
+
+def compose(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Planar poses (..., 3): ``a`` then ``b`` expressed in ``a``."""
+    c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
+    return np.stack([a[..., 0] + c * b[..., 0] - s * b[..., 1], a[..., 1] + s * b[..., 0] + c * b[..., 1],
+                     a[..., 2] + b[..., 2]], axis=-1)
+
+
+def invert(a: np.ndarray) -> np.ndarray:
+    c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
+    return np.stack([-(c * a[..., 0] + s * a[..., 1]), s * a[..., 0] - c * a[..., 1], -a[..., 2]], axis=-1)
+
+
+LASER = (0.1, 0.0, 0.2)           # x, y, z of the laser on base_link (turned 0)
+SCAN_ANGLES = np.radians(np.arange(-180.0, 180.0, 1.0))
+
+
+def robot_bag(path: Path, world: World, truth: np.ndarray, *, drift: np.ndarray | None = None,
+              ros1: bool = False, scans: bool = True, cloud: dict | None = None, extra=None,
+              tf_map: bool = True) -> Path:
+    """A bag of a robot driving ``truth`` ((n, 4) t, x, y, yaw in the map frame) through ``world``.
+
+    ``drift`` ((n, 3) the map -> odom transform at each time): the odometry is the truth seen
+    through it (odom = drift^-1 . truth) and the exact correction is published on /tf. Scans at
+    every pose from a laser at LASER (on /tf_static); ``cloud``: keyword arguments of
+    ``cloud_points`` (azimuths, elevations, z) plus "layout" ("velodyne" or "ouster") for a
+    PointCloud2 on /points instead of (or beside) the scans. ``extra(bag)`` writes more.
+    """
+    drift = np.zeros((len(truth), 3)) if drift is None else drift
+    odom = compose(invert(drift), truth[:, 1:4])
+    with BagOut(path, ros1=ros1) as bag:
+        t0 = truth[0, 0]
+        bag.write("/tf_static", "tf2_msgs/msg/TFMessage", t0, {"transforms": [
+            {"header": {"stamp": stamp(t0), "frame_id": "base_link"}, "child_frame_id": "laser",
+             "transform": {"translation": dict(zip("xyz", LASER)), "rotation": {"w": 1.0}}}]})
+        for (t, x, y, yaw), (ox, oy, oyaw), (dx, dy, dyaw) in zip(truth, odom, drift):
+            bag.write("/odom", "nav_msgs/msg/Odometry", t, {
+                "header": {"stamp": stamp(t), "frame_id": "odom"}, "child_frame_id": "base_link",
+                "pose": {"pose": pose_msg(ox, oy, oyaw)}})
+            if tf_map:
+                bag.write("/tf", "tf2_msgs/msg/TFMessage", t, {"transforms": [
+                    {"header": {"stamp": stamp(t), "frame_id": "map"}, "child_frame_id": "odom",
+                     "transform": {"translation": {"x": dx, "y": dy}, "rotation": quat(dyaw)}}]})
+            lx, ly = x + math.cos(yaw) * LASER[0], y + math.sin(yaw) * LASER[0]
+            if scans:
+                bag.write("/scan", "sensor_msgs/msg/LaserScan", t, {
+                    "header": {"stamp": stamp(t), "frame_id": "laser"}, "angle_min": float(SCAN_ANGLES[0]),
+                    "angle_max": float(SCAN_ANGLES[-1]), "angle_increment": float(SCAN_ANGLES[1] - SCAN_ANGLES[0]),
+                    "range_min": 0.05, "range_max": 10.0,
+                    "ranges": laser_ranges(world, lx, ly, yaw, SCAN_ANGLES, z=LASER[2])})
+            if cloud is not None:
+                args = {k: v for k, v in cloud.items() if k != "layout"}
+                pts = cloud_points(world, lx, ly, yaw, **args)
+                bag.write("/points", "sensor_msgs/msg/PointCloud2", t,
+                          cloud_msg(pts, t, cloud.get("layout", "velodyne")))
+        if extra is not None:
+            extra(bag)
+    return path
+
+
+def cloud_msg(pts: np.ndarray, t: float, layout: str) -> dict[str, Any]:
+    """A PointCloud2 of ``pts`` (rings, columns, 3) in a driver's field layout: "velodyne"
+    (x, y, z, intensity float32, ring uint16, time float32; unorganised, NaN points dropped,
+    point_step 22) or "ouster" (organised rings x columns with NaN points kept, x, y, z, pad,
+    intensity, t uint32, reflectivity uint16, ring uint16, ambient uint16, range uint32; step 48)."""
+    if layout == "velodyne":
+        flat = pts.reshape(-1, 3)
+        ring = np.repeat(np.arange(pts.shape[0]), pts.shape[1])
+        ok = np.isfinite(flat).all(axis=1)
+        flat, ring = flat[ok], ring[ok]
+        dt = np.dtype({"names": ["x", "y", "z", "intensity", "ring", "time"],
+                       "formats": ["<f4", "<f4", "<f4", "<f4", "<u2", "<f4"], "offsets": [0, 4, 8, 12, 16, 18],
+                       "itemsize": 22})
+        arr = np.zeros(len(flat), dt)
+        arr["x"], arr["y"], arr["z"], arr["ring"] = flat[:, 0], flat[:, 1], flat[:, 2], ring
+        fields = [("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("intensity", 12, 7), ("ring", 16, 4), ("time", 18, 7)]
+        height, width = 1, len(flat)
+    else:
+        dt = np.dtype({"names": ["x", "y", "z", "intensity", "t", "reflectivity", "ring", "ambient", "range"],
+                       "formats": ["<f4", "<f4", "<f4", "<f4", "<u4", "<u2", "<u2", "<u2", "<u4"],
+                       "offsets": [0, 4, 8, 16, 20, 24, 26, 28, 32], "itemsize": 48})
+        arr = np.zeros(pts.shape[:2], dt)
+        arr["x"], arr["y"], arr["z"] = pts[..., 0], pts[..., 1], pts[..., 2]
+        fields = [("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("intensity", 16, 7), ("t", 20, 6),
+                  ("reflectivity", 24, 4), ("ring", 26, 4), ("ambient", 28, 4), ("range", 32, 6)]
+        height, width = pts.shape[0], pts.shape[1]
+    return {"header": {"stamp": stamp(t), "frame_id": "laser"}, "height": height, "width": width,
+            "fields": [{"name": n, "offset": o, "datatype": d, "count": 1} for n, o, d in fields],
+            "is_bigendian": False, "point_step": dt.itemsize, "row_step": dt.itemsize * width,
+            "data": np.frombuffer(arr.tobytes(), np.uint8), "is_dense": layout == "velodyne"}

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .frames import FRAMES
 from .reading import PATH_AS
 from .seed import scenario_from_bag
 
@@ -32,6 +33,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="laser pose in the odometry child frame (m, m, degrees; write --laser-pose=-0.064,0,0 "
                         "for a negative first value); default /tf_static, else the first /tf transforms, else guessed "
                         "from the scans among the common mountings (turned 0, 90, 180, -90 degrees)")
+    p.add_argument("--frame", choices=FRAMES, default="auto",
+                   help="the seed's world frame: auto (default: the map frame when the bag has map -> odom on /tf "
+                        "or a pose topic in the map frame, else the odometry frame), map (an error without one), odom")
+    p.add_argument("--map-frame", default="map", metavar="FRAME", help="name of the map frame (default map)")
+    p.add_argument("--pose-topic", default=None, metavar="TOPIC",
+                   help="localisation pose topic (PoseWithCovarianceStamped or PoseStamped in the map frame) to use "
+                        "instead of map -> odom on /tf (default: /tf, else /amcl_pose, /pose, /tracked_pose)")
     p.add_argument("--path-as", choices=PATH_AS, default="waypoints",
                    help="driven path as decimated waypoints (default), a reference trajectory (CSV t,x,y beside "
                         "the seed, for the reference deviation metrics) or both")
@@ -48,7 +56,8 @@ def run(args: argparse.Namespace) -> int:
     seed = scenario_from_bag(args.bag, odom_topic=args.odom_topic, scan_topic=args.scan_topic,
                              start=args.start, end=args.end, laser_pose=args.laser_pose,
                              path_as=args.path_as, reference_file=csv_name, name=args.name,
-                             robot_radius=args.robot_radius)
+                             robot_radius=args.robot_radius, frame=args.frame, map_frame=args.map_frame,
+                             pose_topic=args.pose_topic)
     extra = {}
     if args.path_as != "waypoints":
         extra[csv_name] = reference_csv(seed.path)

@@ -14,9 +14,10 @@ import numpy as np
 
 from ...core.errors import NavScenarioError
 
-ODOM_TYPES = ("nav_msgs/msg/Odometry",)
-SCAN_TYPES = ("sensor_msgs/msg/LaserScan",)
-TF_STATIC_TYPES = ("tf2_msgs/msg/TFMessage",)
+from .topics import (CLOUD_TYPES, ODOM_TYPES, SCAN_TYPES, command, footprint_from_params, goal_pose, planar,
+                     pose_of, role, spatial, yaw_of)
+
+CLOUD_TOPICS = ("/points", "/velodyne_points", "/ouster/points", "/lidar_points", "/hesai/pandar")
 PATH_AS = ("waypoints", "reference", "both")
 TF_SCAN_LIMIT = 500  # /tf messages read for the laser mount (the mount is fixed; /tf can be long)
 
@@ -34,7 +35,7 @@ class BagData:
     odom_topic: str
     odom_frame: str
     base_frame: str
-    odom: np.ndarray                  # (n, 4) t, x, y, yaw (rad)
+    odom: np.ndarray                  # (n, 4) t, x, y, yaw (rad) in the time window, in the world frame
     scan_topic: str | None = None
     scan_frame: str = ""
     scan_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
@@ -45,15 +46,21 @@ class BagData:
     static_tf: dict[str, tuple[str, float, float, float]] = field(default_factory=dict)  # child -> (parent, x, y, yaw)
     first_tf: dict[str, tuple[str, float, float, float]] = field(default_factory=dict)   # the same, first seen on /tf
     notes: list[str] = field(default_factory=list)
-
-
-def _yaw(q: Any) -> float:
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
-
-
-def _stamp(header: Any, bag_ns: int) -> int:
-    ns = int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
-    return ns if ns > 0 else bag_ns
+    # beyond odometry and laser (times in s on the same clock as ``odom``; whole bag, not only the window)
+    origin_ns: int = 0                                   # bag stamp of t = 0
+    full_odom: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))  # the whole odometry, odometry frame
+    duration: float = 0.0                                # s, the odometry's whole span
+    static_tf3: dict[str, tuple[str, tuple[float, ...]]] = field(default_factory=dict)  # child -> (parent, x,y,z,q)
+    frame_tf: list[tuple[float, str, str, float, float, float]] = field(default_factory=list)  # t, parent, child, x, y, yaw
+    poses: dict[str, list[tuple[float, str, float, float, float]]] = field(default_factory=dict)  # topic -> t, frame, x, y, yaw
+    goals: list[tuple[float, str, float, float, float, str]] = field(default_factory=list)  # t, frame, x, y, yaw, topic
+    cmd: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))    # t, forward speed, yaw rate
+    description: str | None = None                       # URDF text from /robot_description
+    footprints: list[tuple[str, str, Any]] = field(default_factory=list)  # (source, "polygon"|"radius", value)
+    cloud_topic: str | None = None
+    cloud_frame: str = ""
+    cloud_count: int = 0
+    frame: str = ""                                      # the seed's world frame (odometry or map)
 
 
 def _pick(path: Path, connections: list, wanted: str | None, types: Sequence[str], what: str,
@@ -85,7 +92,7 @@ def _pick(path: Path, connections: list, wanted: str | None, types: Sequence[str
 
 
 def read_bag(path: str | Path, *, odom_topic: str | None = None, scan_topic: str | None = None,
-             start: float | None = None, end: float | None = None) -> BagData:
+             start: float | None = None, end: float | None = None, cloud_topic: str | None = None) -> BagData:
     """Read odometry, laser scans and static transforms; ``start``/``end`` are seconds after
     the first odometry message (message header stamps; the bag's receive time where a stamp is
     zero). Raises BagImportError naming the file and what is missing."""
@@ -102,7 +109,7 @@ def read_bag(path: str | Path, *, odom_topic: str | None = None, scan_topic: str
         what = "a damaged or truncated bag" if _has_bag_magic(path) else "not a readable ROS 1 / rosbag2 bag"
         raise BagImportError(f"{path}: {what} ({_reason(exc)})") from None
     try:
-        return _read(reader, path, odom_topic, scan_topic, start, end)
+        return _read(reader, path, odom_topic, scan_topic, start, end, cloud_topic)
     except NavScenarioError:
         raise
     except Exception as exc:
@@ -135,58 +142,123 @@ def _reason(exc: Exception) -> str:
     return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
-def _read(reader: Any, path: Path, odom_topic, scan_topic, start, end) -> BagData:
+def _stamp(header: Any, bag_ns: int) -> int:
+    ns = int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
+    return ns if ns > 0 else bag_ns
+
+
+def _read(reader: Any, path: Path, odom_topic, scan_topic, start, end, cloud_topic=None) -> BagData:
     conns = list(reader.connections)
     odom_name = _pick(path, conns, odom_topic, ODOM_TYPES, "odometry", "--odom-topic", ("/odom",), True)
-    scan_name = _pick(path, conns, scan_topic, SCAN_TYPES, "laser scan", "--scan-topic", ("/scan",), False)
-    wanted = [c for c in conns if c.topic in (odom_name, scan_name) or
-              (c.topic in ("/tf_static", "/tf") and c.msgtype in TF_STATIC_TYPES)]
-    col = _Collector(odom_name)
+    scan_name = None if cloud_topic else \
+        _pick(path, conns, scan_topic, SCAN_TYPES, "laser scan", "--scan-topic", ("/scan",), False)
+    cloud_name = None if scan_name else \
+        _pick(path, conns, cloud_topic, CLOUD_TYPES, "point cloud", "--cloud-topic", CLOUD_TOPICS, False)
+    roles = {c.topic: role(c.topic, c.msgtype) for c in conns}
+    wanted = [c for c in conns if c.topic in (odom_name, scan_name, cloud_name) or roles[c.topic]]
+    col = _Collector(odom_name, scan_name, cloud_name, roles)
     for conn, bag_ns, raw in reader.messages(connections=wanted):
-        col.take(conn.topic, reader.deserialize(raw, conn.msgtype), bag_ns)
+        col.take(conn.topic, reader.deserialize(raw, conn.msgtype) if conn.topic != cloud_name else None,
+                 bag_ns, raw)
     if not col.odom:
         raise BagImportError(f"{path}: topic {odom_name} has no messages; record odometry or choose "
                              f"another topic with --odom-topic")
     data, origin = _odometry(path, col, odom_name, start, end)
+    _attach_extras(data, col, origin)
+    if cloud_name is not None:
+        data.cloud_topic, data.cloud_frame, data.cloud_count = cloud_name, col.cloud_frame, col.clouds
+        return data
     if scan_name is None:
-        data.notes.append(f"no laser scan topic in {path.name}: the seed has the trajectory only, no obstacles")
+        data.notes.append(f"no laser scan topic (and no point cloud) in {path.name}: the seed has the "
+                          f"trajectory only, no obstacles")
         return data
     _attach_scans(data, col, scan_name, origin)
     return data
 
 
 class _Collector:
-    """What one pass over the bag's messages keeps: odometry poses, scans of the first scan's
-    beam layout, the static transforms and the first /tf transform of each frame."""
+    """What the first pass over the bag's messages keeps: odometry poses, scans of the first scan's
+    beam layout, transforms, localisation poses, goals, velocity commands, the robot's description
+    and footprint, and how many point clouds there are (clouds are read in a second pass)."""
 
-    def __init__(self, odom_name: str):
-        self.odom_name = odom_name
+    def __init__(self, odom_name: str, scan_name: str | None, cloud_name: str | None, roles: dict):
+        self.odom_name, self.scan_name, self.cloud_name, self.roles = odom_name, scan_name, cloud_name, roles
         self.odom: list[tuple[int, float, float, float]] = []
         self.scans: list[tuple[int, np.ndarray]] = []
         self.static_tf: dict[str, tuple[str, float, float, float]] = {}
+        self.static_tf3: dict[str, tuple[str, tuple[float, ...]]] = {}
         self.first_tf: dict[str, tuple[str, float, float, float]] = {}
-        self.tf_seen = 0
-        self.odom_frame = self.base_frame = self.scan_frame = ""
+        self.frame_tf: list[tuple[int, str, str, float, float, float]] = []
+        self.poses: dict[str, list[tuple[int, str, float, float, float]]] = {}
+        self.goals: list[tuple[int, str, float, float, float, str]] = []
+        self.cmd: list[tuple[int, float, float]] = []
+        self.description: str | None = None
+        self.footprints: list[tuple[str, str, Any]] = []
+        self.tf_seen = self.clouds = 0
+        self.odom_frame = self.base_frame = self.scan_frame = self.cloud_frame = ""
         self.scan_meta: tuple | None = None
         self.odd_scans = 0
 
-    def take(self, topic: str, msg: Any, bag_ns: int) -> None:
-        if topic == "/tf":
-            # older bags publish the laser mount on /tf: keep the first transform of each frame
-            self.tf_seen += 1
-            if self.tf_seen <= TF_SCAN_LIMIT:
-                for tf in msg.transforms:
-                    self.first_tf.setdefault(tf.child_frame_id.lstrip("/"), _planar(tf))
-        elif topic == "/tf_static":
-            for tf in msg.transforms:
-                self.static_tf[tf.child_frame_id.lstrip("/")] = _planar(tf)
-        elif topic == self.odom_name:
+    def take(self, topic: str, msg: Any, bag_ns: int, raw: bytes) -> None:
+        if topic == self.odom_name:
             p = msg.pose.pose
-            self.odom.append((_stamp(msg.header, bag_ns), p.position.x, p.position.y, _yaw(p.orientation)))
+            self.odom.append((_stamp(msg.header, bag_ns), p.position.x, p.position.y, yaw_of(p.orientation)))
             self.odom_frame = self.odom_frame or msg.header.frame_id.lstrip("/")
             self.base_frame = self.base_frame or msg.child_frame_id.lstrip("/")
-        else:
+        elif topic == self.scan_name:
             self._scan(msg, bag_ns)
+        elif topic == self.cloud_name:
+            self.clouds += 1
+            if not self.cloud_frame:
+                self.cloud_frame = _cloud_frame(raw)
+        else:
+            getattr(self, f"_{self.roles[topic].replace('tf_static', 'static')}")(topic, msg, bag_ns)
+
+    def _tf(self, topic: str, msg: Any, bag_ns: int) -> None:
+        self.tf_seen += 1
+        for tf in msg.transforms:
+            child = tf.child_frame_id.lstrip("/")
+            parent, x, y, yaw = planar(tf)
+            if self.tf_seen <= TF_SCAN_LIMIT:  # older bags publish the laser mount on /tf
+                self.first_tf.setdefault(child, (parent, x, y, yaw))
+                if child not in self.static_tf:
+                    self.static_tf3.setdefault(child, spatial(tf))
+            if child != self.base_frame and ("odom" in child or "map" in parent):
+                self.frame_tf.append((_stamp(tf.header, bag_ns), parent, child, x, y, yaw))
+
+    def _static(self, topic: str, msg: Any, bag_ns: int) -> None:
+        for tf in msg.transforms:
+            self.static_tf[tf.child_frame_id.lstrip("/")] = planar(tf)
+            self.static_tf3[tf.child_frame_id.lstrip("/")] = spatial(tf)
+
+    def _pose(self, topic: str, msg: Any, bag_ns: int) -> None:
+        p = pose_of(msg)
+        self.poses.setdefault(topic, []).append((_stamp(msg.header, bag_ns), msg.header.frame_id.lstrip("/"),
+                                                 p.position.x, p.position.y, yaw_of(p.orientation)))
+
+    def _goal(self, topic: str, msg: Any, bag_ns: int) -> None:
+        found = goal_pose(msg)
+        if found is not None:
+            header, p = found
+            self.goals.append((_stamp(header, bag_ns), header.frame_id.lstrip("/"), p.position.x, p.position.y,
+                               yaw_of(p.orientation), topic))
+
+    def _cmd(self, topic: str, msg: Any, bag_ns: int) -> None:
+        stamp = _stamp(msg.header, bag_ns) if hasattr(msg, "header") else bag_ns
+        self.cmd.append((stamp, *command(msg)))
+
+    def _description(self, topic: str, msg: Any, bag_ns: int) -> None:
+        self.description = self.description or msg.data
+
+    def _footprint(self, topic: str, msg: Any, bag_ns: int) -> None:
+        pts = [(float(p.x), float(p.y)) for p in msg.polygon.points]
+        if len(pts) >= 3 and not self.footprints:
+            self.footprints.append((topic, "polygon", pts))
+
+    def _params(self, topic: str, msg: Any, bag_ns: int) -> None:
+        found = footprint_from_params(msg)
+        if found is not None:
+            self.footprints.append((f"parameter of {msg.node}", *found))
 
     def _scan(self, msg: Any, bag_ns: int) -> None:
         ranges = np.asarray(msg.ranges, dtype=np.float32)
@@ -200,10 +272,37 @@ class _Collector:
         self.scans.append((_stamp(msg.header, bag_ns), ranges))
 
 
-def _planar(tf: Any) -> tuple[str, float, float, float]:
-    """(parent frame, x, y, yaw) of a geometry_msgs/TransformStamped."""
-    tr, rot = tf.transform.translation, tf.transform.rotation
-    return (tf.header.frame_id.lstrip("/"), tr.x, tr.y, _yaw(rot))
+def _cloud_frame(raw: bytes) -> str:
+    """The frame_id of a serialized PointCloud2 without deserializing its points: the header's
+    string follows the stamp (CDR: 4-byte encapsulation, 8-byte stamp; ROS 1: seq, stamp)."""
+    import struct
+    for off in (12, 12 - 4 + 8):
+        try:
+            (n,) = struct.unpack_from("<I", raw, off)
+            if 0 < n < 256:
+                return bytes(raw[off + 4:off + 4 + n]).rstrip(b"\0").decode("utf-8", "replace").lstrip("/")
+        except struct.error:
+            pass
+    return ""
+
+
+def _attach_extras(data: BagData, col: _Collector, origin: float) -> None:
+    """Transforms, poses, goals, commands, description and footprints, on the odometry's clock."""
+    def sec(ns: int) -> float:
+        return (ns - origin) * 1e-9
+
+    data.origin_ns = int(origin)
+    data.static_tf3 = col.static_tf3
+    data.frame_tf = sorted((sec(t), *rest) for t, *rest in col.frame_tf)
+    data.poses = {k: sorted((sec(t), *rest) for t, *rest in v) for k, v in col.poses.items()}
+    data.goals = sorted((sec(t), *rest) for t, *rest in col.goals)
+    if col.cmd:
+        cmd = np.array(col.cmd, dtype=float)
+        cmd[:, 0] = (cmd[:, 0] - origin) * 1e-9
+        data.cmd = cmd[np.argsort(cmd[:, 0], kind="stable")]
+    data.description = col.description
+    data.footprints = col.footprints
+    data.frame = data.odom_frame
 
 
 def _odometry(path: Path, col: _Collector, odom_name: str, start, end) -> tuple[BagData, float]:
@@ -215,7 +314,7 @@ def _odometry(path: Path, col: _Collector, odom_name: str, start, end) -> tuple[
     odom_arr[:, 0] = (odom_arr[:, 0] - origin) * 1e-9
     data = BagData(path=path, odom_topic=odom_name, odom_frame=col.odom_frame or "odom",
                    base_frame=col.base_frame or "base_link", odom=odom_arr, static_tf=col.static_tf,
-                   first_tf=col.first_tf)
+                   first_tf=col.first_tf, duration=float(odom_arr[-1, 0]), full_odom=odom_arr)
     if start is not None or end is not None:
         keep = np.ones(len(odom_arr), bool)
         if start is not None:

@@ -20,6 +20,7 @@ from ...scenario.model import (
     Robot,
     Scenario,
 )
+from .frames import to_world_frame
 from .mount import GUESS_TRIED, estimate_mount, laser_mount
 from .obstacles import FitSettings, _r, fit_obstacles, occupied_clusters
 from .projection import grid_returns
@@ -72,17 +73,21 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
                       laser_pose: tuple[float, float, float] | None = None,
                       path_as: str = "waypoints", reference_file: str | None = None,
                       name: str = "", robot_radius: float = 0.15,
-                      settings: FitSettings = FitSettings()) -> BagSeed:
+                      settings: FitSettings = FitSettings(), frame: str = "auto", map_frame: str = "map",
+                      pose_topic: str | None = None) -> BagSeed:
     """Build a seed scenario from a bag (see the package docstring). ``laser_pose`` is x, y (m),
     yaw (degrees) of the laser in the robot's base frame; ``robot_radius`` the seed's circular
     footprint (m); ``reference_file`` is the CSV name
     written into ``scenario.reference`` when ``path_as`` is ``"reference"`` or ``"both"``
-    (waypoints to drive the loop and the reference to measure how closely the run replays it)."""
+    (waypoints to drive the loop and the reference to measure how closely the run replays it).
+    ``frame``: "auto" (the map frame when the bag has ``map -> odom`` or a pose topic in it, else
+    the odometry frame), "map" or "odom"."""
     if not (math.isfinite(robot_radius) and 0 < robot_radius <= 5):
         raise BagImportError(f"--robot-radius must be a length in (0, 5] m, got {robot_radius}")
     if path_as not in PATH_AS:
         raise BagImportError(f"--path-as must be one of {', '.join(PATH_AS)}, got {path_as!r}")
     data = read_bag(path, odom_topic=odom_topic, scan_topic=scan_topic, start=start, end=end)
+    to_world_frame(data, frame, map_frame, pose_topic, data.full_odom)
     notes = list(data.notes)
     obstacles: list[Obstacle] = []
     mount = None
@@ -177,7 +182,7 @@ def _scenario(data: BagData, obstacles: list[Obstacle], path_as: str, reference_
         obstacles=tuple(obstacles), robot=robot, reference=reference, name=name,
         description=(f"Seed from {Path(data.path).name}: {data.odom_topic} ({length:.1f} m in {duration:.1f} s)"
                      + (f", obstacles from {data.scan_topic}" if data.scan_topic else ", no obstacles (no scans)")
-                     + f"; frame {data.odom_frame}."),
+                     + f"; frame {data.frame or data.odom_frame}."),
     )
     summary = (f"path {length:.1f} m in {duration:.1f} s: "
                + ", ".join(([f"{len(waypoints)} waypoints"] if path_as != "reference" else [])
