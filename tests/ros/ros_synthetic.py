@@ -147,13 +147,13 @@ SCAN_ANGLES = np.radians(np.arange(-180.0, 180.0, 1.0))
 
 def robot_bag(path: Path, world: World, truth: np.ndarray, *, drift: np.ndarray | None = None,
               ros1: bool = False, scans: bool = True, cloud: dict | None = None, extra=None,
-              tf_map: bool = True) -> Path:
+              tf_map: bool = True, laser: tuple[float, float, float] = LASER) -> Path:
     """A bag of a robot driving ``truth`` ((n, 4) t, x, y, yaw in the map frame) through ``world``.
 
     ``drift`` ((n, 3) the map -> odom transform at each time): the odometry is the truth seen
     through it (odom = drift^-1 . truth) and the exact correction is published on /tf. Scans at
-    every pose from a laser at LASER (on /tf_static); ``cloud``: keyword arguments of
-    ``cloud_points`` (azimuths, elevations, z) plus "layout" ("velodyne" or "ouster") for a
+    every pose from a laser at ``laser`` (x, y, z on /tf_static); ``cloud``: keyword arguments of
+    ``cloud_points`` (azimuths, elevations) plus "layout" ("velodyne" or "ouster") for a
     PointCloud2 on /points instead of (or beside) the scans. ``extra(bag)`` writes more.
     """
     drift = np.zeros((len(truth), 3)) if drift is None else drift
@@ -162,7 +162,7 @@ def robot_bag(path: Path, world: World, truth: np.ndarray, *, drift: np.ndarray 
         t0 = truth[0, 0]
         bag.write("/tf_static", "tf2_msgs/msg/TFMessage", t0, {"transforms": [
             {"header": {"stamp": stamp(t0), "frame_id": "base_link"}, "child_frame_id": "laser",
-             "transform": {"translation": dict(zip("xyz", LASER)), "rotation": {"w": 1.0}}}]})
+             "transform": {"translation": dict(zip("xyz", laser)), "rotation": {"w": 1.0}}}]})
         for (t, x, y, yaw), (ox, oy, oyaw), (dx, dy, dyaw) in zip(truth, odom, drift):
             bag.write("/odom", "nav_msgs/msg/Odometry", t, {
                 "header": {"stamp": stamp(t), "frame_id": "odom"}, "child_frame_id": "base_link",
@@ -171,16 +171,16 @@ def robot_bag(path: Path, world: World, truth: np.ndarray, *, drift: np.ndarray 
                 bag.write("/tf", "tf2_msgs/msg/TFMessage", t, {"transforms": [
                     {"header": {"stamp": stamp(t), "frame_id": "map"}, "child_frame_id": "odom",
                      "transform": {"translation": {"x": dx, "y": dy}, "rotation": quat(dyaw)}}]})
-            lx, ly = x + math.cos(yaw) * LASER[0], y + math.sin(yaw) * LASER[0]
+            lx, ly = x + math.cos(yaw) * laser[0], y + math.sin(yaw) * laser[0]
             if scans:
                 bag.write("/scan", "sensor_msgs/msg/LaserScan", t, {
                     "header": {"stamp": stamp(t), "frame_id": "laser"}, "angle_min": float(SCAN_ANGLES[0]),
                     "angle_max": float(SCAN_ANGLES[-1]), "angle_increment": float(SCAN_ANGLES[1] - SCAN_ANGLES[0]),
                     "range_min": 0.05, "range_max": 10.0,
-                    "ranges": laser_ranges(world, lx, ly, yaw, SCAN_ANGLES, z=LASER[2])})
+                    "ranges": laser_ranges(world, lx, ly, yaw, SCAN_ANGLES, z=laser[2])})
             if cloud is not None:
                 args = {k: v for k, v in cloud.items() if k != "layout"}
-                pts = cloud_points(world, lx, ly, yaw, **args)
+                pts = cloud_points(world, lx, ly, yaw, laser[2], **args)
                 bag.write("/points", "sensor_msgs/msg/PointCloud2", t,
                           cloud_msg(pts, t, cloud.get("layout", "velodyne")))
         if extra is not None:

@@ -7,8 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
+from .clouds import CloudSettings
 from .frames import FRAMES
-from .reading import PATH_AS
+from .reading import PATH_AS, BagImportError
 from .seed import scenario_from_bag
 
 
@@ -29,6 +30,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--end", type=float, default=None, help="window end, seconds after the first odometry message")
     p.add_argument("--odom-topic", default=None, help="nav_msgs/Odometry topic (default: found by type)")
     p.add_argument("--scan-topic", default=None, help="sensor_msgs/LaserScan topic (default: found by type)")
+    p.add_argument("--cloud-topic", default=None, metavar="TOPIC",
+                   help="sensor_msgs/PointCloud2 topic of a 3D lidar (default: found by type when the bag has no "
+                        "laser scan; giving it reads the cloud instead of the scan)")
+    p.add_argument("--robot-height", type=float, default=1.0, metavar="M",
+                   help="point clouds: points higher than this above the ground cannot be hit (default 1.0 m)")
+    p.add_argument("--ground-clearance", type=float, default=0.05, metavar="M",
+                   help="point clouds: points lower than this above the ground are the ground (default 0.05 m)")
     p.add_argument("--laser-pose", type=_triple, default=None, metavar="X,Y,YAW",
                    help="laser pose in the odometry child frame (m, m, degrees; write --laser-pose=-0.064,0,0 "
                         "for a negative first value); default /tf_static, else the first /tf transforms, else guessed "
@@ -49,6 +57,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--force", action="store_true", help="overwrite an existing output file")
 
 
+def _cloud_settings(args: argparse.Namespace) -> CloudSettings:
+    for name, value in (("--robot-height", args.robot_height), ("--ground-clearance", args.ground_clearance)):
+        if not (math.isfinite(value) and 0 <= value <= 10):
+            raise BagImportError(f"{name} must be a height in [0, 10] m, got {value}")
+    if args.ground_clearance >= args.robot_height:
+        raise BagImportError(f"--ground-clearance ({args.ground_clearance} m) must be below --robot-height "
+                             f"({args.robot_height} m)")
+    return CloudSettings(robot_height=args.robot_height, clearance=args.ground_clearance)
+
+
 def run(args: argparse.Namespace) -> int:
     from ..world_import import write_seed
     out = Path(args.output)
@@ -57,7 +75,8 @@ def run(args: argparse.Namespace) -> int:
                              start=args.start, end=args.end, laser_pose=args.laser_pose,
                              path_as=args.path_as, reference_file=csv_name, name=args.name,
                              robot_radius=args.robot_radius, frame=args.frame, map_frame=args.map_frame,
-                             pose_topic=args.pose_topic)
+                             pose_topic=args.pose_topic, cloud_topic=args.cloud_topic,
+                             cloud=_cloud_settings(args))
     extra = {}
     if args.path_as != "waypoints":
         extra[csv_name] = reference_csv(seed.path)

@@ -17,6 +17,7 @@ from .projection import Grid
 class Cluster:
     points: np.ndarray    # (k, 2) per-cell mean of the returns
     viewpoint: np.ndarray  # (2,) mean laser position that saw them
+    height: float | None = None  # m, highest return above the ground (3D sensors), else None
 
 
 
@@ -27,14 +28,17 @@ def occupied_clusters(grid: Grid, *, min_hits: int = 2, link: float = 0.3,
 
     Returns the clusters and the number of small clusters (< ``min_cells``) dropped as noise.
     """
-    means = grid.means[grid.counts >= min_hits]
+    kept = grid.counts >= min_hits
+    means = grid.means[kept]
+    top = grid.top[kept] if grid.top is not None else None
     clusters, dropped = [], 0
     for members in _groups(means[:, :2], link):
         if len(members) < min_cells:
             dropped += 1
             continue
         m = means[members]
-        clusters.append(Cluster(points=m[:, :2], viewpoint=m[:, 2:].mean(axis=0)))
+        height = float(np.nanmax(top[members])) if top is not None and np.isfinite(top[members]).any() else None
+        clusters.append(Cluster(points=m[:, :2], viewpoint=m[:, 2:].mean(axis=0), height=height))
     return clusters, dropped
 
 
@@ -216,28 +220,12 @@ def fit_obstacles(clusters: list[Cluster], s: FitSettings = FitSettings(),
     """Cylinders for round clusters, one box for a compact block, else oriented boxes for the
     straight runs and small leftovers. ``free_xy``: positions the robot drove through."""
     obstacles: list[Obstacle] = []
-    n_cyl = n_box = 0
     for cl in sorted(clusters, key=lambda c: (round(float(c.points[:, 0].mean()), 3),
                                                round(float(c.points[:, 1].mean()), 3))):
-        circle = _round(cl.points, s)
-        if circle is not None:
-            n_cyl += 1
-            obstacles.append(CylinderObstacle(name=f"pillar{n_cyl}", x=_r(circle[0]), y=_r(circle[1]),
-                                              radius=_r(circle[2])))
-            continue
-        block = _compact_box(cl.points, free_xy, s)
-        if block is not None:
-            n_box += 1
-            obstacles.append(dataclasses.replace(block, name=f"box{n_box}"))
-            continue
-        for pts, direction in _lines(cl.points, s):
-            # leftovers of the line search (corners, stubs) are boxed per local group
-            groups = [pts] if direction is not None else [pts[g] for g in _groups(pts, 1.5 * s.res)]
-            for grp in groups:
-                if len(grp) < 3:
-                    continue
-                n_box += 1
-                obstacles.append(_box_from_points(f"wall{n_box}", grp, cl.viewpoint, s, direction))
+        fitted = _fit_cluster(cl, s, free_xy)
+        if cl.height is not None:  # a 3D sensor saw how tall it is (a low obstacle keeps its height)
+            fitted = [dataclasses.replace(o, height=_r(max(cl.height, 0.02), 2)) for o in fitted]
+        obstacles.extend(fitted)
     kept = _drop_contained(obstacles)
     counts: dict[str, int] = {}
     named = []
@@ -246,6 +234,23 @@ def fit_obstacles(clusters: list[Cluster], s: FitSettings = FitSettings(),
         counts[prefix] = counts.get(prefix, 0) + 1
         named.append(dataclasses.replace(o, name=f"{prefix}{counts[prefix]}"))
     return named
+
+
+def _fit_cluster(cl: Cluster, s: FitSettings, free_xy: np.ndarray | None) -> list[Obstacle]:
+    """A cylinder, one compact box, or boxes for the straight runs and leftovers of one cluster
+    (numbered per cluster; the caller numbers them again)."""
+    circle = _round(cl.points, s)
+    if circle is not None:
+        return [CylinderObstacle(name="pillar", x=_r(circle[0]), y=_r(circle[1]), radius=_r(circle[2]))]
+    block = _compact_box(cl.points, free_xy, s)
+    if block is not None:
+        return [dataclasses.replace(block, name="box")]
+    out: list[Obstacle] = []
+    for pts, direction in _lines(cl.points, s):
+        # leftovers of the line search (corners, stubs) are boxed per local group
+        groups = [pts] if direction is not None else [pts[g] for g in _groups(pts, 1.5 * s.res)]
+        out.extend(_box_from_points("wall", grp, cl.viewpoint, s, direction) for grp in groups if len(grp) >= 3)
+    return out
 
 
 def _drop_contained(obstacles: list[Obstacle], share: float = 0.5) -> list[Obstacle]:

@@ -1,4 +1,4 @@
-"""Projecting scans: every return into the world frame with the robot's pose at the scan's time,
+"""Projecting scans and clouds: every return into the world frame with the robot's pose at the scan's time,
 accumulated per grid cell (memory for the grid, not for every return)."""
 from __future__ import annotations
 
@@ -10,7 +10,8 @@ import numpy as np
 from .reading import BagData
 
 
-def _poses_at(data: BagData, t: np.ndarray) -> np.ndarray:
+def poses_at(data: BagData, t: np.ndarray) -> np.ndarray:
+    """The robot's poses (k, 3) x, y, yaw in the world frame at times ``t``, interpolated."""
     od = data.odom
     yaw = np.unwrap(od[:, 3])
     return np.stack([np.interp(t, od[:, 0], od[:, 1]), np.interp(t, od[:, 0], od[:, 2]),
@@ -19,7 +20,7 @@ def _poses_at(data: BagData, t: np.ndarray) -> np.ndarray:
 
 def project_scans(data: BagData, mount: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
     """Every valid return as a point in the odometry frame, and the laser position it was seen from."""
-    poses = _poses_at(data, data.scan_t)
+    poses = poses_at(data, data.scan_t)
     rng = data.scan_ranges.astype(float)
     valid = np.isfinite(rng) & (rng > data.range_min) & (rng < data.range_max * 0.99)
     rng = np.where(valid, rng, 0.0)
@@ -39,43 +40,69 @@ def project_scans(data: BagData, mount: tuple[float, float, float]) -> tuple[np.
 
 @dataclass
 class Grid:
-    """Returns accumulated per grid cell: the cell's mean return and mean viewpoint, and hits."""
+    """Returns accumulated per grid cell: the cell's mean return and mean viewpoint, and hits;
+    for 3D returns also the highest point above the ground seen in the cell (NaN for 2D scans)."""
     means: np.ndarray    # (k, 4) x, y of the returns, x, y of the laser that saw them
     counts: np.ndarray   # (k,) returns per cell
     returns: int         # returns in total
+    top: np.ndarray | None = None   # (k,) m above the ground, or None (2D scans)
 
 
-def _cells(points: np.ndarray, origins: np.ndarray, res: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(cell keys (k, 2), sums of [point, origin] (k, 4), counts (k,)) of a batch of returns."""
-    cells = np.floor(points / res).astype(np.int64)
-    keys, inverse, counts = np.unique(cells, axis=0, return_inverse=True, return_counts=True)
-    sums = np.zeros((len(keys), 4))
-    np.add.at(sums, inverse.reshape(-1), np.concatenate([points, origins], axis=1))
-    return keys, sums, counts
+class GridAccumulator:
+    """Sums returns per cell batch by batch, merging every ``merge_every`` batches, so memory
+    follows the area seen, not the length of the bag."""
+
+    def __init__(self, res: float, merge_every: int = 64):
+        self.res, self.merge_every = res, merge_every
+        self.parts: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
+        self.returns = 0
+        self.has_height = False
+
+    def add(self, points: np.ndarray, origins: np.ndarray, heights: np.ndarray | None = None) -> None:
+        self.returns += len(points)
+        if not len(points):
+            return
+        self.has_height |= heights is not None
+        cells = np.floor(points / self.res).astype(np.int64)
+        keys, inverse, counts = np.unique(cells, axis=0, return_inverse=True, return_counts=True)
+        inverse = inverse.reshape(-1)
+        sums = np.zeros((len(keys), 4))
+        np.add.at(sums, inverse, np.concatenate([points, origins], axis=1))
+        top = np.full(len(keys), -np.inf)
+        if heights is not None:
+            np.maximum.at(top, inverse, heights)
+        self.parts.append((keys, sums, counts, top))
+        if len(self.parts) >= self.merge_every:
+            self.parts = [self._merged()]
+
+    def _merged(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        if len(self.parts) == 1:
+            return self.parts[0]
+        keys = np.concatenate([p[0] for p in self.parts])
+        keys, inverse = np.unique(keys, axis=0, return_inverse=True)
+        inverse = inverse.reshape(-1)
+        sums = np.zeros((len(keys), 4))
+        np.add.at(sums, inverse, np.concatenate([p[1] for p in self.parts]))
+        counts = np.bincount(inverse, weights=np.concatenate([p[2] for p in self.parts]),
+                             minlength=len(keys)).astype(np.int64)
+        top = np.full(len(keys), -np.inf)
+        np.maximum.at(top, inverse, np.concatenate([p[3] for p in self.parts]))
+        return keys, sums, counts, top
+
+    def grid(self) -> Grid:
+        if not self.parts:
+            return Grid(np.zeros((0, 4)), np.zeros(0, np.int64), self.returns)
+        _, sums, counts, top = self._merged()
+        return Grid(means=sums / counts[:, None], counts=counts, returns=self.returns,
+                    top=np.where(np.isfinite(top), top, np.nan) if self.has_height else None)
 
 
 def grid_returns(data: BagData, mount: tuple[float, float, float], res: float = 0.05,
                  chunk: int = 1000) -> Grid:
     """Project the scans ``chunk`` at a time and sum them per cell, so an hour-long bag needs
     memory for its grid, not for every return at once."""
-    parts = []
-    total = 0
+    acc = GridAccumulator(res)
     for i in range(0, len(data.scan_t), chunk):
         sub = dataclasses.replace(data, scan_t=data.scan_t[i:i + chunk], scan_ranges=data.scan_ranges[i:i + chunk])
-        pts, origins = project_scans(sub, mount)
-        total += len(pts)
-        if len(pts):
-            parts.append(_cells(pts, origins, res))
-    if not parts:
-        return Grid(np.zeros((0, 4)), np.zeros(0, np.int64), 0)
-    keys = np.concatenate([p[0] for p in parts])
-    sums = np.concatenate([p[1] for p in parts])
-    counts = np.concatenate([p[2] for p in parts])
-    if len(parts) > 1:  # merge the cells that several chunks share
-        keys, inverse = np.unique(keys, axis=0, return_inverse=True)
-        inverse = inverse.reshape(-1)
-        merged = np.zeros((len(keys), 4))
-        np.add.at(merged, inverse, sums)
-        sums, counts = merged, np.bincount(inverse, weights=counts, minlength=len(keys)).astype(np.int64)
-    return Grid(means=sums / counts[:, None], counts=counts, returns=total)
-
+        acc.add(*project_scans(sub, mount))
+    return acc.grid()

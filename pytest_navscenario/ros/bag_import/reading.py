@@ -5,6 +5,7 @@ Reads ROS 1 bags, rosbag2 sqlite3 and MCAP (also old ROS 2 bags with no embedded
 definitions) with ``rosbags``."""
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -96,10 +97,17 @@ def read_bag(path: str | Path, *, odom_topic: str | None = None, scan_topic: str
     """Read odometry, laser scans and static transforms; ``start``/``end`` are seconds after
     the first odometry message (message header stamps; the bag's receive time where a stamp is
     zero). Raises BagImportError naming the file and what is missing."""
+    path = Path(path)
+    with open_reader(path) as reader:
+        return _read(reader, path, odom_topic, scan_topic, start, end, cloud_topic)
+
+
+@contextlib.contextmanager
+def open_reader(path: Path):
+    """An open rosbags AnyReader on ``path``; a bad or damaged bag is a BagImportError naming it."""
     from rosbags.highlevel import AnyReader
     from rosbags.typesys import Stores, get_typestore
 
-    path = Path(path)
     if not path.exists():
         raise BagImportError(f"{path}: no such bag file or folder")
     try:
@@ -109,7 +117,7 @@ def read_bag(path: str | Path, *, odom_topic: str | None = None, scan_topic: str
         what = "a damaged or truncated bag" if _has_bag_magic(path) else "not a readable ROS 1 / rosbag2 bag"
         raise BagImportError(f"{path}: {what} ({_reason(exc)})") from None
     try:
-        return _read(reader, path, odom_topic, scan_topic, start, end, cloud_topic)
+        yield reader
     except NavScenarioError:
         raise
     except Exception as exc:

@@ -1,6 +1,7 @@
 """Building the seed: start, goal, driven path, limits, lidar and robot from what was read and fitted."""
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,6 +21,7 @@ from ...scenario.model import (
     Robot,
     Scenario,
 )
+from .clouds import CloudSettings, grid_clouds, sensor_mount
 from .frames import to_world_frame
 from .mount import GUESS_TRIED, estimate_mount, laser_mount
 from .obstacles import FitSettings, _r, fit_obstacles, occupied_clusters
@@ -74,7 +76,8 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
                       path_as: str = "waypoints", reference_file: str | None = None,
                       name: str = "", robot_radius: float = 0.15,
                       settings: FitSettings = FitSettings(), frame: str = "auto", map_frame: str = "map",
-                      pose_topic: str | None = None) -> BagSeed:
+                      pose_topic: str | None = None, cloud_topic: str | None = None,
+                      cloud: CloudSettings = CloudSettings()) -> BagSeed:
     """Build a seed scenario from a bag (see the package docstring). ``laser_pose`` is x, y (m),
     yaw (degrees) of the laser in the robot's base frame; ``robot_radius`` the seed's circular
     footprint (m); ``reference_file`` is the CSV name
@@ -86,7 +89,8 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
         raise BagImportError(f"--robot-radius must be a length in (0, 5] m, got {robot_radius}")
     if path_as not in PATH_AS:
         raise BagImportError(f"--path-as must be one of {', '.join(PATH_AS)}, got {path_as!r}")
-    data = read_bag(path, odom_topic=odom_topic, scan_topic=scan_topic, start=start, end=end)
+    data = read_bag(path, odom_topic=odom_topic, scan_topic=scan_topic, start=start, end=end,
+                    cloud_topic=cloud_topic)
     to_world_frame(data, frame, map_frame, pose_topic, data.full_odom)
     notes = list(data.notes)
     obstacles: list[Obstacle] = []
@@ -97,6 +101,15 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
                      f"yaw={math.degrees(mount[2]):.1f} deg in {data.base_frame}, {how}")
         obstacles = _obstacles_from_scans(data, mount, settings, notes)
         check_path_free(data, obstacles, robot_radius, how)
+    elif data.cloud_topic is not None:
+        matrix, how = sensor_mount(data, laser_pose)
+        notes.append(f"point cloud frame {data.cloud_frame} at x={matrix[0, 3]:.3f} y={matrix[1, 3]:.3f} "
+                     f"z={matrix[2, 3]:.3f} in {data.base_frame}, {how}")
+        grid, cloud_notes = grid_clouds(data, matrix, dataclasses.replace(cloud, near=max(cloud.near, robot_radius)),
+                                        settings.res)
+        notes.extend(cloud_notes)
+        obstacles = _fit(data, grid, settings, notes, f"{data.cloud_count} clouds")
+        check_path_free(data, obstacles, robot_radius, how, data.cloud_topic)
     scenario, summary = _scenario(data, obstacles, path_as, reference_file, name, robot_radius)
     notes.append(summary)
     od = data.odom
@@ -122,17 +135,21 @@ def choose_mount(data: BagData, laser_pose: tuple[float, float, float] | None) -
 
 
 def _obstacles_from_scans(data: BagData, mount, settings: FitSettings, notes: list[str]) -> list[Obstacle]:
-    grid = grid_returns(data, mount, settings.res)
+    return _fit(data, grid_returns(data, mount, settings.res), settings, notes, f"{len(data.scan_t)} scans")
+
+
+def _fit(data: BagData, grid, settings: FitSettings, notes: list[str], what: str) -> list[Obstacle]:
     clusters, dropped = occupied_clusters(grid, link=settings.link)
     obstacles = fit_obstacles(clusters, settings, free_xy=data.odom[:, 1:3])
     n_cyl = sum(isinstance(o, CylinderObstacle) for o in obstacles)
-    notes.append(f"{len(data.scan_t)} scans, {grid.returns} returns -> {len(clusters)} clusters -> "
+    notes.append(f"{what}, {grid.returns} returns -> {len(clusters)} clusters -> "
                  f"{n_cyl} cylinders, {len(obstacles) - n_cyl} boxes"
                  + (f" ({dropped} specks of < 3 cells ignored as noise)" if dropped else ""))
     return obstacles
 
 
-def check_path_free(data: BagData, obstacles: list[Obstacle], radius: float, how: str) -> None:
+def check_path_free(data: BagData, obstacles: list[Obstacle], radius: float, how: str,
+                    topic: str | None = None) -> None:
     """Raise when a fitted obstacle overlaps the robot's footprint at the start, the goal or a pose
     it drove through: the robot was there, so the laser's mounting (or pose) is wrong, and the
     error says where the mounting came from and how to give it."""
@@ -152,7 +169,7 @@ def check_path_free(data: BagData, obstacles: list[Obstacle], radius: float, how
             k = keep[int(np.argmax(hit))]
             where = "the start" if k == 0 else "the goal" if k == len(od) - 1 else "the driven path"
             raise BagImportError(
-                f"{data.path}: the obstacles fitted from {data.scan_topic} overlap the robot's footprint "
+                f"{data.path}: the obstacles fitted from {topic or data.scan_topic} overlap the robot's footprint "
                 f"(radius {radius} m) on {where} (t={od[k, 0]:.1f} s, x={od[k, 1]:.2f}, y={od[k, 2]:.2f}: "
                 f"{o.name}), where the robot drove: the laser mounting is likely wrong. It was {how}. "
                 f"Give it with --laser-pose=X,Y,YAW (the laser in {data.base_frame}, from the robot's URDF), "
@@ -181,7 +198,8 @@ def _scenario(data: BagData, obstacles: list[Obstacle], path_as: str, reference_
                         goal_tolerance=GoalTolerance(position=0.3), timeout=timeout),
         obstacles=tuple(obstacles), robot=robot, reference=reference, name=name,
         description=(f"Seed from {Path(data.path).name}: {data.odom_topic} ({length:.1f} m in {duration:.1f} s)"
-                     + (f", obstacles from {data.scan_topic}" if data.scan_topic else ", no obstacles (no scans)")
+                     + (f", obstacles from {data.scan_topic or data.cloud_topic}" if data.scan_topic or data.cloud_topic
+                        else ", no obstacles (no scans)")
                      + f"; frame {data.frame or data.odom_frame}."),
     )
     summary = (f"path {length:.1f} m in {duration:.1f} s: "
