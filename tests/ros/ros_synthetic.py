@@ -218,3 +218,25 @@ def cloud_msg(pts: np.ndarray, t: float, layout: str) -> dict[str, Any]:
             "fields": [{"name": n, "offset": o, "datatype": d, "count": 1} for n, o, d in fields],
             "is_bigendian": False, "point_step": dt.itemsize, "row_step": dt.itemsize * width,
             "data": np.frombuffer(arr.tobytes(), np.uint8), "is_dense": layout == "velodyne"}
+
+
+def register_goal_types(ts: Any, ros1: bool) -> None:
+    """Add the move_base (ROS 1) or Nav2 NavigateToPose (ROS 2) goal types to a typestore."""
+    from rosbags.typesys import get_types_from_msg
+
+    if ros1:
+        defs = {"actionlib_msgs/msg/GoalID": "time stamp\nstring id",
+                "move_base_msgs/msg/MoveBaseGoal": "geometry_msgs/PoseStamped target_pose",
+                "move_base_msgs/msg/MoveBaseActionGoal": "std_msgs/Header header\nactionlib_msgs/GoalID goal_id\n"
+                                                         "move_base_msgs/MoveBaseGoal goal"}
+    else:
+        defs = {"nav2_msgs/action/NavigateToPose_Goal": "geometry_msgs/PoseStamped pose\nstring behavior_tree"}
+    for name, text in defs.items():
+        if name not in ts.types:
+            ts.register(get_types_from_msg(text, name))
+
+
+def stop_drive(speed: float = 0.5, stop_x: float = 2.0, duration: float = 8.0, dt: float = 0.1) -> np.ndarray:
+    """(n, 4) t, x, y, yaw: along +x at ``speed`` until ``stop_x``, then standing still."""
+    t = np.arange(0.0, duration + 1e-9, dt)
+    return np.stack([t, np.minimum(speed * t, stop_x), 0 * t, 0 * t], 1)

@@ -48,6 +48,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--pose-topic", default=None, metavar="TOPIC",
                    help="localisation pose topic (PoseWithCovarianceStamped or PoseStamped in the map frame) to use "
                         "instead of map -> odom on /tf (default: /tf, else /amcl_pose, /pose, /tracked_pose)")
+    p.add_argument("--goal-topic", default=None, metavar="TOPIC",
+                   help="the navigation goal's topic (default: found by type: /goal_pose, NavigateToPose and move_base "
+                        "goals); without a goal the seed's goal is the window's last pose")
     p.add_argument("--path-as", choices=PATH_AS, default="waypoints",
                    help="driven path as decimated waypoints (default), a reference trajectory (CSV t,x,y beside "
                         "the seed, for the reference deviation metrics) or both")
@@ -76,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
                              path_as=args.path_as, reference_file=csv_name, name=args.name,
                              robot_radius=args.robot_radius, frame=args.frame, map_frame=args.map_frame,
                              pose_topic=args.pose_topic, cloud_topic=args.cloud_topic,
-                             cloud=_cloud_settings(args))
+                             cloud=_cloud_settings(args), goal_topic=args.goal_topic)
     extra = {}
     if args.path_as != "waypoints":
         extra[csv_name] = reference_csv(seed.path)

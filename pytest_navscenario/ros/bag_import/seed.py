@@ -23,6 +23,7 @@ from ...scenario.model import (
 )
 from .clouds import CloudSettings, grid_clouds, sensor_mount
 from .frames import to_world_frame
+from .goal import choose_goal
 from .mount import GUESS_TRIED, estimate_mount, laser_mount
 from .obstacles import FitSettings, _r, fit_obstacles, occupied_clusters
 from .projection import grid_returns
@@ -77,7 +78,7 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
                       name: str = "", robot_radius: float = 0.15,
                       settings: FitSettings = FitSettings(), frame: str = "auto", map_frame: str = "map",
                       pose_topic: str | None = None, cloud_topic: str | None = None,
-                      cloud: CloudSettings = CloudSettings()) -> BagSeed:
+                      cloud: CloudSettings = CloudSettings(), goal_topic: str | None = None) -> BagSeed:
     """Build a seed scenario from a bag (see the package docstring). ``laser_pose`` is x, y (m),
     yaw (degrees) of the laser in the robot's base frame; ``robot_radius`` the seed's circular
     footprint (m); ``reference_file`` is the CSV name
@@ -91,8 +92,9 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
         raise BagImportError(f"--path-as must be one of {', '.join(PATH_AS)}, got {path_as!r}")
     data = read_bag(path, odom_topic=odom_topic, scan_topic=scan_topic, start=start, end=end,
                     cloud_topic=cloud_topic)
-    to_world_frame(data, frame, map_frame, pose_topic, data.full_odom)
-    notes = list(data.notes)
+    corr = to_world_frame(data, frame, map_frame, pose_topic, data.full_odom)
+    goal, goal_note = choose_goal(data, corr, goal_topic)
+    notes = list(data.notes) + [goal_note]
     obstacles: list[Obstacle] = []
     mount = None
     if data.scan_topic is not None:
@@ -110,7 +112,7 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
         notes.extend(cloud_notes)
         obstacles = _fit(data, grid, settings, notes, f"{data.cloud_count} clouds")
         check_path_free(data, obstacles, robot_radius, how, data.cloud_topic)
-    scenario, summary = _scenario(data, obstacles, path_as, reference_file, name, robot_radius)
+    scenario, summary = _scenario(data, obstacles, path_as, reference_file, name, robot_radius, goal)
     notes.append(summary)
     od = data.odom
     path_rows = np.stack([od[:, 0] - od[0, 0], od[:, 1], od[:, 2]], axis=1)
@@ -177,11 +179,13 @@ def check_path_free(data: BagData, obstacles: list[Obstacle], radius: float, how
 
 
 def _scenario(data: BagData, obstacles: list[Obstacle], path_as: str, reference_file: str | None,
-              name: str, robot_radius: float) -> tuple[Scenario, str]:
-    """The seed scenario from the odometry window and the obstacles, and a one-line summary."""
+              name: str, robot_radius: float, goal: tuple[float, float, float] | None = None) -> tuple[Scenario, str]:
+    """The seed scenario from the odometry window and the obstacles (the goal: ``goal``, else
+    the window's last pose), and a one-line summary."""
     od = data.odom
     start_pose = Pose(_r(od[0, 1]), _r(od[0, 2]), _r(math.degrees(od[0, 3]), 2))
-    goal_pose = Pose(_r(od[-1, 1]), _r(od[-1, 2]), _r(math.degrees(od[-1, 3]), 2))
+    gx, gy, gyaw = goal if goal is not None else od[-1, 1:4]
+    goal_pose = Pose(_r(gx), _r(gy), _r(math.degrees(gyaw), 2))
     length = float(np.hypot(*np.diff(od[:, 1:3], axis=0).T).sum())
     duration = float(od[-1, 0] - od[0, 0])
     waypoints: tuple[Pose, ...] = ()
