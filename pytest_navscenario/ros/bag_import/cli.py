@@ -25,9 +25,22 @@ def _triple(text: str) -> tuple[float, float, float]:
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("bag", help="ROS 1 .bag file, rosbag2 folder, or .mcap/.db3 file")
-    p.add_argument("-o", "--output", required=True, help="seed scenario YAML to write (an existing file is kept unless --force)")
+    p.add_argument("-o", "--output", default=None,
+                   help="seed scenario YAML to write (an existing file is kept unless --force); required unless "
+                        "--list-events")
     p.add_argument("--start", type=float, default=None, help="window start, seconds after the first odometry message")
     p.add_argument("--end", type=float, default=None, help="window end, seconds after the first odometry message")
+    p.add_argument("--at", type=float, default=None, metavar="T",
+                   help="cut the seed from the --window seconds before the moment T (seconds after the first "
+                        "odometry message; --list-events shows candidates); instead of --start/--end")
+    p.add_argument("--window", type=float, default=30.0, metavar="S",
+                   help="with --at: seconds before T that the seed covers (default 30)")
+    p.add_argument("--list-events", action="store_true",
+                   help="list candidate moments with their times (stopped far from the goal, reversed, turned in "
+                        "place long, command dropped to zero during a goal, nearest return inside the footprint "
+                        "margin) and write nothing")
+    p.add_argument("--margin", type=float, default=0.05, metavar="M",
+                   help="with --list-events: a return closer than the footprint plus this is an event (default 0.05 m)")
     p.add_argument("--odom-topic", default=None, help="nav_msgs/Odometry topic (default: found by type)")
     p.add_argument("--scan-topic", default=None, help="sensor_msgs/LaserScan topic (default: found by type)")
     p.add_argument("--cloud-topic", default=None, metavar="TOPIC",
@@ -72,6 +85,10 @@ def _cloud_settings(args: argparse.Namespace) -> CloudSettings:
 
 def run(args: argparse.Namespace) -> int:
     from ..world_import import write_seed
+    if args.list_events:
+        return _list_events(args)
+    if not args.output:
+        raise BagImportError("-o/--output is required: the seed scenario YAML to write (or --list-events)")
     out = Path(args.output)
     csv_name = f"{out.stem}.reference.csv"
     seed = scenario_from_bag(args.bag, odom_topic=args.odom_topic, scan_topic=args.scan_topic,
@@ -79,7 +96,8 @@ def run(args: argparse.Namespace) -> int:
                              path_as=args.path_as, reference_file=csv_name, name=args.name,
                              robot_radius=args.robot_radius, frame=args.frame, map_frame=args.map_frame,
                              pose_topic=args.pose_topic, cloud_topic=args.cloud_topic,
-                             cloud=_cloud_settings(args), goal_topic=args.goal_topic)
+                             cloud=_cloud_settings(args), goal_topic=args.goal_topic, at=args.at,
+                             window=args.window)
     extra = {}
     if args.path_as != "waypoints":
         extra[csv_name] = reference_csv(seed.path)
@@ -87,6 +105,22 @@ def run(args: argparse.Namespace) -> int:
     for note in seed.notes:
         print(f"navscenario from-bag: {note}")
     print(f"navscenario from-bag: wrote {out}" + (f" and {out.parent / csv_name}" if extra else ""))
+    return 0
+
+
+def _list_events(args: argparse.Namespace) -> int:
+    from .events import bag_events, format_events
+    events, notes = bag_events(args.bag, odom_topic=args.odom_topic, scan_topic=args.scan_topic,
+                               cloud_topic=args.cloud_topic, frame=args.frame, map_frame=args.map_frame,
+                               pose_topic=args.pose_topic, laser_pose=args.laser_pose,
+                               robot_radius=args.robot_radius, margin=args.margin)
+    for note in notes:
+        print(f"navscenario from-bag: {note}")
+    print(f"navscenario from-bag: {len(events)} candidate moment(s) in {args.bag}:")
+    for line in format_events(events):
+        print(f"  {line}")
+    if events:
+        print(f"navscenario from-bag: cut a seed before one with --at T (and --window S, default {args.window:g} s)")
     return 0
 
 

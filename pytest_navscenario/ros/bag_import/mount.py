@@ -60,3 +60,20 @@ def estimate_mount(data: BagData, res: float = 0.02) -> tuple[float, float, floa
     yaw = min(GUESS_YAWS, key=lambda y: min(score(dx, y) for dx in GUESS_OFFSETS[::5]))
     dx = min(GUESS_OFFSETS, key=lambda d: score(d, yaw))
     return (float(dx), 0.0, math.radians(yaw))
+
+
+def choose_mount(data: BagData, laser_pose: tuple[float, float, float] | None) -> tuple[tuple[float, float, float], str]:
+    """The laser's mounting (x, y, yaw rad) and where it came from: ``--laser-pose``, /tf_static,
+    the first /tf transforms, else guessed from the scans."""
+    if laser_pose is not None:
+        return (laser_pose[0], laser_pose[1], math.radians(laser_pose[2])), "from --laser-pose"
+    mount = laser_mount(data)
+    if mount is not None:
+        return mount, "from /tf_static"
+    if data.first_tf:
+        mount = laser_mount(data, "/tf")
+        if mount is not None:
+            return mount, "from the first /tf transforms (no /tf_static)"
+    return estimate_mount(data), (f"guessed: estimated from the scans (no transform {data.base_frame} -> {data.scan_frame} "
+                                  f"on /tf_static or /tf; tried {GUESS_TRIED}); pass --laser-pose=X,Y,YAW "
+                                  f"(m, m, degrees) to give it")

@@ -93,13 +93,15 @@ def _pick(path: Path, connections: list, wanted: str | None, types: Sequence[str
 
 
 def read_bag(path: str | Path, *, odom_topic: str | None = None, scan_topic: str | None = None,
-             start: float | None = None, end: float | None = None, cloud_topic: str | None = None) -> BagData:
+             start: float | None = None, end: float | None = None, cloud_topic: str | None = None,
+             at: float | None = None, window: float = 30.0) -> BagData:
     """Read odometry, laser scans and static transforms; ``start``/``end`` are seconds after
     the first odometry message (message header stamps; the bag's receive time where a stamp is
-    zero). Raises BagImportError naming the file and what is missing."""
+    zero); ``at`` with ``window``: the ``window`` seconds before the moment ``at`` instead.
+    Raises BagImportError naming the file and what is missing."""
     path = Path(path)
     with open_reader(path) as reader:
-        return _read(reader, path, odom_topic, scan_topic, start, end, cloud_topic)
+        return _read(reader, path, odom_topic, scan_topic, (start, end, at, window), cloud_topic)
 
 
 @contextlib.contextmanager
@@ -155,7 +157,7 @@ def _stamp(header: Any, bag_ns: int) -> int:
     return ns if ns > 0 else bag_ns
 
 
-def _read(reader: Any, path: Path, odom_topic, scan_topic, start, end, cloud_topic=None) -> BagData:
+def _read(reader: Any, path: Path, odom_topic, scan_topic, cut: tuple, cloud_topic=None) -> BagData:
     conns = list(reader.connections)
     odom_name = _pick(path, conns, odom_topic, ODOM_TYPES, "odometry", "--odom-topic", ("/odom",), True)
     scan_name = None if cloud_topic else \
@@ -171,7 +173,7 @@ def _read(reader: Any, path: Path, odom_topic, scan_topic, start, end, cloud_top
     if not col.odom:
         raise BagImportError(f"{path}: topic {odom_name} has no messages; record odometry or choose "
                              f"another topic with --odom-topic")
-    data, origin = _odometry(path, col, odom_name, start, end)
+    data, origin = _odometry(path, col, odom_name, *cut)
     _attach_extras(data, col, origin)
     if cloud_name is not None:
         data.cloud_topic, data.cloud_frame, data.cloud_count = cloud_name, col.cloud_frame, col.clouds
@@ -313,9 +315,10 @@ def _attach_extras(data: BagData, col: _Collector, origin: float) -> None:
     data.frame = data.odom_frame
 
 
-def _odometry(path: Path, col: _Collector, odom_name: str, start, end) -> tuple[BagData, float]:
-    """The odometry sorted by time, t = 0 at its first message, cut to ``start``..``end``;
-    and the first message's stamp (ns), the origin of every other time."""
+def _odometry(path: Path, col: _Collector, odom_name: str, start, end, at=None,
+              window: float = 30.0) -> tuple[BagData, float]:
+    """The odometry sorted by time, t = 0 at its first message, cut to ``start``..``end`` (or
+    ``at - window``..``at``); and the first message's stamp (ns), the origin of every other time."""
     odom_arr = np.array(col.odom, dtype=float)
     odom_arr = odom_arr[np.argsort(odom_arr[:, 0], kind="stable")]
     origin = float(odom_arr[0, 0])
@@ -323,6 +326,13 @@ def _odometry(path: Path, col: _Collector, odom_name: str, start, end) -> tuple[
     data = BagData(path=path, odom_topic=odom_name, odom_frame=col.odom_frame or "odom",
                    base_frame=col.base_frame or "base_link", odom=odom_arr, static_tf=col.static_tf,
                    first_tf=col.first_tf, duration=float(odom_arr[-1, 0]), full_odom=odom_arr)
+    if at is not None:
+        if not (math.isfinite(at) and 0 < at <= data.duration):
+            raise BagImportError(f"{path}: --at {at:g} is outside the bag: its odometry covers 0..{data.duration:.1f} s "
+                                 f"(times are seconds after the first odometry message; --list-events shows candidates)")
+        if not (math.isfinite(window) and window > 0):
+            raise BagImportError(f"--window must be a positive number of seconds, got {window}")
+        start, end = max(0.0, at - window), at
     if start is not None or end is not None:
         keep = np.ones(len(odom_arr), bool)
         if start is not None:

@@ -24,7 +24,7 @@ from ...scenario.model import (
 from .clouds import CloudSettings, grid_clouds, sensor_mount
 from .frames import to_world_frame
 from .goal import choose_goal
-from .mount import GUESS_TRIED, estimate_mount, laser_mount
+from .mount import choose_mount
 from .obstacles import FitSettings, _r, fit_obstacles, occupied_clusters
 from .projection import grid_returns
 from .reading import PATH_AS, BagData, BagImportError, read_bag
@@ -78,20 +78,24 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
                       name: str = "", robot_radius: float = 0.15,
                       settings: FitSettings = FitSettings(), frame: str = "auto", map_frame: str = "map",
                       pose_topic: str | None = None, cloud_topic: str | None = None,
-                      cloud: CloudSettings = CloudSettings(), goal_topic: str | None = None) -> BagSeed:
+                      cloud: CloudSettings = CloudSettings(), goal_topic: str | None = None,
+                      at: float | None = None, window: float = 30.0) -> BagSeed:
     """Build a seed scenario from a bag (see the package docstring). ``laser_pose`` is x, y (m),
     yaw (degrees) of the laser in the robot's base frame; ``robot_radius`` the seed's circular
     footprint (m); ``reference_file`` is the CSV name
     written into ``scenario.reference`` when ``path_as`` is ``"reference"`` or ``"both"``
     (waypoints to drive the loop and the reference to measure how closely the run replays it).
+    ``at``: cut the ``window`` seconds before this moment instead of ``start``..``end``.
     ``frame``: "auto" (the map frame when the bag has ``map -> odom`` or a pose topic in it, else
     the odometry frame), "map" or "odom"."""
     if not (math.isfinite(robot_radius) and 0 < robot_radius <= 5):
         raise BagImportError(f"--robot-radius must be a length in (0, 5] m, got {robot_radius}")
     if path_as not in PATH_AS:
         raise BagImportError(f"--path-as must be one of {', '.join(PATH_AS)}, got {path_as!r}")
+    if at is not None and (start is not None or end is not None):
+        raise BagImportError("--at cuts the window before a moment: give it without --start/--end")
     data = read_bag(path, odom_topic=odom_topic, scan_topic=scan_topic, start=start, end=end,
-                    cloud_topic=cloud_topic)
+                    cloud_topic=cloud_topic, at=at, window=window)
     corr = to_world_frame(data, frame, map_frame, pose_topic, data.full_odom)
     goal, goal_note = choose_goal(data, corr, goal_topic)
     notes = list(data.notes) + [goal_note]
@@ -117,23 +121,6 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
     od = data.odom
     path_rows = np.stack([od[:, 0] - od[0, 0], od[:, 1], od[:, 2]], axis=1)
     return BagSeed(scenario=scenario, path=path_rows, notes=notes, mount=mount)
-
-
-def choose_mount(data: BagData, laser_pose: tuple[float, float, float] | None) -> tuple[tuple[float, float, float], str]:
-    """The laser's mounting (x, y, yaw rad) and where it came from: ``--laser-pose``, /tf_static,
-    the first /tf transforms, else guessed from the scans."""
-    if laser_pose is not None:
-        return (laser_pose[0], laser_pose[1], math.radians(laser_pose[2])), "from --laser-pose"
-    mount = laser_mount(data)
-    if mount is not None:
-        return mount, "from /tf_static"
-    if data.first_tf:
-        mount = laser_mount(data, "/tf")
-        if mount is not None:
-            return mount, "from the first /tf transforms (no /tf_static)"
-    return estimate_mount(data), (f"guessed: estimated from the scans (no transform {data.base_frame} -> {data.scan_frame} "
-                                  f"on /tf_static or /tf; tried {GUESS_TRIED}); pass --laser-pose=X,Y,YAW "
-                                  f"(m, m, degrees) to give it")
 
 
 def _obstacles_from_scans(data: BagData, mount, settings: FitSettings, notes: list[str]) -> list[Obstacle]:
