@@ -67,8 +67,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--path-as", choices=PATH_AS, default="waypoints",
                    help="driven path as decimated waypoints (default), a reference trajectory (CSV t,x,y beside "
                         "the seed, for the reference deviation metrics) or both")
-    p.add_argument("--robot-radius", type=float, default=0.15, metavar="M",
-                   help="the seed robot's circular footprint radius, m (default 0.15; edit the seed for a box)")
+    p.add_argument("--robot-radius", type=float, default=None, metavar="M",
+                   help="the seed robot's circular footprint radius, m (default: the base link's collision geometry "
+                        "in the URDF on /robot_description, else a Nav2 footprint in the bag, else 0.15)")
     p.add_argument("--name", default="", help="scenario name (default: the output file's stem)")
     p.add_argument("--force", action="store_true", help="overwrite an existing output file")
 

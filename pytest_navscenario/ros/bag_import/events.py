@@ -149,8 +149,9 @@ def format_events(events: list[Event]) -> list[str]:
 def bag_events(path, *, odom_topic: str | None = None, scan_topic: str | None = None,
                cloud_topic: str | None = None, frame: str = "auto", map_frame: str = "map",
                pose_topic: str | None = None, laser_pose: tuple[float, float, float] | None = None,
-               robot_radius: float = 0.15, margin: float = 0.05) -> tuple[list[Event], list[str]]:
+               robot_radius: float | None = None, margin: float = 0.05) -> tuple[list[Event], list[str]]:
     """The candidate moments of a whole bag, and notes on the frame and sensors used."""
+    from .footprint import footprint_from_bag, inner_radius
     from .frames import to_world_frame
     from .mount import choose_mount
     from .reading import read_bag
@@ -167,4 +168,6 @@ def bag_events(path, *, odom_topic: str | None = None, scan_topic: str | None = 
         notes.append("no laser scan: the gap to the nearest return is not checked")
     if not data.goals:
         notes.append("no navigation goal in the bag: stops are listed only where the robot drove on after them")
-    return find_events(data, corr, robot_radius, margin, mount), notes
+    fp, how, _ = footprint_from_bag(data, robot_radius)
+    notes.append(f"footprint: {how}")
+    return find_events(data, corr, inner_radius(fp), margin, mount), notes

@@ -22,6 +22,7 @@ from ...scenario.model import (
     Scenario,
 )
 from .clouds import CloudSettings, grid_clouds, sensor_mount
+from .footprint import footprint_from_bag, inner_radius
 from .frames import to_world_frame
 from .goal import choose_goal
 from .mount import choose_mount
@@ -75,20 +76,20 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
                       start: float | None = None, end: float | None = None,
                       laser_pose: tuple[float, float, float] | None = None,
                       path_as: str = "waypoints", reference_file: str | None = None,
-                      name: str = "", robot_radius: float = 0.15,
+                      name: str = "", robot_radius: float | None = None,
                       settings: FitSettings = FitSettings(), frame: str = "auto", map_frame: str = "map",
                       pose_topic: str | None = None, cloud_topic: str | None = None,
                       cloud: CloudSettings = CloudSettings(), goal_topic: str | None = None,
                       at: float | None = None, window: float = 30.0) -> BagSeed:
     """Build a seed scenario from a bag (see the package docstring). ``laser_pose`` is x, y (m),
     yaw (degrees) of the laser in the robot's base frame; ``robot_radius`` the seed's circular
-    footprint (m); ``reference_file`` is the CSV name
+    footprint (m; default: from the bag's URDF or Nav2 footprint, else 0.15 m); ``reference_file`` is the CSV name
     written into ``scenario.reference`` when ``path_as`` is ``"reference"`` or ``"both"``
     (waypoints to drive the loop and the reference to measure how closely the run replays it).
     ``at``: cut the ``window`` seconds before this moment instead of ``start``..``end``.
     ``frame``: "auto" (the map frame when the bag has ``map -> odom`` or a pose topic in it, else
     the odometry frame), "map" or "odom"."""
-    if not (math.isfinite(robot_radius) and 0 < robot_radius <= 5):
+    if robot_radius is not None and not (math.isfinite(robot_radius) and 0 < robot_radius <= 5):
         raise BagImportError(f"--robot-radius must be a length in (0, 5] m, got {robot_radius}")
     if path_as not in PATH_AS:
         raise BagImportError(f"--path-as must be one of {', '.join(PATH_AS)}, got {path_as!r}")
@@ -98,7 +99,9 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
                     cloud_topic=cloud_topic, at=at, window=window)
     corr = to_world_frame(data, frame, map_frame, pose_topic, data.full_odom)
     goal, goal_note = choose_goal(data, corr, goal_topic)
-    notes = list(data.notes) + [goal_note]
+    fp, fp_how, fp_warnings = footprint_from_bag(data, robot_radius)
+    radius = inner_radius(fp)
+    notes = list(data.notes) + [goal_note] + [f"warning: {w}" for w in fp_warnings] + [f"footprint: {fp_how}"]
     obstacles: list[Obstacle] = []
     mount = None
     if data.scan_topic is not None:
@@ -106,17 +109,17 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
         notes.append(f"laser {data.scan_frame} at x={mount[0]:.3f} y={mount[1]:.3f} "
                      f"yaw={math.degrees(mount[2]):.1f} deg in {data.base_frame}, {how}")
         obstacles = _obstacles_from_scans(data, mount, settings, notes)
-        check_path_free(data, obstacles, robot_radius, how)
+        check_path_free(data, obstacles, radius, how)
     elif data.cloud_topic is not None:
         matrix, how = sensor_mount(data, laser_pose)
         notes.append(f"point cloud frame {data.cloud_frame} at x={matrix[0, 3]:.3f} y={matrix[1, 3]:.3f} "
                      f"z={matrix[2, 3]:.3f} in {data.base_frame}, {how}")
-        grid, cloud_notes = grid_clouds(data, matrix, dataclasses.replace(cloud, near=max(cloud.near, robot_radius)),
+        grid, cloud_notes = grid_clouds(data, matrix, dataclasses.replace(cloud, near=max(cloud.near, radius)),
                                         settings.res)
         notes.extend(cloud_notes)
         obstacles = _fit(data, grid, settings, notes, f"{data.cloud_count} clouds")
-        check_path_free(data, obstacles, robot_radius, how, data.cloud_topic)
-    scenario, summary = _scenario(data, obstacles, path_as, reference_file, name, robot_radius, goal)
+        check_path_free(data, obstacles, radius, how, data.cloud_topic)
+    scenario, summary = _scenario(data, obstacles, path_as, reference_file, name, fp, goal)
     notes.append(summary)
     od = data.odom
     path_rows = np.stack([od[:, 0] - od[0, 0], od[:, 1], od[:, 2]], axis=1)
@@ -162,11 +165,12 @@ def check_path_free(data: BagData, obstacles: list[Obstacle], radius: float, how
                 f"(radius {radius} m) on {where} (t={od[k, 0]:.1f} s, x={od[k, 1]:.2f}, y={od[k, 2]:.2f}: "
                 f"{o.name}), where the robot drove: the laser mounting is likely wrong. It was {how}. "
                 f"Give it with --laser-pose=X,Y,YAW (the laser in {data.base_frame}, from the robot's URDF), "
-                f"or a smaller --robot-radius if the robot is smaller")
+                f"or a smaller --robot-radius if the footprint is too large")
 
 
 def _scenario(data: BagData, obstacles: list[Obstacle], path_as: str, reference_file: str | None,
-              name: str, robot_radius: float, goal: tuple[float, float, float] | None = None) -> tuple[Scenario, str]:
+              name: str, footprint: Footprint, goal: tuple[float, float, float] | None = None
+              ) -> tuple[Scenario, str]:
     """The seed scenario from the odometry window and the obstacles (the goal: ``goal``, else
     the window's last pose), and a one-line summary."""
     od = data.odom
@@ -181,7 +185,7 @@ def _scenario(data: BagData, obstacles: list[Obstacle], path_as: str, reference_
         waypoints = tuple(Pose(_r(x), _r(y)) for x, y in decimate_path(od[:, 1:3]))
     if path_as in ("reference", "both"):
         reference = Reference(file=reference_file or "reference.csv")
-    robot = _robot(data, robot_radius)
+    robot = _robot(data, footprint)
     limits = robot.limits
     timeout = _r(max(30.0, math.ceil(max(duration, length / max(limits.max_speed, 0.1)) * 2.0 + 10.0)), 1)
     scenario = Scenario(
@@ -199,8 +203,8 @@ def _scenario(data: BagData, obstacles: list[Obstacle], path_as: str, reference_
     return scenario, summary
 
 
-def _robot(data: BagData, robot_radius: float) -> Robot:
-    """A circular robot with limits 20 % above the recorded peaks and the bag's laser."""
+def _robot(data: BagData, footprint: Footprint) -> Robot:
+    """The robot with its footprint, limits 20 % above the recorded peaks and the bag's laser."""
     speed, yaw_rate = _peak_rates(data.odom)
     # 20 % above the real peak speed, rounded up to 0.05 m/s: headroom for the planner
     limits = Limits(max_speed=_r(max(0.2, math.ceil(speed * 1.2 * 20) / 20), 2),
@@ -208,4 +212,4 @@ def _robot(data: BagData, robot_radius: float) -> Robot:
     lidar = Lidar(beams=min(len(data.scan_angles), 360) if data.scan_topic else 72,
                   range_max=_r(data.range_max if data.scan_topic and math.isfinite(data.range_max) else 8.0, 2),
                   range_min=_r(data.range_min if data.scan_topic else 0.05, 3))
-    return Robot(footprint=Footprint(shape="circle", radius=robot_radius), drive="diff", limits=limits, lidar=lidar)
+    return Robot(footprint=footprint, drive="diff", limits=limits, lidar=lidar)
