@@ -104,14 +104,16 @@ def ground_height(pts: np.ndarray, s: CloudSettings) -> float | None:
 
 
 class CloudGrid:
-    """Clouds into a grid one at a time (see the module docstring); counts what it left out."""
+    """Clouds into a grid one at a time (see the module docstring); counts what it left out. The
+    sensor's mounting is looked up at the first cloud (its frame is in the cloud's header)."""
 
-    def __init__(self, data: BagData, mount: np.ndarray, s: CloudSettings, res: float):
-        self.data, self.mount, self.s = data, mount, s
+    def __init__(self, data: BagData, laser_pose: tuple[float, float, float] | None, s: CloudSettings, res: float):
+        self.data, self.laser_pose, self.s = data, laser_pose, s
+        self.mount: np.ndarray | None = None
+        self.how = ""
         self.acc = GridAccumulator(res)
         self.used = self.outside = self.nan = self.no_ground = 0
         self.grounds: list[float] = []
-        self.sensor_z = float(mount[2, 3])
         self.last_ground: float | None = None
 
     def add(self, msg: Any, t: float) -> None:
@@ -119,49 +121,57 @@ class CloudGrid:
         if not od[0, 0] <= t <= od[-1, 0]:
             self.outside += 1
             return
+        if self.mount is None:
+            self.data.cloud_frame = msg.header.frame_id.lstrip("/")
+            self.mount, self.how = sensor_mount(self.data, self.laser_pose)
         pts, nan = cloud_xyz(msg, f"{self.data.path}: {self.data.cloud_topic}")
         self.nan += nan
         pts = pts @ self.mount[:3, :3].T + self.mount[:3, 3]
         ground = ground_height(pts, self.s)
+        ground = self.last_ground if ground is None else ground
         if ground is None:
-            ground = self.last_ground
-            if ground is None:
-                self.no_ground += 1
-                return
+            self.no_ground += 1
+            return
         self.last_ground = ground
         self.grounds.append(ground)
         h = pts[:, 2] - ground
         keep = (h >= self.s.clearance) & (h <= self.s.robot_height) & \
-            (np.hypot(pts[:, 0], pts[:, 1]) > self.s.near)
-        pose = poses_at(self.data, np.array([t]))[0]
-        c, sn = math.cos(pose[2]), math.sin(pose[2])
+            (pts[:, 0] * pts[:, 0] + pts[:, 1] * pts[:, 1] > self.s.near * self.s.near)
+        x, y, yaw = poses_at(self.data, np.array([t]))[0]
+        c, sn = math.cos(yaw), math.sin(yaw)
         px, py = pts[keep, 0], pts[keep, 1]
-        world = np.stack([pose[0] + c * px - sn * py, pose[1] + sn * px + c * py], 1)
+        world = np.stack([x + c * px - sn * py, y + sn * px + c * py], 1)
         mx, my = self.mount[0, 3], self.mount[1, 3]
-        origin = np.array([pose[0] + c * mx - sn * my, pose[1] + sn * mx + c * my])
+        origin = np.array([x + c * mx - sn * my, y + sn * mx + c * my])
         self.acc.add(world, np.broadcast_to(origin, world.shape), h[keep])
         self.used += 1
 
-    def grid(self) -> Grid:
-        return self.acc.grid()
+    def notes(self) -> list[str]:
+        d, s = self.data, self.s
+        m = self.mount if self.mount is not None else np.eye(4)
+        notes = [f"point cloud frame {d.cloud_frame} at x={m[0, 3]:.3f} y={m[1, 3]:.3f} z={m[2, 3]:.3f} in "
+                 f"{d.base_frame}, {self.how or 'no cloud in the window'}",
+                 f"{self.used} point clouds from {d.cloud_topic}, {self.acc.returns} points between {s.clearance} and "
+                 f"{s.robot_height} m above the ground"
+                 + (f"; ground found at z={np.median(self.grounds):.2f} m in {d.base_frame}" if self.grounds else "")]
+        if self.nan:
+            notes.append(f"{self.nan} NaN points (no return) dropped")
+        if self.no_ground:
+            notes.append(f"warning: {self.no_ground} cloud(s) skipped: too few points near the robot to find the ground")
+        return notes
 
 
-def grid_clouds(data: BagData, mount: np.ndarray, s: CloudSettings, res: float) -> tuple[Grid, list[str]]:
-    """Stream the bag's clouds on ``data.cloud_topic`` into a grid; notes of what was done."""
+def grid_clouds(data: BagData, laser_pose: tuple[float, float, float] | None, s: CloudSettings,
+                res: float) -> tuple[Grid, list[str], float]:
+    """Stream the bag's clouds on ``data.cloud_topic`` into a grid: the grid, notes of what was
+    done, and the sensor's height above the base frame."""
     from .reading import open_reader
 
-    g = CloudGrid(data, mount, s, res)
+    g = CloudGrid(data, laser_pose, s, res)
     with open_reader(data.path) as reader:
         conns = [c for c in reader.connections if c.topic == data.cloud_topic]
         for conn, bag_ns, raw in reader.messages(connections=conns):
             msg = reader.deserialize(raw, conn.msgtype)
             ns = int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec) or bag_ns
             g.add(msg, (ns - data.origin_ns) * 1e-9)
-    notes = [f"{g.used} point clouds from {data.cloud_topic} (frame {data.cloud_frame}), "
-             f"{g.acc.returns} points between {s.clearance} and {s.robot_height} m above the ground"
-             + (f"; ground found at z={np.median(g.grounds):.2f} m in {data.base_frame}" if g.grounds else "")]
-    if g.nan:
-        notes.append(f"{g.nan} NaN points (no return) dropped")
-    if g.no_ground:
-        notes.append(f"warning: {g.no_ground} cloud(s) skipped: too few points near the robot to find the ground")
-    return g.grid(), notes
+    return g.acc.grid(), g.notes(), float(g.mount[2, 3]) if g.mount is not None else 0.0

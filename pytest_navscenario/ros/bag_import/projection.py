@@ -50,7 +50,8 @@ class Grid:
 
 class GridAccumulator:
     """Sums returns per cell batch by batch, merging every ``merge_every`` batches, so memory
-    follows the area seen, not the length of the bag."""
+    follows the area seen, not the length of the bag. Cells are keyed by one int64 (column
+    * 2^32 + row): only their sums are kept, never their coordinates."""
 
     def __init__(self, res: float, merge_every: int = 64):
         self.res, self.merge_every = res, merge_every
@@ -64,30 +65,18 @@ class GridAccumulator:
             return
         self.has_height |= heights is not None
         cells = np.floor(points / self.res).astype(np.int64)
-        keys, inverse, counts = np.unique(cells, axis=0, return_inverse=True, return_counts=True)
-        inverse = inverse.reshape(-1)
-        sums = np.zeros((len(keys), 4))
-        np.add.at(sums, inverse, np.concatenate([points, origins], axis=1))
-        top = np.full(len(keys), -np.inf)
-        if heights is not None:
-            np.maximum.at(top, inverse, heights)
-        self.parts.append((keys, sums, counts, top))
+        keys, inverse = np.unique(cells[:, 0] * 4294967296 + cells[:, 1], return_inverse=True)
+        self.parts.append(_reduce(keys, inverse.reshape(-1), np.concatenate([points, origins], axis=1),
+                                  np.ones(len(points), np.int64), heights))
         if len(self.parts) >= self.merge_every:
             self.parts = [self._merged()]
 
     def _merged(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         if len(self.parts) == 1:
             return self.parts[0]
-        keys = np.concatenate([p[0] for p in self.parts])
-        keys, inverse = np.unique(keys, axis=0, return_inverse=True)
-        inverse = inverse.reshape(-1)
-        sums = np.zeros((len(keys), 4))
-        np.add.at(sums, inverse, np.concatenate([p[1] for p in self.parts]))
-        counts = np.bincount(inverse, weights=np.concatenate([p[2] for p in self.parts]),
-                             minlength=len(keys)).astype(np.int64)
-        top = np.full(len(keys), -np.inf)
-        np.maximum.at(top, inverse, np.concatenate([p[3] for p in self.parts]))
-        return keys, sums, counts, top
+        keys, inverse = np.unique(np.concatenate([p[0] for p in self.parts]), return_inverse=True)
+        return _reduce(keys, inverse.reshape(-1), np.concatenate([p[1] for p in self.parts]),
+                       np.concatenate([p[2] for p in self.parts]), np.concatenate([p[3] for p in self.parts]))
 
     def grid(self) -> Grid:
         if not self.parts:
@@ -95,6 +84,18 @@ class GridAccumulator:
         _, sums, counts, top = self._merged()
         return Grid(means=sums / counts[:, None], counts=counts, returns=self.returns,
                     top=np.where(np.isfinite(top), top, np.nan) if self.has_height else None)
+
+
+def _reduce(keys: np.ndarray, inverse: np.ndarray, values: np.ndarray, counts: np.ndarray,
+            heights: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per key: the sums of ``values`` columns, the sum of ``counts``, the max of ``heights``."""
+    n = len(keys)
+    sums = np.stack([np.bincount(inverse, weights=values[:, j], minlength=n) for j in range(values.shape[1])], 1)
+    total = np.bincount(inverse, weights=counts, minlength=n).astype(np.int64)
+    top = np.full(n, -np.inf)
+    if heights is not None:
+        np.maximum.at(top, inverse, heights)
+    return keys, sums, total, top
 
 
 def grid_returns(data: BagData, mount: tuple[float, float, float], res: float = 0.05,

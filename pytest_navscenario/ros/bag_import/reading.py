@@ -165,18 +165,19 @@ def _read(reader: Any, path: Path, odom_topic, scan_topic, cut: tuple, cloud_top
     cloud_name = None if scan_name else \
         _pick(path, conns, cloud_topic, CLOUD_TYPES, "point cloud", "--cloud-topic", CLOUD_TOPICS, False)
     roles = {c.topic: role(c.topic, c.msgtype) for c in conns}
-    wanted = [c for c in conns if c.topic in (odom_name, scan_name, cloud_name) or roles[c.topic]]
-    col = _Collector(odom_name, scan_name, cloud_name, roles)
+    # the clouds are big: they are read in a second pass, one at a time (clouds.py), not here
+    wanted = [c for c in conns if c.topic in (odom_name, scan_name) or roles[c.topic]]
+    col = _Collector(odom_name, scan_name, roles)
     for conn, bag_ns, raw in reader.messages(connections=wanted):
-        col.take(conn.topic, reader.deserialize(raw, conn.msgtype) if conn.topic != cloud_name else None,
-                 bag_ns, raw)
+        col.take(conn.topic, reader.deserialize(raw, conn.msgtype), bag_ns)
     if not col.odom:
         raise BagImportError(f"{path}: topic {odom_name} has no messages; record odometry or choose "
                              f"another topic with --odom-topic")
     data, origin = _odometry(path, col, odom_name, *cut)
     _attach_extras(data, col, origin)
     if cloud_name is not None:
-        data.cloud_topic, data.cloud_frame, data.cloud_count = cloud_name, col.cloud_frame, col.clouds
+        data.cloud_topic = cloud_name
+        data.cloud_count = sum(int(getattr(c, "msgcount", 0) or 0) for c in conns if c.topic == cloud_name)
         return data
     if scan_name is None:
         data.notes.append(f"no laser scan topic (and no point cloud) in {path.name}: the seed has the "
@@ -189,10 +190,10 @@ def _read(reader: Any, path: Path, odom_topic, scan_topic, cut: tuple, cloud_top
 class _Collector:
     """What the first pass over the bag's messages keeps: odometry poses, scans of the first scan's
     beam layout, transforms, localisation poses, goals, velocity commands, the robot's description
-    and footprint, and how many point clouds there are (clouds are read in a second pass)."""
+    and footprint."""
 
-    def __init__(self, odom_name: str, scan_name: str | None, cloud_name: str | None, roles: dict):
-        self.odom_name, self.scan_name, self.cloud_name, self.roles = odom_name, scan_name, cloud_name, roles
+    def __init__(self, odom_name: str, scan_name: str | None, roles: dict):
+        self.odom_name, self.scan_name, self.roles = odom_name, scan_name, roles
         self.odom: list[tuple[int, float, float, float]] = []
         self.scans: list[tuple[int, np.ndarray]] = []
         self.static_tf: dict[str, tuple[str, float, float, float]] = {}
@@ -204,12 +205,12 @@ class _Collector:
         self.cmd: list[tuple[int, float, float]] = []
         self.description: str | None = None
         self.footprints: list[tuple[str, str, Any]] = []
-        self.tf_seen = self.clouds = 0
-        self.odom_frame = self.base_frame = self.scan_frame = self.cloud_frame = ""
+        self.tf_seen = 0
+        self.odom_frame = self.base_frame = self.scan_frame = ""
         self.scan_meta: tuple | None = None
         self.odd_scans = 0
 
-    def take(self, topic: str, msg: Any, bag_ns: int, raw: bytes) -> None:
+    def take(self, topic: str, msg: Any, bag_ns: int) -> None:
         if topic == self.odom_name:
             p = msg.pose.pose
             self.odom.append((_stamp(msg.header, bag_ns), p.position.x, p.position.y, yaw_of(p.orientation)))
@@ -217,10 +218,6 @@ class _Collector:
             self.base_frame = self.base_frame or msg.child_frame_id.lstrip("/")
         elif topic == self.scan_name:
             self._scan(msg, bag_ns)
-        elif topic == self.cloud_name:
-            self.clouds += 1
-            if not self.cloud_frame:
-                self.cloud_frame = _cloud_frame(raw)
         else:
             getattr(self, f"_{self.roles[topic].replace('tf_static', 'static')}")(topic, msg, bag_ns)
 
@@ -280,20 +277,6 @@ class _Collector:
             self.odd_scans += 1  # another beam layout than the first scan's: skipped, reported later
             return
         self.scans.append((_stamp(msg.header, bag_ns), ranges))
-
-
-def _cloud_frame(raw: bytes) -> str:
-    """The frame_id of a serialized PointCloud2 without deserializing its points: the header's
-    string follows the stamp (CDR: 4-byte encapsulation, 8-byte stamp; ROS 1: seq, stamp)."""
-    import struct
-    for off in (12, 12 - 4 + 8):
-        try:
-            (n,) = struct.unpack_from("<I", raw, off)
-            if 0 < n < 256:
-                return bytes(raw[off + 4:off + 4 + n]).rstrip(b"\0").decode("utf-8", "replace").lstrip("/")
-        except struct.error:
-            pass
-    return ""
 
 
 def _attach_extras(data: BagData, col: _Collector, origin: float) -> None:

@@ -21,7 +21,7 @@ from ...scenario.model import (
     Robot,
     Scenario,
 )
-from .clouds import CloudSettings, grid_clouds, sensor_mount
+from .clouds import CloudSettings, grid_clouds
 from .footprint import footprint_from_bag, inner_radius
 from .frames import to_world_frame
 from .goal import choose_goal
@@ -111,12 +111,10 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
         obstacles = _obstacles_from_scans(data, mount, settings, notes)
         check_path_free(data, obstacles, radius, how)
     elif data.cloud_topic is not None:
-        matrix, how = sensor_mount(data, laser_pose)
-        notes.append(f"point cloud frame {data.cloud_frame} at x={matrix[0, 3]:.3f} y={matrix[1, 3]:.3f} "
-                     f"z={matrix[2, 3]:.3f} in {data.base_frame}, {how}")
-        grid, cloud_notes = grid_clouds(data, matrix, dataclasses.replace(cloud, near=max(cloud.near, radius)),
-                                        settings.res)
+        grid, cloud_notes, _ = grid_clouds(data, laser_pose, dataclasses.replace(cloud, near=max(cloud.near, radius)),
+                                           settings.res)
         notes.extend(cloud_notes)
+        how = cloud_notes[0].split(", ", 1)[1]
         obstacles = _fit(data, grid, settings, notes, f"{data.cloud_count} clouds")
         check_path_free(data, obstacles, radius, how, data.cloud_topic)
     scenario, summary = _scenario(data, obstacles, path_as, reference_file, name, fp, goal)
