@@ -29,6 +29,8 @@ class CloudSettings:
     clearance: float = 0.05       # m above the ground: lower points are the ground
     near: float = 0.0             # m, horizontal: closer points are the robot itself (set to its radius)
     ground_ring: tuple[float, float] = (0.5, 8.0)   # m, horizontal ring where the ground is looked for
+    # a cloud is used when the robot moved or turned this much since the last one used, or this much time passed
+    keyframe: tuple[float, float, float] = (0.1, 5.0, 1.0)   # m, degrees, s
 
 
 def cloud_xyz(msg: Any, where: str) -> tuple[np.ndarray, int]:
@@ -52,8 +54,10 @@ def cloud_xyz(msg: Any, where: str) -> tuple[np.ndarray, int]:
         raw = raw[:row * height].reshape(height, row)[:, :step * width].reshape(-1)
     n = min(width * height, len(raw) // step)
     arr = np.frombuffer(raw[:n * step].tobytes() if not raw.flags.c_contiguous else raw[:n * step], dt)
-    pts = np.stack([arr["x"], arr["y"], arr["z"]], axis=1).astype(np.float64)
-    ok = np.isfinite(pts).all(axis=1)
+    pts = np.stack([arr["x"], arr["y"], arr["z"]], axis=1).astype(np.float32)
+    ok = np.isfinite(pts.sum(axis=1))
+    if ok.all():
+        return pts, 0
     return pts[ok], int(n - ok.sum())
 
 
@@ -91,8 +95,9 @@ def sensor_mount(data: BagData, laser_pose: tuple[float, float, float] | None) -
 def ground_height(pts: np.ndarray, s: CloudSettings) -> float | None:
     """The ground's height in the base frame under a cloud: the lowest 5 cm layer near the robot
     that holds at least 2 % of the points there (None when there are too few points)."""
-    r = np.hypot(pts[:, 0], pts[:, 1])
-    z = pts[(r >= s.ground_ring[0]) & (r <= s.ground_ring[1]), 2]
+    sub = pts[::4] if len(pts) > 4000 else pts   # a quarter of a dense cloud finds the ground as well
+    r2 = sub[:, 0] * sub[:, 0] + sub[:, 1] * sub[:, 1]
+    z = sub[(r2 >= s.ground_ring[0] ** 2) & (r2 <= s.ground_ring[1] ** 2), 2]
     if len(z) < 50:
         return None
     lo = np.floor(z.min() / 0.05)
@@ -112,7 +117,8 @@ class CloudGrid:
         self.mount: np.ndarray | None = None
         self.how = ""
         self.acc = GridAccumulator(res)
-        self.used = self.outside = self.nan = self.no_ground = 0
+        self.used = self.outside = self.nan = self.no_ground = self.same_place = 0
+        self.last_used: np.ndarray | None = None   # t, x, y, yaw of the last cloud used
         self.grounds: list[float] = []
         self.last_ground: float | None = None
 
@@ -121,12 +127,19 @@ class CloudGrid:
         if not od[0, 0] <= t <= od[-1, 0]:
             self.outside += 1
             return
+        x, y, yaw = poses_at(self.data, np.array([t]))[0]
+        if self.last_used is not None:
+            lt, lx, ly, lyaw = self.last_used
+            move, turn, wait = self.s.keyframe
+            if math.hypot(x - lx, y - ly) < move and math.degrees(abs(yaw - lyaw)) < turn and t - lt < wait:
+                self.same_place += 1   # the robot has not moved: this cloud sees what the last one saw
+                return
         if self.mount is None:
             self.data.cloud_frame = msg.header.frame_id.lstrip("/")
             self.mount, self.how = sensor_mount(self.data, self.laser_pose)
         pts, nan = cloud_xyz(msg, f"{self.data.path}: {self.data.cloud_topic}")
         self.nan += nan
-        pts = pts @ self.mount[:3, :3].T + self.mount[:3, 3]
+        pts = pts @ self.mount[:3, :3].T.astype(np.float32) + self.mount[:3, 3].astype(np.float32)
         ground = ground_height(pts, self.s)
         ground = self.last_ground if ground is None else ground
         if ground is None:
@@ -137,7 +150,6 @@ class CloudGrid:
         h = pts[:, 2] - ground
         keep = (h >= self.s.clearance) & (h <= self.s.robot_height) & \
             (pts[:, 0] * pts[:, 0] + pts[:, 1] * pts[:, 1] > self.s.near * self.s.near)
-        x, y, yaw = poses_at(self.data, np.array([t]))[0]
         c, sn = math.cos(yaw), math.sin(yaw)
         px, py = pts[keep, 0], pts[keep, 1]
         world = np.stack([x + c * px - sn * py, y + sn * px + c * py], 1)
@@ -145,6 +157,7 @@ class CloudGrid:
         origin = np.array([x + c * mx - sn * my, y + sn * mx + c * my])
         self.acc.add(world, np.broadcast_to(origin, world.shape), h[keep])
         self.used += 1
+        self.last_used = np.array([t, x, y, yaw])
 
     def notes(self) -> list[str]:
         d, s = self.data, self.s
@@ -154,6 +167,9 @@ class CloudGrid:
                  f"{self.used} point clouds from {d.cloud_topic}, {self.acc.returns} points between {s.clearance} and "
                  f"{s.robot_height} m above the ground"
                  + (f"; ground found at z={np.median(self.grounds):.2f} m in {d.base_frame}" if self.grounds else "")]
+        if self.same_place:
+            notes.append(f"{self.same_place} cloud(s) taken where the robot had moved < {s.keyframe[0]} m and turned < "
+                         f"{s.keyframe[1]:g} deg within {s.keyframe[2]:g} s of the last one used: skipped")
         if self.nan:
             notes.append(f"{self.nan} NaN points (no return) dropped")
         if self.no_ground:
