@@ -189,7 +189,7 @@ def robot_bag(path: Path, world: World, truth: np.ndarray, *, drift: np.ndarray 
 
 
 def cloud_msg(pts: np.ndarray, t: float, layout: str) -> dict[str, Any]:
-    """A PointCloud2 of ``pts`` (rings, columns, 3) in a driver's field layout: "velodyne"
+    """A PointCloud2 of ``pts`` (rings, columns, 3) in a driver's field layout ("hesai": see below): "velodyne"
     (x, y, z, intensity float32, ring uint16, time float32; unorganised, NaN points dropped,
     point_step 22) or "ouster" (organised rings x columns with NaN points kept, x, y, z, pad,
     intensity, t uint32, reflectivity uint16, ring uint16, ambient uint16, range uint32; step 48)."""
@@ -205,6 +205,21 @@ def cloud_msg(pts: np.ndarray, t: float, layout: str) -> dict[str, Any]:
         arr["x"], arr["y"], arr["z"], arr["ring"] = flat[:, 0], flat[:, 1], flat[:, 2], ring
         fields = [("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("intensity", 12, 7), ("ring", 16, 4), ("time", 18, 7)]
         height, width = 1, len(flat)
+    elif layout == "hesai":
+        # organised rings x columns, NaN kept, x, y, z, intensity float32, timestamp float64, ring
+        # uint16, 32-byte points, each row padded by 16 bytes (row_step > width * point_step)
+        dt = np.dtype({"names": ["x", "y", "z", "intensity", "timestamp", "ring"],
+                       "formats": ["<f4", "<f4", "<f4", "<f4", "<f8", "<u2"], "offsets": [0, 4, 8, 12, 16, 24],
+                       "itemsize": 32})
+        arr = np.zeros(pts.shape[:2], dt)
+        arr["x"], arr["y"], arr["z"] = pts[..., 0], pts[..., 1], pts[..., 2]
+        rows = np.zeros((pts.shape[0], pts.shape[1] * 32 + 16), np.uint8)
+        rows[:, :pts.shape[1] * 32] = np.frombuffer(arr.tobytes(), np.uint8).reshape(pts.shape[0], -1)
+        fields = [("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("intensity", 12, 7), ("timestamp", 16, 8), ("ring", 24, 4)]
+        return {"header": {"stamp": stamp(t), "frame_id": "laser"}, "height": pts.shape[0], "width": pts.shape[1],
+                "fields": [{"name": n, "offset": o, "datatype": d, "count": 1} for n, o, d in fields],
+                "is_bigendian": False, "point_step": 32, "row_step": rows.shape[1], "data": rows.reshape(-1),
+                "is_dense": False}
     else:
         dt = np.dtype({"names": ["x", "y", "z", "intensity", "t", "reflectivity", "ring", "ambient", "range"],
                        "formats": ["<f4", "<f4", "<f4", "<f4", "<u4", "<u2", "<u2", "<u2", "<u4"],

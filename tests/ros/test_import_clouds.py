@@ -1,6 +1,7 @@
 """Issue 17, point clouds: a bag from a known world seen by a 3D lidar (16 rings, ground in view),
-in the field layouts of two drivers (Velodyne: unorganised, packed 22-byte points; Ouster:
-organised 16 x 720 with NaN where a beam hits nothing). The ground is removed, a box lower
+in the field layouts of three drivers (Velodyne: unorganised, packed 22-byte points; Ouster:
+organised 16 x 720 with NaN where a beam hits nothing; Hesai: organised, float64 timestamps, rows
+padded past their points). The ground is removed, a box lower
 than a 2D laser's plane comes through with its height, a tall wall is cut at the robot's height."""
 from __future__ import annotations
 
@@ -29,7 +30,7 @@ def _drive():
     return np.stack([t, -1.0 + 0.6 * t, 0 * t, 0 * t], 1)   # straight along y = 0, from x = -1 to 2.5
 
 
-@pytest.fixture(scope="module", params=["velodyne", "ouster"])
+@pytest.fixture(scope="module", params=["velodyne", "ouster", "hesai"])
 def cloud_seed(request, tmp_path_factory):
     path = robot_bag(tmp_path_factory.mktemp(request.param) / "c", WORLD, _drive(), scans=False, laser=LIDAR,
                      cloud={**CLOUD, "layout": request.param})
@@ -86,3 +87,18 @@ def test_a_cloud_without_xyz_is_an_error(tmp_path):
                 "row_step": 8, "data": np.zeros(8, np.uint8), "is_dense": True})
     with pytest.raises(BagImportError, match=r"/points: the point cloud has no x, y, z field\(s\) \(fields: range\)"):
         scenario_from_bag(path)
+
+
+def test_clouds_without_odometry_is_an_error(tmp_path, capsys):
+    from ros_synthetic import BagOut, cloud_msg, cloud_points
+
+    from pytest_navscenario.cli import main
+
+    path = tmp_path / "clouds_only"
+    with BagOut(path) as bag:
+        for i in range(3):
+            pts = cloud_points(WORLD, 0.0, 0.0, 0.0, 0.6, CLOUD["azimuths"], CLOUD["elevations"])
+            bag.write("/points", "sensor_msgs/msg/PointCloud2", 0.1 * i, cloud_msg(pts, 0.1 * i, "velodyne"))
+    assert main(["from-bag", str(path), "-o", str(tmp_path / "s.yaml")]) == 2
+    err = capsys.readouterr().err
+    assert "no odometry (nav_msgs/msg/Odometry) in the bag (topics: /points (sensor_msgs/msg/PointCloud2))" in err

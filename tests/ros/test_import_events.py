@@ -81,3 +81,13 @@ def test_at_outside_the_bag_is_an_error(event_bag, capsys, tmp_path, at):
     assert main(["from-bag", str(event_bag), "-o", str(tmp_path / "x.yaml"), f"--at={at}"]) == 2
     err = capsys.readouterr().err
     assert f"--at {float(at):g} is outside the bag: its odometry covers 0..21.0 s" in err
+
+
+def test_at_with_start_or_a_bad_window_is_an_error(event_bag, capsys, tmp_path):
+    out = str(tmp_path / "x.yaml")
+    assert main(["from-bag", str(event_bag), "-o", out, "--at", "5", "--start", "1"]) == 2
+    assert "--at cuts the window before a moment: give it without --start/--end" in capsys.readouterr().err
+    assert main(["from-bag", str(event_bag), "-o", out, "--at", "5", "--window", "0"]) == 2
+    assert "--window must be a positive number of seconds, got 0.0" in capsys.readouterr().err
+    assert main(["from-bag", str(event_bag)]) == 2
+    assert "-o/--output is required" in capsys.readouterr().err
