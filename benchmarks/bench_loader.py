@@ -3,7 +3,7 @@
 
     python benchmarks/bench_loader.py [--repeat N] [--cpu]
 
-Prints medians (ms) and ratios; the README's scenario-format/benchmarks sections quote them.
+Prints medians (ms) and ratios; docs/reference/scenario-format.md and docs/benchmarks.md quote them.
 """
 from __future__ import annotations
 

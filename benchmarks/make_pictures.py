@@ -1,4 +1,4 @@
-"""Make the README's pictures from the shipped seeds and the two built-in planners.
+"""Make the pictures of the README and docs from the shipped seeds and the two built-in planners.
 
     python benchmarks/make_pictures.py [--variants 12] [--out examples/pictures]
 

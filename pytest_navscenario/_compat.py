@@ -78,9 +78,12 @@ def _forwarding_module(old: str, targets: tuple[str, ...]) -> types.ModuleType:
             except ModuleNotFoundError:
                 continue
             if hasattr(mod, name):
-                warnings.warn(f"{PACKAGE}.{old} moved: import {name} from {target}",
+                value = getattr(mod, name)
+                home = getattr(value, "__module__", None)  # where a class or function is defined
+                where = home if isinstance(home, str) and home.startswith(PACKAGE + ".") else target
+                warnings.warn(f"{PACKAGE}.{old} moved: import {name} from {where}",
                               DeprecationWarning, stacklevel=2)
-                return getattr(mod, name)
+                return value
         raise AttributeError(f"{PACKAGE}.{old}.{name} no longer exists; the module {PACKAGE}.{old} "
                              f"moved to {' / '.join(full)} (see the docs' API reference)")
 

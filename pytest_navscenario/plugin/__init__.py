@@ -136,6 +136,14 @@ def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> Any:
     return collect_file(file_path, parent)
 
 
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(session: pytest.Session, config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Families of same-named folders stay apart (collect.separate_families); first, before
+    -k/-m deselect, so that a selection does not rename a family."""
+    from .collect import separate_families
+    separate_families(config, items)
+
+
 @pytest.hookimpl(wrapper=True, tryfirst=True)
 def pytest_runtestloop(session: pytest.Session) -> Any:
     """An invalid scenario file is a collection error, but the other items still run.

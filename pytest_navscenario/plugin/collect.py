@@ -8,6 +8,7 @@ ScenarioError (file, line, field, fix); the other files are still collected and 
 """
 from __future__ import annotations
 
+import dataclasses
 import fnmatch
 import re
 import shlex
@@ -69,7 +70,7 @@ class ScenarioFile(pytest.File):
         from ..scenario.loader import load_scenario
 
         try:
-            scenario = load_scenario(self.path)
+            scenario = load_scenario(self.path, family="")  # "": the YAML has no family of its own
         except BaseException:
             get_state(self.config).bad_scenario_files += 1
             raise
@@ -79,10 +80,14 @@ class ScenarioFile(pytest.File):
             raise ScenarioError(f"scenario name {name!r} cannot be a pytest item name ('::' separates "
                                 f"node ids)", path=str(self.path), field="name",
                                 hint="use letters, digits, '-', '_' or '.', e.g. boxes1-narrow")
+        family_from_folder = not scenario.family
+        if family_from_folder:  # may become the folder's path: see separate_families
+            scenario = dataclasses.replace(scenario, family=self.path.parent.name)
         repeats = get_state(self.config).settings.repeat
         for repeat in range(repeats):
             item = ScenarioItem.from_parent(self, name=name if repeats == 1 else f"{name}[r{repeat}]",
                                             scenario=scenario, repeat=repeat)
+            item.family_from_folder = family_from_folder
             for mark in scenario.marks:
                 item.add_marker(getattr(pytest.mark, mark.name)(*mark.args, **dict(mark.kwargs)))
             if scenario.family:
@@ -97,6 +102,30 @@ class ScenarioFile(pytest.File):
         if isinstance(exc, (NavScenarioError, OSError, UnicodeDecodeError)):
             return f"cannot load scenario file {rel_path(self.config, self.path)}: {exc}"
         return super().repr_failure(excinfo)
+
+
+def separate_families(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Keep families from different folders of the same name apart.
+
+    A scenario without ``family:`` in its YAML belongs to the family named after its folder. When
+    the collected items come from two or more folders of the same name (``scenarios/`` and
+    ``examples/scenarios/``), each of those families is named by its folder's path relative to
+    the rootdir instead ("scenarios", "examples/scenarios"), so that the summary, the results
+    file and comparisons do not merge them. Called before ``-k``/``-m`` deselect items, so the
+    names do not depend on them (they do depend on which folders were collected together).
+    """
+    folders: dict[str, set[Path]] = {}
+    ours = [item for item in items if isinstance(item, ScenarioItem) and item.family_from_folder]
+    for item in ours:
+        folders.setdefault(item.scenario.family, set()).add(item.path.parent)
+    shared = {name for name, paths in folders.items() if len(paths) > 1}
+    for item in ours:
+        if item.scenario.family in shared:
+            family = rel_path(config, item.path.parent)
+            if family == ".":
+                family = item.path.parent.name
+            item.scenario = dataclasses.replace(item.scenario, family=family)
+            item.extra_keyword_matches.add(family)
 
 
 def repeat_seed(base_seed: int, repeat: int) -> int:
@@ -136,6 +165,7 @@ class ScenarioItem(pytest.Item):
         super().__init__(**kwargs)
         self.scenario = scenario
         self.repeat = repeat          # --nav-repeat index: 0 .. N-1
+        self.family_from_folder = False  # the family is the folder's (no family: in the YAML)
         self.nav_result: Any = None   # the EpisodeResult, until the call report has taken it
 
     @property

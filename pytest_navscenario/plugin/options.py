@@ -18,7 +18,7 @@ DEFAULT_SCENARIO_PATHS = ["scenarios"]
 DEFAULT_ARTIFACTS = "nav-artifacts"
 DEFAULT_TICK_LIMIT = 1.0
 
-# (option, ini name, help); used for --help, the ini registration and the README table.
+# (option, ini name, help); used for --help, the ini registration and the docs (docs/reference/options.md).
 OPTIONS = (
     ("--nav-subject", "nav_subject",
      "planner under test: 'package.module:Attribute' (a class or zero-argument factory) or a "
@@ -46,8 +46,9 @@ OPTIONS = (
 def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("navscenario", "navigation scenarios (pytest-navscenario)")
     helps = {ini: text for _, ini, text in OPTIONS}
+    # a metavar shows the accepted values ({a,b}) or a unit (N, SECONDS, PATH, DIR, SPEC, NAME)
     metavars = {"nav_subject": "SPEC", "nav_seed": "N", "nav_results": "PATH", "nav_artifacts": "DIR",
-                "nav_summary": "yes|no", "nav_tick_limit": "SECONDS", "nav_repeat": "N"}
+                "nav_summary": "{yes,no}", "nav_tick_limit": "SECONDS", "nav_repeat": "N"}
     for opt, ini, text in OPTIONS:
         group.addoption(opt, dest=ini, default=None, metavar=metavars[ini], help=text + f" [ini: {ini}]")
     parser.addini("nav_subject", helps["nav_subject"], default="")

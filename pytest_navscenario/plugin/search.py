@@ -19,6 +19,8 @@ import pytest
 DEFAULT_BUDGET = 100
 DEFAULT_SHRINK_BUDGET = 40
 DEFAULT_OUT = "scenarios/regressions"
+STRATEGY_NAMES = ("evolve", "random")   # = search.engine.STRATEGIES (not imported: plugin load stays light)
+OLD_OUT_INI = "nav_regressions_dir"     # the old name of the ini option navsearch_out, still read
 
 # (option, dest / ini name, metavar, help)
 OPTIONS = (
@@ -31,15 +33,15 @@ OPTIONS = (
     ("--navsearch-seed", "navsearch_seed", "N",
      "random seed of the search (integer >= 0, default 0); the same seed, subject and budget "
      "repeat a search exactly."),
-    ("--navsearch-strategy", "navsearch_strategy", "NAME",
+    ("--navsearch-strategy", "navsearch_strategy", "{" + ",".join(STRATEGY_NAMES) + "}",
      "evolve (default: Hypothesis-driven, exploits the best layouts so far) or random "
      "(uniform sampling over the same space, as a baseline)."),
     ("--navsearch-shrink-budget", "navsearch_shrink_budget", "N",
      f"simulations allowed to shrink each distinct failure toward the seed, on top of the "
      f"budget (default {DEFAULT_SHRINK_BUDGET}; 0 = keep failures as found)."),
-    ("--navsearch-out", "nav_regressions_dir", "DIR",
+    ("--navsearch-out", "navsearch_out", "DIR",
      f"folder for frozen failures, one subfolder per seed, plus each search's log "
-     f"(default {DEFAULT_OUT})."),
+     f"(default {DEFAULT_OUT}; the ini option's old name {OLD_OUT_INI} is still read)."),
     ("--navsearch-junit", "navsearch_junit", "PATH",
      "also write the generated suite (every simulated candidate) as a JUnit XML file."),
 )
@@ -52,6 +54,9 @@ def pytest_addoption(parser: pytest.Parser) -> None:
         group.addoption(opt, dest=dest, default=None, metavar=metavar, help=f"{text} [ini: {dest}]", **kwargs)
         parser.addini(dest, text, type="args" if dest == "navsearch" else "string",
                       default=[] if dest == "navsearch" else "")
+
+    parser.addini(OLD_OUT_INI, "old name of navsearch_out, still read (navsearch_out wins when both "
+                  "are set to the same folder; different folders are a usage error)", default="")
 
 
 _CONFIGS: list[pytest.Config] = []   # the running session's config (a stack: pytester nests runs)
@@ -120,6 +125,22 @@ def _int(config: pytest.Config, dest: str, default: int, minimum: int, what: str
     return value
 
 
+def _out_raw(config: pytest.Config) -> tuple[Any, str, Path]:
+    """--navsearch-out, else the ini option navsearch_out, else its old name nav_regressions_dir;
+    the two ini names set to different folders is a usage error."""
+    raw, where, base = _raw(config, "navsearch_out")
+    if config.getoption("navsearch_out") is not None:
+        return raw, where, base
+    old = str(config.getini(OLD_OUT_INI)).strip()
+    if old and str(raw).strip() and str(raw).strip() != old:
+        raise pytest.UsageError(f"ini options navsearch_out = {str(raw).strip()!r} and {OLD_OUT_INI} = "
+                                f"{old!r} disagree; {OLD_OUT_INI} is the old name of navsearch_out: "
+                                f"keep only navsearch_out")
+    if old and not str(raw).strip():
+        return old, f"ini option {OLD_OUT_INI}", base
+    return raw, where, base
+
+
 def read_search_settings(config: pytest.Config) -> SearchSettings:
     from ..search.engine import STRATEGIES
 
@@ -132,7 +153,7 @@ def read_search_settings(config: pytest.Config) -> SearchSettings:
     if strategy not in STRATEGIES:
         raise pytest.UsageError(f"{where}: unknown strategy {raw!r}; use one of {', '.join(STRATEGIES)}")
     shrink = _int(config, "navsearch_shrink_budget", DEFAULT_SHRINK_BUDGET, 0, "the shrink budget")
-    raw, where, base = _raw(config, "nav_regressions_dir")
+    raw, where, base = _out_raw(config)
     raw = str(raw).strip() or DEFAULT_OUT
     out = Path(os.path.expanduser(raw))
     out = out if out.is_absolute() else base / out

@@ -220,14 +220,15 @@ def _model(path: Path, model: ET.Element, parent: tuple[float, ...], state_poses
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("format", choices=("aerialist", "sdf"), help="aerialist test YAML or Gazebo SDF world")
-    p.add_argument("file", help="the file to import")
-    p.add_argument("-o", "--output", required=True, help="scenario YAML to write")
-    p.add_argument("--start", default=None, help="start pose x,y,yaw (m, m, degrees); "
-                   "required for sdf; for aerialist, default the mission file's home, else 0,0,90 (the paper's 10 m task)")
-    p.add_argument("--goal", default=None, help="goal pose x,y,yaw; required for sdf; for aerialist, default the mission file's last "
-                   "position, else 0,10,90")
-    p.add_argument("--timeout", type=float, default=30.0, help="mission timeout, s (default 30)")
-    p.add_argument("--name", default="", help="scenario name (default: the output file's stem)")
+    p.add_argument("file", metavar="PATH", help="the file to import (test YAML or .world/.sdf)")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.yaml", help="scenario YAML to write")
+    p.add_argument("--start", default=None, metavar="X,Y,YAW", help="start pose x,y,yaw (m, m, degrees); "
+                   "required for sdf; for aerialist, default the home of the mission file (.plan) beside the test, "
+                   "else 0,0,90 (the paper's 10 m task)")
+    p.add_argument("--goal", default=None, metavar="X,Y,YAW", help="goal pose x,y,yaw (m, m, degrees); required for "
+                   "sdf; for aerialist, default the mission file's last position, else 0,10,90")
+    p.add_argument("--timeout", type=float, default=30.0, metavar="SECONDS", help="mission timeout (default 30)")
+    p.add_argument("--name", default="", metavar="TEXT", help="scenario name (default: the output file's stem)")
     p.add_argument("--force", action="store_true", help="overwrite an existing output file")
 
 

@@ -47,7 +47,7 @@ from .yaml_tree import YMap, YNode, YScalar, YSeq, describe, from_plain, parse_y
 
 SUPPORTED_VERSIONS = (SCHEMA_VERSION,)
 
-#: Limits that keep hostile or absurd files from hanging or crashing a run (documented in the README).
+#: Limits that keep hostile or absurd files from hanging or crashing a run (documented in docs/reference/scenario-format.md).
 SCENARIO_LIMITS: Mapping[str, float] = MappingProxyType({
     "max_file_bytes": 5_000_000,       # a scenario file larger than this is refused unread
     "max_depth": 64,                    # YAML nesting levels
@@ -451,6 +451,18 @@ def _check_name(ctx: _Ctx, name: str, field: str, line: int | None, *, file_name
                        field, line, "use letters, digits, '-', '_' and '.', without '/' or '\\'")
 
 
+def _check_family(ctx: _Ctx, family: str, line: int | None) -> None:
+    """A family is a name, or a relative folder path such as ``examples/scenarios`` (what the pytest
+    plugin names the families of two folders with the same name): each part a name, no climbing."""
+    _check_name(ctx, family, "family", line)
+    parts = family.split("/")
+    if "\\" in family or any(not p.strip() or p.strip() in (".", "..") for p in parts):
+        raise ctx.fail(f"{family!r} cannot be used: a family is a name or a relative folder path "
+                       f"(scenario names and families become file and folder names)", "family",
+                       line, "use names of letters, digits, '-', '_' and '.', separated by '/' "
+                             "(e.g. examples/scenarios), without '..' or '\\'")
+
+
 def _simulation(ctx: _Ctx, top: _Section) -> Simulation:
     sec = top.section("simulation", SIMULATION_KEYS, "the simulation settings (a mapping)")
     if sec is None:
@@ -648,7 +660,7 @@ def _build(root: YNode | None, ctx: _Ctx, name: str | None, family: str | None) 
         _check_name(ctx, scenario_name, "name", top.line_of("name"), file_name=True)
     scenario_family = top.string("family", family or "", nonempty=False)
     if scenario_family:
-        _check_name(ctx, scenario_family, "family", top.line_of("family"), file_name=True)
+        _check_family(ctx, scenario_family, top.line_of("family"))
     scenario = Scenario(
         version=int(version),
         name=scenario_name,
@@ -709,8 +721,9 @@ def _decode(data: bytes, source: str | None) -> str:
                             line=line, hint="is this a binary file? save the scenario as UTF-8 text") from None
 
 
-def load_scenario(path: str | os.PathLike) -> Scenario:
-    """Load a scenario file; its name defaults to the file stem, its family to the folder name."""
+def load_scenario(path: str | os.PathLike, *, family: str | None = None) -> Scenario:
+    """Load a scenario file; its name defaults to the file stem, its family to ``family`` (by
+    default the folder's name) when the YAML has no ``family:``."""
     p = Path(path)
     src = os.fspath(path)
     limit = int(SCENARIO_LIMITS["max_file_bytes"])
@@ -730,7 +743,7 @@ def load_scenario(path: str | os.PathLike) -> Scenario:
         raise ScenarioError(f"the file is larger than the limit of {limit} bytes", path=src,
                             hint="scenario files are small; is this the right file?")
     text = _decode(data, src)
-    return loads_scenario(text, src, name=p.stem, family=p.absolute().parent.name)
+    return loads_scenario(text, src, name=p.stem, family=p.absolute().parent.name if family is None else family)
 
 
 def resolve_path(scenario: Scenario, relative: str | os.PathLike) -> Path:

@@ -315,16 +315,29 @@ def test_round_trip_of_generated_scenarios_is_exact(s):
         assert math.copysign(1, a.x) == math.copysign(1, b.x) and a.x.hex() == float(b.x).hex()
 
 
-def test_readme_example_loads_and_round_trips():
-    """The complete example in the README's format section is a valid scenario."""
+def test_docs_complete_example_loads_and_round_trips():
+    """The complete example of the scenario-format reference page is a valid scenario."""
     from pathlib import Path
-    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
-    section = readme.split("<!-- section:scenario-format -->", 1)[1].split("<!-- /section:scenario-format -->")[0]
+    page = Path(__file__).resolve().parents[2] / "docs" / "reference" / "scenario-format.md"
+    section = page.read_text(encoding="utf-8").split("## A complete example", 1)[1].split("\n## ", 1)[0]
     example = section.split("```yaml\n", 1)[1].split("```", 1)[0]
-    s = loads_scenario(example, "README.md")
+    s = loads_scenario(example, str(page))
     assert s.name == "boxes1" and [o.name for o in s.obstacles] == ["left", "cyl1"]
     assert s.mission.goal_tolerance.yaw == 15.0 and s.marks[1].kwargs == {"reason": "known bug #12"}
     assert loads_scenario(dump_scenario(s)) == s
+
+
+def test_readme_scenario_loads_and_passes_with_the_default_planner():
+    """The README's one scenario is valid and, as the README says, the built-in planner passes it."""
+    from pathlib import Path
+    from pytest_navscenario import Outcome, run_scenario
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
+    section = readme.split("<!-- section:scenario-example -->", 1)[1].split("<!-- /section:scenario-example -->")[0]
+    example = section.split("```yaml\n", 1)[1].split("```", 1)[0]
+    s = loads_scenario(example, "README.md", name="readme")
+    assert [o.name for o in s.obstacles] == ["box_left", "box_right"]
+    assert loads_scenario(dump_scenario(s)) == s
+    assert run_scenario(s).outcome is Outcome.SUCCESS
 
 
 def test_pure_python_parser_gives_the_same_results(monkeypatch, good_file):

@@ -24,35 +24,34 @@ def _triple(text: str) -> tuple[float, float, float]:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("bag", help="ROS 1 .bag file, rosbag2 folder, or .mcap/.db3 file")
-    p.add_argument("-o", "--output", default=None,
+    p.add_argument("bag", metavar="PATH", help="ROS 1 .bag file, rosbag2 folder, or .mcap/.db3 file")
+    p.add_argument("-o", "--output", default=None, metavar="OUT.yaml",
                    help="seed scenario YAML to write (an existing file is kept unless --force); required unless "
                         "--list-events")
-    p.add_argument("--start", type=float, default=None, help="window start, seconds after the first odometry message")
-    p.add_argument("--end", type=float, default=None, help="window end, seconds after the first odometry message")
-    p.add_argument("--at", type=float, default=None, metavar="T",
-                   help="cut the seed from the --window seconds before the moment T (seconds after the first "
+    p.add_argument("--start", type=float, default=None, metavar="SECONDS", help="window start, seconds after the first odometry message")
+    p.add_argument("--end", type=float, default=None, metavar="SECONDS", help="window end, seconds after the first odometry message")
+    p.add_argument("--at", type=float, default=None, metavar="SECONDS",
+                   help="cut the seed from the --window seconds before this moment (seconds after the first "
                         "odometry message; --list-events shows candidates); instead of --start/--end")
-    p.add_argument("--window", type=float, default=30.0, metavar="S",
-                   help="with --at: seconds before T that the seed covers (default 30)")
+    p.add_argument("--window", type=float, default=30.0, metavar="SECONDS",
+                   help="with --at: how many seconds before that moment the seed covers (default 30)")
     p.add_argument("--list-events", action="store_true",
                    help="list candidate moments with their times (stopped far from the goal, reversed, turned in "
                         "place long, command dropped to zero during a goal, nearest return inside the footprint "
                         "margin) and write nothing")
-    p.add_argument("--margin", type=float, default=0.05, metavar="M",
+    p.add_argument("--margin", type=float, default=0.05, metavar="METRES",
                    help="with --list-events: a return closer than the footprint plus this is an event (default 0.05 m)")
-    p.add_argument("--odom-topic", default=None, help="nav_msgs/Odometry topic (default: found by type)")
-    p.add_argument("--scan-topic", default=None, help="sensor_msgs/LaserScan topic (default: found by type)")
+    p.add_argument("--odom-topic", default=None, metavar="TOPIC", help="nav_msgs/Odometry topic (default: found by type)")
+    p.add_argument("--scan-topic", default=None, metavar="TOPIC", help="sensor_msgs/LaserScan topic (default: found by type)")
     p.add_argument("--cloud-topic", default=None, metavar="TOPIC",
                    help="sensor_msgs/PointCloud2 topic of a 3D lidar (default: found by type when the bag has no "
                         "laser scan; giving it reads the cloud instead of the scan)")
-    p.add_argument("--robot-height", type=float, default=1.0, metavar="M",
+    p.add_argument("--robot-height", type=float, default=1.0, metavar="METRES",
                    help="point clouds: points higher than this above the ground cannot be hit (default 1.0 m)")
-    p.add_argument("--ground-clearance", type=float, default=0.05, metavar="M",
+    p.add_argument("--ground-clearance", type=float, default=0.05, metavar="METRES",
                    help="point clouds: points lower than this above the ground are the ground (default 0.05 m)")
     p.add_argument("--laser-pose", type=_triple, default=None, metavar="X,Y,YAW",
-                   help="laser pose in the odometry child frame (m, m, degrees; write --laser-pose=-0.064,0,0 "
-                        "for a negative first value); default /tf_static, else the first /tf transforms, else guessed "
+                   help="laser pose in the odometry child frame (m, m, degrees; e.g. --laser-pose -0.064,0,0); default /tf_static, else the first /tf transforms, else guessed "
                         "from the scans among the common mountings (turned 0, 90, 180, -90 degrees)")
     p.add_argument("--frame", choices=FRAMES, default="auto",
                    help="the seed's world frame: auto (default: the map frame when the bag has map -> odom on /tf "
@@ -67,10 +66,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--path-as", choices=PATH_AS, default="waypoints",
                    help="driven path as decimated waypoints (default), a reference trajectory (CSV t,x,y beside "
                         "the seed, for the reference deviation metrics) or both")
-    p.add_argument("--robot-radius", type=float, default=None, metavar="M",
+    p.add_argument("--robot-radius", type=float, default=None, metavar="METRES",
                    help="the seed robot's circular footprint radius, m (default: the base link's collision geometry "
                         "in the URDF on /robot_description, else a Nav2 footprint in the bag, else 0.15)")
-    p.add_argument("--name", default="", help="scenario name (default: the output file's stem)")
+    p.add_argument("--name", default="", metavar="TEXT", help="scenario name (default: the output file's stem)")
     p.add_argument("--force", action="store_true", help="overwrite an existing output file")
 
 
