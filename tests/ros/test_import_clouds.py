@@ -102,3 +102,25 @@ def test_clouds_without_odometry_is_an_error(tmp_path, capsys):
     assert main(["from-bag", str(path), "-o", str(tmp_path / "s.yaml")]) == 2
     err = capsys.readouterr().err
     assert "no odometry (nav_msgs/msg/Odometry) in the bag (topics: /points (sensor_msgs/msg/PointCloud2))" in err
+
+
+def test_cloud_fields_in_any_layout_byte_order_and_width():
+    """x, y, z as big-endian float64 after other fields, rows padded: read exactly; integer x is an error."""
+    from types import SimpleNamespace as NS
+
+    from pytest_navscenario.ros.bag_import.clouds import cloud_xyz
+
+    pts = np.array([[1.5, -2.0, 0.25], [np.nan, np.nan, np.nan], [3.0, 4.0, -0.5]])
+    dt = np.dtype({"names": ["ring", "x", "y", "z"], "formats": [">u2", ">f8", ">f8", ">f8"],
+                   "offsets": [0, 8, 16, 24], "itemsize": 40})
+    arr = np.zeros(3, dt)
+    arr["x"], arr["y"], arr["z"] = pts[:, 0], pts[:, 1], pts[:, 2]
+    data = np.frombuffer(arr.tobytes() + b"\0" * 8, np.uint8)          # one row, padded by 8 bytes
+    fields = [NS(name="ring", offset=0, datatype=4), NS(name="x", offset=8, datatype=8),
+              NS(name="y", offset=16, datatype=8), NS(name="z", offset=24, datatype=8)]
+    msg = NS(fields=fields, is_bigendian=True, point_step=40, width=3, height=1, row_step=128, data=data)
+    got, nan = cloud_xyz(msg, "bag: /points")
+    assert nan == 1 and np.allclose(got, pts[[0, 2]])
+    fields[1] = NS(name="x", offset=8, datatype=6)
+    with pytest.raises(BagImportError, match=r"bag: /points: point cloud field\(s\) x are not float32/float64"):
+        cloud_xyz(msg, "bag: /points")

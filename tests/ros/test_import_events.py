@@ -32,8 +32,7 @@ def _timeline():
     return np.array(rows)
 
 
-@pytest.fixture(scope="module")
-def event_bag(tmp_path_factory):
+def _event_bag(folder, **sensor):
     tl = _timeline()
     truth = np.stack([tl[:, 0], tl[:, 1], 0 * tl[:, 0], tl[:, 2]], 1)
     drift = np.stack([0.03 * tl[:, 0], 0.01 * tl[:, 0], np.radians(0.5 * tl[:, 0])], 1)
@@ -43,11 +42,25 @@ def event_bag(tmp_path_factory):
                   {"header": {"stamp": stamp(0.5), "frame_id": "map"}, "pose": pose_msg(6.0, 0.0, 0.0)})
         for t, _, _, v, w in tl:
             bag.write("/cmd_vel", "geometry_msgs/msg/Twist", t, {"linear": {"x": v}, "angular": {"z": w}})
-    return robot_bag(tmp_path_factory.mktemp("ev") / "ev", WORLD, truth, drift=drift, extra=extra)
+    return robot_bag(folder / "ev", WORLD, truth, drift=drift, extra=extra, **sensor)
 
 
-def test_list_events_finds_each_moment(event_bag):
-    events, notes = bag_events(event_bag)
+@pytest.fixture(scope="module")
+def event_bag(tmp_path_factory):
+    return _event_bag(tmp_path_factory.mktemp("ev"))
+
+
+@pytest.fixture(scope="module")
+def cloud_event_bag(tmp_path_factory):
+    """The same drive seen by a 3D lidar (16 rings, 0.6 m up) instead of a laser."""
+    cloud = {"azimuths": np.radians(np.arange(-180.0, 180.0, 1.0)),
+             "elevations": np.radians(np.arange(-15.0, 16.0, 2.0))}
+    return _event_bag(tmp_path_factory.mktemp("evc"), scans=False, laser=(0.0, 0.0, 0.6), cloud=cloud)
+
+
+@pytest.mark.parametrize("sensor", ["laser", "3D lidar"])
+def test_list_events_finds_each_moment(event_bag, cloud_event_bag, sensor):
+    events, notes = bag_events(event_bag if sensor == "laser" else cloud_event_bag)
     kinds = {e.kind: e for e in events}
     assert sorted(kinds) == ["close", "cmd-zero", "reversed", "stopped", "turned"], events
     assert kinds["stopped"].t == pytest.approx(4.0, abs=0.5) and kinds["stopped"].duration > 3

@@ -119,6 +119,7 @@ class CloudGrid:
         self.acc = GridAccumulator(res)
         self.used = self.outside = self.nan = self.no_ground = self.same_place = 0
         self.last_used: np.ndarray | None = None   # t, x, y, yaw of the last cloud used
+        self.nearest: list[tuple[float, float]] = []  # t, horizontal distance to the nearest point in the band
         self.grounds: list[float] = []
         self.last_ground: float | None = None
 
@@ -152,6 +153,8 @@ class CloudGrid:
             (pts[:, 0] * pts[:, 0] + pts[:, 1] * pts[:, 1] > self.s.near * self.s.near)
         c, sn = math.cos(yaw), math.sin(yaw)
         px, py = pts[keep, 0], pts[keep, 1]
+        if len(px):
+            self.nearest.append((t, float(np.sqrt((px * px + py * py).min()))))
         world = np.stack([x + c * px - sn * py, y + sn * px + c * py], 1)
         mx, my = self.mount[0, 3], self.mount[1, 3]
         origin = np.array([x + c * mx - sn * my, y + sn * mx + c * my])
@@ -178,9 +181,10 @@ class CloudGrid:
 
 
 def grid_clouds(data: BagData, laser_pose: tuple[float, float, float] | None, s: CloudSettings,
-                res: float) -> tuple[Grid, list[str], float]:
+                res: float) -> tuple[Grid, list[str], np.ndarray]:
     """Stream the bag's clouds on ``data.cloud_topic`` into a grid: the grid, notes of what was
-    done, and the sensor's height above the base frame."""
+    done, and (k, 2) time and horizontal distance from the base to the nearest point in the band
+    of each cloud used."""
     from .reading import open_reader
 
     g = CloudGrid(data, laser_pose, s, res)
@@ -190,4 +194,4 @@ def grid_clouds(data: BagData, laser_pose: tuple[float, float, float] | None, s:
             msg = reader.deserialize(raw, conn.msgtype)
             ns = int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec) or bag_ns
             g.add(msg, (ns - data.origin_ns) * 1e-9)
-    return g.acc.grid(), g.notes(), float(g.mount[2, 3]) if g.mount is not None else 0.0
+    return g.acc.grid(), g.notes(), np.array(g.nearest, dtype=float).reshape(-1, 2)

@@ -69,8 +69,9 @@ def _goal_distance(data: BagData, corr: np.ndarray | None, t: np.ndarray, pose: 
 
 
 def find_events(data: BagData, corr: np.ndarray | None, robot_radius: float, margin: float,
-                mount: tuple[float, float, float] | None = None) -> list[Event]:
-    """The candidate moments of the whole bag, in time order."""
+                nearest: np.ndarray | None = None) -> list[Event]:
+    """The candidate moments of the whole bag, in time order; ``nearest``: (k, 2) time and
+    distance to the nearest return of each scan or cloud (see ``scan_nearest``)."""
     od = data.full_odom
     if corr is not None:
         od = np.c_[od[:, 0], compose(held(corr, od[:, 0]), od[:, 1:4])]
@@ -98,7 +99,7 @@ def find_events(data: BagData, corr: np.ndarray | None, robot_radius: float, mar
             events.append(Event(t[a], t[b - 1] - t[a], "turned", f"turned in place {turn:.0f} deg in "
                                                                     f"{t[b - 1] - t[a]:.1f} s"))
     events += _command_drops(data, t, goal)
-    events += _close_returns(data, robot_radius, margin, mount)
+    events += _close_returns(np.zeros((0, 2)) if nearest is None else nearest, robot_radius, margin)
     return sorted(events, key=lambda e: (e.t, e.kind))
 
 
@@ -117,23 +118,26 @@ def _command_drops(data: BagData, t: np.ndarray, goal: np.ndarray) -> list[Event
     return out
 
 
-def _close_returns(data: BagData, radius: float, margin: float,
-                   mount: tuple[float, float, float] | None) -> list[Event]:
-    """Runs of scans whose nearest return is closer than the footprint plus ``margin``."""
-    if data.scan_topic is None or not len(data.scan_t):
-        return []
-    mx, my, myaw = mount or (0.0, 0.0, 0.0)
+def scan_nearest(data: BagData, mount: tuple[float, float, float]) -> np.ndarray:
+    """(k, 2) time and distance from the base to the nearest valid return of each scan."""
+    mx, my, myaw = mount
     rng = data.scan_ranges.astype(float)
     valid = np.isfinite(rng) & (rng > data.range_min) & (rng < data.range_max * 0.99)
     rng = np.where(valid, rng, 0.0)
     ang = data.scan_angles[None, :] + myaw
     dist = np.hypot(mx + rng * np.cos(ang), my + rng * np.sin(ang))
-    nearest = np.where(valid, dist, np.inf).min(axis=1)
-    gap = nearest - radius
+    return np.stack([data.scan_t, np.where(valid, dist, np.inf).min(axis=1)], 1)
+
+
+def _close_returns(nearest: np.ndarray, radius: float, margin: float) -> list[Event]:
+    """Runs of scans or clouds whose nearest return is closer than the footprint plus ``margin``."""
+    if not len(nearest):
+        return []
+    gap = nearest[:, 1] - radius
     out = []
     for a, b in _runs(gap < margin):
         g = float(gap[a:b].min())
-        out.append(Event(float(data.scan_t[a]), float(data.scan_t[b - 1] - data.scan_t[a]), "close",
+        out.append(Event(float(nearest[a, 0]), float(nearest[b - 1, 0] - nearest[a, 0]), "close",
                          f"nearest return {g * 100:.0f} cm from the footprint (margin {margin * 100:.0f} cm)"))
     return out
 
@@ -159,15 +163,21 @@ def bag_events(path, *, odom_topic: str | None = None, scan_topic: str | None = 
     data = read_bag(path, odom_topic=odom_topic, scan_topic=scan_topic, cloud_topic=cloud_topic)
     corr = to_world_frame(data, frame, map_frame, pose_topic, data.full_odom)
     notes = list(data.notes)
-    mount = None
+    fp, how, _ = footprint_from_bag(data, robot_radius)
+    notes.append(f"footprint: {how}")
+    radius = inner_radius(fp)
+    nearest = None
     if data.scan_topic is not None:
         mount, how = choose_mount(data, laser_pose)
         notes.append(f"laser {data.scan_frame} at x={mount[0]:.3f} y={mount[1]:.3f} "
                      f"yaw={math.degrees(mount[2]):.1f} deg in {data.base_frame}, {how}")
-    if data.scan_topic is None:
-        notes.append("no laser scan: the gap to the nearest return is not checked")
+        nearest = scan_nearest(data, mount)
+    elif data.cloud_topic is not None:
+        from .clouds import CloudSettings, grid_clouds
+        _, cloud_notes, nearest = grid_clouds(data, laser_pose, CloudSettings(near=radius), 0.05)
+        notes.extend(cloud_notes)
+    else:
+        notes.append("no laser scan or point cloud: the gap to the nearest return is not checked")
     if not data.goals:
         notes.append("no navigation goal in the bag: stops are listed only where the robot drove on after them")
-    fp, how, _ = footprint_from_bag(data, robot_radius)
-    notes.append(f"footprint: {how}")
-    return find_events(data, corr, inner_radius(fp), margin, mount), notes
+    return find_events(data, corr, radius, margin, nearest), notes
