@@ -1,18 +1,27 @@
 """``navscenario from-bag``: a seed scenario from a real robot's bag.
 
-Odometry and laser topics are found by type (override with ``--odom-topic`` / ``--scan-topic``).
-The scenario's world frame is the odometry frame:
+Topics are found by type (odometry; a 2D laser, else a 3D lidar's point cloud; transforms,
+localisation poses, navigation goals, velocity commands, the robot's URDF and Nav2 footprint).
+The seed's world frame is the map frame when the bag has ``map -> odom`` or a pose topic in the
+map, else the odometry frame:
 
-* start and goal: the first and last odometry pose in the time window;
+* start: the first pose of the window (``--start``/``--end``, or ``--at`` with ``--window``);
+  goal: the recorded navigation goal in force at the window's end, else its last pose;
 * the driven path: decimated waypoints, or a reference trajectory (CSV ``t,x,y`` beside the
   seed, ``reference.file`` relative to it);
-* obstacles: every scan projected with the laser's mount transform (``--laser-pose``, else
-  ``/tf_static``, else the first ``/tf`` transforms, else guessed from the scans), accumulated in
-  the odometry frame on a grid, clustered, and fitted as cylinders and oriented boxes.
+* obstacles: every scan projected with the laser's mounting (``--laser-pose``, else
+  ``/tf_static``, else the first ``/tf`` transforms, else guessed from the scans), or every point
+  cloud (streamed, ground removed, the robot's height band kept), accumulated on a grid,
+  clustered, and fitted as cylinders and oriented boxes (with their heights from a 3D lidar);
+* the robot: the footprint from the URDF or Nav2, else a circle.
 
-Modules, in the order the data flows: ``reading`` (bag -> arrays), ``mount`` (laser mounting),
-``projection`` (scans -> grid), ``obstacles`` (grid -> clusters -> obstacles), ``seed`` (the
-scenario), ``cli`` (the command line).
+``--list-events`` lists candidate moments of the whole bag instead (``events``).
+
+Modules, in the order the data flows: ``topics`` (which topic plays which part), ``reading``
+(first pass: bag -> arrays), ``frames`` (map or odometry frame), ``goal``, ``footprint``,
+``mount`` (laser mounting), ``projection`` (scans -> grid), ``clouds`` (second pass: clouds ->
+grid), ``obstacles`` (grid -> clusters -> obstacles), ``seed`` (the scenario), ``events``,
+``cli`` (the command line).
 """
 from __future__ import annotations
 
