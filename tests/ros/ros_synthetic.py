@@ -245,7 +245,17 @@ def register_goal_types(ts: Any, ros1: bool) -> None:
                 "move_base_msgs/msg/MoveBaseActionGoal": "std_msgs/Header header\nactionlib_msgs/GoalID goal_id\n"
                                                          "move_base_msgs/MoveBaseGoal goal"}
     else:
-        defs = {"nav2_msgs/action/NavigateToPose_Goal": "geometry_msgs/PoseStamped pose\nstring behavior_tree"}
+        goal = "geometry_msgs/PoseStamped pose\nstring behavior_tree"
+        # rosbags writes nested definitions only from msg/ names: the recorded event's parts go there
+        defs = {"nav2_msgs/action/NavigateToPose_Goal": goal, "nav2_msgs/msg/NavigateToPose_Goal": goal,
+                "service_msgs/msg/ServiceEventInfo": "uint8 event_type\nbuiltin_interfaces/Time stamp\n"
+                                                     "char[16] client_gid\nint64 sequence_number",
+                "nav2_msgs/msg/NavigateToPose_SendGoal_Request": "unique_identifier_msgs/UUID goal_id\n"
+                                                                    "nav2_msgs/NavigateToPose_Goal goal",
+                "nav2_msgs/msg/NavigateToPose_SendGoal_Response": "bool accepted\nbuiltin_interfaces/Time stamp",
+                "nav2_msgs/msg/NavigateToPose_SendGoal_Event": (
+                    "service_msgs/ServiceEventInfo info\nnav2_msgs/NavigateToPose_SendGoal_Request[<=1] request\n"
+                    "nav2_msgs/NavigateToPose_SendGoal_Response[<=1] response")}
     for name, text in defs.items():
         if name not in ts.types:
             ts.register(get_types_from_msg(text, name))

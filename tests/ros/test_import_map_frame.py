@@ -102,3 +102,20 @@ def test_broken_chain_is_a_warning(tmp_path):
     seed = scenario_from_bag(path)
     assert any("warning: /tf has map -> odom_slam but no map -> odom" in n for n in seed.notes)
     assert any("world frame: odom (odometry)" in n for n in seed.notes)
+
+
+def test_late_first_correction_and_a_missing_pose_topic(tmp_path):
+    """map -> odom starts 1 s into the bag (the localiser was still starting): used before it too,
+    and said; --pose-topic naming a topic the bag does not have is an error listing the pose topics."""
+    truth = loop_drive(n=100, dt=0.1, radius=1.8)
+
+    def late(bag):
+        for t in truth[10:, 0]:
+            bag.write("/tf", "tf2_msgs/msg/TFMessage", t, {"transforms": [
+                {"header": {"stamp": stamp(t), "frame_id": "map"}, "child_frame_id": "odom",
+                 "transform": {"translation": {"x": 0.0}, "rotation": {"w": 1.0}}}]})
+    path = robot_bag(tmp_path / "late", WORLD, truth, tf_map=False, extra=late)
+    seed = scenario_from_bag(path)
+    assert any("the first correction is at t=1.0 s: it is used before it too" in n for n in seed.notes)
+    with pytest.raises(BagImportError, match=r"no pose messages on '/amcl_pose' \(pose topics: none\); fix --pose-topic"):
+        scenario_from_bag(path, pose_topic="/amcl_pose")

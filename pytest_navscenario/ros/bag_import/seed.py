@@ -163,7 +163,9 @@ def check_path_free(data: BagData, obstacles: list[Obstacle], radius: float, how
                 f"(radius {radius} m) on {where} (t={od[k, 0]:.1f} s, x={od[k, 1]:.2f}, y={od[k, 2]:.2f}: "
                 f"{o.name}), where the robot drove: the laser mounting is likely wrong. It was {how}. "
                 f"Give it with --laser-pose=X,Y,YAW (the laser in {data.base_frame}, from the robot's URDF), "
-                f"or a smaller --robot-radius if the footprint is too large")
+                f"or a smaller --robot-radius if the footprint is too large"
+                + (f"; the poses are in the {data.frame} frame from the bag's localisation: if it was off, "
+                   f"--frame odom uses the odometry alone" if data.frame != data.odom_frame else ""))
 
 
 def _scenario(data: BagData, obstacles: list[Obstacle], path_as: str, reference_file: str | None,

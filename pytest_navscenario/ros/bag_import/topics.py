@@ -15,8 +15,8 @@ POSE_TYPES = ("geometry_msgs/msg/PoseWithCovarianceStamped", "geometry_msgs/msg/
 CMD_TYPES = ("geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped")
 # goals: a PoseStamped on a goal topic (Nav2 / RViz: /goal_pose; ROS 1 RViz: /move_base_simple/goal),
 # a ROS 1 move_base action goal, a Nav2 NavigateToPose goal (recorded service request or goal message)
-GOAL_TYPE_SUFFIXES = ("MoveBaseActionGoal", "NavigateToPose_SendGoal_Request", "NavigateToPose_Goal",
-                      "NavigateToPose_Request")
+GOAL_TYPE_SUFFIXES = ("MoveBaseActionGoal", "NavigateToPose_SendGoal_Event", "NavigateToPose_SendGoal_Request",
+                      "NavigateToPose_Goal", "NavigateToPose_Request")
 FOOTPRINT_TYPES = ("geometry_msgs/msg/PolygonStamped",)
 PARAM_EVENT_TYPES = ("rcl_interfaces/msg/ParameterEvent",)
 STRING_TYPES = ("std_msgs/msg/String",)
@@ -62,11 +62,14 @@ def spatial(tf: Any) -> tuple[str, tuple[float, ...]]:
 
 
 def goal_pose(msg: Any) -> tuple[Any, Any] | None:
-    """(header, geometry_msgs/Pose) of a goal message of any supported type, else None."""
+    """(header, geometry_msgs/Pose) of a goal message of any supported type, else None. A recorded
+    service event (ROS 2 Jazzy records an action's send_goal as one) holds its request in a list."""
     for path in (("goal", "target_pose"), ("goal", "pose"), ("request", "goal", "pose"), ("pose",), ()):
         cur = msg
         for part in path:
             cur = getattr(cur, part, None)
+            if isinstance(cur, (list, tuple)):
+                cur = cur[0] if len(cur) else None
         if cur is not None and hasattr(cur, "header") and hasattr(getattr(cur, "pose", None), "position"):
             return cur.header, cur.pose
     return None
