@@ -119,3 +119,28 @@ def test_late_first_correction_and_a_missing_pose_topic(tmp_path):
     assert any("the first correction is at t=1.0 s: it is used before it too" in n for n in seed.notes)
     with pytest.raises(BagImportError, match=r"no pose messages on '/amcl_pose' \(pose topics: none\); fix --pose-topic"):
         scenario_from_bag(path, pose_topic="/amcl_pose")
+
+
+def test_obstacles_not_on_the_bags_map_are_named(tmp_path):
+    """The bag's /map has every pillar but the one at (2.6, 2.6), put there that day: the note names it."""
+    truth = loop_drive(n=300, dt=0.1, radius=1.8)
+    res, size = 0.05, 200
+    ys, xs = np.mgrid[0:size, 0:size]
+    cx, cy = -5 + (xs + 0.5) * res, -5 + (ys + 0.5) * res
+    grid = np.zeros((size, size), np.int8)
+    for x, y, r, _ in WORLD.pillars:
+        if (x, y) != (2.6, 2.6):
+            grid[np.hypot(cx - x, cy - y) <= r] = 100
+
+    def known(bag):
+        bag.write("/map", "nav_msgs/msg/OccupancyGrid", 0.0, {
+            "header": {"stamp": stamp(0.0), "frame_id": "map"},
+            "info": {"resolution": res, "width": size, "height": size,
+                     "origin": {"position": {"x": -5.0, "y": -5.0}, "orientation": {"w": 1.0}}},
+            "data": grid.reshape(-1)})
+    seed = scenario_from_bag(robot_bag(tmp_path / "m", WORLD, truth, drift=_drift(truth), extra=known))
+    note = next(n for n in seed.notes if n.startswith("/map (200 x 200 cells of 0.05 m)"))
+    assert "1 of 6 obstacles were not on the map that day" in note and "at (2.60, 2.60)" in note, note
+    # in the odometry frame the map is not compared (another frame), and that is said
+    seed = scenario_from_bag(tmp_path / "m", frame="odom")
+    assert any("/map is in frame 'map' and the seed in 'odom'" in n for n in seed.notes)

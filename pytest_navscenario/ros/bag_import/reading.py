@@ -62,6 +62,7 @@ class BagData:
     cloud_frame: str = ""
     cloud_count: int = 0
     frame: str = ""                                      # the seed's world frame (odometry or map)
+    known_map: Any = None                                # the last OccupancyGrid on /map (known_map.KnownMap)
 
 
 def _pick(path: Path, connections: list, wanted: str | None, types: Sequence[str], what: str,
@@ -205,6 +206,7 @@ class _Collector:
         self.cmd: list[tuple[int, float, float]] = []
         self.description: str | None = None
         self.footprints: list[tuple[str, str, Any]] = []
+        self.known_map: Any = None
         self.tf_seen = 0
         self.odom_frame = self.base_frame = self.scan_frame = ""
         self.scan_meta: tuple | None = None
@@ -267,6 +269,10 @@ class _Collector:
         if found is not None:
             self.footprints.append((f"parameter of {msg.node}", *found))
 
+    def _map(self, topic: str, msg: Any, bag_ns: int) -> None:
+        from .known_map import from_message
+        self.known_map = from_message(msg, topic)
+
     def _scan(self, msg: Any, bag_ns: int) -> None:
         ranges = np.asarray(msg.ranges, dtype=np.float32)
         meta = (len(ranges), float(msg.angle_min), float(msg.angle_increment))
@@ -295,6 +301,7 @@ def _attach_extras(data: BagData, col: _Collector, origin: float) -> None:
         data.cmd = cmd[np.argsort(cmd[:, 0], kind="stable")]
     data.description = col.description
     data.footprints = col.footprints
+    data.known_map = col.known_map
     data.frame = data.odom_frame
 
 

@@ -25,6 +25,7 @@ from .clouds import CloudSettings, grid_clouds
 from .footprint import footprint_from_bag, inner_radius
 from .frames import to_world_frame
 from .goal import choose_goal
+from .known_map import not_on_map
 from .mount import choose_mount
 from .obstacles import FitSettings, _r, fit_obstacles, occupied_clusters
 from .projection import grid_returns
@@ -117,6 +118,8 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
         how = cloud_notes[0].split(", ", 1)[1]
         obstacles = _fit(data, grid, settings, notes, f"{data.cloud_count} clouds")
         check_path_free(data, obstacles, radius, how, data.cloud_topic)
+    if data.known_map is not None and obstacles:
+        notes.append(not_on_map(data.known_map, obstacles, data.frame)[1])
     scenario, summary = _scenario(data, obstacles, path_as, reference_file, name, fp, goal)
     notes.append(summary)
     od = data.odom

@@ -20,11 +20,12 @@ GOAL_TYPE_SUFFIXES = ("MoveBaseActionGoal", "NavigateToPose_SendGoal_Event", "Na
 FOOTPRINT_TYPES = ("geometry_msgs/msg/PolygonStamped",)
 PARAM_EVENT_TYPES = ("rcl_interfaces/msg/ParameterEvent",)
 STRING_TYPES = ("std_msgs/msg/String",)
+MAP_TYPES = ("nav_msgs/msg/OccupancyGrid",)
 
 
 def role(topic: str, msgtype: str) -> str | None:
     """The part a topic plays beyond odometry and laser (picked apart): tf, pose, goal, cmd,
-    description, footprint, params; None for a topic the importer does not read."""
+    description, footprint, params, map; None for a topic the importer does not read."""
     name = topic.rstrip("/").lower()
     if msgtype in TF_TYPES and name in ("/tf", "/tf_static"):
         return name[1:]
@@ -42,6 +43,8 @@ def role(topic: str, msgtype: str) -> str | None:
         return "footprint"
     if msgtype in PARAM_EVENT_TYPES:
         return "params"
+    if msgtype in MAP_TYPES and (name == "/map" or name.endswith("/map")):
+        return "map"
     return None
 
 
