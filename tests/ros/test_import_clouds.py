@@ -124,3 +124,8 @@ def test_cloud_fields_in_any_layout_byte_order_and_width():
     fields[1] = NS(name="x", offset=8, datatype=6)
     with pytest.raises(BagImportError, match=r"bag: /points: point cloud field\(s\) x are not float32/float64"):
         cloud_xyz(msg, "bag: /points")
+
+
+def test_scan_and_cloud_topic_together_is_an_error(tmp_path):
+    with pytest.raises(BagImportError, match="--scan-topic and --cloud-topic: give one"):
+        scenario_from_bag(tmp_path / "any.bag", scan_topic="/scan", cloud_topic="/points")

@@ -180,11 +180,17 @@ class CloudGrid:
         return notes
 
 
+@dataclass
+class CloudResult:
+    grid: Grid
+    notes: list[str]
+    nearest: np.ndarray   # (k, 2) time, horizontal distance from the base to the nearest point in the band
+    how: str              # where the sensor's mounting came from
+
+
 def grid_clouds(data: BagData, laser_pose: tuple[float, float, float] | None, s: CloudSettings,
-                res: float) -> tuple[Grid, list[str], np.ndarray]:
-    """Stream the bag's clouds on ``data.cloud_topic`` into a grid: the grid, notes of what was
-    done, and (k, 2) time and horizontal distance from the base to the nearest point in the band
-    of each cloud used."""
+                res: float) -> CloudResult:
+    """Stream the bag's clouds on ``data.cloud_topic`` into a grid (one cloud in memory at a time)."""
     from .reading import open_reader
 
     g = CloudGrid(data, laser_pose, s, res)
@@ -194,4 +200,5 @@ def grid_clouds(data: BagData, laser_pose: tuple[float, float, float] | None, s:
             msg = reader.deserialize(raw, conn.msgtype)
             ns = int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec) or bag_ns
             g.add(msg, (ns - data.origin_ns) * 1e-9)
-    return g.acc.grid(), g.notes(), np.array(g.nearest, dtype=float).reshape(-1, 2)
+    return CloudResult(g.acc.grid(), g.notes(), np.array(g.nearest, dtype=float).reshape(-1, 2),
+                       g.how or "no cloud in the window")

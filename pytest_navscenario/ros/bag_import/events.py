@@ -174,8 +174,9 @@ def bag_events(path, *, odom_topic: str | None = None, scan_topic: str | None = 
         nearest = scan_nearest(data, mount)
     elif data.cloud_topic is not None:
         from .clouds import CloudSettings, grid_clouds
-        _, cloud_notes, nearest = grid_clouds(data, laser_pose, CloudSettings(near=radius), 0.05)
-        notes.extend(cloud_notes)
+        clouds = grid_clouds(data, laser_pose, CloudSettings(near=radius), 0.05)
+        notes.extend(clouds.notes)
+        nearest = clouds.nearest
     else:
         notes.append("no laser scan or point cloud: the gap to the nearest return is not checked")
     if not data.goals:

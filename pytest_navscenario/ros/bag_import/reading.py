@@ -101,6 +101,8 @@ def read_bag(path: str | Path, *, odom_topic: str | None = None, scan_topic: str
     zero); ``at`` with ``window``: the ``window`` seconds before the moment ``at`` instead.
     Raises BagImportError naming the file and what is missing."""
     path = Path(path)
+    if scan_topic and cloud_topic:
+        raise BagImportError("--scan-topic and --cloud-topic: give one (obstacles come from a laser or a 3D lidar)")
     with open_reader(path) as reader:
         return _read(reader, path, odom_topic, scan_topic, (start, end, at, window), cloud_topic)
 

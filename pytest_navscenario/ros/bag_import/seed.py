@@ -112,10 +112,9 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
         obstacles = _obstacles_from_scans(data, mount, settings, notes)
         check_path_free(data, obstacles, radius, how)
     elif data.cloud_topic is not None:
-        grid, cloud_notes, _ = grid_clouds(data, laser_pose, dataclasses.replace(cloud, near=max(cloud.near, radius)),
-                                           settings.res)
-        notes.extend(cloud_notes)
-        how = cloud_notes[0].split(", ", 1)[1]
+        clouds = grid_clouds(data, laser_pose, dataclasses.replace(cloud, near=max(cloud.near, radius)), settings.res)
+        notes.extend(clouds.notes)
+        grid, how = clouds.grid, clouds.how
         obstacles = _fit(data, grid, settings, notes, f"{data.cloud_count} clouds")
         check_path_free(data, obstacles, radius, how, data.cloud_topic)
     if data.known_map is not None and obstacles:
