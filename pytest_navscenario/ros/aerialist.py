@@ -25,7 +25,7 @@ TREE_RADIUS = 0.5  # m, a tree without a size: a pine trunk with its lower branc
 NOT_CARRIED = {
     "port": "the PX4 connection", "params_file": "PX4 parameters are not simulated",
     "simulator": "the simulation here is MuJoCo", "speed": "simulation speed", "headless": "GUI setting",
-    "home_position": "geographic; the plan's home is the local origin", "wind": "wind is not simulated",
+    "home_position": "a geographic position, and no mission plan to place it against", "wind": "wind is not simulated",
     "commands_file": "runtime commands are not replayed", "log_file": "the reference flight log (.ulg) is not read",
     "variable": "the compared flight variable", "agent": "test execution settings",
 }
@@ -41,6 +41,8 @@ class AerialistTest:
     obstacles: list[Obstacle]
     mission_file: Path | None = None          # the .plan, resolved (None when absent or not found)
     mission_key: str = ""                     # "robot.mission_file" with its line, for messages
+    home_position: tuple[float, float] | None = None   # simulation.home_position lat, lon: where the drone starts
+    home_key: str = ""                        # "file:line: simulation.home_position", for messages
     dropped: list[str] = field(default_factory=list)
 
 
@@ -107,6 +109,10 @@ def read_aerialist(path: str | Path) -> AerialistTest:
         for key in value:
             if (section, key) == ("simulation", "obstacles"):
                 continue
+            if (section, key) == ("simulation", "home_position") and _lat_lon(value[key]) is not None:
+                test.home_position = _lat_lon(value[key])
+                test.home_key = f"{doc.at(section, key)}: simulation.home_position"
+                continue
             if key == "mission_file" and section in ("robot", "drone"):
                 test.mission_key = f"{doc.at(section, key)}: {section}.mission_file"
                 test.mission_file = _find_plan(doc.path, value[key])
@@ -114,6 +120,14 @@ def read_aerialist(path: str | Path) -> AerialistTest:
             test.dropped.append(f"{doc.at(section, key)}: {section}.{key}: not carried over "
                                 f"({NOT_CARRIED.get(key, 'no meaning in a 2D ground scenario')})")
     return test
+
+
+def _lat_lon(value: Any) -> tuple[float, float] | None:
+    """(lat, lon) of a ``[lat, lon, alt]`` list of numbers, else None (e.g. a template placeholder)."""
+    if isinstance(value, list) and len(value) >= 2 and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in value[:2]):
+        return float(value[0]), float(value[1])
+    return None
 
 
 def _find_plan(test_path: Path, value: Any) -> Path | None:
@@ -202,11 +216,12 @@ def _obstacle(doc: _Doc, i: int, l: float, w: float, h: float, x: float, y: floa
                        yaw=_num(r), height=_num(h))
 
 
-def mission_from_plan(plan_points: list[tuple[float, float, str]], min_step: float = 0.5
-                      ) -> tuple[Pose, Pose, tuple[Pose, ...]] | None:
-    """Start at the home (the local origin), waypoints, goal at the last position of the plan;
-    points closer than ``min_step`` to the previous one are merged. None when the plan goes nowhere."""
-    pts = [(0.0, 0.0)]
+def mission_from_plan(plan_points: list[tuple[float, float, str]], min_step: float = 0.5,
+                      start: tuple[float, float] = (0.0, 0.0)) -> tuple[Pose, Pose, tuple[Pose, ...]] | None:
+    """Start at ``start`` (the plan's home, the local origin, unless the test moves it), waypoints,
+    goal at the last position of the plan; points closer than ``min_step`` to the previous one are
+    merged. None when the plan goes nowhere."""
+    pts = [(float(start[0]), float(start[1]))]
     for x, y, _ in plan_points:
         if math.hypot(x - pts[-1][0], y - pts[-1][1]) >= min_step:
             pts.append((x, y))
@@ -216,9 +231,9 @@ def mission_from_plan(plan_points: list[tuple[float, float, str]], min_step: flo
     def heading(a, b) -> float:
         return _num(math.degrees(math.atan2(b[1] - a[1], b[0] - a[0])), 2)
 
-    start = Pose(0.0, 0.0, heading(pts[0], pts[1]))
+    first = Pose(_num(pts[0][0]), _num(pts[0][1]), heading(pts[0], pts[1]))
     goal = Pose(_num(pts[-1][0]), _num(pts[-1][1]), heading(pts[-2], pts[-1]))
-    return start, goal, tuple(Pose(_num(x), _num(y)) for x, y in pts[1:-1])
+    return first, goal, tuple(Pose(_num(x), _num(y)) for x, y in pts[1:-1])
 
 
 def _num(v: float, nd: int = 4) -> float:

@@ -264,7 +264,7 @@ def run(args: argparse.Namespace) -> int:
 def _aerialist(args: argparse.Namespace, src: Path, notes: list[str]):
     """Obstacles, start, goal and waypoints of an Aerialist test: the plan beside it gives the
     mission unless --start/--goal are given; what is not carried over is warned about by line."""
-    from .qgc_plan import read_plan
+    from .qgc_plan import local_xy, read_plan
 
     test = read_aerialist(src)
     for line in test.dropped:
@@ -276,14 +276,22 @@ def _aerialist(args: argparse.Namespace, src: Path, notes: list[str]):
     if test.mission_file is not None and not (args.start and args.goal):
         plan = read_plan(test.mission_file)
         notes.extend(plan.notes)
-        mission = mission_from_plan(plan.points)
+        lat, lon, _ = plan.home
+        home = (0.0, 0.0)
+        if test.home_position is not None:
+            home = local_xy(*test.home_position, lat, lon)
+            notes.append(f"start from simulation.home_position ({test.home_key.split(': ')[0]}): "
+                         f"x={home[0]:.2f}, y={home[1]:.2f} from the plan's home")
+        mission = mission_from_plan(plan.points, start=home)
         if mission is None:
             notes.append(f"{test.mission_file.name}: the mission has no position away from its home")
         else:
-            lat, lon, _ = plan.home
             notes.append(f"start, {len(mission[2])} waypoint(s) and goal from {test.mission_file} "
                          f"(home {lat:.7f}, {lon:.7f} is x=0, y=0; x east, y north, metres)")
-    elif test.mission_key and test.mission_file is None:
+    if test.home_position is not None and mission is None and not (args.start and args.goal):
+        print(f"navscenario import: warning: {test.home_key}: not carried over (a geographic position, and no "
+              f"mission plan to place it against)", file=sys.stderr)
+    if test.mission_key and test.mission_file is None:
         print(f"navscenario import: warning: {test.mission_key}: the mission file is not beside the test "
               f"(looked for it relative to {src.parent} and by its name there): using a default mission",
               file=sys.stderr)

@@ -138,3 +138,19 @@ def test_bad_plan_and_double_rotation(tmp_path, capsys):
     assert main(["import", "aerialist", str(src), "-o", str(tmp_path / "s.yaml")]) == 2
     err = capsys.readouterr().err
     assert f"{src}:12: simulation.obstacles[0].position: the rotation is given twice (r and angle)" in err
+
+
+def test_home_position_moves_the_start(tmp_path, capsys):
+    """simulation.home_position (where the drone starts) 2 m south of the plan's home: the start."""
+    lat = 47.3977419 - math.degrees(2.0 / 6371000.0)
+    text = TEST.replace("  headless: true\n", f"  headless: true\n  home_position: [{lat:.9f}, 8.5455938, 488.0]\n")
+    rc, out, stdout, err, src = _import(tmp_path, capsys, text)
+    assert rc == 0, err
+    s = load_scenario(out)
+    assert (s.mission.start.x, s.mission.start.y) == (pytest.approx(0.0, abs=0.01), pytest.approx(-2.0, abs=0.01))
+    assert f"start from simulation.home_position ({src}:10)" in stdout
+    assert "simulation.home_position" not in err
+    # without a plan it cannot be placed: a warning with its line
+    (tmp_path / "noplan").mkdir()
+    rc, out, stdout, err, src = _import(tmp_path / "noplan", capsys, text.replace("flight.plan", "elsewhere.plan"))
+    assert rc == 0 and f"{src}:10: simulation.home_position: not carried over" in err
