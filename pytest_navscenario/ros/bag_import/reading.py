@@ -170,7 +170,7 @@ def _read(reader: Any, path: Path, odom_topic, scan_topic, cut: tuple, cloud_top
     roles = {c.topic: role(c.topic, c.msgtype) for c in conns}
     # the clouds are big: they are read in a second pass, one at a time (clouds.py), not here
     wanted = [c for c in conns if c.topic in (odom_name, scan_name) or roles[c.topic]]
-    col = _Collector(odom_name, scan_name, roles)
+    col = _Collector(odom_name, scan_name, roles, _scan_window(*cut))
     for conn, bag_ns, raw in reader.messages(connections=wanted):
         col.take(conn.topic, reader.deserialize(raw, conn.msgtype), bag_ns)
     if not col.odom:
@@ -195,8 +195,10 @@ class _Collector:
     beam layout, transforms, localisation poses, goals, velocity commands, the robot's description
     and footprint."""
 
-    def __init__(self, odom_name: str, scan_name: str | None, roles: dict):
+    def __init__(self, odom_name: str, scan_name: str | None, roles: dict,
+                 window: tuple[float, float] = (-math.inf, math.inf)):
         self.odom_name, self.scan_name, self.roles = odom_name, scan_name, roles
+        self.window = window   # s after the first odometry message: scans outside it are not kept
         self.odom: list[tuple[int, float, float, float]] = []
         self.scans: list[tuple[int, np.ndarray]] = []
         self.static_tf: dict[str, tuple[str, float, float, float]] = {}
@@ -284,7 +286,22 @@ class _Collector:
         elif meta != self.scan_meta[:3]:
             self.odd_scans += 1  # another beam layout than the first scan's: skipped, reported later
             return
-        self.scans.append((_stamp(msg.header, bag_ns), ranges))
+        stamp = _stamp(msg.header, bag_ns)
+        if self.odom:  # a time window is known once odometry started: hold only the scans in it
+            t = (stamp - self.odom[0][0]) * 1e-9
+            if not self.window[0] <= t <= self.window[1]:
+                return
+        self.scans.append((stamp, ranges))
+
+
+def _scan_window(start, end, at=None, window: float = 30.0) -> tuple[float, float]:
+    """The span (s after the first odometry message, 2 s wider each side for odometry stamps out
+    of order) whose scans the first pass keeps: a cut of a long bag holds only its own scans."""
+    if at is not None:
+        start, end = at - window, at
+    lo = -math.inf if start is None else start - 2.0
+    hi = math.inf if end is None else end + 2.0
+    return lo, hi
 
 
 def _attach_extras(data: BagData, col: _Collector, origin: float) -> None:
