@@ -51,7 +51,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--ground-clearance", type=float, default=0.05, metavar="METRES",
                    help="point clouds: points lower than this above the ground are the ground (default 0.05 m)")
     p.add_argument("--laser-pose", type=_triple, default=None, metavar="X,Y,YAW",
-                   help="laser pose in the odometry child frame (m, m, degrees; e.g. --laser-pose -0.064,0,0); default /tf_static, else the first /tf transforms, else guessed "
+                   help="laser (or 3D lidar) pose in the odometry child frame (m, m, degrees; e.g. --laser-pose "
+                        "-0.064,0,0); default /tf_static, else the first /tf transforms, else guessed "
                         "from the scans among the common mountings (turned 0, 90, 180, -90 degrees)")
     p.add_argument("--frame", choices=FRAMES, default="auto",
                    help="the seed's world frame: auto (default: the map frame when the bag has map -> odom on /tf "
