@@ -147,22 +147,26 @@ SCAN_ANGLES = np.radians(np.arange(-180.0, 180.0, 1.0))
 
 def robot_bag(path: Path, world: World, truth: np.ndarray, *, drift: np.ndarray | None = None,
               ros1: bool = False, scans: bool = True, cloud: dict | None = None, extra=None,
-              tf_map: bool = True, laser: tuple[float, float, float] = LASER) -> Path:
+              tf_map: bool = True, laser: tuple[float, float, float] = LASER, pitch: float = 0.0) -> Path:
     """A bag of a robot driving ``truth`` ((n, 4) t, x, y, yaw in the map frame) through ``world``.
 
     ``drift`` ((n, 3) the map -> odom transform at each time): the odometry is the truth seen
     through it (odom = drift^-1 . truth) and the exact correction is published on /tf. Scans at
     every pose from a laser at ``laser`` (x, y, z on /tf_static); ``cloud``: keyword arguments of
     ``cloud_points`` (azimuths, elevations) plus "layout" ("velodyne" or "ouster") for a
-    PointCloud2 on /points instead of (or beside) the scans. ``extra(bag)`` writes more.
+    PointCloud2 on /points instead of (or beside) the scans; ``pitch`` (degrees, positive nose
+    down) tilts the lidar, on /tf_static and in its points. ``extra(bag)`` writes more.
     """
+    p = math.radians(pitch)
+    tilt = np.array([[math.cos(p), 0, math.sin(p)], [0, 1, 0], [-math.sin(p), 0, math.cos(p)]])  # sensor -> level
     drift = np.zeros((len(truth), 3)) if drift is None else drift
     odom = compose(invert(drift), truth[:, 1:4])
     with BagOut(path, ros1=ros1) as bag:
         t0 = truth[0, 0]
         bag.write("/tf_static", "tf2_msgs/msg/TFMessage", t0, {"transforms": [
             {"header": {"stamp": stamp(t0), "frame_id": "base_link"}, "child_frame_id": "laser",
-             "transform": {"translation": dict(zip("xyz", laser)), "rotation": {"w": 1.0}}}]})
+             "transform": {"translation": dict(zip("xyz", laser)),
+                           "rotation": {"y": math.sin(p / 2), "w": math.cos(p / 2)}}}]})
         for (t, x, y, yaw), (ox, oy, oyaw), (dx, dy, dyaw) in zip(truth, odom, drift):
             bag.write("/odom", "nav_msgs/msg/Odometry", t, {
                 "header": {"stamp": stamp(t), "frame_id": "odom"}, "child_frame_id": "base_link",
@@ -180,7 +184,7 @@ def robot_bag(path: Path, world: World, truth: np.ndarray, *, drift: np.ndarray 
                     "ranges": laser_ranges(world, lx, ly, yaw, SCAN_ANGLES, z=laser[2])})
             if cloud is not None:
                 args = {k: v for k, v in cloud.items() if k != "layout"}
-                pts = cloud_points(world, lx, ly, yaw, laser[2], **args)
+                pts = cloud_points(world, lx, ly, yaw, laser[2], **args) @ tilt   # level -> the sensor's axes
                 bag.write("/points", "sensor_msgs/msg/PointCloud2", t,
                           cloud_msg(pts, t, cloud.get("layout", "velodyne")))
         if extra is not None:

@@ -129,3 +129,19 @@ def test_cloud_fields_in_any_layout_byte_order_and_width():
 def test_scan_and_cloud_topic_together_is_an_error(tmp_path):
     with pytest.raises(BagImportError, match="--scan-topic and --cloud-topic: give one"):
         scenario_from_bag(tmp_path / "any.bag", scan_topic="/scan", cloud_topic="/points")
+
+
+def test_a_tilted_lidar_is_levelled_with_its_mounting(tmp_path):
+    """The lidar pitched 12 degrees nose down (as on legged robots), its mounting on /tf_static: the
+    pillar and the low box come out as with a level lidar; read as level, the ground would tilt
+    into the band and the result would be wrong."""
+    path = robot_bag(tmp_path / "tilt", WORLD, _drive(), scans=False, laser=LIDAR, pitch=12.0,
+                     cloud={**CLOUD, "layout": "velodyne"})
+    obs = scenario_from_bag(path).scenario.obstacles
+    pillar = [o for o in obs if isinstance(o, CylinderObstacle)]
+    assert len(pillar) == 1 and (pillar[0].x, pillar[0].y, pillar[0].radius) == pytest.approx((2.0, 1.2, 0.25), abs=0.04)
+    low = [o for o in obs if isinstance(o, BoxObstacle) and math.hypot(o.x - 3.0, o.y + 1.0) < 0.4]
+    assert low and all(o.height == pytest.approx(0.15, abs=0.03) for o in low)
+    truth = [Point(x, y).buffer(r) for x, y, r, _ in WORLD.pillars] + \
+        [box(x - ln / 2, y - w / 2, x + ln / 2, y + w / 2) for x, y, ln, w, _, _ in WORLD.boxes]
+    assert all(min(obstacle_polygon(o).distance(t) for t in truth) < 0.02 for o in obs), obs
