@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import fnmatch
+import os
 import re
 import shlex
 from pathlib import Path
@@ -18,7 +19,7 @@ from typing import Any, Iterator
 import pytest
 
 from ..core.errors import NavScenarioError, ScenarioError
-from .state import get_state
+from .state import STATE_KEY, get_state
 
 _TOP_KEY = re.compile(r"^(version|mission)\s*:", re.MULTILINE)
 
@@ -42,17 +43,89 @@ def looks_like_scenario_text(text: str | bytes) -> bool:
 
 def collect_file(file_path: Path, parent: pytest.Collector) -> "ScenarioFile | None":
     """The ``pytest_collect_file`` implementation (called for every file pytest visits)."""
-    globs = get_state(parent.config).settings.globs
+    state = get_state(parent.config)
     name = file_path.name
-    if not any(fnmatch.fnmatch(name, g) for g in globs):
+    if not any(fnmatch.fnmatch(name, g) for g in state.settings.globs):
         return None
+    if _named_on_command_line(parent.config, file_path):   # the loader says what is wrong with it
+        state.scenario_folders.add(str(file_path.parent))
+        return ScenarioFile.from_parent(parent, path=file_path)
     try:
         data = file_path.read_bytes()
     except OSError:
         return None  # unreadable: pytest cannot use it either; nothing suggests it is a scenario
     if not looks_like_scenario_text(data):
+        from .skipped import add_skipped, why_not_a_scenario
+        reason = why_not_a_scenario(data)
+        if reason is not None:
+            add_skipped(state, file_path, reason)
         return None
+    state.scenario_folders.add(str(file_path.parent))
     return ScenarioFile.from_parent(parent, path=file_path)
+
+
+def _named_on_command_line(config: pytest.Config, path: Path) -> bool:
+    """True if ``path`` is a file given on the command line (``pytest s/x.yaml``, or ``::name``)."""
+    base = Path(config.invocation_params.dir)
+    return any(Path(os.path.abspath(base / arg.split("::")[0])) == Path(os.path.abspath(path))
+               for arg in config.args)
+
+
+def output_folders(config: pytest.Config) -> list[Path]:
+    """The folders this plugin writes in this run: artifacts, plots, bags (issue 15: a copy of a
+    failing scenario in the artifacts must not come back as an item in the next ``pytest .``)."""
+    state = config.stash.get(STATE_KEY, None)
+    if state is None:
+        return []
+    folders = [state.settings.artifacts] if state.settings.artifacts is not None else []
+    from .bags import _STATE as BAG_KEY
+    from .reports import DEFAULT_PLOTS_DIR, REPORT_KEY
+    bags = config.stash.get(BAG_KEY, None)
+    if bags is not None:
+        folders.append(bags.folder)
+    report = config.stash.get(REPORT_KEY, None)
+    if report is not None and report.settings.plots_dir is not None:
+        folders.append(report.settings.plots_dir)
+    elif state.settings.artifacts is None:
+        folders.append(Path(config.rootpath) / DEFAULT_PLOTS_DIR)
+    return [Path(os.path.abspath(f)) for f in folders]
+
+
+def ignore_output_folder(collection_path: Path, config: pytest.Config) -> bool | None:
+    """``pytest_ignore_collect``: True for an output folder of the plugin, None (no opinion) else.
+
+    Never ignored: a folder holding the rootdir, the current folder or a path named on the command
+    line (``--nav-artifacts=.`` must not hide the project; ``pytest nav-artifacts/x/scenario.yaml``
+    runs that file), nor one holding or inside the frozen regressions' folder (--navsearch-out)."""
+    folders = output_folders(config)
+    path = Path(os.path.abspath(collection_path))
+    if path not in folders:
+        return None
+    regressions = _regressions_folder(config)
+    named = [Path(os.path.abspath(Path(config.invocation_params.dir) / a.split("::")[0]))
+             for a in config.args]
+    keep = [Path(config.rootpath), Path(config.invocation_params.dir), regressions, *named]
+    if any(k == path or path in k.parents for k in keep):
+        return None
+    return True
+
+
+def _regressions_folder(config: pytest.Config) -> Path:
+    """--navsearch-out, else its ini twin (either name), else the default folder."""
+    from .search import DEFAULT_OUT
+    names = ("navsearch_out", "nav_regressions_dir")
+    for name in names:
+        cli = config.getoption(name, None)
+        if cli:
+            return Path(os.path.abspath(Path(config.invocation_params.dir) / os.path.expanduser(str(cli))))
+    for name in names:
+        try:
+            raw = str(config.getini(name) or "").strip()
+        except ValueError:     # not an ini option in this version
+            continue
+        if raw:
+            return Path(os.path.abspath(Path(config.rootpath) / os.path.expanduser(raw)))
+    return Path(os.path.abspath(Path(config.rootpath) / DEFAULT_OUT))
 
 
 def rel_path(config: pytest.Config, path: Path) -> str:
@@ -172,13 +245,23 @@ class ScenarioItem(pytest.Item):
     def rel_path(self) -> str:
         return rel_path(self.config, self.path)
 
+    def setup(self) -> None:
+        """A scenario no planner can pass (or that passes without one) is an error of this item,
+        not a failure of the planner (issue 15): verdict/feasibility.py, ~free (paths are cached)."""
+        from ..verdict.feasibility import impassable_reason
+        reason = impassable_reason(self.scenario)
+        if reason is not None:
+            from ..core.errors import ImpassableScenarioError
+            raise ImpassableScenarioError(f"{self.rel_path}: {reason}")
+
     def runtest(self) -> None:
         from ..harness.runner import run_scenario
 
         state = get_state(self.config)
         result = run_scenario(self.scenario, state.subject.runner_arg,
                               seed=repeat_seed(state.settings.seed, self.repeat),
-                              tick_limit=state.settings.tick_limit)
+                              tick_limit=state.settings.tick_limit,
+                              reset_timeout=state.settings.reset_timeout)
         self.nav_result = result
         m = result.metrics
         self.user_properties.extend([

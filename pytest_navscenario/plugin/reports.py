@@ -30,6 +30,8 @@ from typing import Any
 
 import pytest
 
+from .options import ini_type, ini_value
+
 PLOT_CHOICES = ("failed", "all", "none")
 MODE_CHOICES = ("fail", "warn")
 DEFAULT_PLOTS_DIR = "nav-plots"
@@ -101,7 +103,8 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("navscenario", "navigation scenarios (pytest-navscenario)")
     for opt, ini, default, text in OPTIONS:
         group.addoption(opt, dest=ini, default=None, metavar=METAVARS[ini], help=f"{text} [ini: {ini}]")
-        parser.addini(ini, text, default=default)
+        kind = ini_type("int") if ini == "nav_plots_max" else "string"   # its real type (issue 15)
+        parser.addini(ini, text, type=kind, default=default)
 
 
 def _value(config: pytest.Config, name: str) -> tuple[str, str, Path]:
@@ -109,7 +112,7 @@ def _value(config: pytest.Config, name: str) -> tuple[str, str, Path]:
     cli = config.getoption(name)
     if cli is not None:
         return str(cli).strip(), f"--{name.replace('_', '-')}", Path(config.invocation_params.dir)
-    return str(config.getini(name)).strip(), f"ini option {name}", Path(config.rootpath)
+    return str(ini_value(config, name)).strip(), f"ini option {name}", Path(config.rootpath)
 
 
 def _path(raw: str, base: Path) -> Path:

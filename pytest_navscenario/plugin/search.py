@@ -16,6 +16,8 @@ from typing import Any
 
 import pytest
 
+from .options import ini_type, ini_value
+
 DEFAULT_BUDGET = 100
 DEFAULT_SHRINK_BUDGET = 40
 DEFAULT_OUT = "scenarios/regressions"
@@ -47,12 +49,16 @@ OPTIONS = (
 )
 
 
+_INT_OPTIONS = ("navsearch_budget", "navsearch_seed", "navsearch_shrink_budget")   # ini type int
+
+
 def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("navsearch", "navigation failure search (pytest-navscenario)")
     for opt, dest, metavar, text in OPTIONS:
         kwargs: dict[str, Any] = {"action": "append"} if dest == "navsearch" else {}
         group.addoption(opt, dest=dest, default=None, metavar=metavar, help=f"{text} [ini: {dest}]", **kwargs)
-        parser.addini(dest, text, type="args" if dest == "navsearch" else "string",
+        kind = "args" if dest == "navsearch" else ini_type("int") if dest in _INT_OPTIONS else "string"
+        parser.addini(dest, text, type=kind,
                       default=[] if dest == "navsearch" else "")
 
     parser.addini(OLD_OUT_INI, "old name of navsearch_out, still read (navsearch_out wins when both "
@@ -108,7 +114,7 @@ def _raw(config: pytest.Config, dest: str) -> tuple[Any, str, Path]:
     if cli is not None:
         return cli, f"--{dest.replace('_', '-')}" if dest != "navsearch_budget" else "--budget", \
             Path(config.invocation_params.dir)
-    return config.getini(dest), f"ini option {dest}", Path(config.rootpath)
+    return ini_value(config, dest), f"ini option {dest}", Path(config.rootpath)
 
 
 def _int(config: pytest.Config, dest: str, default: int, minimum: int, what: str) -> int:

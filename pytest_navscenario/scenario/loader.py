@@ -14,6 +14,7 @@ number is expected.
 """
 from __future__ import annotations
 
+import codecs
 import difflib
 import math
 import numbers
@@ -712,12 +713,27 @@ def scenario_from_dict(data: Mapping[str, Any], source: str | os.PathLike | None
     return _build(root, _Ctx(src), None, None)
 
 
+_BOMS = ((codecs.BOM_UTF32_LE, "utf-32"), (codecs.BOM_UTF32_BE, "utf-32"), (codecs.BOM_UTF8, "utf-8-sig"),
+         (codecs.BOM_UTF16_LE, "utf-16"), (codecs.BOM_UTF16_BE, "utf-16"))   # UTF-32 LE before UTF-16 LE
+
+
+def text_codec(data: bytes) -> str:
+    """The codec of a scenario file's bytes: UTF-8, or UTF-16/32 when the file starts with their
+    byte-order mark (YAML allows all three); the codec consumes the mark."""
+    for bom, codec in _BOMS:
+        if data.startswith(bom):
+            return codec
+    return "utf-8"
+
+
 def _decode(data: bytes, source: str | None) -> str:
+    codec = text_codec(data)
     try:
-        return data.decode("utf-8-sig")
+        return data.decode(codec)
     except UnicodeDecodeError as exc:
-        line = data.count(b"\n", 0, exc.start) + 1
-        raise ScenarioError(f"not UTF-8 text: byte 0x{data[exc.start]:02x} cannot be decoded", path=source,
+        name = {"utf-8-sig": "UTF-8", "utf-8": "UTF-8"}.get(codec, codec.upper())
+        line = data.count(b"\n", 0, exc.start) + 1 if name == "UTF-8" else None
+        raise ScenarioError(f"not {name} text: byte 0x{data[exc.start]:02x} cannot be decoded", path=source,
                             line=line, hint="is this a binary file? save the scenario as UTF-8 text") from None
 
 
@@ -763,7 +779,8 @@ def looks_like_scenario(text_or_mapping: str | bytes | Mapping[str, Any]) -> boo
     else:
         text = text_or_mapping
         if isinstance(text, (bytes, bytearray)):
-            text = bytes(text[:1_000_000]).decode("utf-8", errors="replace")
+            head = bytes(text[:1_000_000])
+            text = head.decode(text_codec(head), errors="replace")
         if not isinstance(text, str):
             return False
         keys = set(_TOP_KEY.findall(text))

@@ -26,6 +26,7 @@ import numpy as np
 
 from .deadline import PlannerTimeout, TickDeadline
 from ..core.errors import ScenarioError, SimulationDivergedError
+from ..core.interrupts import PlannerExit, from_the_user
 from ..subjects.protocol import Command, Observation
 from .trajectory import Collision, SafetyStop, SubjectFailure, Trajectory
 from .safety import SafetyLayer
@@ -313,20 +314,27 @@ def _planner_traceback(exc: BaseException) -> str:
 
 
 def _call_planner(fn: Callable[[Any], Any], arg: Any, deadline: TickDeadline | None) -> Any:
-    """The ONE place the planner's code is called (reset or act), under the optional tick limit."""
-    if deadline is None:
-        return fn(arg)
-    deadline.arm()
+    """The ONE place the planner's code is called (reset or act), under the optional tick limit.
+    SystemExit/KeyboardInterrupt raised by the planner's own code become PlannerExit (an ordinary
+    subject error with the planner's frames); a user's Ctrl-C passes (core/interrupts.py)."""
     try:
-        out = fn(arg)
-    except BaseException:
+        if deadline is None:
+            return fn(arg)
+        deadline.arm()
         try:
-            deadline.disarm()
-        except PlannerTimeout:
-            pass
-        raise
-    deadline.disarm()  # raises PlannerTimeout when the tick took longer than the limit
-    return out
+            out = fn(arg)
+        except BaseException:
+            try:
+                deadline.disarm()
+            except PlannerTimeout:
+                pass
+            raise
+        deadline.disarm()  # raises PlannerTimeout when the tick took longer than the limit
+        return out
+    except (SystemExit, KeyboardInterrupt, GeneratorExit) as exc:
+        if from_the_user(exc):
+            raise
+        raise PlannerExit(exc).with_traceback(exc.__traceback__) from None
 
 
 _BEAM_TABLES: dict[Any, tuple[np.ndarray, np.ndarray]] = {}
