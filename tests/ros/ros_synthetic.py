@@ -147,7 +147,8 @@ SCAN_ANGLES = np.radians(np.arange(-180.0, 180.0, 1.0))
 
 def robot_bag(path: Path, world: World, truth: np.ndarray, *, drift: np.ndarray | None = None,
               ros1: bool = False, scans: bool = True, cloud: dict | None = None, extra=None,
-              tf_map: bool = True, laser: tuple[float, float, float] = LASER, pitch: float = 0.0) -> Path:
+              tf_map: bool = True, laser: tuple[float, float, float] = LASER, pitch: float = 0.0,
+              world_at=None) -> Path:
     """A bag of a robot driving ``truth`` ((n, 4) t, x, y, yaw in the map frame) through ``world``.
 
     ``drift`` ((n, 3) the map -> odom transform at each time): the odometry is the truth seen
@@ -155,7 +156,8 @@ def robot_bag(path: Path, world: World, truth: np.ndarray, *, drift: np.ndarray 
     every pose from a laser at ``laser`` (x, y, z on /tf_static); ``cloud``: keyword arguments of
     ``cloud_points`` (azimuths, elevations) plus "layout" ("velodyne" or "ouster") for a
     PointCloud2 on /points instead of (or beside) the scans; ``pitch`` (degrees, positive nose
-    down) tilts the lidar, on /tf_static and in its points. ``extra(bag)`` writes more.
+    down) tilts the lidar, on /tf_static and in its points; ``world_at(t)`` gives the world at time t
+(something that moves) instead of ``world``. ``extra(bag)`` writes more.
     """
     p = math.radians(pitch)
     tilt = np.array([[math.cos(p), 0, math.sin(p)], [0, 1, 0], [-math.sin(p), 0, math.cos(p)]])  # sensor -> level
@@ -176,6 +178,7 @@ def robot_bag(path: Path, world: World, truth: np.ndarray, *, drift: np.ndarray 
                     {"header": {"stamp": stamp(t), "frame_id": "map"}, "child_frame_id": "odom",
                      "transform": {"translation": {"x": dx, "y": dy}, "rotation": quat(dyaw)}}]})
             lx, ly = x + math.cos(yaw) * laser[0], y + math.sin(yaw) * laser[0]
+            world = world_at(t) if world_at is not None else world
             if scans:
                 bag.write("/scan", "sensor_msgs/msg/LaserScan", t, {
                     "header": {"stamp": stamp(t), "frame_id": "laser"}, "angle_min": float(SCAN_ANGLES[0]),

@@ -67,3 +67,19 @@ def test_a_wrong_guess_is_an_error_about_the_mounting(tmp_path, capsys):
     assert "--laser-pose" in capsys.readouterr().err
     seed = scenario_from_bag(bag, laser_pose=(0.0, 0.4, 0.0))   # given, it imports
     assert len(seed.scenario.obstacles) == 1
+
+
+def test_something_that_moved_off_the_path_is_a_warning_not_an_error(tmp_path):
+    """A person stands 3 m ahead for the first 3 s, then walks away; the robot later drives through
+    where they stood. That is not a wrong mounting: the seed is written and a warning names it."""
+    from ros_synthetic import robot_bag
+
+    t = np.arange(100) * 0.1
+    drive = np.stack([t, 0.5 * t, 0 * t, 0 * t], 1)
+    walls = [(2.5, 1.2, 8.0, 0.2, 0.0, 1.0), (2.5, -1.2, 8.0, 0.2, 0.0, 1.0)]
+    person = World(pillars=[(3.0, 0.0, 0.2, 1.7)], boxes=walls)
+    empty = World(boxes=walls)
+    path = robot_bag(tmp_path / "person", empty, drive, tf_map=False, world_at=lambda s: person if s < 3 else empty)
+    seed = scenario_from_bag(path)
+    warn = [n for n in seed.notes if n.startswith("warning: pillar1 at (3.00, 0.00) lies where the robot drove")]
+    assert len(warn) == 1 and "something that moved" in warn[0], seed.notes

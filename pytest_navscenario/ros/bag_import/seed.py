@@ -110,13 +110,13 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
         notes.append(f"laser {data.scan_frame} at x={mount[0]:.3f} y={mount[1]:.3f} "
                      f"yaw={math.degrees(mount[2]):.1f} deg in {data.base_frame}, {how}")
         obstacles = _obstacles_from_scans(data, mount, settings, notes)
-        check_path_free(data, obstacles, radius, how)
+        notes += check_path_free(data, obstacles, radius, how)
     elif data.cloud_topic is not None:
         clouds = grid_clouds(data, laser_pose, dataclasses.replace(cloud, near=max(cloud.near, radius)), settings.res)
         notes.extend(clouds.notes)
         grid, how = clouds.grid, clouds.how
         obstacles = _fit(data, grid, settings, notes, f"{data.cloud_count} clouds")
-        check_path_free(data, obstacles, radius, how, data.cloud_topic)
+        notes += check_path_free(data, obstacles, radius, how, data.cloud_topic)
     if data.known_map is not None and obstacles:
         notes.append(not_on_map(data.known_map, obstacles, data.frame)[1])
     scenario, summary = _scenario(data, obstacles, path_as, reference_file, name, fp, goal)
@@ -140,34 +140,45 @@ def _fit(data: BagData, grid, settings: FitSettings, notes: list[str], what: str
     return obstacles
 
 
+SYSTEMATIC = 0.2   # share of the driven path under obstacles above which the sensor's mounting is wrong
+
+
 def check_path_free(data: BagData, obstacles: list[Obstacle], radius: float, how: str,
-                    topic: str | None = None) -> None:
-    """Raise when a fitted obstacle overlaps the robot's footprint at the start, the goal or a pose
-    it drove through: the robot was there, so the laser's mounting (or pose) is wrong, and the
-    error says where the mounting came from and how to give it."""
+                    topic: str | None = None) -> list[str]:
+    """Fitted obstacles must not overlap the footprint where the robot drove. Over the start, the
+    window's end or more than SYSTEMATIC of the path, the sensor's mounting (or the localisation)
+    is wrong: an error saying where the mounting came from and how to give it. A few local
+    overlaps are something that moved (a person, a door): warnings naming them."""
     import shapely
 
     from ...scenario.geometry import obstacle_polygon
 
     if not obstacles:
-        return
+        return []
     od = data.odom
     step = np.hypot(*np.diff(od[:, 1:3], axis=0).T).cumsum()
     keep = np.r_[0, np.nonzero(np.diff(np.floor(step / 0.05)) > 0)[0] + 1, len(od) - 1]
     pts = shapely.points(od[keep, 1:3])
-    for o in obstacles:
-        hit = shapely.distance(obstacle_polygon(o), pts) < radius - 1e-3
-        if hit.any():
-            k = keep[int(np.argmax(hit))]
-            where = "the start" if k == 0 else "the goal" if k == len(od) - 1 else "the driven path"
-            raise BagImportError(
-                f"{data.path}: the obstacles fitted from {topic or data.scan_topic} overlap the robot's footprint "
-                f"(radius {radius} m) on {where} (t={od[k, 0]:.1f} s, x={od[k, 1]:.2f}, y={od[k, 2]:.2f}: "
-                f"{o.name}), where the robot drove: the laser mounting is likely wrong. It was {how}. "
-                f"Give it with --laser-pose=X,Y,YAW (the laser in {data.base_frame}, from the robot's URDF), "
-                f"or a smaller --robot-radius if the footprint is too large"
-                + (f"; the poses are in the {data.frame} frame from the bag's localisation: if it was off, "
-                   f"--frame odom uses the odometry alone" if data.frame != data.odom_frame else ""))
+    hits = {o.name: shapely.distance(obstacle_polygon(o), pts) < radius - 1e-3 for o in obstacles}
+    under = np.any(list(hits.values()), axis=0)
+    if not under.any():
+        return []
+    if under[0] or under[-1] or under.mean() > SYSTEMATIC:
+        i = 0 if under[0] else len(keep) - 1 if under[-1] else int(np.argmax(under))
+        name = next(n for n, h in hits.items() if h[i])
+        k = keep[i]
+        where = "the start" if i == 0 else "the end of the window" if i == len(keep) - 1 else "the driven path"
+        raise BagImportError(
+            f"{data.path}: the obstacles fitted from {topic or data.scan_topic} overlap the robot's footprint "
+            f"(radius {radius} m) on {where} (t={od[k, 0]:.1f} s, x={od[k, 1]:.2f}, y={od[k, 2]:.2f}: {name}) "
+            f"and on {under.mean():.0%} of the driven path, where the robot drove: the laser mounting is likely "
+            f"wrong. It was {how}. Give it with --laser-pose=X,Y,YAW (the laser in {data.base_frame}, from the "
+            f"robot's URDF), or a smaller --robot-radius if the footprint is too large"
+            + (f"; the poses are in the {data.frame} frame from the bag's localisation: if it was off, "
+               f"--frame odom uses the odometry alone" if data.frame != data.odom_frame else ""))
+    return [f"warning: {o.name} at ({o.x:.2f}, {o.y:.2f}) lies where the robot drove "
+            f"(t={od[keep[int(np.argmax(hits[o.name]))], 0]:.1f} s): something that moved (a person, a door)? "
+            f"Remove it from the seed if so" for o in obstacles if hits[o.name].any()]
 
 
 def _scenario(data: BagData, obstacles: list[Obstacle], path_as: str, reference_file: str | None,
