@@ -11,6 +11,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from ..core.interrupts import PlannerExit, from_the_user
 from ..scenario.model import Robot
 from ..subjects.protocol import Command
 from .deadline import PlannerTimeout, TickDeadline
@@ -19,20 +20,27 @@ _SIM_DIR = os.path.dirname(os.path.abspath(__file__))
 
 
 def call_planner(fn: Callable[[Any], Any], arg: Any, deadline: TickDeadline | None) -> Any:
-    """The ONE place the planner's code is called (reset or act), under the optional tick limit."""
-    if deadline is None:
-        return fn(arg)
-    deadline.arm()
+    """The ONE place the planner's code is called (reset or act), under the optional tick limit.
+    SystemExit/KeyboardInterrupt raised by the planner's own code become PlannerExit (an ordinary
+    subject error with the planner's frames); a user's Ctrl-C passes (core/interrupts.py)."""
     try:
-        out = fn(arg)
-    except BaseException:
+        if deadline is None:
+            return fn(arg)
+        deadline.arm()
         try:
-            deadline.disarm()
-        except PlannerTimeout:
-            pass
-        raise
-    deadline.disarm()  # raises PlannerTimeout when the tick took longer than the limit
-    return out
+            out = fn(arg)
+        except BaseException:
+            try:
+                deadline.disarm()
+            except PlannerTimeout:
+                pass
+            raise
+        deadline.disarm()  # raises PlannerTimeout when the tick took longer than the limit
+        return out
+    except (SystemExit, KeyboardInterrupt, GeneratorExit) as exc:
+        if from_the_user(exc):
+            raise
+        raise PlannerExit(exc).with_traceback(exc.__traceback__) from None
 
 
 def planner_traceback(exc: BaseException) -> str:
