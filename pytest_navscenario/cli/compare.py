@@ -1,7 +1,8 @@
 """``navscenario compare A.jsonl B.jsonl``: planner A (baseline) against planner B (candidate).
 
-Exit status: 0, or 1 with ``--fail-on-regression`` when B broke a scenario A passed; 2 when a
-file cannot be read (the error names the file and line).
+Exit status: 0, or 1 with ``--fail-on-regression`` when B broke a scenario A passed or when
+nothing could be compared (B empty, no scenario in common: the reason is printed); 2 when a file
+cannot be read (the error names the file and line).
 """
 from __future__ import annotations
 
@@ -21,7 +22,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--html", metavar="OUT.html",
                    help="write a self-contained HTML report: the comparison, the bar chart and B's runs")
     p.add_argument("--fail-on-regression", action="store_true",
-                   help="exit with status 1 when B fails a scenario that A passed (a CI gate)")
+                   help="exit with status 1 when B fails a scenario that A passed, or when nothing could be "
+                        "compared (B empty, no scenario in common) (a CI gate)")
     p.add_argument("--max-listed", type=int, default=50, metavar="N",
                    help="list at most N scenarios per list (default 50)")
     p.add_argument("--side-by-side", metavar="DIR",
@@ -56,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
                                                  if u.record is not None]
         entries = [Entry(record=r, reproduce=cmp.record_command(r)) for r in b_records]
         bars = png_bytes(bars_figure(cmp)) if cmp.pairs else None
-        write_html(args.html, entries, title=f"navscenario compare: {cmp.b_subject} vs {cmp.a_subject}",
+        write_html(args.html, entries, template="compare_report.html.j2", title=f"navscenario compare: {cmp.a_subject} → {cmp.b_subject}",
                    comparison=cmp, bars_png=bars, info=[f"A: {args.a}", f"B: {args.b}"])
         print(f"HTML report written to {args.html}")
     if args.side_by_side:
@@ -66,7 +68,11 @@ def run(args: argparse.Namespace) -> int:
         for line in problems:
             print(f"side-by-side: {line}", file=sys.stderr)
         print(f"{len(written)} side-by-side plot(s) written to {args.side_by_side}")
-    if args.fail_on_regression and cmp.has_regressions:
+    why = cmp.nothing_compared()
+    if why is not None:
+        verdict = "FAILED the gate" if args.fail_on_regression else "warning"
+        print(f"navscenario compare: {verdict}: nothing was compared: {why}", file=sys.stderr)
+    if args.fail_on_regression and (cmp.has_regressions or why is not None):
         return 1
     return 0
 

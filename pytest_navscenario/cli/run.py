@@ -20,12 +20,13 @@ _SUBJECT_HELP = (f"planner under test: a built-in name ({', '.join(sorted(BUILTI
 
 
 def add_arguments_run(p: argparse.ArgumentParser) -> None:
-    p.add_argument("scenario", help="scenario YAML file")
-    p.add_argument("--subject", "-s", default=DEFAULT_SUBJECT, help=_SUBJECT_HELP)
-    p.add_argument("--seed", type=int, default=None,
-                   help="base seed mixed with the scenario's simulation.seed (default: the scenario's own)")
+    p.add_argument("scenario", metavar="SCENARIO.yaml", help="scenario YAML file")
+    p.add_argument("--subject", "-s", default=DEFAULT_SUBJECT, metavar="SPEC", help=_SUBJECT_HELP)
+    p.add_argument("--seed", type=int, default=None, metavar="N",
+                   help="base seed (integer >= 0) mixed with the scenario's simulation.seed "
+                        "(default: the scenario's own)")
     p.add_argument("--tick-limit", type=float, default=None, metavar="SECONDS",
-                   help="a planner tick slower than this is a subject error")
+                   help="a planner tick slower than this is a subject error (default: no limit)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
 
 
@@ -87,13 +88,14 @@ def run_run(args: argparse.Namespace) -> int:
 
 
 def add_arguments_check_planner(p: argparse.ArgumentParser) -> None:
-    p.add_argument("subject", help=_SUBJECT_HELP.replace("; default " + DEFAULT_SUBJECT, ""))
-    p.add_argument("--scenario", default=None,
+    p.add_argument("subject", metavar="SPEC", help=_SUBJECT_HELP.replace("; default " + DEFAULT_SUBJECT, ""))
+    p.add_argument("--scenario", default=None, metavar="SCENARIO.yaml",
                    help="scenario YAML to check on (default: a short built-in scenario)")
-    p.add_argument("--ticks", type=int, default=20, help="control ticks to run (default 20)")
-    p.add_argument("--seed", type=int, default=0, help="lidar noise seed (default 0)")
+    p.add_argument("--ticks", type=int, default=20, metavar="N",
+                   help="control ticks to run, at least 1 (default 20)")
+    p.add_argument("--seed", type=int, default=0, metavar="N", help="lidar noise seed (default 0)")
     p.add_argument("--tick-limit", type=float, default=10.0, metavar="SECONDS",
-                   help="stop and report an act() call that takes longer (default 10)")
+                   help="stop and report an act() call that takes longer (default 10; 0: no limit)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
 
 

@@ -52,3 +52,8 @@ class PlannerProtocolError(NavScenarioError):
 
 class SimulationDivergedError(NavScenarioError):
     """MuJoCo produced NaN/inf state or warnings: the physics cannot be trusted."""
+
+
+class ImpassableScenarioError(NavScenarioError):
+    """No planner can pass the scenario (its goal cannot be reached), or it passes without one:
+    a defect of the scenario, reported before any episode runs, never a planner failure."""

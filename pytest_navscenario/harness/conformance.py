@@ -161,7 +161,8 @@ def check_planner(planner: Any, scenario: Scenario | None = None, *, ticks: int 
     stopped and reported (None: no limit). Never raises for a broken planner (see
     ``raise_if_failed``); raises SubjectLoadError only when the spec cannot be loaded.
     """
-    from ..sim.episode import simulate, validate_command
+    from ..sim.command import validate_command
+    from ..sim.episode import simulate
 
     scenario = scenario or default_check_scenario()
     instance, factory, label = _make(planner)
@@ -170,16 +171,7 @@ def check_planner(planner: Any, scenario: Scenario | None = None, *, ticks: int 
         instance = _instantiate(factory, label, check)
         if instance is None:
             return check
-    twin = None
-    if factory is not None:
-        twin = _instantiate(factory, label, PlannerCheck(label))
-    else:
-        try:
-            twin = copy.deepcopy(instance)
-        except Exception as exc:
-            check.warnings.append(f"determinism not checked: the planner object cannot be deep-copied "
-                                  f"({type(exc).__name__}: {exc}); pass its class or a factory instead")
-
+    twin = _twin(instance, factory, label, check)
     bad = [msg for msg in (_signature_problem(instance, "reset", "scenario"),
                            _signature_problem(instance, "act", "obs")) if msg]
     if bad:
@@ -192,7 +184,31 @@ def check_planner(planner: Any, scenario: Scenario | None = None, *, ticks: int 
         check.max_tick_time = max(recorder.times)
         check.median_tick_time = float(np.median(recorder.times))
 
-    failure = facts.subject_failure
+    _check_failure(check, facts.subject_failure, recorder)
+    _check_names(check, instance)
+    _check_limits(check, scenario, recorder.answers, validate_command)
+    _check_speed(check, scenario, recorder.times, slow_tick)
+    if twin is not None and facts.subject_failure is None and recorder.observations:
+        _check_determinism(check, scenario, twin, recorder, validate_command)
+    return check
+
+
+def _twin(instance: Any, factory: Any, label: str, check: PlannerCheck) -> Any | None:
+    """A second fresh planner for the determinism check: from the factory, or a deep copy of
+    the object (before its first reset); None (with a warning) when neither works."""
+    if factory is not None:
+        return _instantiate(factory, label, PlannerCheck(label))
+    try:
+        return copy.deepcopy(instance)
+    except Exception as exc:
+        check.warnings.append(f"determinism not checked: the planner object cannot be deep-copied "
+                              f"({type(exc).__name__}: {exc}); pass its class or a factory instead")
+        return None
+
+
+def _check_failure(check: PlannerCheck, failure: Any, recorder: _Recorder) -> None:
+    """The episode's subject failure (raised, bad answer, hung) with the planner's own frame,
+    and any write into the observation's arrays, as problems."""
     if failure is not None:
         message = failure.message
         if "read-only" in message:
@@ -213,21 +229,22 @@ def check_planner(planner: Any, scenario: Scenario | None = None, *, ticks: int 
             "act() wrote into the observation's arrays: " + ", ".join(recorder.mutated[:3])
             + "; the harness passes read-only arrays, so copy before changing them")
 
+
+def _check_names(check: PlannerCheck, instance: Any) -> None:
     for attr in ("name", "version"):   # read after reset: some planners name themselves there
         if getattr(instance, attr, None) is None:
             check.warnings.append(f"no `{attr}` attribute: results files will name the planner by "
                                   f"its spec only; add e.g. `{attr} = \"...\"` to the class")
-    _check_limits(check, scenario, recorder.answers, validate_command)
-    steady = recorder.times[1:]   # the first tick may pay one-time set-up (caches, tables)
+
+
+def _check_speed(check: PlannerCheck, scenario: Scenario, times: list[float], slow_tick: float) -> None:
+    steady = times[1:]   # the first tick may pay one-time set-up (caches, tables)
     if steady and max(steady) > slow_tick:
         slow = sum(t > slow_tick for t in steady)
         check.warnings.append(
             f"act() is slow: {slow} of {len(steady)} ticks after the first took more than "
             f"{slow_tick * 1e3:.0f} ms (max {max(steady) * 1e3:.1f} ms); the control period "
             f"is {1e3 / scenario.simulation.control_rate:.0f} ms and a search runs thousands of episodes")
-    if twin is not None and failure is None and recorder.observations:
-        _check_determinism(check, scenario, twin, recorder, validate_command)
-    return check
 
 
 def _check_limits(check: PlannerCheck, scenario: Scenario, answers: list[Any], validate) -> None:

@@ -16,7 +16,6 @@ gathers the records and writes every file, so workers never race on one.
 """
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -48,10 +47,20 @@ class XdistHooks:
         if state is not None:
             node.workerinput[WORKER_SEED_KEY] = state.settings.seed
 
+    def pytest_testnodedown(self, node: Any, error: Any) -> None:
+        """Controller: the workers collected; take over their list of skipped YAML files."""
+        from .skipped import WORKER_KEY
+        from .state import STATE_KEY
+        state = node.config.stash.get(STATE_KEY, None)
+        sent = getattr(node, "workeroutput", {}).get(WORKER_KEY)
+        if state is not None and sent:
+            state.not_scenarios.extend((p, r) for p, r in sent["files"])
+            state.scenario_folders.update(sent["folders"])
+
 
 def pytest_configure(config: pytest.Config) -> None:
     config.pluginmanager.register(Controller(config), "navscenario-controller")
-    if config.pluginmanager.hasplugin("xdist"):
+    if config.pluginmanager.hasplugin("xdist") or config.pluginmanager.hasplugin("xdist.plugin"):  # -p xdist.plugin
         config.pluginmanager.register(XdistHooks(), "navscenario-xdist")
     _stop_gracefully_on_sigterm(config)
 
@@ -59,21 +68,14 @@ def pytest_configure(config: pytest.Config) -> None:
 def _stop_gracefully_on_sigterm(config: pytest.Config) -> None:
     """SIGTERM (a CI job cancelled, ``kill``) ends the run like Ctrl-C: pytest's own interruption
     path, so the results file, frozen failures and the summary of what finished are still written.
-    Only in the controller's main thread, and only when nobody else handles SIGTERM."""
-    import signal
-    import threading
+    SIGTERM only in the controller, and only when nobody else handles it. Both Ctrl-C and SIGTERM
+    raise core.interrupts.UserInterrupt, so that a planner's own ``raise KeyboardInterrupt`` or
+    ``sys.exit()`` can be told apart from the user's and ends only its episode (issue 15)."""
+    from ..core.interrupts import install
 
-    if _is_worker(config) or threading.current_thread() is not threading.main_thread():
-        return
-    if signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
-        return
-
-    def on_sigterm(signum: int, frame: Any) -> None:
-        signal.signal(signal.SIGTERM, signal.SIG_DFL)  # a second SIGTERM kills at once
-        raise KeyboardInterrupt("SIGTERM")
-
-    signal.signal(signal.SIGTERM, on_sigterm)
-    config.add_cleanup(lambda: signal.signal(signal.SIGTERM, signal.SIG_DFL))
+    restore = install(sigterm=not _is_worker(config))
+    if restore is not None:
+        config.add_cleanup(restore)
 
 
 def _is_worker(config: pytest.Config) -> bool:
@@ -99,8 +101,9 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     subject = resolve_subject(config, settings.subject_spec, origin)
     config.stash[STATE_KEY] = NavState(settings=settings, subject=subject, is_worker=worker)
     if not worker and subject.origin != "built-in default":
+        distributed = bool(getattr(config.option, "numprocesses", None))   # xdist workers run episodes
         try:
-            subject.check()
+            subject.check(keep_running=not distributed)
         except SubjectLoadError as exc:
             raise pytest.UsageError(f"navscenario: {exc}") from None
     if not worker and settings.results is not None:
@@ -131,9 +134,23 @@ def pytest_report_header(config: pytest.Config) -> list[str]:
     return lines
 
 
+def pytest_ignore_collect(collection_path: Path, config: pytest.Config) -> bool | None:
+    """The plugin's own output folders (artifacts, plots, bags) are never collected."""
+    from .collect import ignore_output_folder
+    return ignore_output_folder(collection_path, config)
+
+
 def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> Any:
     from .collect import collect_file
     return collect_file(file_path, parent)
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(session: pytest.Session, config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Families of same-named folders stay apart (collect.separate_families); first, before
+    -k/-m deselect, so that a selection does not rename a family."""
+    from .collect import separate_families
+    separate_families(config, items)
 
 
 @pytest.hookimpl(wrapper=True, tryfirst=True)
@@ -216,6 +233,10 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
     from .state import STATE_KEY
     config = session.config
     state = config.stash.get(STATE_KEY, None)
+    if state is not None and state.is_worker and (state.not_scenarios or state.scenario_folders):
+        from .skipped import WORKER_KEY
+        config.workeroutput[WORKER_KEY] = {  # type: ignore[attr-defined]
+            "files": [list(f) for f in state.not_scenarios], "folders": sorted(state.scenario_folders)}
     if state is None or state.is_worker or state.settings.results is None:
         return
     if config.option.collectonly:  # nothing ran: keep an existing results file
@@ -225,14 +246,24 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
     try:
         write_results(state.settings.results, annotate_repeats(state.records))
     except OSError as exc:
-        sys.stderr.write(f"navscenario: cannot write the results file {state.settings.results}: {exc}\n")
-        session.exitstatus = pytest.ExitCode.INTERNAL_ERROR
+        # Said in the terminal summary, on a line of its own. The run fails: a CI job whose
+        # results are lost must not pass (the gate that reads them later would see nothing).
+        state.results_error = (f"navscenario: cannot write the results file {state.settings.results}: "
+                               f"{exc}; no results were written")
+        if session.exitstatus == pytest.ExitCode.OK:   # a failing run's own status stays (1, 2, ...)
+            session.exitstatus = pytest.ExitCode.INTERNAL_ERROR
 
 
 def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pytest.Config) -> None:
+    from .collect import rel_path
     from .state import STATE_KEY
     state = config.stash.get(STATE_KEY, None)
-    if state is None or state.is_worker or not state.records and state.settings.results is None:
+    if state is None or state.is_worker:
+        return
+    from .skipped import summary_lines
+    for line in summary_lines(state, lambda p: rel_path(config, p), config.getoption("verbose") > 0):
+        terminalreporter.write_line(line)
+    if not state.records and state.settings.results is None:
         return
     tr = terminalreporter
     if state.settings.summary and state.records:
@@ -245,7 +276,9 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
         tr.write_sep("=", "navscenario flaky scenarios")
         for line in format_flaky(state.records).splitlines():
             tr.write_line(line)
-    if state.settings.results is not None and not config.option.collectonly:
+    if state.results_error is not None:
+        tr.write_line(state.results_error, red=True, bold=True)
+    elif state.settings.results is not None and not config.option.collectonly:
         tr.write_line(f"navscenario: wrote {len(state.records)} record(s) to {state.settings.results}")
     if state.failed_artifacts:
         tr.write_line(f"navscenario: artifacts of {len(state.failed_artifacts)} failing item(s) in "

@@ -51,7 +51,8 @@ _STATE = pytest.StashKey[BagState]()
 
 def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("navscenario-bags", "ROS bags of episodes (pytest-navscenario)")
-    metavars = {"nav_bag": "failed|all|none", "nav_bag_format": "mcap|sqlite3|ros1", "nav_bag_dir": "DIR"}
+    metavars = {"nav_bag": "{failed,all,none}", "nav_bag_format": "{" + ",".join(FORMATS) + "}",
+                "nav_bag_dir": "DIR"}
     for opt, ini, text in OPTIONS:
         group.addoption(opt, dest=ini, default=None, metavar=metavars[ini], help=f"{text} [ini: {ini}]")
     parser.addini("nav_bag", OPTIONS[0][2], default="none")

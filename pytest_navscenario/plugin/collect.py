@@ -8,7 +8,9 @@ ScenarioError (file, line, field, fix); the other files are still collected and 
 """
 from __future__ import annotations
 
+import dataclasses
 import fnmatch
+import os
 import re
 import shlex
 from pathlib import Path
@@ -17,7 +19,7 @@ from typing import Any, Iterator
 import pytest
 
 from ..core.errors import NavScenarioError, ScenarioError
-from .state import get_state
+from .state import STATE_KEY, get_state
 
 _TOP_KEY = re.compile(r"^(version|mission)\s*:", re.MULTILINE)
 
@@ -41,17 +43,89 @@ def looks_like_scenario_text(text: str | bytes) -> bool:
 
 def collect_file(file_path: Path, parent: pytest.Collector) -> "ScenarioFile | None":
     """The ``pytest_collect_file`` implementation (called for every file pytest visits)."""
-    globs = get_state(parent.config).settings.globs
+    state = get_state(parent.config)
     name = file_path.name
-    if not any(fnmatch.fnmatch(name, g) for g in globs):
+    if not any(fnmatch.fnmatch(name, g) for g in state.settings.globs):
         return None
+    if _named_on_command_line(parent.config, file_path):   # the loader says what is wrong with it
+        state.scenario_folders.add(str(file_path.parent))
+        return ScenarioFile.from_parent(parent, path=file_path)
     try:
         data = file_path.read_bytes()
     except OSError:
         return None  # unreadable: pytest cannot use it either; nothing suggests it is a scenario
     if not looks_like_scenario_text(data):
+        from .skipped import add_skipped, why_not_a_scenario
+        reason = why_not_a_scenario(data)
+        if reason is not None:
+            add_skipped(state, file_path, reason)
         return None
+    state.scenario_folders.add(str(file_path.parent))
     return ScenarioFile.from_parent(parent, path=file_path)
+
+
+def _named_on_command_line(config: pytest.Config, path: Path) -> bool:
+    """True if ``path`` is a file given on the command line (``pytest s/x.yaml``, or ``::name``)."""
+    base = Path(config.invocation_params.dir)
+    return any(Path(os.path.abspath(base / arg.split("::")[0])) == Path(os.path.abspath(path))
+               for arg in config.args)
+
+
+def output_folders(config: pytest.Config) -> list[Path]:
+    """The folders this plugin writes in this run: artifacts, plots, bags (issue 15: a copy of a
+    failing scenario in the artifacts must not come back as an item in the next ``pytest .``)."""
+    state = config.stash.get(STATE_KEY, None)
+    if state is None:
+        return []
+    folders = [state.settings.artifacts] if state.settings.artifacts is not None else []
+    from .bags import _STATE as BAG_KEY
+    from .reports import DEFAULT_PLOTS_DIR, REPORT_KEY
+    bags = config.stash.get(BAG_KEY, None)
+    if bags is not None:
+        folders.append(bags.folder)
+    report = config.stash.get(REPORT_KEY, None)
+    if report is not None and report.settings.plots_dir is not None:
+        folders.append(report.settings.plots_dir)
+    elif state.settings.artifacts is None:
+        folders.append(Path(config.rootpath) / DEFAULT_PLOTS_DIR)
+    return [Path(os.path.abspath(f)) for f in folders]
+
+
+def ignore_output_folder(collection_path: Path, config: pytest.Config) -> bool | None:
+    """``pytest_ignore_collect``: True for an output folder of the plugin, None (no opinion) else.
+
+    Never ignored: a folder holding the rootdir, the current folder or a path named on the command
+    line (``--nav-artifacts=.`` must not hide the project; ``pytest nav-artifacts/x/scenario.yaml``
+    runs that file), nor one holding or inside the frozen regressions' folder (--navsearch-out)."""
+    folders = output_folders(config)
+    path = Path(os.path.abspath(collection_path))
+    if path not in folders:
+        return None
+    regressions = _regressions_folder(config)
+    named = [Path(os.path.abspath(Path(config.invocation_params.dir) / a.split("::")[0]))
+             for a in config.args]
+    keep = [Path(config.rootpath), Path(config.invocation_params.dir), regressions, *named]
+    if any(k == path or path in k.parents for k in keep):
+        return None
+    return True
+
+
+def _regressions_folder(config: pytest.Config) -> Path:
+    """--navsearch-out, else its ini twin (either name), else the default folder."""
+    from .search import DEFAULT_OUT
+    names = ("navsearch_out", "nav_regressions_dir")
+    for name in names:
+        cli = config.getoption(name, None)
+        if cli:
+            return Path(os.path.abspath(Path(config.invocation_params.dir) / os.path.expanduser(str(cli))))
+    for name in names:
+        try:
+            raw = str(config.getini(name) or "").strip()
+        except ValueError:     # not an ini option in this version
+            continue
+        if raw:
+            return Path(os.path.abspath(Path(config.rootpath) / os.path.expanduser(raw)))
+    return Path(os.path.abspath(Path(config.rootpath) / DEFAULT_OUT))
 
 
 def rel_path(config: pytest.Config, path: Path) -> str:
@@ -69,7 +143,7 @@ class ScenarioFile(pytest.File):
         from ..scenario.loader import load_scenario
 
         try:
-            scenario = load_scenario(self.path)
+            scenario = load_scenario(self.path, family="")  # "": the YAML has no family of its own
         except BaseException:
             get_state(self.config).bad_scenario_files += 1
             raise
@@ -79,10 +153,14 @@ class ScenarioFile(pytest.File):
             raise ScenarioError(f"scenario name {name!r} cannot be a pytest item name ('::' separates "
                                 f"node ids)", path=str(self.path), field="name",
                                 hint="use letters, digits, '-', '_' or '.', e.g. boxes1-narrow")
+        family_from_folder = not scenario.family
+        if family_from_folder:  # may become the folder's path: see separate_families
+            scenario = dataclasses.replace(scenario, family=self.path.parent.name)
         repeats = get_state(self.config).settings.repeat
         for repeat in range(repeats):
             item = ScenarioItem.from_parent(self, name=name if repeats == 1 else f"{name}[r{repeat}]",
                                             scenario=scenario, repeat=repeat)
+            item.family_from_folder = family_from_folder
             for mark in scenario.marks:
                 item.add_marker(getattr(pytest.mark, mark.name)(*mark.args, **dict(mark.kwargs)))
             if scenario.family:
@@ -97,6 +175,30 @@ class ScenarioFile(pytest.File):
         if isinstance(exc, (NavScenarioError, OSError, UnicodeDecodeError)):
             return f"cannot load scenario file {rel_path(self.config, self.path)}: {exc}"
         return super().repr_failure(excinfo)
+
+
+def separate_families(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Keep families from different folders of the same name apart.
+
+    A scenario without ``family:`` in its YAML belongs to the family named after its folder. When
+    the collected items come from two or more folders of the same name (``scenarios/`` and
+    ``examples/scenarios/``), each of those families is named by its folder's path relative to
+    the rootdir instead ("scenarios", "examples/scenarios"), so that the summary, the results
+    file and comparisons do not merge them. Called before ``-k``/``-m`` deselect items, so the
+    names do not depend on them (they do depend on which folders were collected together).
+    """
+    folders: dict[str, set[Path]] = {}
+    ours = [item for item in items if isinstance(item, ScenarioItem) and item.family_from_folder]
+    for item in ours:
+        folders.setdefault(item.scenario.family, set()).add(item.path.parent)
+    shared = {name for name, paths in folders.items() if len(paths) > 1}
+    for item in ours:
+        if item.scenario.family in shared:
+            family = rel_path(config, item.path.parent)
+            if family == ".":
+                family = item.path.parent.name
+            item.scenario = dataclasses.replace(item.scenario, family=family)
+            item.extra_keyword_matches.add(family)
 
 
 def repeat_seed(base_seed: int, repeat: int) -> int:
@@ -136,11 +238,21 @@ class ScenarioItem(pytest.Item):
         super().__init__(**kwargs)
         self.scenario = scenario
         self.repeat = repeat          # --nav-repeat index: 0 .. N-1
+        self.family_from_folder = False  # the family is the folder's (no family: in the YAML)
         self.nav_result: Any = None   # the EpisodeResult, until the call report has taken it
 
     @property
     def rel_path(self) -> str:
         return rel_path(self.config, self.path)
+
+    def setup(self) -> None:
+        """A scenario no planner can pass (or that passes without one) is an error of this item,
+        not a failure of the planner (issue 15): verdict/feasibility.py, ~free (paths are cached)."""
+        from ..verdict.feasibility import impassable_reason
+        reason = impassable_reason(self.scenario)
+        if reason is not None:
+            from ..core.errors import ImpassableScenarioError
+            raise ImpassableScenarioError(f"{self.rel_path}: {reason}")
 
     def runtest(self) -> None:
         from ..harness.runner import run_scenario
@@ -148,7 +260,8 @@ class ScenarioItem(pytest.Item):
         state = get_state(self.config)
         result = run_scenario(self.scenario, state.subject.runner_arg,
                               seed=repeat_seed(state.settings.seed, self.repeat),
-                              tick_limit=state.settings.tick_limit)
+                              tick_limit=state.settings.tick_limit,
+                              reset_timeout=state.settings.reset_timeout)
         self.nav_result = result
         m = result.metrics
         self.user_properties.extend([

@@ -81,6 +81,7 @@ def nav_run(request: pytest.FixtureRequest) -> Callable[..., Any]:
         scenario = apply_overrides(scenario, overrides)
         subject = state.subject.runner_arg if planner is None else planner
         return run_scenario(scenario, subject, seed=state.settings.seed if seed is None else seed,
-                            tick_limit=state.settings.tick_limit)
+                            tick_limit=state.settings.tick_limit,
+                            reset_timeout=state.settings.reset_timeout)
 
     return run

@@ -8,6 +8,7 @@ pytest.UsageError saying which option and how to fix it.
 from __future__ import annotations
 
 import os
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -17,6 +18,7 @@ DEFAULT_GLOB = ["*.yaml", "*.yml"]
 DEFAULT_SCENARIO_PATHS = ["scenarios"]
 DEFAULT_ARTIFACTS = "nav-artifacts"
 DEFAULT_TICK_LIMIT = 1.0
+DEFAULT_RESET_TIMEOUT = 10.0   # = subjects.external.RESET_TIMEOUT (not imported: plugin load stays light)
 
 # (option, ini name, help); used for --help, the ini registration and the docs (docs/reference/options.md).
 OPTIONS = (
@@ -37,26 +39,57 @@ OPTIONS = (
     ("--nav-tick-limit", "nav_tick_limit",
      "seconds one planner tick (act) may take; a slower or hanging planner ends the episode as a "
      "subject-error and the next item runs. Default 1; 0 or none: no limit."),
+    ("--nav-reset-timeout", "nav_reset_timeout",
+     "seconds an external (exec:) planner may take to answer reset, its start-up included; after "
+     "one reset timed out, the later items of that planner fail at once with the same message. "
+     "Default 10."),
     ("--nav-repeat", "nav_repeat",
      "run each scenario N times with different noise seeds (repeat 0 keeps the run's seed) and "
      "report the scenarios whose outcomes differ (flaky) with per-outcome counts. Default 1."),
 )
 
 
+def _typed_ini_supported() -> bool:
+    """pytest >= 8.4 knows the ini types "int" and "float" (older ones only strings, bool, lists)."""
+    return tuple(int(x) for x in re.findall(r"\d+", pytest.__version__)[:2]) >= (8, 4)
+
+
+def ini_type(kind: str) -> str:
+    """The addini type for an option whose values are ``kind`` ("int", "float", "bool", "string"):
+    declared with its real type so that pytest 9's native ``[tool.pytest]`` TOML table takes
+    ``nav_repeat = 2`` or ``nav_summary = false``; "string" on a pytest without int/float types."""
+    return kind if kind not in ("int", "float") or _typed_ini_supported() else "string"
+
+
+def ini_value(config: pytest.Config, name: str, expected: str = "") -> object:
+    """``config.getini(name)``, with pytest's conversion errors (a non-number in pytest.ini, a
+    wrong TOML type) turned into a usage error that names the option and what it expects."""
+    try:
+        return config.getini(name)
+    except (ValueError, TypeError) as exc:
+        hint = f"; expected {expected}" if expected else ""
+        raise pytest.UsageError(f"ini option {name}: {exc}{hint}") from None
+
+
 def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("navscenario", "navigation scenarios (pytest-navscenario)")
     helps = {ini: text for _, ini, text in OPTIONS}
+    # a metavar shows the accepted values ({a,b}) or a unit (N, SECONDS, PATH, DIR, SPEC, NAME)
     metavars = {"nav_subject": "SPEC", "nav_seed": "N", "nav_results": "PATH", "nav_artifacts": "DIR",
-                "nav_summary": "yes|no", "nav_tick_limit": "SECONDS", "nav_repeat": "N"}
+                "nav_summary": "{yes,no}", "nav_tick_limit": "SECONDS", "nav_repeat": "N",
+                "nav_reset_timeout": "SECONDS"}
     for opt, ini, text in OPTIONS:
         group.addoption(opt, dest=ini, default=None, metavar=metavars[ini], help=text + f" [ini: {ini}]")
     parser.addini("nav_subject", helps["nav_subject"], default="")
-    parser.addini("nav_seed", helps["nav_seed"], default="0")
+    parser.addini("nav_seed", helps["nav_seed"], type=ini_type("int"), default=0)
     parser.addini("nav_results", helps["nav_results"], default="")
     parser.addini("nav_artifacts", helps["nav_artifacts"], default=DEFAULT_ARTIFACTS)
-    parser.addini("nav_summary", helps["nav_summary"], default="yes")
-    parser.addini("nav_tick_limit", helps["nav_tick_limit"], default=str(DEFAULT_TICK_LIMIT))
-    parser.addini("nav_repeat", helps["nav_repeat"], default="1")
+    parser.addini("nav_summary", helps["nav_summary"], type="bool", default=True)
+    parser.addini("nav_tick_limit", helps["nav_tick_limit"], type=ini_type("float"),
+                  default=DEFAULT_TICK_LIMIT)
+    parser.addini("nav_repeat", helps["nav_repeat"], type=ini_type("int"), default=1)
+    parser.addini("nav_reset_timeout", helps["nav_reset_timeout"], type=ini_type("float"),
+                  default=DEFAULT_RESET_TIMEOUT)
     parser.addini("nav_scenario_glob",
                   "file name patterns of scenario files (space separated); files matching them are "
                   "collected when they are a YAML mapping with 'version' and 'mission' keys "
@@ -78,14 +111,24 @@ class Settings:
     repeat: int                       # episodes per scenario (>= 1)
     globs: tuple[str, ...]
     scenario_paths: tuple[Path, ...]
+    reset_timeout: float = DEFAULT_RESET_TIMEOUT   # s an exec: planner may take to answer reset
+
+
+_EXPECTED = {"nav_seed": "a whole number >= 0", "nav_summary": "yes or no (true or false)",
+             "nav_tick_limit": "seconds >= 0 (0: no limit)",
+             "nav_repeat": "a whole number of runs per scenario from 1 to 10000",
+             "nav_reset_timeout": "seconds > 0"}
 
 
 def _value(config: pytest.Config, name: str) -> tuple[str, str, Path]:
-    """(raw value, where it came from, base folder for relative paths)."""
+    """(raw value as text, where it came from, base folder for relative paths). An ini value
+    of a real type (a TOML number or boolean) comes back as its text: "3", "2.5", "no"."""
     cli = config.getoption(name)
     if cli is not None:
         return str(cli), f"--{name.replace('_', '-')}", Path(config.invocation_params.dir)
-    return str(config.getini(name)), f"ini option {name}", Path(config.rootpath)
+    raw = ini_value(config, name, _EXPECTED.get(name, ""))
+    text = ("yes" if raw else "no") if isinstance(raw, bool) else str(raw)
+    return text, f"ini option {name}", Path(config.rootpath)
 
 
 def _path(raw: str, base: Path) -> Path:
@@ -157,6 +200,14 @@ def read_settings(config: pytest.Config) -> Settings:
     if not 1 <= repeat <= 10_000:
         raise pytest.UsageError(f"{where}: expected a whole number of runs per scenario from 1 to "
                                 f"10000, got {raw!r} (e.g. --nav-repeat=10)")
+    raw, where, _ = _value(config, "nav_reset_timeout")
+    try:
+        reset_timeout = float(raw.strip())
+    except ValueError:
+        reset_timeout = -1.0
+    if not 0 < reset_timeout < float("inf"):
+        raise pytest.UsageError(f"{where}: expected seconds > 0 for an external planner to answer "
+                                f"reset, got {raw!r} (e.g. --nav-reset-timeout=30)")
     return Settings(subject_spec=subject, seed=seed, results=results, artifacts=artifacts,
                     summary=summary, tick_limit=tick_limit, repeat=repeat, globs=globs,
-                    scenario_paths=paths)
+                    scenario_paths=paths, reset_timeout=reset_timeout)

@@ -5,7 +5,8 @@ Options (each with an ini twin)::
     --nav-baseline=A.jsonl        compare this run with a results file of an earlier run; the
                                   comparison goes into the terminal summary
     --nav-baseline-mode=fail|warn fail (default): the session fails when this run broke a scenario
-                                  the baseline passed; warn: only report it
+                                  the baseline passed, or when none of its scenario runs could be
+                                  compared with the baseline; warn: only report it
     --nav-baseline-subject=SPEC   re-run the baseline's subject on each regression for a side-by-side
                                   plot (default: the subject its records name)
     --nav-plots=failed|all|none   trajectory plots of failing items (default), of every item, or none
@@ -29,6 +30,8 @@ from typing import Any
 
 import pytest
 
+from .options import ini_type, ini_value
+
 PLOT_CHOICES = ("failed", "all", "none")
 MODE_CHOICES = ("fail", "warn")
 DEFAULT_PLOTS_DIR = "nav-plots"
@@ -39,7 +42,8 @@ OPTIONS = (
      "the comparison is added to the terminal summary"),
     ("--nav-baseline-mode", "nav_baseline_mode", "fail",
      "what a regression against --nav-baseline does: fail (default: the session fails when a scenario "
-     "the baseline passed fails now) or warn (report only)"),
+     "the baseline passed fails now, or when no scenario run could be compared with the baseline) or "
+     "warn (report only)"),
     ("--nav-baseline-subject", "nav_baseline_subject", "",
      "the baseline's subject spec, to re-run it for side-by-side plots of regressions (default: the "
      "subject named in the baseline's records; built-in names work as they are)"),
@@ -55,9 +59,10 @@ OPTIONS = (
      "write one self-contained HTML report (summary, comparison, every failure's plot) to this file"),
 )
 
-METAVARS = {"nav_baseline": "FILE", "nav_baseline_mode": "fail|warn", "nav_baseline_subject": "SPEC",
-            "nav_plots": "failed|all|none", "nav_plots_max": "N", "nav_plots_dir": "DIR",
-            "nav_html": "FILE"}
+# accepted values in braces, or a unit (N, PATH, DIR, SPEC), as every option of the plugin shows it
+METAVARS = {"nav_baseline": "PATH", "nav_baseline_mode": "{" + ",".join(MODE_CHOICES) + "}",
+            "nav_baseline_subject": "SPEC", "nav_plots": "{" + ",".join(PLOT_CHOICES) + "}",
+            "nav_plots_max": "N", "nav_plots_dir": "DIR", "nav_html": "PATH"}
 
 
 @dataclass
@@ -78,6 +83,7 @@ class ReportState:
     records: list[dict[str, Any]] = field(default_factory=list)
     plots: dict[tuple[str, int], Path | bytes] = field(default_factory=dict)  # (nodeid, repeat) -> file or PNG
     views: dict[tuple[str, int], dict[str, Any]] = field(default_factory=dict)  # for the HTML's viewer
+    xfailed: dict[tuple[str, int], str] = field(default_factory=dict)  # expected failures: xfail reason
     side_by_side: dict[tuple[str, int], Path | bytes] = field(default_factory=dict)  # regressions: A | B
     baseline_index: dict[tuple[str, int], dict[str, Any]] = field(default_factory=dict)
     bad_baseline_subjects: set[str] = field(default_factory=set)
@@ -87,6 +93,7 @@ class ReportState:
     comparison: Any = None
     html_written: Path | None = None
     gate_failed: bool = False
+    nothing_compared: str | None = None       # why no scenario run was compared with the baseline
 
 
 REPORT_KEY = pytest.StashKey[ReportState]()
@@ -96,7 +103,8 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("navscenario", "navigation scenarios (pytest-navscenario)")
     for opt, ini, default, text in OPTIONS:
         group.addoption(opt, dest=ini, default=None, metavar=METAVARS[ini], help=f"{text} [ini: {ini}]")
-        parser.addini(ini, text, default=default)
+        kind = ini_type("int") if ini == "nav_plots_max" else "string"   # its real type (issue 15)
+        parser.addini(ini, text, type=kind, default=default)
 
 
 def _value(config: pytest.Config, name: str) -> tuple[str, str, Path]:
@@ -104,7 +112,7 @@ def _value(config: pytest.Config, name: str) -> tuple[str, str, Path]:
     cli = config.getoption(name)
     if cli is not None:
         return str(cli).strip(), f"--{name.replace('_', '-')}", Path(config.invocation_params.dir)
-    return str(config.getini(name)).strip(), f"ini option {name}", Path(config.rootpath)
+    return str(ini_value(config, name)).strip(), f"ini option {name}", Path(config.rootpath)
 
 
 def _path(raw: str, base: Path) -> Path:
@@ -220,6 +228,8 @@ def pytest_navscenario_episode_report(config: pytest.Config, report: pytest.Test
     rec = payload["record"]
     state.records.append(rec)
     failed = rec["outcome"] != "success"
+    if report.skipped and getattr(report, "wasxfail", None) is not None:  # xfailed: an expected failure
+        state.xfailed[(rec["nodeid"], int(rec.get("repeat") or 0))] = str(report.wasxfail)
     make, to_file = _wants_plot(state.settings, failed)
     if not make:  # (without a trajectory in the payload the plot still shows layout and markers)
         return
@@ -329,7 +339,9 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
         if seed is not None:
             state.comparison.extra_args = f"--nav-seed={seed}"
         state.comparison.command_prefix = _cd_rootdir(config)
-        if state.comparison.has_regressions and s.mode == "fail":
+        if not config.option.collectonly:
+            state.nothing_compared = _nothing_compared(state.comparison)
+        if (state.comparison.has_regressions or state.nothing_compared) and s.mode == "fail":
             state.gate_failed = True
             if session.exitstatus == pytest.ExitCode.OK:
                 session.exitstatus = pytest.ExitCode.TESTS_FAILED
@@ -338,6 +350,24 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
             _write_html(config, state)
         except Exception as exc:
             state.plot_errors.append(f"HTML report {s.html}: {type(exc).__name__}: {exc}")
+
+
+def _nothing_compared(cmp: Any) -> str | None:
+    """Why no scenario run of this session could be compared with the baseline (None when one
+    was): a run of another suite, or one that missed the baseline's scenarios, must not pass the
+    regression gate as "no regression"."""
+    if cmp.pairs:
+        return None
+    shared = len(cmp.not_comparable)
+    n_base = len(cmp.only_a) + shared
+    if not n_base:
+        return f"the baseline {cmp.a_name} has no records"
+    if shared:
+        why = (f"the {shared} scenario run(s) this run shares with it changed since it was written "
+               f"(another scenario_hash)")
+    else:
+        why = f"this run ran none of its {n_base} scenario run(s)"
+    return why + (f" ({len(cmp.only_b)} run now, not in it)" if cmp.only_b else "")
 
 
 def _write_html(config: pytest.Config, state: ReportState) -> None:
@@ -353,7 +383,8 @@ def _write_html(config: pytest.Config, state: ReportState) -> None:
         side_png = side.read_bytes() if isinstance(side, Path) and side.is_file() else (
             side if isinstance(side, bytes) else None)
         entries.append(Entry(record=rec, plot_png=png, reproduce=_reproduce(config, rec),
-                             view=state.views.get(key), compare_png=side_png))
+                             view=state.views.get(key), compare_png=side_png,
+                             xfail_reason=state.xfailed.get(key)))
     bars = None
     if state.comparison is not None and state.comparison.pairs:
         from ..report.plots import bars_figure, png_bytes
@@ -378,6 +409,13 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
         for line in text.splitlines():
             tr.write_line(line)
         n = len(state.comparison.broke)
+        why = state.nothing_compared
+        if why and state.settings.mode == "fail":
+            tr.write_line(f"navscenario: FAILED the regression gate: nothing was compared with the baseline: "
+                          f"{why} (--nav-baseline-mode=warn to only report this)", red=True, bold=True)
+        elif why:
+            tr.write_line(f"navscenario: warning: nothing was compared with the baseline: {why} "
+                          f"(--nav-baseline-mode=warn)", yellow=True, bold=True)
         if n and state.settings.mode == "fail":
             tr.write_line(f"navscenario: FAILED the regression gate: {n} scenario(s) the baseline passed "
                           f"fail now (--nav-baseline-mode=warn to only report this)", red=True, bold=True)

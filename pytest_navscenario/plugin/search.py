@@ -18,10 +18,14 @@ from typing import Any
 
 import pytest
 
+from .options import ini_type, ini_value
+
 DEFAULT_BUDGET = 100
 DEFAULT_SHRINK_BUDGET = 40
 DEFAULT_OUT = "scenarios/regressions"
 DEFAULT_STUCK_AFTER = 20.0
+STRATEGY_NAMES = ("evolve", "random", "hillclimb")   # = search.engine.STRATEGIES (not imported: plugin load stays light)
+OLD_OUT_INI = "nav_regressions_dir"     # the old name of the ini option navsearch_out, still read
 
 # (option, dest / ini name, metavar, help)
 OPTIONS = (
@@ -34,7 +38,7 @@ OPTIONS = (
     ("--navsearch-seed", "navsearch_seed", "N",
      "random seed of the search (integer >= 0, default 0); the same seed, subject and budget "
      "repeat a search exactly."),
-    ("--navsearch-strategy", "navsearch_strategy", "{evolve,random,hillclimb}",
+    ("--navsearch-strategy", "navsearch_strategy", "{" + ",".join(STRATEGY_NAMES) + "}",
      "evolve (default: quality-diversity search drawn by Hypothesis; looks for new ways of "
      "failing), random (uniform sampling over the same space, a baseline) or hillclimb (the "
      "Surrealist baseline: adaptive-step hill-climb on one obstacle at a time, minimising "
@@ -45,12 +49,15 @@ OPTIONS = (
     ("--navsearch-stuck-after", "navsearch_stuck_after", "SECONDS",
      f"end a search episode early, as a timeout, when the robot has covered no new ground for "
      f"this long (default {DEFAULT_STUCK_AFTER:g}; 0 = run every episode to its timeout)."),
-    ("--navsearch-out", "nav_regressions_dir", "DIR",
+    ("--navsearch-out", "navsearch_out", "DIR",
      f"folder for frozen failures, one subfolder per seed, plus each search's log "
-     f"(default {DEFAULT_OUT})."),
+     f"(default {DEFAULT_OUT}; the ini option's old name {OLD_OUT_INI} is still read)."),
     ("--navsearch-junit", "navsearch_junit", "PATH",
      "also write the generated suite (every simulated candidate) as a JUnit XML file."),
 )
+
+
+_INT_OPTIONS = ("navsearch_budget", "navsearch_seed", "navsearch_shrink_budget")   # ini type int
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
@@ -58,8 +65,13 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     for opt, dest, metavar, text in OPTIONS:
         kwargs: dict[str, Any] = {"action": "append"} if dest == "navsearch" else {}
         group.addoption(opt, dest=dest, default=None, metavar=metavar, help=f"{text} [ini: {dest}]", **kwargs)
-        parser.addini(dest, text, type="args" if dest == "navsearch" else "string",
+        kind = ("args" if dest == "navsearch" else ini_type("int") if dest in _INT_OPTIONS
+                else ini_type("float") if dest == "navsearch_stuck_after" else "string")
+        parser.addini(dest, text, type=kind,
                       default=[] if dest == "navsearch" else "")
+
+    parser.addini(OLD_OUT_INI, "old name of navsearch_out, still read (navsearch_out wins when both "
+                  "are set to the same folder; different folders are a usage error)", default="")
 
 
 _CONFIGS: list[pytest.Config] = []   # the running session's config (a stack: pytester nests runs)
@@ -112,7 +124,7 @@ def _raw(config: pytest.Config, dest: str) -> tuple[Any, str, Path]:
     if cli is not None:
         return cli, f"--{dest.replace('_', '-')}" if dest != "navsearch_budget" else "--budget", \
             Path(config.invocation_params.dir)
-    return config.getini(dest), f"ini option {dest}", Path(config.rootpath)
+    return ini_value(config, dest), f"ini option {dest}", Path(config.rootpath)
 
 
 def _int(config: pytest.Config, dest: str, default: int, minimum: int, what: str) -> int:
@@ -129,6 +141,22 @@ def _int(config: pytest.Config, dest: str, default: int, minimum: int, what: str
     return value
 
 
+def _out_raw(config: pytest.Config) -> tuple[Any, str, Path]:
+    """--navsearch-out, else the ini option navsearch_out, else its old name nav_regressions_dir;
+    the two ini names set to different folders is a usage error."""
+    raw, where, base = _raw(config, "navsearch_out")
+    if config.getoption("navsearch_out") is not None:
+        return raw, where, base
+    old = str(config.getini(OLD_OUT_INI)).strip()
+    if old and str(raw).strip() and str(raw).strip() != old:
+        raise pytest.UsageError(f"ini options navsearch_out = {str(raw).strip()!r} and {OLD_OUT_INI} = "
+                                f"{old!r} disagree; {OLD_OUT_INI} is the old name of navsearch_out: "
+                                f"keep only navsearch_out")
+    if old and not str(raw).strip():
+        return old, f"ini option {OLD_OUT_INI}", base
+    return raw, where, base
+
+
 def read_search_settings(config: pytest.Config) -> SearchSettings:
     from ..search.engine import STRATEGIES
 
@@ -141,7 +169,7 @@ def read_search_settings(config: pytest.Config) -> SearchSettings:
     if strategy not in STRATEGIES:
         raise pytest.UsageError(f"{where}: unknown strategy {raw!r}; use one of {', '.join(STRATEGIES)}")
     shrink = _int(config, "navsearch_shrink_budget", DEFAULT_SHRINK_BUDGET, 0, "the shrink budget")
-    raw, where, base = _raw(config, "nav_regressions_dir")
+    raw, where, base = _out_raw(config)
     raw = str(raw).strip() or DEFAULT_OUT
     out = Path(os.path.expanduser(raw))
     out = out if out.is_absolute() else base / out

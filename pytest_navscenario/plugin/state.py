@@ -19,6 +19,9 @@ class NavState:
     records: list[dict[str, Any]] = field(default_factory=list)   # controller: results records
     failed_artifacts: list[str] = field(default_factory=list)      # controller: folders written
     bad_scenario_files: int = 0   # scenario files that failed to load (collection errors)
+    results_error: str | None = None   # controller: why the results file could not be written
+    not_scenarios: list[tuple[str, str]] = field(default_factory=list)   # (path, why): skipped.py
+    scenario_folders: set[str] = field(default_factory=set)   # folders holding collected scenarios
 
 
 STATE_KEY = pytest.StashKey[NavState]()

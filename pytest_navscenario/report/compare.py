@@ -121,6 +121,26 @@ class Comparison:
     def has_regressions(self) -> bool:
         return bool(self.broke)
 
+    def nothing_compared(self) -> str | None:
+        """Why not a single pair was compared, or None when one was. Nothing compared is no
+        evidence of "no regression" (a candidate run that crashed before writing its results,
+        another suite): regression gates fail on it, with this reason."""
+        if self.pairs:
+            return None
+        shared = len(self.not_comparable)
+        n_a, n_b = len(self.only_a) + shared, len(self.only_b) + shared
+        if not n_a and not n_b:
+            return f"A ({self.a_name}) and B ({self.b_name}) have no records"
+        if not n_b:
+            return f"B ({self.b_name}) has no records, A has {n_a} (did the run stop before writing its results?)"
+        if not n_a:
+            return f"A ({self.a_name}) has no records, B has {n_b}"
+        if shared:
+            return (f"the {shared} scenario run(s) A and B share changed between the runs (another "
+                    f"scenario_hash), {len(self.only_a)} only in A, {len(self.only_b)} only in B")
+        return (f"A and B share no scenario ({len(self.only_a)} only in A, {len(self.only_b)} only in B): "
+                f"were both runs made on the same suite?")
+
     def reproduce_command(self, pair: Pair, side: str = "b") -> str:
         """The command that re-runs this one scenario with B's (or A's) subject."""
         return self.record_command(pair.b if side == "b" else pair.a, side)
@@ -345,7 +365,7 @@ def to_junit_xml(cmp: Comparison) -> str:
         tc = TestCase(name=u.label, classname=f"navscenario.compare.{u.family or 'default'}")
         tc.add_skipped_info(message=u.reason)
         cases.append(tc)
-    suite = TestSuite(f"navscenario compare: {cmp.b_subject} vs {cmp.a_subject}", cases)
+    suite = TestSuite(f"navscenario compare: {cmp.a_subject} -> {cmp.b_subject}", cases)
     return to_xml_report_string([suite])
 
 

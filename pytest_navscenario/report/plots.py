@@ -10,7 +10,8 @@ the area the robot's footprint swept (light band, the "thick line") and its outl
 every ``outline_every`` seconds, the centre path coloured by speed with a colour bar and time
 labels, start / waypoints / goal (with its tolerance circle), the point of minimum clearance
 and the narrowest obstacle gap with their values, the collision or safety stop, a grid in
-metres, equal aspect and the outcome in the title.
+metres, equal aspect and the outcome in the title. ``draw_episode`` draws these in named steps
+(``draw_obstacles`` first: the one place where obstacles are drawn, to extend for new kinds).
 """
 from __future__ import annotations
 
@@ -126,38 +127,66 @@ def _extent(result: EpisodeResult, margin: float = 0.8) -> tuple[float, float, f
     return min(xs) - margin, max(xs) + margin, min(ys) - margin, max(ys) + margin
 
 
+_HALO = dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8)   # behind labels on the map
+
+
 def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
                  outline_every: float | None = None, title: str | None = None,
                  legend: bool = False) -> Any:
-    """Draw one episode on ``ax``; return the speed colour mapping (for a colour bar) or None."""
-    import shapely
-    from matplotlib.collections import LineCollection, PolyCollection
-    from matplotlib.patches import Circle
-    from matplotlib.patches import Polygon as MplPolygon
-    from matplotlib.ticker import MultipleLocator
+    """Draw one episode on ``ax``; return the speed colour mapping (for a colour bar) or None.
 
-    s, m, traj = result.scenario, result.metrics, result.trajectory
-    fp = s.robot.footprint
-    halo = dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8)
+    The picture is made in named steps, back to front: the obstacles, the shortest path, the
+    footprint's path (swept area, outlines, centre line coloured by speed, time labels), the
+    mission (start, waypoints, goal), the key moments (minimum clearance, narrowest gap,
+    collision or safety stop), then the axes (limits, grid, labels, legend, title). Artists are
+    added as collections with ``autolim=False``: the limits are set once, at the end.
+    """
+    s = result.scenario
+    draw_obstacles(ax, s, involved=_involved_obstacles(result))
+    _draw_shortest_path(ax, s)
+    mapping = _draw_footprint_path(ax, result, norm=norm, outline_every=outline_every)
+    _draw_mission(ax, s.mission)
+    _draw_min_clearance(ax, result)
+    _draw_narrowest_gap(ax, s, result.metrics)
+    _draw_events(ax, result)
+    _finish_axes(ax, result, title=title, legend=legend)
+    return mapping
 
-    # Collections, not one patch each: patches re-run autoscaling per patch (slow); limits are set below.
-    polys = [obstacle_polygon(obs) for obs in s.obstacles]
+
+def _involved_obstacles(result: EpisodeResult) -> set[str]:
+    """The obstacles the episode's story is about (closest, the narrowest gap's, the one hit)."""
+    m = result.metrics
+    return {m.min_clearance_obstacle, *(m.min_gap_obstacles or "").split("|"),
+            result.collision.obstacle if result.collision else "",
+            result.safety_stop.obstacle if result.safety_stop else ""}
+
+
+def draw_obstacles(ax: "Axes", scenario: Any, *, involved: set[str] = frozenset()) -> None:  # type: ignore[assignment]
+    """The obstacles as grey polygons, with their names (on maps of more than
+    MAX_NAMED_OBSTACLES obstacles, only the ``involved`` ones are named).
+
+    This is the one place that draws obstacles: a new kind of obstacle (moving ones, believed
+    versus true positions) is drawn by extending this step, not ``draw_episode``.
+    """
+    from matplotlib.collections import PolyCollection
+
+    # Collections, not one patch each: patches re-run autoscaling per patch (slow).
+    polys = [obstacle_polygon(obs) for obs in scenario.obstacles]
     ax.add_collection(PolyCollection([np.asarray(p.exterior.coords) for p in polys], closed=True,
                                      facecolors="#9e9e9e", edgecolors="#424242", linewidths=1.0,
                                      zorder=2), autolim=False)
-    # every name on small maps; on big ones (imported maps) only the obstacles the story is about
-    involved = {m.min_clearance_obstacle, *(m.min_gap_obstacles or "").split("|"),
-                result.collision.obstacle if result.collision else "",
-                result.safety_stop.obstacle if result.safety_stop else ""}
-    for obs, poly in zip(s.obstacles, polys):
+    for obs, poly in zip(scenario.obstacles, polys):
         if len(polys) > MAX_NAMED_OBSTACLES and obs.name not in involved:
             continue
         ax.annotate(obs.name, (poly.centroid.x, poly.centroid.y), ha="center", va="center",
-                    fontsize=7, zorder=8, bbox=halo)
+                    fontsize=7, zorder=8, bbox=_HALO)
 
+
+def _draw_shortest_path(ax: "Axes", scenario: Any) -> None:
+    """The shortest collision-free path from start to goal through the waypoints (dashed)."""
     try:
         from ..verdict.paths import shortest_path
-        best = shortest_path(s)
+        best = shortest_path(scenario)
     except ImportError:  # pragma: no cover
         best = None
     if best is not None:
@@ -165,50 +194,84 @@ def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
         ax.plot(pts[:, 0], pts[:, 1], ls="--", lw=1.0, color="#616161", zorder=3,
                 label=f"shortest path {best.length:.1f} m")
 
-    mapping = None
-    if len(traj.t) >= 2:
-        pose = np.asarray(traj.pose, dtype=float)
-        speed = _speed(result)
-        t = np.asarray(traj.t, dtype=float)
-        duration = float(t[-1] - t[0])
-        # the swept area (the "thick line"), then outlines to scale every outline_every seconds
-        # a footprint every 5 cm of travel or 10 degrees of turn is enough for the union (fast)
-        step = max(1, len(pose) // 1000)
-        swept = shapely.union_all(footprint_polygons(fp, pose[_thin(pose, step, 0.05, 10.0)]))
-        rings = [np.asarray(g.exterior.coords) for g in getattr(swept, "geoms", [swept]) if not g.is_empty]
-        ax.add_collection(PolyCollection(rings, closed=True, facecolors="#90caf9", edgecolors="none",
-                                         alpha=0.35, zorder=1, label="swept by the footprint"),
-                          autolim=False)
-        every = outline_every or _nice_step(max(0.5, duration / 25.0))
-        marks = np.searchsorted(t, np.arange(t[0], t[-1] + 1e-9, every))
-        marks = _spread(pose, np.unique(np.append(np.clip(marks, 0, len(t) - 1), len(t) - 1)), 0.25)
-        outlines = [np.asarray(p.exterior.coords) for p in footprint_polygons(fp, pose[marks])]
-        ax.add_collection(PolyCollection(outlines, closed=True, facecolors="none", edgecolors="#1565c0",
-                                         linewidths=0.6, alpha=0.55, zorder=4,
-                                         label=f"footprint every {every:g} s"), autolim=False)
-        # centre path coloured by speed
-        stride = max(1, len(pose) // 2000)
-        xy = pose[::stride, :2]
-        segs = np.stack([xy[:-1], xy[1:]], axis=1)
-        from matplotlib.colors import Normalize
-        lc = LineCollection(segs, cmap=SPEED_CMAP, norm=norm or Normalize(0, max(0.1, speed.max())),
-                            lw=2.5, zorder=6)
-        lc.set_array(speed[::stride][:-1])
-        ax.add_collection(lc, autolim=False)
-        mapping = lc
-        # time labels along the path
-        tick = _nice_step(duration / 6.0)
-        ticks = np.arange(tick, t[-1], tick)
-        idx = np.clip(np.searchsorted(t, ticks), 0, len(t) - 1)
-        keep = set(_spread(pose, idx, 0.4).tolist())
-        for tt, i in zip(ticks, idx):
-            if i not in keep:  # the robot stood still: one label is enough
-                continue
-            ax.plot(*pose[i, :2], "o", ms=2.5, color="black", zorder=7)
-            ax.annotate(f"{tt:g}s", pose[i, :2], xytext=(4, -8), textcoords="offset points",
-                        fontsize=6, color="#212121", zorder=8)
 
-    mission = s.mission
+def _draw_footprint_path(ax: "Axes", result: EpisodeResult, *, norm: Any,
+                         outline_every: float | None) -> Any:
+    """Where the robot went: the area its footprint swept (the "thick line"), its outline to
+    scale every ``outline_every`` seconds, the centre path coloured by speed, and time labels.
+    Returns the speed colour mapping, or None without a trajectory."""
+    traj = result.trajectory
+    if len(traj.t) < 2:
+        return None
+    fp = result.scenario.robot.footprint
+    pose = np.asarray(traj.pose, dtype=float)
+    t = np.asarray(traj.t, dtype=float)
+    duration = float(t[-1] - t[0])
+    _draw_swept_area(ax, fp, pose)
+    _draw_outlines(ax, fp, pose, t, outline_every or _nice_step(max(0.5, duration / 25.0)))
+    mapping = _draw_speed_path(ax, pose, _speed(result), norm)
+    _draw_time_labels(ax, pose, t, duration)
+    return mapping
+
+
+def _draw_swept_area(ax: "Axes", fp: Any, pose: np.ndarray) -> None:
+    import shapely
+    from matplotlib.collections import PolyCollection
+
+    # a footprint every 5 cm of travel or 10 degrees of turn is enough for the union (fast)
+    step = max(1, len(pose) // 1000)
+    swept = shapely.union_all(footprint_polygons(fp, pose[_thin(pose, step, 0.05, 10.0)]))
+    rings = [np.asarray(g.exterior.coords) for g in getattr(swept, "geoms", [swept]) if not g.is_empty]
+    ax.add_collection(PolyCollection(rings, closed=True, facecolors="#90caf9", edgecolors="none",
+                                     alpha=0.35, zorder=1, label="swept by the footprint"),
+                      autolim=False)
+
+
+def _draw_outlines(ax: "Axes", fp: Any, pose: np.ndarray, t: np.ndarray, every: float) -> None:
+    """The footprint to scale every ``every`` seconds (one outline where the robot stood still)."""
+    from matplotlib.collections import PolyCollection
+
+    marks = np.searchsorted(t, np.arange(t[0], t[-1] + 1e-9, every))
+    marks = _spread(pose, np.unique(np.append(np.clip(marks, 0, len(t) - 1), len(t) - 1)), 0.25)
+    outlines = [np.asarray(p.exterior.coords) for p in footprint_polygons(fp, pose[marks])]
+    ax.add_collection(PolyCollection(outlines, closed=True, facecolors="none", edgecolors="#1565c0",
+                                     linewidths=0.6, alpha=0.55, zorder=4,
+                                     label=f"footprint every {every:g} s"), autolim=False)
+
+
+def _draw_speed_path(ax: "Axes", pose: np.ndarray, speed: np.ndarray, norm: Any) -> Any:
+    """The centre path coloured by speed; returns its colour mapping (for the colour bar)."""
+    from matplotlib.collections import LineCollection
+    from matplotlib.colors import Normalize
+
+    stride = max(1, len(pose) // 2000)
+    xy = pose[::stride, :2]
+    segs = np.stack([xy[:-1], xy[1:]], axis=1)
+    lc = LineCollection(segs, cmap=SPEED_CMAP, norm=norm or Normalize(0, max(0.1, speed.max())),
+                        lw=2.5, zorder=6)
+    lc.set_array(speed[::stride][:-1])
+    ax.add_collection(lc, autolim=False)
+    return lc
+
+
+def _draw_time_labels(ax: "Axes", pose: np.ndarray, t: np.ndarray, duration: float) -> None:
+    """Dots with the time ("2s") at about six nice instants along the path."""
+    tick = _nice_step(duration / 6.0)
+    ticks = np.arange(tick, t[-1], tick)
+    idx = np.clip(np.searchsorted(t, ticks), 0, len(t) - 1)
+    keep = set(_spread(pose, idx, 0.4).tolist())
+    for tt, i in zip(ticks, idx):
+        if i not in keep:  # the robot stood still: one label is enough
+            continue
+        ax.plot(*pose[i, :2], "o", ms=2.5, color="black", zorder=7)
+        ax.annotate(f"{tt:g}s", pose[i, :2], xytext=(4, -8), textcoords="offset points",
+                    fontsize=6, color="#212121", zorder=8)
+
+
+def _draw_mission(ax: "Axes", mission: Any) -> None:
+    """Start, numbered waypoints, and the goal with its tolerance circle."""
+    from matplotlib.patches import Circle
+
     ax.plot(mission.start.x, mission.start.y, marker="o", ms=8, color="#2e7d32", zorder=9, ls="none",
             label="start")
     for k, w in enumerate(mission.waypoints, 1):
@@ -220,44 +283,59 @@ def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
     ax.plot(mission.goal.x, mission.goal.y, marker="*", ms=13, color="#2e7d32", zorder=9, ls="none",
             label="goal")
 
-    # minimum clearance: the segment between footprint and obstacle at that moment
-    if math.isfinite(m.min_clearance) and m.min_clearance_obstacle:
-        p = _pose_at(result, m.min_clearance_time)
-        if p is None:
-            p = np.array([m.min_clearance_x, m.min_clearance_y, math.radians(mission.start.yaw)])
-        try:
-            from shapely.ops import nearest_points
-            a, b = nearest_points(footprint_polygon(fp, *p),
-                                  obstacle_polygon(s.obstacle(m.min_clearance_obstacle)))
-            ax.plot([a.x, b.x], [a.y, b.y], color="#d50000", lw=2, zorder=10)
-            ax.plot([a.x], [a.y], marker="o", ms=5, color="#d50000", zorder=10)
-            ax.add_patch(MplPolygon(np.asarray(footprint_polygon(fp, *p).exterior.coords), closed=True,
-                                    fill=False, ec="#d50000", lw=1.2, zorder=10))
-            # label on the free side: from the obstacle towards the robot
-            d = np.array([a.x - b.x, a.y - b.y])
-            d = d / np.linalg.norm(d) if np.linalg.norm(d) > 1e-9 else np.array([-0.7, 0.7])
-            ax.annotate(f"min clearance {m.min_clearance:.2f} m\n(t={m.min_clearance_time:.1f} s)",
-                        (a.x, a.y), xytext=tuple(28 * d), textcoords="offset points", fontsize=7,
-                        ha="right" if d[0] < 0 else "left", va="top" if d[1] < 0 else "bottom",
-                        color="#d50000", zorder=11, bbox=halo,
-                        arrowprops=dict(arrowstyle="-", color="#d50000", lw=0.6))
-        except KeyError:
-            pass
 
-    # narrowest obstacle-obstacle gap
-    gap, na, nb = _gap(s, m)
-    if math.isfinite(gap) and na and nb:
-        try:
-            from shapely.ops import nearest_points
-            a, b = nearest_points(obstacle_polygon(s.obstacle(na)), obstacle_polygon(s.obstacle(nb)))
-            ax.annotate("", (a.x, a.y), (b.x, b.y), zorder=10,
-                        arrowprops=dict(arrowstyle="<->", color="#ff6f00", lw=1.3, shrinkA=0, shrinkB=0))
-            ax.annotate(f"gap {gap:.2f} m", ((a.x + b.x) / 2, (a.y + b.y) / 2), xytext=(0, -7),
-                        textcoords="offset points", ha="center", va="top", fontsize=7, color="#e65100",
-                        zorder=11, bbox=halo)
-        except KeyError:
-            pass
+def _draw_min_clearance(ax: "Axes", result: EpisodeResult) -> None:
+    """The moment of minimum clearance: the footprint then (red outline) and the segment from it
+    to the nearest obstacle, labelled on the free side."""
+    from matplotlib.patches import Polygon as MplPolygon
+    from shapely.ops import nearest_points
 
+    s, m = result.scenario, result.metrics
+    if not (math.isfinite(m.min_clearance) and m.min_clearance_obstacle):
+        return
+    p = _pose_at(result, m.min_clearance_time)
+    if p is None:
+        p = np.array([m.min_clearance_x, m.min_clearance_y, math.radians(s.mission.start.yaw)])
+    try:
+        obstacle = obstacle_polygon(s.obstacle(m.min_clearance_obstacle))
+    except KeyError:
+        return
+    footprint = footprint_polygon(s.robot.footprint, *p)
+    a, b = nearest_points(footprint, obstacle)
+    ax.plot([a.x, b.x], [a.y, b.y], color="#d50000", lw=2, zorder=10)
+    ax.plot([a.x], [a.y], marker="o", ms=5, color="#d50000", zorder=10)
+    ax.add_patch(MplPolygon(np.asarray(footprint.exterior.coords), closed=True,
+                            fill=False, ec="#d50000", lw=1.2, zorder=10))
+    # label on the free side: from the obstacle towards the robot
+    d = np.array([a.x - b.x, a.y - b.y])
+    d = d / np.linalg.norm(d) if np.linalg.norm(d) > 1e-9 else np.array([-0.7, 0.7])
+    ax.annotate(f"min clearance {m.min_clearance:.2f} m\n(t={m.min_clearance_time:.1f} s)",
+                (a.x, a.y), xytext=tuple(28 * d), textcoords="offset points", fontsize=7,
+                ha="right" if d[0] < 0 else "left", va="top" if d[1] < 0 else "bottom",
+                color="#d50000", zorder=11, bbox=_HALO,
+                arrowprops=dict(arrowstyle="-", color="#d50000", lw=0.6))
+
+
+def _draw_narrowest_gap(ax: "Axes", scenario: Any, metrics: Any) -> None:
+    """The narrowest gap between two obstacles: a double arrow with its width."""
+    from shapely.ops import nearest_points
+
+    gap, na, nb = _gap(scenario, metrics)
+    if not (math.isfinite(gap) and na and nb):
+        return
+    try:
+        a, b = nearest_points(obstacle_polygon(scenario.obstacle(na)), obstacle_polygon(scenario.obstacle(nb)))
+    except KeyError:
+        return
+    ax.annotate("", (a.x, a.y), (b.x, b.y), zorder=10,
+                arrowprops=dict(arrowstyle="<->", color="#ff6f00", lw=1.3, shrinkA=0, shrinkB=0))
+    ax.annotate(f"gap {gap:.2f} m", ((a.x + b.x) / 2, (a.y + b.y) / 2), xytext=(0, -7),
+                textcoords="offset points", ha="center", va="top", fontsize=7, color="#e65100",
+                zorder=11, bbox=_HALO)
+
+
+def _draw_events(ax: "Axes", result: EpisodeResult) -> None:
+    """Where the episode ended badly: the collision's contact point, the safety stop's pose."""
     if result.collision is not None:
         c = result.collision
         ax.plot(c.x, c.y, marker="X", ms=12, color="#b71c1c", mec="white", zorder=12, ls="none",
@@ -268,12 +346,16 @@ def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
             ax.plot(p[0], p[1], marker="8", ms=11, color="#ef6c00", mec="white", zorder=12, ls="none",
                     label=f"safety stop t={result.safety_stop.time:.1f} s")
 
+
+def _finish_axes(ax: "Axes", result: EpisodeResult, *, title: str | None, legend: bool) -> None:
+    """Limits around everything drawn, equal aspect, a grid in metres, labels, legend, title."""
+    from matplotlib.ticker import MultipleLocator
+
     x0, x1, y0, y1 = _extent(result)
     ax.set_xlim(x0, x1)
     ax.set_ylim(y0, y1)
     ax.set_aspect("equal", adjustable="box")
-    span = max(x1 - x0, y1 - y0)
-    major = _nice_step(span / 8.0)
+    major = _nice_step(max(x1 - x0, y1 - y0) / 8.0)
     ax.xaxis.set_major_locator(MultipleLocator(major))
     ax.yaxis.set_major_locator(MultipleLocator(major))
     ax.grid(True, which="major", color="#bdbdbd", lw=0.6, zorder=0)
@@ -285,7 +367,6 @@ def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
     outcome = result.outcome.value
     ax.set_title(title if title is not None else episode_title(result), fontsize=9,
                  color=OUTCOME_COLOURS.get(outcome, "black"))
-    return mapping
 
 
 def _nice_step(raw: float) -> float:

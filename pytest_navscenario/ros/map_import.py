@@ -191,12 +191,12 @@ def map_obstacles(path: str | Path) -> tuple[list[BoxObstacle], MapInfo, int]:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("map", help="map_server YAML (image, resolution, origin, thresholds, negate)")
-    p.add_argument("--start", required=True, help="start pose x,y,yaw (m, m, degrees) in the map frame")
-    p.add_argument("--goal", required=True, help="goal pose x,y,yaw (m, m, degrees)")
-    p.add_argument("-o", "--output", required=True, help="scenario YAML to write")
-    p.add_argument("--timeout", type=float, default=60.0, help="mission timeout, s (default 60)")
-    p.add_argument("--name", default="", help="scenario name (default: the output file's stem)")
+    p.add_argument("map", metavar="MAP.yaml", help="map_server YAML (image, resolution, origin, thresholds, negate)")
+    p.add_argument("--start", required=True, metavar="X,Y,YAW", help="start pose x,y,yaw (m, m, degrees) in the map frame")
+    p.add_argument("--goal", required=True, metavar="X,Y,YAW", help="goal pose x,y,yaw (m, m, degrees) in the map frame")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.yaml", help="scenario YAML to write")
+    p.add_argument("--timeout", type=float, default=60.0, metavar="SECONDS", help="mission timeout (default 60)")
+    p.add_argument("--name", default="", metavar="TEXT", help="scenario name (default: the output file's stem)")
     p.add_argument("--force", action="store_true", help="overwrite an existing output file")
 
 

@@ -14,6 +14,7 @@ number is expected.
 """
 from __future__ import annotations
 
+import codecs
 import difflib
 import math
 import numbers
@@ -451,6 +452,18 @@ def _check_name(ctx: _Ctx, name: str, field: str, line: int | None, *, file_name
                        field, line, "use letters, digits, '-', '_' and '.', without '/' or '\\'")
 
 
+def _check_family(ctx: _Ctx, family: str, line: int | None) -> None:
+    """A family is a name, or a relative folder path such as ``examples/scenarios`` (what the pytest
+    plugin names the families of two folders with the same name): each part a name, no climbing."""
+    _check_name(ctx, family, "family", line)
+    parts = family.split("/")
+    if "\\" in family or any(not p.strip() or p.strip() in (".", "..") for p in parts):
+        raise ctx.fail(f"{family!r} cannot be used: a family is a name or a relative folder path "
+                       f"(scenario names and families become file and folder names)", "family",
+                       line, "use names of letters, digits, '-', '_' and '.', separated by '/' "
+                             "(e.g. examples/scenarios), without '..' or '\\'")
+
+
 def _simulation(ctx: _Ctx, top: _Section) -> Simulation:
     sec = top.section("simulation", SIMULATION_KEYS, "the simulation settings (a mapping)")
     if sec is None:
@@ -648,7 +661,7 @@ def _build(root: YNode | None, ctx: _Ctx, name: str | None, family: str | None) 
         _check_name(ctx, scenario_name, "name", top.line_of("name"), file_name=True)
     scenario_family = top.string("family", family or "", nonempty=False)
     if scenario_family:
-        _check_name(ctx, scenario_family, "family", top.line_of("family"), file_name=True)
+        _check_family(ctx, scenario_family, top.line_of("family"))
     scenario = Scenario(
         version=int(version),
         name=scenario_name,
@@ -700,17 +713,33 @@ def scenario_from_dict(data: Mapping[str, Any], source: str | os.PathLike | None
     return _build(root, _Ctx(src), None, None)
 
 
+_BOMS = ((codecs.BOM_UTF32_LE, "utf-32"), (codecs.BOM_UTF32_BE, "utf-32"), (codecs.BOM_UTF8, "utf-8-sig"),
+         (codecs.BOM_UTF16_LE, "utf-16"), (codecs.BOM_UTF16_BE, "utf-16"))   # UTF-32 LE before UTF-16 LE
+
+
+def text_codec(data: bytes) -> str:
+    """The codec of a scenario file's bytes: UTF-8, or UTF-16/32 when the file starts with their
+    byte-order mark (YAML allows all three); the codec consumes the mark."""
+    for bom, codec in _BOMS:
+        if data.startswith(bom):
+            return codec
+    return "utf-8"
+
+
 def _decode(data: bytes, source: str | None) -> str:
+    codec = text_codec(data)
     try:
-        return data.decode("utf-8-sig")
+        return data.decode(codec)
     except UnicodeDecodeError as exc:
-        line = data.count(b"\n", 0, exc.start) + 1
-        raise ScenarioError(f"not UTF-8 text: byte 0x{data[exc.start]:02x} cannot be decoded", path=source,
+        name = {"utf-8-sig": "UTF-8", "utf-8": "UTF-8"}.get(codec, codec.upper())
+        line = data.count(b"\n", 0, exc.start) + 1 if name == "UTF-8" else None
+        raise ScenarioError(f"not {name} text: byte 0x{data[exc.start]:02x} cannot be decoded", path=source,
                             line=line, hint="is this a binary file? save the scenario as UTF-8 text") from None
 
 
-def load_scenario(path: str | os.PathLike) -> Scenario:
-    """Load a scenario file; its name defaults to the file stem, its family to the folder name."""
+def load_scenario(path: str | os.PathLike, *, family: str | None = None) -> Scenario:
+    """Load a scenario file; its name defaults to the file stem, its family to ``family`` (by
+    default the folder's name) when the YAML has no ``family:``."""
     p = Path(path)
     src = os.fspath(path)
     limit = int(SCENARIO_LIMITS["max_file_bytes"])
@@ -730,7 +759,7 @@ def load_scenario(path: str | os.PathLike) -> Scenario:
         raise ScenarioError(f"the file is larger than the limit of {limit} bytes", path=src,
                             hint="scenario files are small; is this the right file?")
     text = _decode(data, src)
-    return loads_scenario(text, src, name=p.stem, family=p.absolute().parent.name)
+    return loads_scenario(text, src, name=p.stem, family=p.absolute().parent.name if family is None else family)
 
 
 def resolve_path(scenario: Scenario, relative: str | os.PathLike) -> Path:
@@ -750,7 +779,8 @@ def looks_like_scenario(text_or_mapping: str | bytes | Mapping[str, Any]) -> boo
     else:
         text = text_or_mapping
         if isinstance(text, (bytes, bytearray)):
-            text = bytes(text[:1_000_000]).decode("utf-8", errors="replace")
+            head = bytes(text[:1_000_000])
+            text = head.decode(text_codec(head), errors="replace")
         if not isinstance(text, str):
             return False
         keys = set(_TOP_KEY.findall(text))

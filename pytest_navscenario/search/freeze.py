@@ -1,6 +1,6 @@
 """Freezing search results: failures as ordinary scenario YAML, the search log, a JUnit file.
 
-Layout under the regressions folder (``--navsearch-out`` / ini ``nav_regressions_dir``)::
+Layout under the regressions folder (``--navsearch-out`` / ini ``navsearch_out``)::
 
     <out>/<seed name>/<seed name>-<content hash>.yaml   one per distinct (shrunk) failure
     <out>/<seed name>/search-log.jsonl                   every simulated candidate of the last search

@@ -29,6 +29,7 @@ import json
 import os
 import selectors
 import shlex
+import shutil
 import subprocess
 import threading
 import time
@@ -56,6 +57,8 @@ class ExternalProcess:
         self._stderr: collections.deque[str] = collections.deque(maxlen=STDERR_LINES)
         self._buffer = b""
         self.identity: dict[str, Any] = {}
+        self.timed_out = False                  # the last exchange ended by its deadline
+        self.reset_timeout_message: str | None = None   # set once a reset timed out: fail fast after
 
     # -- life cycle -------------------------------------------------------------------------
     def start(self) -> None:
@@ -119,6 +122,7 @@ class ExternalProcess:
         Ctrl-C) stops the process, so a late answer can never be read as the next tick's."""
         if not self.alive:
             self.start()
+        self.timed_out = False
         try:
             return self._exchange(message, timeout, what)
         except BaseException:
@@ -156,6 +160,7 @@ class ExternalProcess:
             while b"\n" not in self._buffer:
                 remaining = deadline - time.monotonic()
                 if remaining <= 0 or not sel.select(remaining):
+                    self.timed_out = True
                     self.stop(grace=0.2)
                     raise PlannerProtocolError(
                         f"external planner did not answer {what} within {timeout:g} s "
@@ -196,6 +201,18 @@ def _shutdown_all() -> None:
 atexit.register(_shutdown_all)
 
 
+def check_start(planner: Any, keep_running: bool) -> None:
+    """Start an external planner's program once (SubjectLoadError if it cannot start: missing
+    interpreter, bad format, ...), so that this is found at session start, not item by item.
+    ``keep_running``: leave it up for the episodes of this process (else stop it again)."""
+    process = getattr(planner, "process", None)
+    if not isinstance(process, ExternalProcess) or process.alive:
+        return
+    process.start()
+    if not keep_running:
+        process.stop(grace=0.5)
+
+
 class ExternalPlanner:
     """Planner-protocol adapter around a shared ExternalProcess (one per command line).
 
@@ -203,19 +220,30 @@ class ExternalPlanner:
     external planner is held to the same limit as an in-process one (also outside the main
     thread, where no alarm signal is available)."""
 
-    def __init__(self, process: ExternalProcess, tick_timeout: float = DEFAULT_TICK_TIMEOUT):
+    def __init__(self, process: ExternalProcess, tick_timeout: float = DEFAULT_TICK_TIMEOUT,
+                 reset_timeout: float = RESET_TIMEOUT):
         self.process = process
         self.tick_timeout = tick_timeout
+        self.reset_timeout = reset_timeout      # run_scenario sets it from --nav-reset-timeout
         self.name = "exec:" + shlex.join(process.argv)
         self.version: str | None = None
 
     def reset(self, scenario: Scenario) -> None:
         from ..scenario.dump import scenario_to_dict
 
-        reply = self.process.request(
-            {"type": "reset", "protocol": PROTOCOL, "version": PROTOCOL_VERSION,
-             "scenario": scenario_to_dict(scenario)},
-            RESET_TIMEOUT, "reset")
+        if self.process.reset_timeout_message is not None:   # one slow start-up, not one per item
+            raise PlannerProtocolError(
+                f"{self.process.reset_timeout_message} [not retried: an earlier reset of this planner "
+                f"timed out; give it longer with --nav-reset-timeout / ini nav_reset_timeout]")
+        try:
+            reply = self.process.request(
+                {"type": "reset", "protocol": PROTOCOL, "version": PROTOCOL_VERSION,
+                 "scenario": scenario_to_dict(scenario)},
+                self.reset_timeout, "reset")
+        except PlannerProtocolError as exc:
+            if self.process.timed_out:
+                self.process.reset_timeout_message = str(exc)
+            raise
         if reply.get("type") != "ready":
             raise PlannerProtocolError(f"external planner answered reset with {reply.get('type')!r}, expected 'ready'")
         if reply.get("name"):
@@ -248,12 +276,15 @@ def exec_factory(command: str, *, cwd: str | None = None,
     if not argv:
         raise SubjectLoadError("subject 'exec:' names no program: write exec:PATH [ARGS...], e.g. exec:./my_planner")
     exe = argv[0]
-    if os.sep in exe and not os.path.isabs(exe):
-        exe_path = os.path.join(cwd or os.getcwd(), exe)
+    if os.sep in exe:
+        exe_path = exe if os.path.isabs(exe) else os.path.join(cwd or os.getcwd(), exe)
         if not os.path.exists(exe_path):
             raise SubjectLoadError(f"subject 'exec:{command}': no such program {exe_path!r}")
-        if not os.access(exe_path, os.X_OK):
+        if os.path.isdir(exe_path) or not os.access(exe_path, os.X_OK):
             raise SubjectLoadError(f"subject 'exec:{command}': {exe_path!r} is not executable (chmod +x it)")
+    elif shutil.which(exe) is None:
+        raise SubjectLoadError(f"subject 'exec:{command}': no such program {exe!r} on PATH "
+                               f"(give its path, e.g. exec:./{exe}, or install it)")
     key = (cwd or "", *argv)
 
     def factory() -> ExternalPlanner:

@@ -8,6 +8,7 @@ import importlib
 from typing import Any
 
 from ..core.errors import SubjectLoadError
+from ..core.interrupts import from_the_user
 from .protocol import PlannerFactory
 
 
@@ -80,7 +81,9 @@ def make_planner(planner: Any = None) -> tuple[Any, str]:
             f"with reset() and act(); got {type(planner).__name__} {planner!r:.60}")
     try:
         instance = factory()
-    except Exception as exc:
+    except (Exception, SystemExit, KeyboardInterrupt) as exc:
+        if not isinstance(exc, Exception) and from_the_user(exc):   # a real Ctrl-C stops the run
+            raise
         raise SubjectLoadError(f"subject {spec!r}: calling it to make a planner raised "
                                f"{type(exc).__name__}: {exc}") from exc
     missing = [m for m in ("reset", "act") if not callable(getattr(instance, m, None))]

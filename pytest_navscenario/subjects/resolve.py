@@ -48,10 +48,14 @@ class Subject:
         """A fresh planner instance."""
         return self.factory()
 
-    def check(self) -> None:
-        """Load the subject and make one planner; SubjectLoadError if it breaks the protocol."""
+    def check(self, keep_running: bool = True) -> None:
+        """Load the subject and make one planner; SubjectLoadError if it breaks the protocol.
+        An external (exec:) planner's program is started, so one that cannot start is found now;
+        ``keep_running`` leaves it up for this process's episodes (False when workers run them)."""
+        from .external import check_start
         from .loading import make_planner
-        make_planner(self.runner_arg)
+        planner, _ = make_planner(self.runner_arg)
+        check_start(planner, keep_running)
 
 
 def resolve_subject(config: pytest.Config, spec: str | None, origin: str) -> Subject:

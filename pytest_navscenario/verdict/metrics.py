@@ -8,14 +8,18 @@ samples unless said otherwise; NaN means "not defined for this episode"):
   position. Coarse bounds from the robot centre prune pairs, the exact box-box distance is
   computed for the rest (see paths.py). A reported collision overrides it with 0 at the hit.
 * min_obstacle_gap: narrowest obstacle-obstacle gap of the scenario (paths.min_obstacle_gap).
-* path_length: sum of the steps of the centre; shortest_path_length: paths.shortest_path;
-  path_efficiency = shortest / (driven + still to go), where "still to go" is the straight
-  distance to the goal point when the run ended inside the goal tolerance (stopping short of
-  the exact point costs nothing), else the shortest collision-free path from the last position
-  through the waypoints not yet passed to the goal (1 = optimal; below 1 for detours and for
-  runs that ended early; NaN if the robot did not move; above 1 only if the robot cut closer
-  to obstacles than half its width, or ended where the footprint cannot stand);
-  max/mean_deviation: distance of each pose to the shortest-path polyline.
+* path_length: sum of the steps of the centre; shortest_path_length: paths.reference_path, the
+  shortest collision-free path from the start through each waypoint's tolerance disc (a
+  waypoint counts as passed anywhere within mission.waypoint_tolerance, as in the simulation)
+  to the goal point; path_efficiency = shortest / (driven + still to go), where "still to go"
+  is the straight distance to the goal point when the run ended inside the goal tolerance
+  (stopping short of the exact point costs nothing), else the shortest collision-free path
+  from the last position through the waypoints not yet passed to the goal (1 = optimal; below
+  1 for detours and for runs that ended early; NaN if the robot did not move; above 1 only if
+  the robot cut closer to obstacles than half its width, or by at most ~0.5 % of the waypoint
+  tolerance where the reference touches a disc's rim at a sample next to the exact optimum);
+  max/mean_deviation: distance of each pose to the exact shortest-path polyline (through the
+  waypoints' exact points).
 * duration, mean_speed = path_length / duration, goal position error (m) and goal yaw error
   (degrees, wrapped to [0, 180]) of the last pose.
 * smoothness: mean |jerk| (m/s^3) of the planar motion, from the measured velocity turned
@@ -42,6 +46,7 @@ from .paths import (
     min_obstacle_gap,
     obstacle_shapes,
     path_through,
+    reference_path,
     shortest_path,
 )
 from ..sim.trajectory import Collision, Trajectory
@@ -72,7 +77,8 @@ def compute_metrics(scenario: Scenario, trajectory: Trajectory, *,
 
     path_length = float(np.sqrt(np.diff(xy[:, 0]) ** 2 + np.diff(xy[:, 1]) ** 2).sum()) if len(xy) > 1 else 0.0
     sp = shortest_path(scenario)
-    shortest = sp.length if sp is not None else NAN
+    ref = reference_path(scenario)   # through the waypoints' tolerance discs (= sp without waypoints)
+    shortest = ref.length if ref is not None else NAN
     goal = scenario.mission.goal
     goal_err = math.hypot(pose[-1, 0] - goal.x, pose[-1, 1] - goal.y) if len(pose) else NAN
     efficiency = (shortest / (path_length + remaining_length(scenario, trajectory, xy))

@@ -302,24 +302,36 @@ def _plan(stops: np.ndarray, obstacles: Sequence[Obstacle], r: float) -> Shortes
     if not obstacles:
         return _make_path(stops)
     g = _grow(obstacles, r)
-    k, mmax = g.offsets.shape
-
-    def inside(points: np.ndarray) -> np.ndarray:  # (n, k): strictly inside polygon j
-        proj = np.einsum("kmc,nc->nkm", g.normals, points)
-        return (proj < g.offsets[None] - 1e-7).all(axis=2)
-
-    if inside(stops).any():
+    if _inside(stops, g).any():
         return None
     if _segments_free(stops[:-1], stops[1:], g).all():    # nothing in the way: straight legs
         return _make_path(stops)
-    # nodes: the mission stops, then the polygon vertices not buried inside another polygon
+    nodes, adj = _graph(stops, g)
+    route = [0]
+    for leg in range(len(stops) - 1):
+        hops = _astar(adj, nodes, leg, leg + 1)
+        if hops is None:
+            return None
+        route.extend(hops[1:])
+    return _make_path(nodes[route])
+
+
+def _inside(points: np.ndarray, g: _Grown) -> np.ndarray:
+    """(n, k): point i strictly inside grown polygon j."""
+    proj = np.einsum("kmc,nc->nkm", g.normals, points)
+    return (proj < g.offsets[None] - 1e-7).all(axis=2)
+
+
+def _graph(stops: np.ndarray, g: _Grown) -> tuple[np.ndarray, list[list[tuple[int, float]]]]:
+    """The reduced visibility graph: nodes (``stops`` first, in order, then the polygon vertices
+    not buried inside another polygon) and each node's (neighbour, distance) list."""
+    k, mmax = g.offsets.shape
     valid = np.arange(mmax)[None, :] < g.sizes[:, None]
     owner = np.broadcast_to(np.arange(k)[:, None], valid.shape)[valid]
     allv = g.verts[valid]
-    buried = inside(allv)
+    buried = _inside(allv, g)
     buried[np.arange(len(allv)), owner] = False
     keep = ~buried.any(axis=1)
-    ns = len(stops)
     nodes = np.concatenate([stops, allv[keep]])
     prev = np.concatenate([stops, g.prev[valid][keep]])
     after = np.concatenate([stops, g.after[valid][keep]])
@@ -333,21 +345,134 @@ def _plan(stops: np.ndarray, obstacles: Sequence[Obstacle], r: float) -> Shortes
     scale = np.sqrt((ea * ea).sum(1) * (eb * eb).sum(1))[:, None]
     tangent = fa * fb >= -1e-12 * scale * d2
     i, j = np.nonzero(np.triu(tangent & tangent.T, 1))
-    p, q = nodes[i], nodes[j]
-    free = _segments_free(p, q, g)
+    free = _segments_free(nodes[i], nodes[j], g)
     i, j = i[free], j[free]
     length = np.sqrt(d2[i, j])
     adj: list[list[tuple[int, float]]] = [[] for _ in range(len(nodes))]
     for a, b, w in zip(i.tolist(), j.tolist(), length.tolist()):
         adj[a].append((b, w))
         adj[b].append((a, w))
-    route = [0]
-    for leg in range(ns - 1):
-        hops = _astar(adj, nodes, leg, leg + 1)
-        if hops is None:
-            return None
-        route.extend(hops[1:])
-    return _make_path(nodes[route])
+    return nodes, adj
+
+
+# --------------------------------------------------------------------------------------------
+# Paths through tolerance discs: the waypoints count as passed anywhere within their tolerance.
+
+DISC_SAMPLES = 32   # points on a tolerance disc's rim (plus its centre) a path may touch
+
+
+def path_through_discs(scenario: Scenario, discs: Sequence[tuple[float, float, float]],
+                       inflation: float | None = None) -> tuple[ShortestPath | None, int]:
+    """Shortest collision-free path from the first disc's centre touching every following disc
+    (x, y, radius) in order; ``(path or None, number of discs reached in order)``. A disc is
+    touched at its centre or at one of ``DISC_SAMPLES`` points on its rim (a path through the
+    exact touch point of the optimum is at most r (1 - cos(pi / 32)), 0.5 % of r, longer).
+    ``inflation``: obstacle growth (default: the footprint's, as for shortest_path). Cached."""
+    r = inflation_radius(scenario.robot.footprint) if inflation is None else inflation
+    discs = tuple((float(x), float(y), max(float(t), 0.0)) for x, y, t in discs)
+    key = ("discs", r, discs, tuple(scenario.obstacles))
+    try:
+        return _PATH_CACHE[key]
+    except KeyError:
+        pass
+    result = _plan_discs(discs, scenario.obstacles, r)
+    _remember(_PATH_CACHE, key, result)
+    return result
+
+
+def _disc_points(discs: Sequence[tuple[float, float, float]]) -> tuple[np.ndarray, np.ndarray]:
+    """Candidate points of each disc (centre, the disc's point nearest the line between its
+    neighbours' centres -- exact where a straight leg crosses the disc --, then rim samples)
+    and the disc index of each."""
+    ang = np.arange(DISC_SAMPLES) * (2 * math.pi / DISC_SAMPLES)
+    pts, which = [], []
+    for d, (x, y, t) in enumerate(discs):
+        ring = [(x, y)] + ([] if t <= 0 else list(zip(x + t * np.cos(ang), y + t * np.sin(ang))))
+        if t > 0 and 0 < d < len(discs) - 1:
+            ring.append(_nearest_in_disc((x, y, t), discs[d - 1][:2], discs[d + 1][:2]))
+        pts.extend(ring)
+        which.extend([d] * len(ring))
+    return np.array(pts, dtype=float).reshape(-1, 2), np.array(which)
+
+
+def _nearest_in_disc(disc: tuple[float, float, float], a: tuple[float, float],
+                     b: tuple[float, float]) -> tuple[float, float]:
+    """The point of the disc nearest to the segment a-b (on the segment if it crosses the disc)."""
+    x, y, t = disc
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    u = max(0.0, min(1.0, ((x - a[0]) * dx + (y - a[1]) * dy) / ((dx * dx + dy * dy) or 1.0)))
+    px, py = a[0] + u * dx, a[1] + u * dy
+    dist = math.hypot(px - x, py - y)
+    if dist <= t:
+        return px, py
+    return x + (px - x) * t / dist, y + (py - y) * t / dist
+
+
+def _plan_discs(discs: Sequence[tuple[float, float, float]], obstacles: Sequence[Obstacle],
+                r: float) -> tuple[ShortestPath | None, int]:
+    pts, which = _disc_points(discs)
+    if obstacles:
+        g = _grow(obstacles, r)
+        ok = ~_inside(pts, g).any(axis=1)
+        pts, which = pts[ok], which[ok]
+        if not len(pts) or which[0] != 0:
+            return None, 0
+        nodes, adj = _graph(pts, g)
+    else:
+        nodes = pts
+        dist = np.hypot(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))
+        adj = [[(j, float(dist[i, j])) for j in range(len(pts)) if j != i] for i in range(len(pts))]
+    return _layered_dijkstra(nodes, adj, which, len(discs))
+
+
+def _layered_dijkstra(nodes: np.ndarray, adj: list[list[tuple[int, float]]], which: np.ndarray,
+                      n_discs: int) -> tuple[ShortestPath | None, int]:
+    """Dijkstra over (node, next disc to touch): at a candidate of that disc the state moves on
+    to the next disc at no cost. Starts at node 0 (disc 0 touched)."""
+    disc_of = which.tolist() + [-1] * (len(nodes) - len(which))
+    start = (0, 1)
+    cost = {start: 0.0}
+    back: dict[tuple[int, int], tuple[int, int]] = {}
+    heap = [(0.0, 0, 1)]
+    best_layer = 1
+    while heap:
+        du, u, layer = heapq.heappop(heap)
+        if du > cost.get((u, layer), math.inf):
+            continue
+        if disc_of[u] == layer:      # touching the disc this state is heading for
+            nxt = (u, layer + 1)
+            if du < cost.get(nxt, math.inf):
+                cost[nxt], back[nxt] = du, (u, layer)
+                heapq.heappush(heap, (du, u, layer + 1))
+            continue
+        best_layer = max(best_layer, layer)
+        if layer == n_discs:
+            points = [u]
+            state = (u, layer)
+            while state in back:
+                state = back[state]
+                if state[0] != points[-1]:
+                    points.append(state[0])
+            return _make_path(nodes[points[::-1]]), n_discs
+        for v, w in adj[u]:
+            nd = du + w
+            if nd < cost.get((v, layer), math.inf):
+                cost[(v, layer)], back[(v, layer)] = nd, (u, layer)
+                heapq.heappush(heap, (nd, v, layer))
+    return None, best_layer
+
+
+def reference_path(scenario: Scenario) -> ShortestPath | None:
+    """The yardstick of path efficiency: the shortest collision-free path from the start through
+    each waypoint's tolerance disc (a waypoint counts as passed anywhere within
+    ``mission.waypoint_tolerance``, as in the simulation) to the goal point. Without waypoints
+    it is shortest_path. Cached."""
+    m = scenario.mission
+    if not m.waypoints or m.waypoint_tolerance <= 0:
+        return shortest_path(scenario)
+    discs = [(m.start.x, m.start.y, 0.0), *((w.x, w.y, m.waypoint_tolerance) for w in m.waypoints),
+             (m.goal.x, m.goal.y, 0.0)]
+    return path_through_discs(scenario, discs)[0]
 
 
 def _segments_free(p: np.ndarray, q: np.ndarray, g: _Grown) -> np.ndarray:

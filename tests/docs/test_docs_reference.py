@@ -76,7 +76,7 @@ def test_every_registered_option_has_help_and_an_ini_twin(plugin_registers):
 def test_option_reference_shows_defaults_and_escapes_markdown(reference):
     text = reference.pytest_options_markdown()
     assert "### `--nav-subject=SPEC` { #nav_subject }" in text
-    assert "### `--nav-bag=failed|all|none` { #nav_bag }" in text
+    assert "### `--nav-bag={failed,all,none}` { #nav_bag }" in text
     block = text.split("{ #nav_bag_format }", 1)[1].split("###", 1)[0]
     assert "default: `mcap`" in block and "ini: `nav_bag_format`" in block
     block = text.split("{ #navsearch }", 1)[1].split("###", 1)[0]

@@ -99,13 +99,18 @@ def test_summary_counts_rates_and_metrics():
 
 def test_interrupted_run_still_writes_the_results_of_what_ran(pytester, monkeypatch):
     monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
+    # A real Ctrl-C (SIGINT to this process) while the planner runs; since issue 15 a planner that
+    # raises KeyboardInterrupt itself only ends its episode (tests/plugin/test_planner_exit.py).
     pytester.makepyfile(stopper="""
+        import os, signal, time
+
         class Stopper:
             def reset(self, scenario):
                 self.stop = scenario.name == "b"
             def act(self, obs):
                 if self.stop:
-                    raise KeyboardInterrupt
+                    os.kill(os.getpid(), signal.SIGINT)
+                    time.sleep(5)
                 return 1.0, 0.0, 0.0
     """)
     pytester.syspathinsert()

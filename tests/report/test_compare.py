@@ -98,7 +98,7 @@ def test_disjoint_sets_and_changed_scenario_are_reported_not_paired(files, capsy
     assert [u.nodeid for u in cmp.not_comparable] == ["scenarios/boxes/b1.yaml::b1"]
     assert "scenario changed between the runs" in cmp.not_comparable[0].reason
     assert len(cmp.only_a) == 4 and [u.nodeid for u in cmp.only_b] == ["scenarios/boxes/new.yaml::new"]
-    assert main(["compare", str(a), str(b), "--fail-on-regression"]) == 0
+    assert main(["compare", str(a), str(b), "--fail-on-regression"]) == 1   # nothing compared: no pass
     out = capsys.readouterr().out
     assert "not comparable (1):" in out and "only in A" in out and "only in B" in out
     assert "could be paired" in out and "nothing to compare" in out
@@ -145,6 +145,8 @@ def test_junit_one_case_per_scenario_failing_on_regressions(files, tmp_path):
     skipped = [c.get("name") for c in cases if c.find("skipped") is not None]
     assert failed == ["scenarios/boxes/b1.yaml::b1"] and skipped == ["scenarios/boxes/extra.yaml::extra"]
     assert "--nav-subject=new" in ET.tostring(cases[0], encoding="unicode")
+    suite_el = ET.parse(out).getroot().find(".//testsuite")
+    assert suite_el.get("name") == "navscenario compare: dwa -> dwa, new"   # A -> B (B mixes two subjects)
 
 
 def test_side_by_side_reruns_regressions_with_both_subjects(tmp_path, capsys):
@@ -189,6 +191,8 @@ def test_html_comparison_report(files, tmp_path):
     assert 'id="comparison"' in page and "B broke (A passed, B failed) (1)" in page
     assert page.count("data:image/png;base64,") == 1       # the bar chart
     assert "pytest scenarios/boxes/b1.yaml::b1 --nav-subject=new" in page
+    # the comparison is A (baseline) -> B (candidate): the title says it in that order
+    assert "<title>navscenario compare: dwa → dwa, new</title>" in page and "new vs dwa" not in page
 
 
 def test_subject_errors_get_their_own_column():
@@ -198,3 +202,32 @@ def test_subject_errors_get_their_own_column():
     header = next(line for line in format_comparison(cmp).splitlines() if line.startswith("family"))
     assert header.split()[2:7] == ["success", "safety-stop", "timeout", "collision", "error"]
     assert "error" not in format_comparison(compare_records(suite(BASE), suite(BASE))).split("\n\n")[1]
+
+
+@pytest.mark.parametrize("case, why", [
+    ("b-empty", "B ({b}) has no records"),
+    ("disjoint", "A and B share no scenario"),
+    ("a-empty", "A ({a}) has no records"),
+    ("all-changed", "the 5 scenario run(s) A and B share changed between the runs"),
+])
+def test_nothing_compared_fails_the_gate_and_says_why(files, capsys, case, why):
+    """A candidate run that crashed before writing results (B empty), or a run of another suite,
+    must not pass the CI gate: nothing compared is not 'no regression'."""
+    a_recs, b_recs = suite(BASE), suite(BASE, subject="new")
+    if case == "b-empty":
+        b_recs = []
+    elif case == "a-empty":
+        a_recs = []
+    elif case == "disjoint":
+        b_recs = [rec("scenarios/other/x.yaml::x", "success")]
+    else:  # every shared scenario changed its layout: not comparable
+        b_recs = [dict(r, scenario_hash="other") for r in b_recs]
+    a, b = files(a_recs, b_recs)
+    assert main(["compare", str(a), str(b), "--fail-on-regression"]) == 1
+    captured = capsys.readouterr()
+    assert "nothing to compare" in captured.out
+    err = captured.err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("navscenario compare: FAILED the gate: nothing was compared: ")
+    assert why.format(a=a, b=b) in err[0]
+    assert main(["compare", str(a), str(b)]) == 0          # without the gate: report only
+    assert "navscenario compare: warning: nothing was compared: " in capsys.readouterr().err

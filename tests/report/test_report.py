@@ -49,6 +49,7 @@ import sys
 def pytest_unconfigure(config):
     if not hasattr(config, "workerinput"):
         print("MATPLOTLIB-IMPORTED:", "matplotlib" in sys.modules)
+        print("JINJA2-IMPORTED:", "jinja2" in sys.modules)
 '''
 
 OK = "version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 2, y: 0}, timeout: 10}\n"
@@ -122,6 +123,7 @@ def test_regression_gate_fails_the_session(runs):
     assert "reproduce: pytest scenarios/crash.yaml::crash --nav-subject=straight:Straight --nav-seed=0" in out
     assert "only in A (" in out and "scenarios/gone.yaml::gone" in out
     assert "MATPLOTLIB-IMPORTED: True" in out
+    assert "JINJA2-IMPORTED: True" in out
     assert "1 side-by-side plot(s) of regressions (baseline | this run)" in out
     # the "baseline" re-run is the same straight planner: it crashes too, and the run says so
     assert ("scenarios/crash.yaml::crash: the baseline's subject 'straight:Straight' re-run gave collision, "
@@ -142,6 +144,7 @@ def test_default_passing_run_does_not_import_matplotlib(runs):
     code, out, root = runs["pass"]
     assert code == 0, out
     assert "MATPLOTLIB-IMPORTED: False" in out
+    assert "JINJA2-IMPORTED: False" in out           # the templates are loaded only to write a report
     assert not list(root.rglob("*.png"))
 
 
@@ -167,6 +170,10 @@ def test_html_report_is_self_contained_with_one_entry_per_failure(runs):
     assert "HTML report written to" in out
     assert page.count('<section class="failure"') == 1
     assert 'data-outcome="collision"' in page and 'data-family="scenarios"' in page
+    # crash is marked xfail: an expected failure, shown apart, not counted as a failure
+    assert "<h2>Failures (0)</h2>" in page and "<h2>Expected failures (xfail) (1)</h2>" in page
+    assert "expected to fail (xfail): known to crash" in page
+    assert "2 scenario run(s): 1 success, 1 collision (1 expected to fail: xfail)" in page
     assert page.count("data:image/png;base64,") == 3         # the failure's plot, side by side, bar chart
     assert "The same scenario under the baseline and now:" in page
     assert not re.search(r"(src|href)=\"(https?:)?//", page)  # nothing fetched from a server
@@ -225,3 +232,73 @@ def test_gate_exit_status_with_pytester(pytester: pytest.Pytester, monkeypatch, 
     assert result.ret == status
     result.assert_outcomes(passed=1, xfailed=1)
     result.stdout.fnmatch_lines(["*B broke (regressions: A passed, B failed) (1):*"])
+
+
+@pytest.mark.parametrize("mode, status", [("fail", pytest.ExitCode.TESTS_FAILED), ("warn", pytest.ExitCode.OK)])
+def test_gate_fails_when_the_run_ran_none_of_the_baselines_scenarios(pytester: pytest.Pytester, monkeypatch,
+                                                                     mode, status):
+    """--nav-baseline whose scenarios this run did not run (another suite, a selection that
+    missed them): nothing was compared, which is no evidence of no regression."""
+    monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
+    pytester.syspathinsert()
+    pytester.makepyfile(straight=PLANNER)
+    pytester.mkdir("scenarios")
+    (pytester.path / "scenarios" / "ok.yaml").write_text(OK)
+    write_results(pytester.path / "base.jsonl", [record(pytester.path, "scenarios/gone.yaml", "success"),
+                                                 record(pytester.path, "scenarios/other.yaml", "success")])
+    result = pytester.runpytest_inprocess("-p", "pytest_navscenario.plugin", "scenarios", SUBJECT,
+                                          "--nav-baseline=base.jsonl", f"--nav-baseline-mode={mode}",
+                                          "--nav-plots=none")
+    assert result.ret == status
+    result.assert_outcomes(passed=1)
+    verdict = "FAILED the regression gate" if mode == "fail" else "warning"
+    result.stdout.fnmatch_lines([f"navscenario: {verdict}: nothing was compared with the baseline: this run "
+                                 f"ran none of its 2 scenario run(s) (1 run now, not in it)*"])
+
+
+def test_gate_fails_on_an_empty_baseline(pytester: pytest.Pytester, monkeypatch):
+    monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
+    pytester.syspathinsert()
+    pytester.makepyfile(straight=PLANNER)
+    pytester.mkdir("scenarios")
+    (pytester.path / "scenarios" / "ok.yaml").write_text(OK)
+    (pytester.path / "base.jsonl").write_text("")
+    result = pytester.runpytest_inprocess("-p", "pytest_navscenario.plugin", "scenarios", SUBJECT,
+                                          "--nav-baseline=base.jsonl", "--nav-plots=none")
+    assert result.ret == pytest.ExitCode.TESTS_FAILED
+    result.stdout.fnmatch_lines(["navscenario: FAILED the regression gate: nothing was compared with the "
+                                 "baseline: the baseline * has no records*"])
+
+
+def test_html_counts_expected_failures_apart(tmp_path):
+    from pytest_navscenario.report.html import Entry, write_html
+
+    def rec(nodeid, outcome):
+        return {"nodeid": nodeid, "family": "f", "outcome": outcome, "message": outcome, "metrics": {},
+                "repeat": 0, "seed": 1, "subject": "x"}
+    entries = [Entry(rec("a", "collision")), Entry(rec("b", "timeout"), xfail_reason="known <slow>"),
+               Entry(rec("c", "success"))]
+    page = write_html(tmp_path / "r.html", entries).read_text()
+    assert "<h2>Failures (1)</h2>" in page and "<h2>Expected failures (xfail) (1)</h2>" in page
+    assert "3 scenario run(s): 1 success, 1 timeout, 1 collision (1 expected to fail: xfail)" in page
+    failures, expected = page.split("<h2>Expected failures (xfail)")
+    assert 'data-nodeid="a"' in failures and 'data-nodeid="b"' not in failures
+    assert 'data-nodeid="b"' in expected and "expected to fail (xfail): known &lt;slow&gt;" in expected
+    assert '<a href="#f-' in page.split('id="runs"')[1].split("</table>")[0]   # both linked from the table
+    plain = write_html(tmp_path / "p.html", entries[:1]).read_text()
+    assert "Expected failures" not in plain and "expected to fail" not in plain
+
+
+def test_expected_failures_apart_under_xdist(pytester: pytest.Pytester, monkeypatch):
+    """xdist workers send the report with its xfail mark: the controller's page still knows."""
+    monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
+    pytester.makepyfile(straight=PLANNER)
+    pytester.mkdir("scenarios")
+    (pytester.path / "scenarios" / "ok.yaml").write_text(OK)
+    (pytester.path / "scenarios" / "crash.yaml").write_text(CRASH)
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(pytester.path), os.environ.get("PYTHONPATH", "")]))
+    result = pytester.runpytest_subprocess("-p", "pytest_navscenario.plugin", "-p", "xdist.plugin", "-n", "2",
+                                           "scenarios", SUBJECT, "--nav-html=r.html")
+    assert result.ret == pytest.ExitCode.OK
+    page = (pytester.path / "r.html").read_text()
+    assert "<h2>Failures (0)</h2>" in page and "<h2>Expected failures (xfail) (1)</h2>" in page

@@ -226,3 +226,18 @@ def test_dwa_escapes_the_corner_of_a_jittered_l_corridor_where_plain_dwa_stalls(
     result = run_scenario(jittered, DynamicWindowPlanner())
     assert result.outcome is Outcome.SUCCESS, result.message
     assert result.metrics.min_clearance > 0.15
+
+
+def test_a_factory_that_calls_sys_exit_is_a_load_error_not_the_end_of_the_run():
+    """Issue 15 item 2: sys.exit() in a planner's constructor is a SubjectLoadError."""
+    import sys as _sys
+
+    from pytest_navscenario.core.errors import SubjectLoadError
+    from pytest_navscenario.subjects.loading import make_planner
+
+    class Quits:
+        def __init__(self):
+            _sys.exit("no licence")
+
+    with pytest.raises(SubjectLoadError, match="raised SystemExit: no licence"):
+        make_planner(Quits)

@@ -267,7 +267,22 @@ class DynamicWindowPlanner:
 
     # -- one tick -------------------------------------------------------------------------
     def act(self, obs: Observation) -> Command:
-        p = require_reset(self._p, "DynamicWindowPlanner")
+        """One tick: the dynamic window, each candidate's clearance, the point to aim at, the
+        candidates' scores, the choice."""
+        require_reset(self._p, "DynamicWindowPlanner")
+        win = self._dynamic_window(obs)
+        terms = self._terms[:, :win.n]                  # rows: distance to target, heading error,
+        clear = terms[2]                                # clearance (one weighted sum in _score)
+        points = self._clearance(win, obs.ranges, clear)
+        routed, tx, ty = self._aim(obs, points)
+        score = self._score(obs, win, terms, tx, ty)
+        best = self._choose(win, score, clear, routed)
+        self._idx = win.cand[best]
+        return win.commands[best]
+
+    def _dynamic_window(self, obs: Observation) -> _Window:
+        """The candidates the robot can reach within one tick from its current command (on the
+        first tick: the grid command closest to the measured velocity)."""
         t = self._t
         if self._beams_shape != obs.angles.shape:
             self._beams(obs.angles)
@@ -275,34 +290,36 @@ class DynamicWindowPlanner:
             v = obs.velocity
             self._idx = tuple(int(np.argmin(np.abs(grid - float(value))))
                               for grid, value in zip((t.vx, t.vy, t.wz), v))
-        win = t.window(self._idx)
+        return t.window(self._idx)
+
+    def _clearance(self, win: _Window, r: np.ndarray, clear: np.ndarray) -> np.ndarray | None:
+        """Fill ``clear`` with each candidate's clearance: its footprint at every rollout pose
+        against the lidar points within reach (capped at ``clearance_cap``). Returns those
+        points as [px, py, 1] columns in the robot frame, or None when none is within reach."""
+        p, t = self._p, self._t
         n, steps = win.n, self.steps
-
-        # Clearance: footprint at every rollout pose vs the lidar points within reach.
-        r = obs.ranges
         near = (r < min(win.reach, p.range_max * 0.999)).nonzero()[0]
-        terms = self._terms[:, :n]                      # rows: distance to target, heading error,
-        clear = terms[2]                                # clearance (one weighted sum below)
-        points = None
-        if near.size:
-            np.multiply(self._unit, r, out=self._points[:2])
-            P = self._points[:, near]                       # (3, m) [px, py, 1], robot frame
-            points = P
-            E = win.rot3 @ P                                # (n * steps * 2, m): local x, y
-            np.abs(E, out=E)
-            E -= win.half
-            np.maximum(E, 0.0, out=E)
-            np.square(E, out=E)
-            E = E.reshape(n * steps, 2, -1)
-            d2 = (E[:, 0] + E[:, 1]).reshape(n, -1)         # squared footprint-point distances
-            np.minimum.reduce(d2, axis=1, out=clear)
-            np.sqrt(clear, out=clear)
-            clear -= t.radius + self._inflation
-            np.minimum(clear, t.cap, out=clear)
-        else:
+        if not near.size:
             clear.fill(t.cap)
+            return None
+        np.multiply(self._unit, r, out=self._points[:2])
+        P = self._points[:, near]                       # (3, m) [px, py, 1], robot frame
+        E = win.rot3 @ P                                # (n * steps * 2, m): local x, y
+        np.abs(E, out=E)
+        E -= win.half
+        np.maximum(E, 0.0, out=E)
+        np.square(E, out=E)
+        E = E.reshape(n * steps, 2, -1)
+        d2 = (E[:, 0] + E[:, 1]).reshape(n, -1)         # squared footprint-point distances
+        np.minimum.reduce(d2, axis=1, out=clear)
+        np.sqrt(clear, out=clear)
+        clear -= t.radius + self._inflation
+        np.minimum(clear, t.cap, out=clear)
+        return P
 
-        # Score: progress towards the target, heading, clearance, speed, turning.
+    def _aim(self, obs: Observation, points: np.ndarray | None) -> tuple[bool, float, float]:
+        """(routed, tx, ty): the point to aim at in the robot frame: the next waypoint or the
+        goal, a point along the grid route when stalled, or a detour around a blocked lane."""
         target = obs.waypoints[0] if len(obs.waypoints) else obs.goal
         pose = obs.pose
         dx, dy = float(target[0]) - float(pose[0]), float(target[1]) - float(pose[1])
@@ -310,32 +327,22 @@ class DynamicWindowPlanner:
         tx, ty = c * dx + s * dy, -s * dx + c * dy       # target in the robot frame
         routed = False
         if self.stall_time > 0:
-            routed, tx, ty = self._route(obs, r, c, s, dx, dy, tx, ty)
+            routed, tx, ty = self._route(obs, obs.ranges, c, s, dx, dy, tx, ty)
         if not routed and points is not None and self.lookahead > 0:
             tx, ty = self._subgoal(tx, ty, points)
+        return routed, tx, ty
+
+    def _score(self, obs: Observation, win: _Window, terms: np.ndarray, tx: float,
+               ty: float) -> np.ndarray:
+        """Each candidate's score: progress towards (tx, ty), heading, clearance, speed and
+        turning, weighted; -inf for the candidates that come too close (not admissible)."""
+        p = self._p
         d0sq = tx * tx + ty * ty
         d0 = math.sqrt(d0sq)
         v = self._target_vec
         v[0], v[1], v[3] = tx, ty, d0sq
         q = win.score_rows @ v
-        nk = n * steps
-        wp = self._weights[0]
-        dist, heading_err = terms[0], terms[1]
-        if self._in_goal_phase(obs, d0):
-            want = float(wrap_angle(p.goal_yaw - float(pose[2])))
-            np.abs(wrap_angle(want - win.stop_yaw), out=heading_err)
-            np.hypot(q[nk:nk + n], q[nk + n:], out=dist)    # distance from the end pose
-            k_dist = -wp / max(p.goal_tolerance, 1e-6)
-        else:
-            # closest approach along the rollout: driving past a near target is fine
-            np.minimum.reduce(q[:nk].reshape(n, steps), axis=1, out=dist)
-            np.sqrt(np.maximum(dist, 0.0, out=dist), out=dist)
-            np.arctan2(q[nk + n:], q[nk:nk + n], out=heading_err)   # at the end pose
-            np.abs(heading_err, out=heading_err)
-            # a rollout that reaches the target is not penalised for ending past it
-            reach_tol = 0.5 * (p.waypoint_tolerance if len(obs.waypoints) else p.goal_tolerance)
-            heading_err[dist < reach_tol] = 0.0
-            k_dist = -wp / (p.max_speed * self.horizon)
+        k_dist = self._distance_and_heading(obs, win, q, d0, terms[0], terms[1])
         # heading linear in the angle, as in Fox et al.
         w = self._term_weights
         w[0] = k_dist
@@ -347,7 +354,37 @@ class DynamicWindowPlanner:
             w[1] = -self.weights[1] / math.pi
         score = w @ terms
         score += win.static
-        score[clear < self._min_clear] = -np.inf        # not admissible: too close
+        score[terms[2] < self._min_clear] = -np.inf     # not admissible: too close
+        return score
+
+    def _distance_and_heading(self, obs: Observation, win: _Window, q: np.ndarray, d0: float,
+                              dist: np.ndarray, heading_err: np.ndarray) -> float:
+        """Fill ``dist`` (to the target) and ``heading_err`` per candidate from ``q`` (see
+        ``_Window.score_rows``); return the distance term's weight. In the goal phase: the end
+        pose's distance and the braking yaw's error to the goal yaw; otherwise the closest
+        approach along the rollout and the end pose's bearing to the target."""
+        p = self._p
+        n, steps = win.n, self.steps
+        nk = n * steps
+        wp = self._weights[0]
+        if self._in_goal_phase(obs, d0):
+            want = float(wrap_angle(p.goal_yaw - float(obs.pose[2])))
+            np.abs(wrap_angle(want - win.stop_yaw), out=heading_err)
+            np.hypot(q[nk:nk + n], q[nk + n:], out=dist)    # distance from the end pose
+            return -wp / max(p.goal_tolerance, 1e-6)
+        # closest approach along the rollout: driving past a near target is fine
+        np.minimum.reduce(q[:nk].reshape(n, steps), axis=1, out=dist)
+        np.sqrt(np.maximum(dist, 0.0, out=dist), out=dist)
+        np.arctan2(q[nk + n:], q[nk:nk + n], out=heading_err)   # at the end pose
+        np.abs(heading_err, out=heading_err)
+        # a rollout that reaches the target is not penalised for ending past it
+        reach_tol = 0.5 * (p.waypoint_tolerance if len(obs.waypoints) else p.goal_tolerance)
+        heading_err[dist < reach_tol] = 0.0
+        return -wp / (p.max_speed * self.horizon)
+
+    def _choose(self, win: _Window, score: np.ndarray, clear: np.ndarray, routed: bool) -> int:
+        """The best admissible candidate; while stalled, the best one that moves; when none is
+        admissible, the hardest brake, then (standing) the one with the most room."""
         best = int(score.argmax())
         if routed and win.still[best] and score[best] > -np.inf:
             # stuck: standing still is the local minimum itself, so take the best move
@@ -361,8 +398,7 @@ class DynamicWindowPlanner:
             best = int(np.lexsort((-clear, win.speed))[0])
             if win.still[best] and win.still[win.cand.index(self._idx)]:
                 best = int(np.lexsort((win.speed, -clear))[0])
-        self._idx = win.cand[best]
-        return win.commands[best]
+        return best
 
     def _route(self, obs: Observation, r: np.ndarray, c: float, s: float, dx: float, dy: float,
                tx: float, ty: float) -> tuple[bool, float, float]:

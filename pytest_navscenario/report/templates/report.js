@@ -1,0 +1,34 @@
+function cellValue(row, i, type){var c=row.cells[i];var v=c.getAttribute('data-v');if(v===null)v=c.textContent;
+ if(type==='num'){var f=parseFloat(v);return isNaN(f)?Infinity:f;}return v.toLowerCase();}
+document.querySelectorAll('table.sortable th').forEach(function(th,i){th.addEventListener('click',function(){
+ var table=th.closest('table'),tbody=table.tBodies[0],type=th.getAttribute('data-type');
+ var asc=th.getAttribute('data-asc')!=='1';table.querySelectorAll('th').forEach(function(h){h.removeAttribute('data-asc');});
+ if(asc)th.setAttribute('data-asc','1');
+ var rows=Array.prototype.slice.call(tbody.rows);rows.sort(function(a,b){var x=cellValue(a,i,type),y=cellValue(b,i,type);
+  return (x<y?-1:x>y?1:0)*(asc?1:-1);});rows.forEach(function(r){tbody.appendChild(r);});});});
+function navViewer(box){
+ var d=JSON.parse(box.querySelector('script.nav-view').textContent);
+ var cv=box.querySelector('canvas'),ctx=cv.getContext('2d'),sl=box.querySelector('input'),lab=box.querySelector('.t');
+ var xs=d.x.concat([d.goal[0]]),ys=d.y.concat([d.goal[1]]);
+ d.obs.forEach(function(p){p.forEach(function(q){xs.push(q[0]);ys.push(q[1]);});});
+ var x0=Math.min.apply(null,xs)-1,x1=Math.max.apply(null,xs)+1,y0=Math.min.apply(null,ys)-1,y1=Math.max.apply(null,ys)+1;
+ var s=Math.min(cv.width/(x1-x0),cv.height/(y1-y0));
+ function X(x){return (x-x0)*s;} function Y(y){return cv.height-(y-y0)*s;}
+ function poly(p){ctx.beginPath();p.forEach(function(q,i){if(i)ctx.lineTo(X(q[0]),Y(q[1]));else ctx.moveTo(X(q[0]),Y(q[1]));});ctx.closePath();}
+ function robot(i){var c=Math.cos(d.yaw[i]),n=Math.sin(d.yaw[i]),l=d.fp.length/2,w=d.fp.width/2;
+  if(d.fp.shape==='circle'){ctx.beginPath();ctx.arc(X(d.x[i]),Y(d.y[i]),d.fp.radius*s,0,2*Math.PI);return;}
+  poly([[l,w],[-l,w],[-l,-w],[l,-w]].map(function(q){return [d.x[i]+c*q[0]-n*q[1],d.y[i]+n*q[0]+c*q[1]];}));}
+ function draw(i){ctx.clearRect(0,0,cv.width,cv.height);ctx.fillStyle='#9e9e9e';
+  d.obs.forEach(function(p){poly(p);ctx.fill();});
+  ctx.strokeStyle='#2e7d32';ctx.beginPath();ctx.arc(X(d.goal[0]),Y(d.goal[1]),Math.max(3,d.goal[2]*s),0,2*Math.PI);ctx.stroke();
+  ctx.lineWidth=2;for(var k=1;k<d.x.length;k++){var f=Math.min(1,d.v[k]/d.vmax);
+   ctx.strokeStyle='hsl('+Math.round(260-200*f)+',75%,'+(k<=i?45:80)+'%)';ctx.beginPath();
+   ctx.moveTo(X(d.x[k-1]),Y(d.y[k-1]));ctx.lineTo(X(d.x[k]),Y(d.y[k]));ctx.stroke();}
+  ctx.strokeStyle='#d50000';robot(i);ctx.stroke();ctx.lineWidth=1;
+  lab.textContent='t = '+d.t[i].toFixed(2)+' s, speed '+d.v[i].toFixed(2)+' m/s (drag to replay)';}
+ sl.max=String(d.x.length-1);sl.value=sl.max;sl.addEventListener('input',function(){draw(+sl.value);});draw(d.x.length-1);}
+document.querySelectorAll('.viewer').forEach(navViewer);
+function sortFailures(key){var box=document.getElementById('failures');
+ var items=Array.prototype.slice.call(box.querySelectorAll('section.failure'));
+ items.sort(function(a,b){var x=a.dataset[key]+'\u0000'+a.dataset.nodeid,y=b.dataset[key]+'\u0000'+b.dataset.nodeid;
+  return x<y?-1:x>y?1:0;});items.forEach(function(s){box.appendChild(s);});}
