@@ -49,7 +49,7 @@ def main() -> None:
     cpu, wall = timed(lambda: scenario_from_bag(TB3), args.repeats)
     seed = scenario_from_bag(TB3)
     print(f"from-bag {TB3.name} ({TB3.stat().st_size / 1e6:.1f} MB): {cpu:.2f} s CPU "
-          f"({wall:.2f} s wall), median of {args.repeats}; {seed.notes[1]}")
+          f"({wall:.2f} s wall), median of {args.repeats}; {next(n for n in seed.notes if ' returns -> ' in n)}")
 
     tmp = Path(tempfile.mkdtemp(prefix="bench_bags."))
     try:

@@ -31,7 +31,9 @@ import numpy as np
 from pytest_navscenario.scenario.loader import load_scenario
 from pytest_navscenario.subjects.loading import make_planner
 from pytest_navscenario.harness.runner import run_scenario
-from pytest_navscenario.sim.episode import LIDAR_HEIGHT, compiled_world, lidar_angles, simulate, steps_per_tick
+from pytest_navscenario.sim.episode import simulate
+from pytest_navscenario.sim.lidar import lidar_angles
+from pytest_navscenario.sim.world import LIDAR_HEIGHT, compiled_world, steps_per_tick
 
 PLANNERS = ("dwa", "potential-field")
 

@@ -55,9 +55,11 @@ DESCRIPTIONS: dict[str, str] = {
                "B = candidate): the scenarios B broke and fixed and the metric changes, per family; "
                "optionally as JUnit XML, a bar chart, an HTML report and side-by-side re-runs. With "
                "--fail-on-regression the exit status is 1 when B fails a scenario A passed.",
-    "from-bag": "Build a seed scenario from a recorded ROS 1 or ROS 2 bag: start and goal from the "
-                "odometry, the driven path as waypoints or a reference trajectory, obstacles fitted "
-                "to the laser scans.",
+    "from-bag": "Build a seed scenario from a recorded ROS 1 or ROS 2 bag: poses in the map frame "
+                "when the bag has a localiser's map -> odom (else the odometry frame), the goal the "
+                "robot was sent (else the last pose), obstacles fitted to the laser scans or 3D point "
+                "clouds, the driven path as waypoints or a reference trajectory; --list-events lists "
+                "the moments that went wrong and --at cuts the seed around one.",
     "from-map": "Build a seed scenario from a map_server occupancy grid (the map YAML and the image "
                 "beside it): occupied cells become box obstacles; start and goal are poses in the "
                 "map frame, e.g. --start -2.25,3,90.",

@@ -30,12 +30,12 @@ class PlannerExit(Exception):
 
 
 def _on_sigint(signum: int, frame: Any) -> None:
-    raise UserInterrupt()
+    raise UserInterrupt("interrupted by Ctrl-C (SIGINT)")
 
 
 def _on_sigterm(signum: int, frame: Any) -> None:
     signal.signal(signal.SIGTERM, signal.SIG_DFL)  # a second SIGTERM kills at once
-    raise UserInterrupt("SIGTERM")
+    raise UserInterrupt("interrupted by SIGTERM")
 
 
 def install(sigterm: bool = True) -> Callable[[], None] | None:

@@ -11,17 +11,11 @@ Ray is optional (``pip install "pytest-navscenario[ray]"``) and imported only by
 """
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from ..core.lazy import lazy_exports
 
-_EXPORTS = {"EpisodeJob": "jobs", "run_job": "jobs", "Pending": "jobs",
-            "SubjectFactory": "jobs", "SerialExecutor": "local", "ProcessExecutor": "local", "make_local_executor": "local",
+_EXPORTS = {"EpisodeJob": "jobs", "run_job": "jobs", "Pending": "jobs", "SubjectFactory": "jobs",
+            "SerialExecutor": "local", "ProcessExecutor": "local", "make_local_executor": "local",
             "RayExecutor": "on_ray", "RaySetupError": "on_ray"}
 __all__ = sorted(_EXPORTS)
 
-
-def __getattr__(name: str) -> Any:
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(importlib.import_module(f".{module}", __name__), name)
+__getattr__ = lazy_exports(__name__, _EXPORTS)

@@ -161,7 +161,8 @@ def check_planner(planner: Any, scenario: Scenario | None = None, *, ticks: int 
     stopped and reported (None: no limit). Never raises for a broken planner (see
     ``raise_if_failed``); raises SubjectLoadError only when the spec cannot be loaded.
     """
-    from ..sim.episode import simulate, validate_command
+    from ..sim.command import validate_command
+    from ..sim.episode import simulate
 
     scenario = scenario or default_check_scenario()
     instance, factory, label = _make(planner)

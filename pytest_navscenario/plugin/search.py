@@ -25,9 +25,9 @@ from .options import ini_type, ini_value
 DEFAULT_BUDGET = 100
 DEFAULT_SHRINK_BUDGET = 40
 DEFAULT_OUT = "scenarios/regressions"
+DEFAULT_STUCK_AFTER = 20.0
 STRATEGY_NAMES = ("evolve", "random", "hillclimb")   # = search.engine.STRATEGIES (not imported: plugin load stays light)
 OLD_OUT_INI = "nav_regressions_dir"     # the old name of the ini option navsearch_out, still read
-DEFAULT_STUCK_AFTER = 20.0
 
 # (option, dest / ini name, metavar, help)
 OPTIONS = (
@@ -67,7 +67,8 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     for opt, dest, metavar, text in OPTIONS:
         kwargs: dict[str, Any] = {"action": "append"} if dest == "navsearch" else {}
         group.addoption(opt, dest=dest, default=None, metavar=metavar, help=f"{text} [ini: {dest}]", **kwargs)
-        kind = "args" if dest == "navsearch" else ini_type("int") if dest in _INT_OPTIONS else "string"
+        kind = ("args" if dest == "navsearch" else ini_type("int") if dest in _INT_OPTIONS
+                else ini_type("float") if dest == "navsearch_stuck_after" else "string")
         parser.addini(dest, text, type=kind,
                       default=[] if dest == "navsearch" else "")
 

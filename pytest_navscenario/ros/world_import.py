@@ -1,10 +1,8 @@
 """``navscenario import``: other tools' worlds as scenarios.
 
-* ``navscenario import aerialist test.yaml -o s.yaml``: an Aerialist test definition. Its
-  ``simulation.obstacles`` come in two encodings, both read: a list of
-  ``{size: {l, w, h}, position: {x, y, z, r}}`` mappings, or a flat list
-  ``[l, w, h, x, y, z, r, ...]`` (seven numbers per box). Boxes are centred on their position,
-  ``r`` is the yaw in degrees (our YAML unit too, so it is copied unchanged).
+* ``navscenario import aerialist test.yaml -o s.yaml``: an Aerialist test definition: its
+  obstacles, and start, goal and waypoints from the QGroundControl mission file beside it
+  (see ``aerialist.py``); every key not carried over is listed with its file and line.
 * ``navscenario import sdf world.world --start x,y,yaw --goal x,y,yaw -o s.yaml``: a Gazebo SDF
   world. The box and cylinder collision geometry of static models becomes obstacles, with the
   model, link and collision poses composed (a world ``<state>`` pose overrides the model's,
@@ -23,9 +21,9 @@ import tempfile
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 from ..core.errors import NavScenarioError
+from .aerialist import aerialist_obstacles, mission_from_plan, read_aerialist  # noqa: F401 (re-exported)
 from ..scenario.model import BoxObstacle, CylinderObstacle, Mission, Obstacle, Pose, Scenario
 
 
@@ -91,93 +89,6 @@ def parse_pose(text: str, option: str) -> Pose:
 
 def _num(v: float, nd: int = 4) -> float:
     return float(round(float(v), nd)) + 0.0
-
-
-# ------------------------------------------------------------------ Aerialist
-
-def aerialist_obstacles(path: str | Path) -> list[BoxObstacle]:
-    """The boxes of an Aerialist test YAML (both encodings); errors name file, line and field."""
-    import yaml
-
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise WorldImportError(f"{path}: no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise WorldImportError(f"{path}: cannot read: {exc}") from None
-    try:
-        node = yaml.compose(text)
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f":{mark.line + 1}" if mark else ""
-        raise WorldImportError(f"{path}{where}: not valid YAML ({getattr(exc, 'problem', exc)})") from None
-
-    def line_of(*keys: Any) -> str:
-        cur = node
-        for key in keys:
-            if isinstance(cur, yaml.MappingNode):
-                cur = next((v for k, v in cur.value if k.value == key), None)
-            elif isinstance(cur, yaml.SequenceNode) and isinstance(key, int) and key < len(cur.value):
-                cur = cur.value[key]
-            else:
-                cur = None
-            if cur is None:
-                return ""
-        return f":{cur.start_mark.line + 1}"
-
-    if not isinstance(data, dict) or not isinstance(data.get("simulation"), dict):
-        raise WorldImportError(f"{path}: not an Aerialist test: no 'simulation' mapping "
-                           f"(expected simulation.obstacles)")
-    obstacles = data["simulation"].get("obstacles")
-    if obstacles is None:
-        return []
-    if not isinstance(obstacles, list):
-        raise WorldImportError(f"{path}{line_of('simulation', 'obstacles')}: simulation.obstacles must be a list")
-    boxes: list[BoxObstacle] = []
-
-    def number(value: Any, field_name: str, *keys: Any) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise WorldImportError(f"{path}{line_of(*keys)}: {field_name}: expected a number, got {value!r}"
-                               + (" (a template placeholder?)" if isinstance(value, str) else ""))
-        return float(value)
-
-    if obstacles and not isinstance(obstacles[0], dict):
-        if len(obstacles) % 7:
-            raise WorldImportError(f"{path}{line_of('simulation', 'obstacles')}: simulation.obstacles as a flat list "
-                               f"needs 7 numbers per box (l,w,h,x,y,z,r), got {len(obstacles)} values")
-        for i in range(0, len(obstacles), 7):
-            vals = [number(v, f"simulation.obstacles[{i + j}]", "simulation", "obstacles", i + j)
-                    for j, v in enumerate(obstacles[i:i + 7])]
-            boxes.append(_aerialist_box(path, len(boxes), *vals))
-        return boxes
-    for i, ob in enumerate(obstacles):
-        keys = ("simulation", "obstacles", i)
-        if not isinstance(ob, dict) or not isinstance(ob.get("size"), dict) or not isinstance(ob.get("position"), dict):
-            raise WorldImportError(f"{path}{line_of(*keys)}: simulation.obstacles[{i}]: expected "
-                               f"{{size: {{l, w, h}}, position: {{x, y, z, r}}}}")
-        size, pos = ob["size"], ob["position"]
-        vals = []
-        for part, name in (("size", "l"), ("size", "w"), ("size", "h"), ("position", "x"),
-                           ("position", "y"), ("position", "z"), ("position", "r")):
-            src = size if part == "size" else pos
-            if name not in src:
-                if name in ("z", "r"):
-                    vals.append(0.0)
-                    continue
-                raise WorldImportError(f"{path}{line_of(*keys, part)}: simulation.obstacles[{i}].{part}.{name} is missing")
-            vals.append(number(src[name], f"simulation.obstacles[{i}].{part}.{name}", *keys, part, name))
-        boxes.append(_aerialist_box(path, i, *vals))
-    return boxes
-
-
-def _aerialist_box(path: Path, i: int, l: float, w: float, h: float, x: float, y: float, z: float,
-                   r: float) -> BoxObstacle:
-    if l <= 0 or w <= 0 or h <= 0:
-        raise WorldImportError(f"{path}: simulation.obstacles[{i}]: size must be > 0, got l={l} w={w} h={h}")
-    return BoxObstacle(name=f"box{i + 1}", x=_num(x), y=_num(y), length=_num(l), width=_num(w),
-                       yaw=_num(r), height=_num(h))
 
 
 # ------------------------------------------------------------------ SDF
@@ -312,8 +223,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("file", metavar="PATH", help="the file to import (test YAML or .world/.sdf)")
     p.add_argument("-o", "--output", required=True, metavar="OUT.yaml", help="scenario YAML to write")
     p.add_argument("--start", default=None, metavar="X,Y,YAW", help="start pose x,y,yaw (m, m, degrees); "
-                   "required for sdf, default 0,0,90 for aerialist (the paper's 10 m task)")
-    p.add_argument("--goal", default=None, metavar="X,Y,YAW", help="goal pose x,y,yaw (m, m, degrees); required for sdf, default 0,10,90 for aerialist")
+                   "required for sdf; for aerialist, default the home of the mission file (.plan) beside the test, "
+                   "else 0,0,90 (the paper's 10 m task)")
+    p.add_argument("--goal", default=None, metavar="X,Y,YAW", help="goal pose x,y,yaw (m, m, degrees); required for "
+                   "sdf; for aerialist, default the mission file's last position, else 0,10,90")
     p.add_argument("--timeout", type=float, default=30.0, metavar="SECONDS", help="mission timeout (default 30)")
     p.add_argument("--name", default="", metavar="TEXT", help="scenario name (default: the output file's stem)")
     p.add_argument("--force", action="store_true", help="overwrite an existing output file")
@@ -323,16 +236,12 @@ def run(args: argparse.Namespace) -> int:
     src = Path(args.file)
     notes: list[str] = []
     if args.format == "aerialist":
-        obstacles: list[Obstacle] = list(aerialist_obstacles(src))
-        start = parse_pose(args.start or "0,0,90", "--start")
-        goal = parse_pose(args.goal or "0,10,90", "--goal")
-        if not args.start or not args.goal:
-            notes.append("Aerialist missions are drone flight plans: using start/goal "
-                         f"{start.x},{start.y} -> {goal.x},{goal.y} (set --start/--goal)")
+        obstacles, start, goal, waypoints = _aerialist(args, src, notes)
     else:
         if not args.start or not args.goal:
             raise WorldImportError(f"{src}: an SDF world has no mission: pass --start x,y,yaw and --goal x,y,yaw")
         start, goal = parse_pose(args.start, "--start"), parse_pose(args.goal, "--goal")
+        waypoints = ()
         world = sdf_obstacles(src)
         obstacles = world.obstacles
         if world.ignored_planes:
@@ -342,7 +251,7 @@ def run(args: argparse.Namespace) -> int:
         if world.warnings:
             print(f"navscenario import: warning: {len(world.warnings)} element(s) of {src} not imported "
                   f"(listed above)", file=sys.stderr)
-    scenario = Scenario(mission=Mission(start=start, goal=goal, timeout=args.timeout),
+    scenario = Scenario(mission=Mission(start=start, goal=goal, waypoints=waypoints, timeout=args.timeout),
                         obstacles=tuple(obstacles), name=args.name,
                         description=f"Imported from {args.format} file {src.name}.")
     write_seed(scenario, args.output, force=args.force)
@@ -350,3 +259,51 @@ def run(args: argparse.Namespace) -> int:
         print(f"navscenario import: {note}")
     print(f"navscenario import: {len(obstacles)} obstacle(s) -> wrote {args.output}")
     return 0
+
+
+def _aerialist(args: argparse.Namespace, src: Path, notes: list[str]):
+    """Obstacles, start, goal and waypoints of an Aerialist test: the plan beside it gives the
+    mission unless --start/--goal are given; what is not carried over is warned about by line."""
+    from .qgc_plan import local_xy, read_plan
+
+    test = read_aerialist(src)
+    for line in test.dropped:
+        print(f"navscenario import: warning: {line}", file=sys.stderr)
+    if test.dropped:
+        print(f"navscenario import: warning: {len(test.dropped)} key(s) of {src} not carried over "
+              f"(listed above)", file=sys.stderr)
+    mission = None
+    if test.mission_file is not None and not (args.start and args.goal):
+        plan = read_plan(test.mission_file)
+        notes.extend(plan.notes)
+        lat, lon, _ = plan.home
+        home = (0.0, 0.0)
+        if test.home_position is not None:
+            home = local_xy(*test.home_position, lat, lon)
+            notes.append(f"start from simulation.home_position ({test.home_key.split(': ')[0]}): "
+                         f"x={home[0]:.2f}, y={home[1]:.2f} from the plan's home")
+        mission = mission_from_plan(plan.points, start=home)
+        if mission is None:
+            notes.append(f"{test.mission_file.name}: the mission has no position away from its home")
+        else:
+            notes.append(f"start, {len(mission[2])} waypoint(s) and goal from {test.mission_file} "
+                         f"(home {lat:.7f}, {lon:.7f} is x=0, y=0; x east, y north, metres)")
+    if test.home_position is not None and mission is None and not (args.start and args.goal):
+        print(f"navscenario import: warning: {test.home_key}: not carried over (a geographic position, and no "
+              f"mission plan to place it against)", file=sys.stderr)
+    if test.mission_key and test.mission_file is None:
+        print(f"navscenario import: warning: {test.mission_key}: the mission file is not beside the test "
+              f"(looked for it relative to {src.parent} and by its name there): using a default mission",
+              file=sys.stderr)
+    if mission is not None:
+        start, goal, waypoints = mission
+    else:
+        start, goal, waypoints = parse_pose("0,0,90", "--start"), parse_pose("0,10,90", "--goal"), ()
+    if args.start or args.goal:
+        start = parse_pose(args.start, "--start") if args.start else start
+        goal = parse_pose(args.goal, "--goal") if args.goal else goal
+        waypoints = () if (args.start and args.goal) else waypoints
+    elif mission is None:
+        notes.append("Aerialist missions are drone flight plans: using start/goal "
+                     f"{start.x},{start.y} -> {goal.x},{goal.y} (set --start/--goal)")
+    return list(test.obstacles), start, goal, waypoints

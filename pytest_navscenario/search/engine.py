@@ -256,6 +256,7 @@ def _search_loop(strategy: Any, sim: _Simulator, budget: int, on_result: Callabl
         sim.check_stop()
         proposals = strategy.ask(budget - report.sims_used)
         if not proposals:
+            report.stop_reason = report.stop_reason or "the strategy had no new candidate to propose"
             break
         results = []
         for cand in sim.run(proposals[: budget - report.sims_used], "search"):

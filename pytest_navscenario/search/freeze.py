@@ -96,7 +96,8 @@ def _where(cand: Any) -> str:
     if len(cand.signature) < 4:
         return ""
     quarters = ("first", "second", "third", "last")
-    return f", in the {quarters[cand.signature[3]]} quarter of the route"
+    return (f" (beside the {quarters[cand.signature[2]]} quarter of the route), robot stopped in the "
+            f"{quarters[cand.signature[3]]} quarter")
 
 
 def freeze_failures(report: SearchReport, space: SearchSpace, out_dir: str | Path, *,

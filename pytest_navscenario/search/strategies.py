@@ -141,7 +141,12 @@ class HillClimb:
             out = self._probe()
             if out:
                 return out[:room]
-        return [(uniform(self.space, self.rnd), "climb")] if room else []
+        while True:   # boxed in on every coordinate: a random restart (GaveUp ends a hopeless space)
+            offsets = uniform(self.space, self.rnd)
+            if self.admission.admit(offsets):
+                self.current, self.current_value = offsets, math.inf
+                self.climbs.append([])
+                return [(offsets, "climb")]
 
     def _probe(self) -> list[tuple[tuple[float, ...], str]]:
         group = self.groups[self.group]
@@ -240,10 +245,10 @@ class Evolve:
         if self.generation == 1 and self.admission.admit(self.space.zero()):
             out.append((self.space.zero(), "seed"))
         want = min(room, GENERATION)
-        for attempt in range(20):
-            if len(out) >= want:
-                break
+        attempt = 0
+        while len(out) < want:   # ends: the admission gives up (GaveUp) after too many misses
             out.extend(self._hypothesis_batch(want - len(out), attempt))
+            attempt += 1
         return out[:want]
 
     def _hypothesis_batch(self, n: int, attempt: int) -> list[tuple[tuple[float, ...], str]]:

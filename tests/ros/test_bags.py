@@ -172,9 +172,12 @@ def test_rewrite_replaces_and_failure_leaves_nothing(episodes, tmp_path):
 def test_round_trip_episode_bag_seed_recovers_obstacles(episodes, tmp_path, name):
     """Tolerance: every obstacle of the scenario is recovered as one obstacle of the same kind,
     centre within 0.05 m, radius / side lengths within 0.05 m, box yaw within 2 degrees (mod 90);
-    start and goal come from the first and last odometry pose (within 1 mm, 0.01 deg)."""
+    start comes from the first odometry pose, the driven path ends at the last (within 1 mm);
+    the goal is the recorded navigation goal on /goal_pose, i.e. the scenario's own (issue 17;
+    before, the last odometry pose was taken as the goal)."""
     result = episodes[name]
-    seed = scenario_from_bag(write_episode_bag(result, tmp_path / name)).scenario
+    imported = scenario_from_bag(write_episode_bag(result, tmp_path / name))
+    seed = imported.scenario
     original = result.scenario.obstacles
     assert len(seed.obstacles) == len(original), seed.obstacles
     for obs in original:
@@ -189,8 +192,11 @@ def test_round_trip_episode_bag_seed_recovers_obstacles(episodes, tmp_path, name
             assert min(abs(got.yaw - obs.yaw) % 90, 90 - abs(got.yaw - obs.yaw) % 90) < 2.0
     pose = result.trajectory.pose
     assert (seed.mission.start.x, seed.mission.start.y) == pytest.approx(tuple(pose[0, :2]), abs=1e-3)
-    assert (seed.mission.goal.x, seed.mission.goal.y) == pytest.approx(tuple(pose[-1, :2]), abs=1e-3)
-    assert seed.mission.goal.yaw == pytest.approx(math.degrees(pose[-1, 2]), abs=0.01)
+    assert tuple(imported.path[-1, 1:]) == pytest.approx(tuple(pose[-1, :2]), abs=1e-3)
+    goal = result.scenario.mission.goal
+    assert (seed.mission.goal.x, seed.mission.goal.y) == pytest.approx((goal.x, goal.y), abs=1e-3)
+    assert seed.mission.goal.yaw == pytest.approx(goal.yaw, abs=0.01)
+    assert any(n.startswith("goal from /goal_pose") for n in imported.notes)
 
 
 def test_hit_obstacle_is_red_and_the_event_is_in_the_result(episodes, tmp_path):

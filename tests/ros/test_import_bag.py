@@ -188,3 +188,24 @@ def test_laser_mount_from_tf_when_there_is_no_tf_static(tmp_path, capsys):
     assert len(long) == 1
     wall = long[0]
     assert abs(wall.yaw) < 0.5 and wall.y - wall.width / 2 == pytest.approx(2.0, abs=0.03)
+
+
+def test_a_cut_holds_only_its_own_scans():
+    """The first pass keeps the scans of the window (2 s wider each side), not the whole bag's:
+    a cut of a long bag needs memory for the cut."""
+    from pytest_navscenario.ros.bag_import.reading import _Collector, _scan_window, open_reader
+    from pytest_navscenario.ros.bag_import.topics import role
+
+    def collect(window):
+        with open_reader(TB3) as reader:
+            conns = [c for c in reader.connections if c.topic in ("/odom", "/scan")]
+            col = _Collector("/odom", "/scan", {c.topic: role(c.topic, c.msgtype) for c in conns}, window)
+            for conn, ns, raw in reader.messages(connections=conns):
+                col.take(conn.topic, reader.deserialize(raw, conn.msgtype), ns)
+        return col.scans
+
+    assert len(collect(_scan_window(None, None))) == 457
+    held = collect(_scan_window(None, None, at=40.0, window=10.0))
+    assert 50 <= len(held) <= 5 * 14 + 5            # 5 Hz scans over 30..40 s, +- 2 s
+    seed = scenario_from_bag(TB3, at=40.0, window=10.0)
+    assert seed.path[0, 0] == 0.0 and seed.path[-1, 0] == pytest.approx(10.0, abs=0.05)

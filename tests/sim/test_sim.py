@@ -1,16 +1,23 @@
 """The MuJoCo engine: real physics, real ray casting, scenarios built in code, tiny planners."""
 from __future__ import annotations
 
+import dataclasses
+import hashlib
 import math
+import platform
 import time
 
+import mujoco
 import numpy as np
 import pytest
 
 from pytest_navscenario.core.errors import SimulationDivergedError
-from pytest_navscenario.subjects.protocol import Command
+from pytest_navscenario.subjects.protocol import Command, Observation
 from pytest_navscenario.scenario.model import BoxObstacle, CylinderObstacle, Footprint, GoalTolerance, Lidar, Limits, Mission, Pose, Robot, Safety, Scenario, Simulation
-from pytest_navscenario.sim.episode import clear_model_cache, lidar_angles, model_xml, simulate, steps_per_tick, validate_command
+from pytest_navscenario.sim.command import validate_command
+from pytest_navscenario.sim.episode import simulate
+from pytest_navscenario.sim.lidar import lidar_angles
+from pytest_navscenario.sim.world import clear_model_cache, model_xml, steps_per_tick
 
 
 # ------------------------------------------------------------------ tiny test planners
@@ -152,6 +159,19 @@ def test_observation_content_and_read_only_arrays():
             arr[0] = 0.0
 
 
+def test_observations_are_whole_frozen_observations():
+    # the loop fills Observation's fields without its generated __init__ (a tick's worth of
+    # speed): it must still be exactly an Observation with every field, frozen
+    planner = GoTo()
+    simulate(scenario(waypoints=(Pose(3, 3),), timeout=0.2), planner, seed=0)
+    obs = planner.seen[-1]
+    assert type(obs) is Observation and not hasattr(Observation, "__post_init__")
+    assert list(vars(obs)) == [f.name for f in dataclasses.fields(Observation)]
+    assert obs.tick == 1 and obs.time == pytest.approx(0.1) and obs.target.tolist() == [3.0, 3.0]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        obs.tick = 5
+
+
 def test_the_beam_angles_shared_by_episodes_cannot_be_unlocked():
     # every episode of a lidar configuration hands out views of one read-only table: a planner
     # that unlocked it could change the angles of later episodes and recorded trajectories
@@ -268,6 +288,60 @@ def test_same_inputs_give_bit_identical_trajectories():
     assert first.collision == again.collision and first.end == again.end
 
 
+class Cautious(GoTo):
+    """GoTo, slowed down near whatever the lidar sees and turning a little: the lidar noise and
+    dropout reach its commands, and the safety layer sees yaw rates."""
+
+    def act(self, obs):
+        cmd = super().act(obs)
+        scale = min(1.0, float(obs.ranges.min()) / 2.0)
+        return Command(cmd.vx * scale, cmd.vy * scale, 0.3 * scale)
+
+
+def _digest(res) -> str:
+    traj = res.trajectory
+    h = hashlib.sha256()
+    for name in ("t", "pose", "velocity", "tick_t", "command", "ranges", "angles"):
+        h.update(getattr(traj, name).tobytes())
+    h.update(repr((traj.waypoint_times, res.end, res.ticks, res.collision, res.safety_stop)).encode())
+    return h.hexdigest()[:16]
+
+
+# Recorded with the code before and after the sim layer became an Episode object (the same bits);
+# MuJoCo's and numpy's float results can differ in the last bit between versions and CPUs, so
+# the pins hold for the environment they were recorded in. A change to the loop that changes them
+# changes every recorded trajectory: say so in the change, or find the bug.
+PINNED_ENV = ("4.0.0", "2.4", "x86_64")
+PINNED = {
+    "waypoints, noise, dropout, goal": "3de91d901a5a7f68",
+    "safety stop": "e2ab22233c4f6003",
+    "collision, safety off": "1f90a213a8287712",
+}
+
+
+def _pinned_episode(case):
+    boxes = [BoxObstacle("b", 2.0, 5.0, 1.0, 1.0, yaw=20.0), CylinderObstacle("c", -2.0, 7.0, 0.5)]
+    if case == "waypoints, noise, dropout, goal":
+        sc = scenario(boxes, waypoints=(Pose(-0.5, 3.0), Pose(0.0, 8.5)), seed=5,
+                      lidar=Lidar(noise_sigma=0.03, dropout=0.05))
+        return simulate(sc, Cautious(), seed=12345)
+    if case == "safety stop":
+        return simulate(scenario([WALL]), Cautious(gain=3.0), seed=0)
+    return simulate(scenario([WALL], safety=False, drive="diff"), Constant((1.0, 0.3, 0.1)), seed=0)
+
+
+@pytest.mark.parametrize("case", sorted(PINNED))
+def test_trajectories_keep_their_pinned_bits(case):
+    res = _pinned_episode(case)
+    assert res.end == {"waypoints, noise, dropout, goal": "goal", "safety stop": "safety-stop",
+                       "collision, safety off": "collision"}[case]
+    assert len(res.trajectory.waypoint_times) == (2 if res.end == "goal" else 0)
+    env = (mujoco.__version__, ".".join(np.__version__.split(".")[:2]), platform.machine())
+    if env != PINNED_ENV:
+        pytest.skip(f"digests pinned for MuJoCo, numpy, machine = {PINNED_ENV}, this is {env}")
+    assert _digest(res) == PINNED[case], "the episode's bits changed (see the note above PINNED)"
+
+
 # ------------------------------------------------------------------ the planner misbehaving
 
 class Bad:
@@ -301,7 +375,8 @@ def test_planner_mistakes_become_subject_failures_with_tick_and_time(answer, wor
     assert fail.tick == 3 and fail.time == pytest.approx(0.3)
     assert words in fail.message
     if isinstance(answer, Exception):
-        assert "in act" in fail.traceback and "_call_planner" not in fail.traceback
+        assert "in act" in fail.traceback and "call_planner" not in fail.traceback
+        assert "episode.py" not in fail.traceback   # the harness's frames are dropped
     else:
         assert "Command(vx, vy, wz)" in fail.message or "shape (3,)" in fail.message
 
@@ -372,3 +447,19 @@ def test_a_graze_between_two_ticks_is_caught_by_the_per_step_contact_check():
                    Constant((0.5, -0.5, 0.0)), 0)
     assert hit.end == "collision" and hit.collision.obstacle == "pin"
     assert hit.collision.time == pytest.approx(free.trajectory.t[overlap][0])
+
+
+def test_every_name_of_the_old_flat_sim_module_still_resolves():
+    # before 0.2, pytest_navscenario.sim was one module; user code importing its public names from
+    # pytest_navscenario.sim keeps working through the package's lazy exports
+    import pytest_navscenario.sim as sim
+
+    old = ("FORCE_HEADROOM", "LIDAR_HEIGHT", "MODEL_CACHE_SIZE", "ROBOT_HEIGHT", "ROBOT_MASS", "STILL",
+           "SimResult", "TRACKING_TAU", "TWO_PI", "World", "build_spec", "clear_model_cache",
+           "compiled_world", "lidar_angles", "model_xml", "simulate", "steps_per_tick",
+           "validate_command", "wrap_angle")
+    for name in old:
+        assert getattr(sim, name) is not None, name
+    assert sim.simulate is simulate and sim.lidar_angles is lidar_angles
+    with pytest.raises(AttributeError, match="see its modules episode, world, lidar"):
+        sim.no_such_name  # noqa: B018

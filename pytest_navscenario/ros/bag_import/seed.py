@@ -1,0 +1,228 @@
+"""Building the seed: start, goal, driven path, limits, lidar and robot from what was read and fitted."""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ...scenario.model import (
+    CylinderObstacle,
+    Footprint,
+    GoalTolerance,
+    Lidar,
+    Limits,
+    Mission,
+    Obstacle,
+    Pose,
+    Reference,
+    Robot,
+    Scenario,
+)
+from .clouds import CloudSettings, grid_clouds
+from .footprint import footprint_from_bag, inner_radius
+from .frames import to_world_frame
+from .goal import choose_goal
+from .known_map import not_on_map
+from .mount import choose_mount
+from .obstacles import FitSettings, _r, fit_obstacles, occupied_clusters
+from .projection import grid_returns
+from .reading import PATH_AS, BagData, BagImportError, read_bag
+
+
+def _peak_rates(od: np.ndarray, window: float = 0.5) -> tuple[float, float]:
+    """98th-percentile speed (m/s) and yaw rate (rad/s) over ``window``-second steps (odometry
+    jitter makes per-message differences useless for limits)."""
+    if len(od) < 2 or od[-1, 0] - od[0, 0] <= 0:
+        return 0.0, 0.0
+    t = np.arange(od[0, 0], od[-1, 0], window / 5)
+    if len(t) < 6:
+        return 0.0, 0.0
+    x, y = np.interp(t, od[:, 0], od[:, 1]), np.interp(t, od[:, 0], od[:, 2])
+    yaw = np.interp(t, od[:, 0], np.unwrap(od[:, 3]))
+    speed = np.hypot(x[5:] - x[:-5], y[5:] - y[:-5]) / window
+    rate = np.abs(yaw[5:] - yaw[:-5]) / window
+    return float(np.percentile(speed, 98)), float(np.percentile(rate, 98))
+
+
+@dataclass
+class BagSeed:
+    """The importer's result: the scenario, the driven path (t, x, y) and what to tell the user."""
+    scenario: Scenario
+    path: np.ndarray
+    notes: list[str]
+    mount: tuple[float, float, float] | None = None
+
+
+def decimate_path(xy: np.ndarray, tolerance: float = 0.15, min_spacing: float = 0.5) -> np.ndarray:
+    """Waypoints that follow the driven path within ``tolerance`` (Douglas-Peucker), no two
+    closer than ``min_spacing``; excludes the first and last point (start and goal)."""
+    from shapely.geometry import LineString
+    if len(xy) < 3:
+        return np.zeros((0, 2))
+    simple = np.asarray(LineString(xy).simplify(tolerance, preserve_topology=False).coords)
+    pts = [simple[0]]
+    for p in simple[1:-1]:
+        if np.hypot(*(p - pts[-1])) >= min_spacing:
+            pts.append(p)
+    inner = np.asarray(pts[1:])
+    if len(inner) and np.hypot(*(inner[-1] - simple[-1])) < min_spacing:
+        inner = inner[:-1]
+    return inner.reshape(-1, 2)
+
+
+def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_topic: str | None = None,
+                      start: float | None = None, end: float | None = None,
+                      laser_pose: tuple[float, float, float] | None = None,
+                      path_as: str = "waypoints", reference_file: str | None = None,
+                      name: str = "", robot_radius: float | None = None,
+                      settings: FitSettings = FitSettings(), frame: str = "auto", map_frame: str = "map",
+                      pose_topic: str | None = None, cloud_topic: str | None = None,
+                      cloud: CloudSettings = CloudSettings(), goal_topic: str | None = None,
+                      at: float | None = None, window: float = 30.0) -> BagSeed:
+    """Build a seed scenario from a bag (see the package docstring). ``laser_pose`` is x, y (m),
+    yaw (degrees) of the laser in the robot's base frame; ``robot_radius`` the seed's circular
+    footprint (m; default: from the bag's URDF or Nav2 footprint, else 0.15 m); ``reference_file`` is the CSV name
+    written into ``scenario.reference`` when ``path_as`` is ``"reference"`` or ``"both"``
+    (waypoints to drive the loop and the reference to measure how closely the run replays it).
+    ``at``: cut the ``window`` seconds before this moment instead of ``start``..``end``.
+    ``frame``: "auto" (the map frame when the bag has ``map -> odom`` or a pose topic in it, else
+    the odometry frame), "map" or "odom"."""
+    if robot_radius is not None and not (math.isfinite(robot_radius) and 0 < robot_radius <= 5):
+        raise BagImportError(f"--robot-radius must be a length in (0, 5] m, got {robot_radius}")
+    if path_as not in PATH_AS:
+        raise BagImportError(f"--path-as must be one of {', '.join(PATH_AS)}, got {path_as!r}")
+    if at is not None and (start is not None or end is not None):
+        raise BagImportError("--at cuts the window before a moment: give it without --start/--end")
+    data = read_bag(path, odom_topic=odom_topic, scan_topic=scan_topic, start=start, end=end,
+                    cloud_topic=cloud_topic, at=at, window=window)
+    corr = to_world_frame(data, frame, map_frame, pose_topic, data.full_odom)
+    goal, goal_note = choose_goal(data, corr, goal_topic)
+    fp, fp_how, fp_warnings = footprint_from_bag(data, robot_radius)
+    radius = inner_radius(fp)
+    notes = list(data.notes) + [goal_note] + [f"warning: {w}" for w in fp_warnings] + [f"footprint: {fp_how}"]
+    obstacles: list[Obstacle] = []
+    mount = None
+    if data.scan_topic is not None:
+        mount, how = choose_mount(data, laser_pose)
+        notes.append(f"laser {data.scan_frame} at x={mount[0]:.3f} y={mount[1]:.3f} "
+                     f"yaw={math.degrees(mount[2]):.1f} deg in {data.base_frame}, {how}")
+        obstacles = _obstacles_from_scans(data, mount, settings, notes)
+        notes += check_path_free(data, obstacles, radius, how)
+    elif data.cloud_topic is not None:
+        clouds = grid_clouds(data, laser_pose, dataclasses.replace(cloud, near=max(cloud.near, radius)), settings.res)
+        notes.extend(clouds.notes)
+        grid, how = clouds.grid, clouds.how
+        obstacles = _fit(data, grid, settings, notes, f"{data.cloud_count} clouds")
+        notes += check_path_free(data, obstacles, radius, how, data.cloud_topic)
+    if data.known_map is not None and obstacles:
+        notes.append(not_on_map(data.known_map, obstacles, data.frame)[1])
+    scenario, summary = _scenario(data, obstacles, path_as, reference_file, name, fp, goal)
+    notes.append(summary)
+    od = data.odom
+    path_rows = np.stack([od[:, 0] - od[0, 0], od[:, 1], od[:, 2]], axis=1)
+    return BagSeed(scenario=scenario, path=path_rows, notes=notes, mount=mount)
+
+
+def _obstacles_from_scans(data: BagData, mount, settings: FitSettings, notes: list[str]) -> list[Obstacle]:
+    return _fit(data, grid_returns(data, mount, settings.res), settings, notes, f"{len(data.scan_t)} scans")
+
+
+def _fit(data: BagData, grid, settings: FitSettings, notes: list[str], what: str) -> list[Obstacle]:
+    clusters, dropped = occupied_clusters(grid, link=settings.link)
+    obstacles = fit_obstacles(clusters, settings, free_xy=data.odom[:, 1:3])
+    n_cyl = sum(isinstance(o, CylinderObstacle) for o in obstacles)
+    notes.append(f"{what}, {grid.returns} returns -> {len(clusters)} clusters -> "
+                 f"{n_cyl} cylinders, {len(obstacles) - n_cyl} boxes"
+                 + (f" ({dropped} specks of < 3 cells ignored as noise)" if dropped else ""))
+    return obstacles
+
+
+SYSTEMATIC = 0.2   # share of the driven path under obstacles above which the sensor's mounting is wrong
+
+
+def check_path_free(data: BagData, obstacles: list[Obstacle], radius: float, how: str,
+                    topic: str | None = None) -> list[str]:
+    """Fitted obstacles must not overlap the footprint where the robot drove. Over the start, the
+    window's end or more than SYSTEMATIC of the path, the sensor's mounting (or the localisation)
+    is wrong: an error saying where the mounting came from and how to give it. A few local
+    overlaps are something that moved (a person, a door): warnings naming them."""
+    import shapely
+
+    from ...scenario.geometry import obstacle_polygon
+
+    if not obstacles:
+        return []
+    od = data.odom
+    step = np.hypot(*np.diff(od[:, 1:3], axis=0).T).cumsum()
+    keep = np.r_[0, np.nonzero(np.diff(np.floor(step / 0.05)) > 0)[0] + 1, len(od) - 1]
+    pts = shapely.points(od[keep, 1:3])
+    hits = {o.name: shapely.distance(obstacle_polygon(o), pts) < radius - 1e-3 for o in obstacles}
+    under = np.any(list(hits.values()), axis=0)
+    if not under.any():
+        return []
+    if under[0] or under[-1] or under.mean() > SYSTEMATIC:
+        i = 0 if under[0] else len(keep) - 1 if under[-1] else int(np.argmax(under))
+        name = next(n for n, h in hits.items() if h[i])
+        k = keep[i]
+        where = "the start" if i == 0 else "the end of the window" if i == len(keep) - 1 else "the driven path"
+        raise BagImportError(
+            f"{data.path}: the obstacles fitted from {topic or data.scan_topic} overlap the robot's footprint "
+            f"(radius {radius} m) on {where} (t={od[k, 0]:.1f} s, x={od[k, 1]:.2f}, y={od[k, 2]:.2f}: {name}) "
+            f"and on {under.mean():.0%} of the driven path, where the robot drove: the laser mounting is likely "
+            f"wrong. It was {how}. Give it with --laser-pose=X,Y,YAW (the laser in {data.base_frame}, from the "
+            f"robot's URDF), or a smaller --robot-radius if the footprint is too large"
+            + (f"; the poses are in the {data.frame} frame from the bag's localisation: if it was off, "
+               f"--frame odom uses the odometry alone" if data.frame != data.odom_frame else ""))
+    return [f"warning: {o.name} at ({o.x:.2f}, {o.y:.2f}) lies where the robot drove "
+            f"(t={od[keep[int(np.argmax(hits[o.name]))], 0]:.1f} s): something that moved (a person, a door)? "
+            f"Remove it from the seed if so" for o in obstacles if hits[o.name].any()]
+
+
+def _scenario(data: BagData, obstacles: list[Obstacle], path_as: str, reference_file: str | None,
+              name: str, footprint: Footprint, goal: tuple[float, float, float] | None = None
+              ) -> tuple[Scenario, str]:
+    """The seed scenario from the odometry window and the obstacles (the goal: ``goal``, else
+    the window's last pose), and a one-line summary."""
+    od = data.odom
+    start_pose = Pose(_r(od[0, 1]), _r(od[0, 2]), _r(math.degrees(od[0, 3]), 2))
+    gx, gy, gyaw = goal if goal is not None else od[-1, 1:4]
+    goal_pose = Pose(_r(gx), _r(gy), _r(math.degrees(gyaw), 2))
+    length = float(np.hypot(*np.diff(od[:, 1:3], axis=0).T).sum())
+    duration = float(od[-1, 0] - od[0, 0])
+    waypoints: tuple[Pose, ...] = ()
+    reference = None
+    if path_as in ("waypoints", "both"):
+        waypoints = tuple(Pose(_r(x), _r(y)) for x, y in decimate_path(od[:, 1:3]))
+    if path_as in ("reference", "both"):
+        reference = Reference(file=reference_file or "reference.csv")
+    robot = _robot(data, footprint)
+    limits = robot.limits
+    timeout = _r(max(30.0, math.ceil(max(duration, length / max(limits.max_speed, 0.1)) * 2.0 + 10.0)), 1)
+    scenario = Scenario(
+        mission=Mission(start=start_pose, goal=goal_pose, waypoints=waypoints,
+                        goal_tolerance=GoalTolerance(position=0.3), timeout=timeout),
+        obstacles=tuple(obstacles), robot=robot, reference=reference, name=name,
+        description=(f"Seed from {Path(data.path).name}: {data.odom_topic} ({length:.1f} m in {duration:.1f} s)"
+                     + (f", obstacles from {data.scan_topic or data.cloud_topic}" if data.scan_topic or data.cloud_topic
+                        else ", no obstacles (no scans)")
+                     + f"; frame {data.frame or data.odom_frame}."),
+    )
+    summary = (f"path {length:.1f} m in {duration:.1f} s: "
+               + ", ".join(([f"{len(waypoints)} waypoints"] if path_as != "reference" else [])
+                           + ([f"reference trajectory of {len(od)} poses"] if path_as != "waypoints" else [])))
+    return scenario, summary
+
+
+def _robot(data: BagData, footprint: Footprint) -> Robot:
+    """The robot with its footprint, limits 20 % above the recorded peaks and the bag's laser."""
+    speed, yaw_rate = _peak_rates(data.odom)
+    # 20 % above the real peak speed, rounded up to 0.05 m/s: headroom for the planner
+    limits = Limits(max_speed=_r(max(0.2, math.ceil(speed * 1.2 * 20) / 20), 2),
+                    max_yaw_rate=_r(max(30.0, math.ceil(math.degrees(yaw_rate) * 1.2 / 5) * 5), 1))
+    lidar = Lidar(beams=min(len(data.scan_angles), 360) if data.scan_topic else 72,
+                  range_max=_r(data.range_max if data.scan_topic and math.isfinite(data.range_max) else 8.0, 2),
+                  range_min=_r(data.range_min if data.scan_topic else 0.05, 3))
+    return Robot(footprint=footprint, drive="diff", limits=limits, lidar=lidar)

@@ -1,0 +1,267 @@
+"""The MuJoCo world of a scenario: the model built from it, compiled once and cached, and what an
+episode asks of it (a fresh MjData, the collision among the current contacts, a clear error when
+the physics diverges).
+
+The robot is a rigid body on planar joints (slide-x, slide-y, hinge-yaw) with gravity off, driven by
+three velocity actuators attached to a site at its centre, so commands act in the robot frame and the
+motion has inertia and tracking lag (time constant ``TRACKING_TAU``, force limited). Obstacles are
+static world geoms named after the scenario's obstacles. Only robot-obstacle pairs can collide.
+"""
+from __future__ import annotations
+
+import logging
+import math
+from collections import OrderedDict, deque
+from dataclasses import dataclass, field
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from ..core.errors import ScenarioError
+from ..scenario.model import BoxObstacle, CylinderObstacle, Footprint, Scenario
+from .safety import SafetyLayer
+from .trajectory import Collision
+
+ROBOT_MASS = 50.0          # kg (about an ANYmal)
+ROBOT_HEIGHT = 0.5         # m; the robot's body spans z in [0, ROBOT_HEIGHT]
+LIDAR_HEIGHT = 0.2         # m; the lidar plane. Obstacles lower than this are invisible to it.
+TRACKING_TAU = 0.05        # s; velocity tracking time constant of the actuators (kv = inertia / tau)
+FORCE_HEADROOM = 1.5       # actuator force limit = inertia * max acceleration * headroom
+MODEL_CACHE_SIZE = 64      # compiled models kept (the search and repeats re-run the same layout)
+
+TWO_PI = 2.0 * math.pi
+
+log = logging.getLogger(__name__)
+MUJOCO_WARNINGS: deque[str] = deque(maxlen=5)   # the last texts our handler received
+
+
+def on_mujoco_warning(message: str) -> None:
+    """MuJoCo's warning handler: keep the text for SimulationDivergedError and log it, instead of
+    MuJoCo's default of printing and appending to MUJOCO_LOG.TXT in the working directory."""
+    MUJOCO_WARNINGS.append(str(message).strip())
+    log.warning("MuJoCo: %s", str(message).strip())
+
+
+if mujoco.get_mju_user_warning() is None:   # leave a handler someone else installed alone
+    mujoco.set_mju_user_warning(on_mujoco_warning)
+
+
+def wrap_angle(a: float) -> float:
+    """Angle in radians wrapped to [-pi, pi)."""
+    return (a + math.pi) % TWO_PI - math.pi
+
+
+def steps_per_tick(scenario: Scenario) -> int:
+    """Physics steps per control tick: round(1 / (control_rate * timestep)); ScenarioError if < 1."""
+    sim = scenario.simulation
+    if not (sim.timestep > 0 and sim.control_rate > 0):
+        raise ScenarioError(f"timestep and control_rate must be > 0, got {sim.timestep} and "
+                            f"{sim.control_rate}", path=scenario.source, field="simulation",
+                            hint="e.g. timestep: 0.01, control_rate: 10")
+    n = round(1.0 / (sim.control_rate * sim.timestep))
+    if n < 1:
+        raise ScenarioError(
+            f"control_rate {sim.control_rate} Hz is faster than the physics ({1 / sim.timestep:g} Hz)",
+            path=scenario.source, field="simulation.control_rate",
+            hint="lower control_rate or the timestep so that 1/(control_rate*timestep) >= 1")
+    return n
+
+
+# ---------------------------------------------------------------- model building
+
+def _footprint_inertia(fp: Footprint) -> float:
+    """Yaw moment of inertia (kg m^2) of the robot as a uniform box or disc of ROBOT_MASS."""
+    if fp.shape == "circle":
+        return ROBOT_MASS * fp.radius ** 2 / 2.0
+    return ROBOT_MASS * (fp.length ** 2 + fp.width ** 2) / 12.0
+
+
+def _geom_names(scenario: Scenario) -> list[str]:
+    """MuJoCo geom names: the obstacle's name, unless empty or repeated (then ``obstacle<i>``)."""
+    seen: set[str] = set()
+    names = []
+    for i, obs in enumerate(scenario.obstacles):
+        name = obs.name if obs.name and obs.name not in seen and obs.name != "robot" else f"obstacle{i}"
+        while name in seen:
+            name = f"_{name}"
+        seen.add(name)
+        names.append(name)
+    return names
+
+
+def _add_robot(spec: mujoco.MjSpec, scenario: Scenario) -> None:
+    """The robot body on its planar joints, its footprint geom and the three velocity actuators."""
+    fp = scenario.robot.footprint
+    limits = scenario.robot.limits
+    robot = spec.worldbody.add_body(name="robot", pos=[0.0, 0.0, ROBOT_HEIGHT / 2.0])
+    robot.add_joint(name="x", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0])
+    robot.add_joint(name="y", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 1, 0])
+    robot.add_joint(name="yaw", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
+    if fp.shape == "circle":
+        robot.add_geom(name="footprint", type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+                       size=[fp.radius, ROBOT_HEIGHT / 2.0, 0.0], mass=ROBOT_MASS,
+                       contype=1, conaffinity=2, rgba=[0.2, 0.4, 0.9, 1])
+    else:
+        robot.add_geom(name="footprint", type=mujoco.mjtGeom.mjGEOM_BOX,
+                       size=[fp.length / 2.0, fp.width / 2.0, ROBOT_HEIGHT / 2.0], mass=ROBOT_MASS,
+                       contype=1, conaffinity=2, rgba=[0.2, 0.4, 0.9, 1])
+    robot.add_site(name="centre", pos=[0.0, 0.0, 0.0])
+
+    inertia = _footprint_inertia(fp)
+    lin_force = ROBOT_MASS * limits.max_accel * FORCE_HEADROOM
+    yaw_torque = inertia * math.radians(limits.max_yaw_accel) * FORCE_HEADROOM
+    for name, gear, kv, limit in (
+            ("vx", [1, 0, 0, 0, 0, 0], ROBOT_MASS / TRACKING_TAU, lin_force),
+            ("vy", [0, 1, 0, 0, 0, 0], ROBOT_MASS / TRACKING_TAU, lin_force),
+            ("wz", [0, 0, 0, 0, 0, 1], inertia / TRACKING_TAU, yaw_torque)):
+        act = spec.add_actuator(name=name, trntype=mujoco.mjtTrn.mjTRN_SITE, target="centre", gear=gear)
+        act.set_to_velocity(kv=kv)
+        act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+        act.forcerange = [-limit, limit]
+
+
+def _add_obstacles(spec: mujoco.MjSpec, scenario: Scenario) -> None:
+    """One static world geom per obstacle (boxes and cylinders standing on z = 0)."""
+    for obs, gname in zip(scenario.obstacles, _geom_names(scenario)):
+        h = obs.height
+        if isinstance(obs, BoxObstacle):
+            yaw = obs.yaw_rad
+            spec.worldbody.add_geom(
+                name=gname, type=mujoco.mjtGeom.mjGEOM_BOX, pos=[obs.x, obs.y, h / 2.0],
+                quat=[math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0)],
+                size=[obs.length / 2.0, obs.width / 2.0, h / 2.0], contype=2, conaffinity=1,
+                rgba=[0.6, 0.6, 0.6, 1])
+        elif isinstance(obs, CylinderObstacle):
+            spec.worldbody.add_geom(
+                name=gname, type=mujoco.mjtGeom.mjGEOM_CYLINDER, pos=[obs.x, obs.y, h / 2.0],
+                size=[obs.radius, h / 2.0, 0.0], contype=2, conaffinity=1, rgba=[0.6, 0.6, 0.6, 1])
+        else:
+            raise ScenarioError(f"unknown obstacle type {type(obs).__name__}", path=scenario.source,
+                                field=f"obstacles[{obs.name}]", hint="use a box or a cylinder")
+
+
+def build_spec(scenario: Scenario) -> mujoco.MjSpec:
+    """The MjSpec of a scenario: planar robot with velocity actuators, static obstacle geoms."""
+    spec = mujoco.MjSpec()
+    spec.modelname = scenario.name or "navscenario"
+    spec.compiler.degree = False              # every angle below is in radians
+    spec.option.gravity = [0.0, 0.0, 0.0]     # planar: no gravity, no floor
+    spec.option.timestep = scenario.simulation.timestep
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST  # stable with stiff kv
+    _add_robot(spec, scenario)
+    _add_obstacles(spec, scenario)
+    return spec
+
+
+def model_xml(scenario: Scenario) -> str:
+    """The scenario's MuJoCo model as MJCF text (to keep beside a frozen failure, or view it)."""
+    spec = build_spec(scenario)
+    spec.compile()
+    return spec.to_xml()
+
+
+# ---------------------------------------------------------------- the compiled world
+
+@dataclass
+class World:
+    """A compiled model and the lookups the loop needs, shared by episodes (the model is never
+    changed; only the pool of MjData to reuse is)."""
+    model: mujoco.MjModel
+    robot_body: int
+    robot_geom: int
+    obstacle_of_geom: dict[int, int]   # geom id -> index in scenario.obstacles
+    safety: SafetyLayer | None
+    free_data: list = field(default_factory=list)  # MjData pool: creating one costs ~1 ms
+
+    def take_data(self) -> mujoco.MjData:
+        """A freshly reset MjData (mj_resetData gives exactly the state of a new one)."""
+        try:
+            d = self.free_data.pop()
+        except IndexError:
+            return mujoco.MjData(self.model)
+        mujoco.mj_resetData(self.model, d)
+        return d
+
+    def give_back(self, d: mujoco.MjData) -> None:
+        if len(self.free_data) < 2:
+            self.free_data.append(d)
+
+    def first_collision(self, d: mujoco.MjData, obstacles: tuple, t: float) -> Collision | None:
+        """The deepest robot-obstacle penetration among the current contacts of ``d``, or None."""
+        best = None
+        contacts = d.contact
+        robot_geom, obstacle_of_geom = self.robot_geom, self.obstacle_of_geom
+        for k in range(d.ncon):
+            dist = float(contacts.dist[k])
+            if dist >= 0.0:
+                continue
+            g1, g2 = int(contacts.geom[k][0]), int(contacts.geom[k][1])
+            other = g2 if g1 == robot_geom else (g1 if g2 == robot_geom else -1)
+            idx = obstacle_of_geom.get(other)
+            if idx is None:
+                continue
+            if best is None or dist < best[0]:
+                best = (dist, idx, k)
+        if best is None:
+            return None
+        dist, idx, k = best
+        pos = contacts.pos[k]
+        return Collision(t, obstacles[idx].name, float(pos[0]), float(pos[1]), -dist)
+
+
+_CACHE: OrderedDict[Any, World] = OrderedDict()
+
+
+def _cache_key(scenario: Scenario) -> Any:
+    # Everything the compiled model (and the safety geometry) depends on, names included (the
+    # content hash ignores names, but contacts must map to the right name).
+    robot = scenario.robot
+    return (robot.footprint, robot.limits, robot.safety, scenario.obstacles,
+            scenario.simulation.timestep)
+
+
+def compiled_world(scenario: Scenario) -> World:
+    """The compiled World for a scenario, from a small LRU cache."""
+    key = _cache_key(scenario)
+    world = _CACHE.get(key)
+    if world is not None:
+        _CACHE.move_to_end(key)
+        return world
+    spec = build_spec(scenario)
+    try:
+        model = spec.compile()
+    except Exception as exc:  # mujoco.FatalError / ValueError with MuJoCo's own text
+        raise ScenarioError(f"MuJoCo could not build the model: {exc}", path=scenario.source,
+                            hint="check obstacle sizes and heights (> 0) and the robot footprint") from exc
+    robot_body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "robot")
+    robot_geom = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "footprint")
+    obstacle_of_geom = {mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, gname): i
+                        for i, gname in enumerate(_geom_names(scenario))}
+    safety = SafetyLayer(scenario) if scenario.robot.safety.enabled and scenario.obstacles else None
+    world = World(model, robot_body, robot_geom, obstacle_of_geom, safety)
+    _CACHE[key] = world
+    if len(_CACHE) > MODEL_CACHE_SIZE:
+        _CACHE.popitem(last=False)
+    return world
+
+
+def clear_model_cache() -> None:
+    _CACHE.clear()
+
+
+def divergence_message(scenario: Scenario, d: mujoco.MjData, t: float) -> str:
+    """What SimulationDivergedError says: where, when, MuJoCo's warnings and the state, and what to
+    check."""
+    where = scenario.name or "<unnamed scenario>"
+    if scenario.source:
+        where += f" ({scenario.source})"
+    warned = [f"{mujoco.mjtWarning(k).name} (x{int(w.number)}, info {int(w.lastinfo)})"
+              for k, w in enumerate(d.warning) if w.number]
+    state = f"qpos={np.array2string(d.qpos, precision=3)}, qvel={np.array2string(d.qvel, precision=3)}"
+    why = ("MuJoCo warnings: " + ", ".join(warned)) if warned else "non-finite state"
+    if MUJOCO_WARNINGS:
+        why += f" ({MUJOCO_WARNINGS[-1]})"
+    return (f"simulation diverged in scenario {where} by t={t:.3f} s: {why}; {state}. "
+            f"The physics cannot be trusted: check robot.limits (huge speeds or accelerations) and "
+            f"simulation.timestep (try 0.01 s or smaller).")
