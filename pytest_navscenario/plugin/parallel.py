@@ -182,9 +182,8 @@ def pytest_runtestloop(session: pytest.Session) -> Any:
     state = session.config.stash.get(STATE_KEY, None)
     executor = state.executor if state is not None else None
     if executor is not None and not session.config.option.collectonly:
-        from .collect import ScenarioItem
-
-        items = [i for i in session.items if isinstance(i, ScenarioItem) and not _skipped(i)]
+        # scenario items (collect.ScenarioItem, known by its method: no import, no cycle)
+        items = [i for i in session.items if hasattr(i, "episode_job") and not _skipped(i)]
         keep = keep_trajectory(session.config)
         for item, pending in zip(items, executor.submit([i.episode_job(keep) for i in items])):
             item.nav_pending = pending
