@@ -54,6 +54,14 @@ class SlowStraight(Straight):
         import time
         time.sleep(0.005)
         return super().act(obs)
+
+
+class SlowerStraight(Straight):
+    """50 ms per tick: an episode of about a second (a suite long enough to interrupt)."""
+    def act(self, obs):
+        import time
+        time.sleep(0.05)
+        return super().act(obs)
 '''
 
 
@@ -142,3 +150,33 @@ def test_interrupting_a_search_on_ray_keeps_what_it_found(pytester: pytest.Pytes
     log = [json.loads(line) for line in (folder / "search-log.jsonl").read_text().splitlines()]
     assert 0 < sims < 300 and len([r for r in log if r["phase"] == "search"]) == sims
     assert sorted(folder.glob("crate-*.yaml")), out[-3000:]
+
+
+def test_interrupting_a_suite_on_ray_keeps_the_finished_items(pytester: pytest.Pytester, planners: Path):
+    from dispatch_helpers import scenario_text
+    suite = pytester.path / "suite"
+    suite.mkdir()
+    for i in range(16):
+        (suite / f"s{i:02d}.yaml").write_text(scenario_text(f"s{i:02d}", 1.0 + i / 100))
+    address = ray.get_runtime_context().gcs_address
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(planners), os.environ.get("PYTHONPATH", "")]))
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-v", f"--nav-ray={address}", "suite",
+         "--nav-subject=straight_planner:SlowerStraight", "--nav-results=out/r.jsonl", "--nav-plots=none"],
+        cwd=pytester.path, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    assert proc.stdout is not None
+    seen, passed, deadline = "", 0, time.monotonic() + 120
+    while passed < 3 and time.monotonic() < deadline:
+        line = proc.stdout.readline()
+        seen += line
+        passed += " PASSED" in line
+        if not line:
+            break
+    proc.send_signal(signal.SIGTERM)
+    out = seen + proc.communicate(timeout=120)[0]
+    assert proc.returncode == pytest.ExitCode.INTERRUPTED, out[-3000:]
+    from pytest_navscenario.report.results_file import read_results
+    records = read_results(pytester.path / "out" / "r.jsonl")
+    assert 3 <= len(records) < 16, out[-3000:]
+    assert len({r["nodeid"] for r in records}) == len(records)
+    assert all(r["outcome"] == "success" for r in records)
