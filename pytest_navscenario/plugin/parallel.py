@@ -79,7 +79,7 @@ def pytest_configure(config: pytest.Config) -> None:
 def _wants_search(config: pytest.Config) -> bool:
     try:
         return bool(config.getoption("navsearch") or config.getini("navsearch"))
-    except ValueError:   # the search plugin is not loaded
+    except (ValueError, pytest.UsageError):   # the search plugin is not loaded
         return False
 
 
