@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any, Sequence
 import numpy as np
 
 from ..scenario.geometry import footprint_polygon, footprint_polygons, obstacle_polygon
+from ..scenario.motion import Track, displacement, is_moving
 from ..verdict.result import EpisodeResult
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -91,15 +92,16 @@ def _gap(scenario: Any, metrics: Any) -> tuple[float, str, str]:
     else:
         from ..verdict.paths import min_obstacle_gap
         gap = min_obstacle_gap(scenario)
-    if gap[0] > 1e-6 or not 3 <= len(scenario.obstacles) <= MAX_GAP_SEARCH:
+    still = [o for o in scenario.obstacles if not is_moving(o)]
+    if gap[0] > 1e-6 or not 3 <= len(still) <= MAX_GAP_SEARCH:
         return gap
-    polys = [obstacle_polygon(o) for o in scenario.obstacles]
+    polys = [obstacle_polygon(o) for o in still]
     best = (math.inf, "", "")
     for i in range(len(polys)):
         for j in range(i + 1, len(polys)):
             d = polys[i].distance(polys[j])
             if 1e-6 < d < best[0]:
-                best = (d, scenario.obstacles[i].name, scenario.obstacles[j].name)
+                best = (d, still[i].name, still[j].name)
     return best
 
 
@@ -116,10 +118,15 @@ def _extent(result: EpisodeResult, margin: float = 0.8) -> tuple[float, float, f
     s = result.scenario
     xs = [s.mission.start.x, s.mission.goal.x] + [w.x for w in s.mission.waypoints]
     ys = [s.mission.start.y, s.mission.goal.y] + [w.y for w in s.mission.waypoints]
+    end = float(result.trajectory.t[-1]) if len(result.trajectory.t) else 0.0
     for obs in s.obstacles:
         x0, y0, x1, y1 = obstacle_polygon(obs).bounds
         xs += [x0, x1]
         ys += [y0, y1]
+        if is_moving(obs):     # where it went during the episode
+            x0, y0, x1, y1 = obstacle_polygon_at(obs, end).bounds
+            xs += [x0, x1]
+            ys += [y0, y1]
     if len(result.trajectory.t):
         pose = np.asarray(result.trajectory.pose)
         xs += [float(pose[:, 0].min()), float(pose[:, 0].max())]
@@ -143,6 +150,7 @@ def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
     """
     s = result.scenario
     draw_obstacles(ax, s, involved=_involved_obstacles(result))
+    draw_moving_obstacles(ax, result)
     _draw_shortest_path(ax, s)
     mapping = _draw_footprint_path(ax, result, norm=norm, outline_every=outline_every)
     _draw_mission(ax, s.mission)
@@ -172,14 +180,81 @@ def draw_obstacles(ax: "Axes", scenario: Any, *, involved: set[str] = frozenset(
 
     # Collections, not one patch each: patches re-run autoscaling per patch (slow).
     polys = [obstacle_polygon(obs) for obs in scenario.obstacles]
-    ax.add_collection(PolyCollection([np.asarray(p.exterior.coords) for p in polys], closed=True,
+    still = [p for obs, p in zip(scenario.obstacles, polys) if not is_moving(obs)]
+    ax.add_collection(PolyCollection([np.asarray(p.exterior.coords) for p in still], closed=True,
                                      facecolors="#9e9e9e", edgecolors="#424242", linewidths=1.0,
                                      zorder=2), autolim=False)
     for obs, poly in zip(scenario.obstacles, polys):
         if len(polys) > MAX_NAMED_OBSTACLES and obs.name not in involved:
             continue
+        if is_moving(obs):
+            continue    # named at its key moments (draw_moving_obstacles)
         ax.annotate(obs.name, (poly.centroid.x, poly.centroid.y), ha="center", va="center",
                     fontsize=7, zorder=8, bbox=_HALO)
+
+
+MOVING_COLOUR = "#e65100"
+
+
+def obstacle_polygon_at(obs: Any, time: float) -> Any:
+    """The obstacle's outline where it was at ``time`` (moving obstacles translate)."""
+    poly = obstacle_polygon(obs)
+    if not is_moving(obs):
+        return poly
+    from shapely.affinity import translate
+
+    dx, dy = displacement(Track(obs), np.array([time]))[0]
+    return translate(poly, float(dx), float(dy))
+
+
+def moving_key_moments(result: EpisodeResult, obs: Any) -> list[tuple[float, str]]:
+    """(time, label) of the moments to draw a moving obstacle at: the start, its closest approach
+    to the robot, and the end (labelled with the collision or safety stop that ended it)."""
+    traj = result.trajectory
+    end = float(traj.t[-1]) if len(traj.t) else 0.0
+    moments = [(0.0, "t=0")]
+    if len(traj.t) > 1:
+        t = np.asarray(traj.t, dtype=float)
+        centre = Track(obs).positions(t)
+        pose = np.asarray(traj.pose, dtype=float)
+        k = int(np.argmin(np.hypot(centre[:, 0] - pose[:, 0], centre[:, 1] - pose[:, 1])))
+        if 0 < k < len(t) - 1:
+            moments.append((float(t[k]), f"closest t={t[k]:.1f}s"))
+    why = ("collision" if result.collision is not None else
+           "stop" if result.safety_stop is not None else "end")
+    moments.append((end, f"{why} t={end:.1f}s"))
+    return moments
+
+
+def draw_moving_obstacles(ax: "Axes", result: EpisodeResult) -> None:
+    """Each moving obstacle: the way it went during the episode (dotted, from where it stood
+    to where it was at the end) and its outline at the key moments (moving_key_moments), the
+    last one filled, each labelled with its name and time."""
+    from matplotlib.collections import PolyCollection
+
+    traj = result.trajectory
+    end = float(traj.t[-1]) if len(traj.t) else 0.0
+    for obs in result.scenario.obstacles:
+        if not is_moving(obs):
+            continue
+        times = np.linspace(0.0, end, max(2, int(end / 0.05) + 1))
+        way = Track(obs).positions(times)
+        ax.plot(way[:, 0], way[:, 1], ls=":", lw=1.4, color=MOVING_COLOUR, zorder=3,
+                label="moving obstacle's way" if not ax.get_legend_handles_labels()[1].count(
+                    "moving obstacle's way") else None)
+        moments = moving_key_moments(result, obs)
+        polys = [obstacle_polygon_at(obs, t) for t, _ in moments]
+        rings = [np.asarray(p.exterior.coords) for p in polys]
+        ax.add_collection(PolyCollection(rings[:-1], closed=True, facecolors="none",
+                                         edgecolors=MOVING_COLOUR, linewidths=0.9, linestyles="--",
+                                         zorder=5), autolim=False)
+        ax.add_collection(PolyCollection(rings[-1:], closed=True, facecolors="#ffcc80",
+                                         edgecolors=MOVING_COLOUR, linewidths=1.2, zorder=5),
+                          autolim=False)
+        for (t, label), poly in zip(moments, polys):
+            ax.annotate(f"{obs.name} {label}" if t == moments[0][0] else label,
+                        (poly.centroid.x, poly.centroid.y), xytext=(0, 9), textcoords="offset points",
+                        ha="center", fontsize=6, color=MOVING_COLOUR, zorder=8, bbox=_HALO)
 
 
 def _draw_shortest_path(ax: "Axes", scenario: Any) -> None:
@@ -297,7 +372,7 @@ def _draw_min_clearance(ax: "Axes", result: EpisodeResult) -> None:
     if p is None:
         p = np.array([m.min_clearance_x, m.min_clearance_y, math.radians(s.mission.start.yaw)])
     try:
-        obstacle = obstacle_polygon(s.obstacle(m.min_clearance_obstacle))
+        obstacle = obstacle_polygon_at(s.obstacle(m.min_clearance_obstacle), m.min_clearance_time)
     except KeyError:
         return
     footprint = footprint_polygon(s.robot.footprint, *p)
@@ -338,8 +413,9 @@ def _draw_events(ax: "Axes", result: EpisodeResult) -> None:
     """Where the episode ended badly: the collision's contact point, the safety stop's pose."""
     if result.collision is not None:
         c = result.collision
+        who = "" if getattr(c, "robot_moving", True) else ", robot standing"
         ax.plot(c.x, c.y, marker="X", ms=12, color="#b71c1c", mec="white", zorder=12, ls="none",
-                label=f"collision t={c.time:.1f} s")
+                label=f"collision t={c.time:.1f} s{who}")
     if result.safety_stop is not None:
         p = _pose_at(result, result.safety_stop.time)
         if p is not None:

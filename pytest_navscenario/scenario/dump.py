@@ -10,7 +10,7 @@ import yaml
 
 from ..core.files import atomic_write_text
 from .loader import LIDAR_KEYS, LIMITS_KEYS
-from .model import BoxObstacle, Mark, Obstacle, Pose, Scenario
+from .model import BoxObstacle, Mark, Motion, Obstacle, Pose, Scenario
 
 
 def _f(value: Any) -> float:
@@ -49,10 +49,24 @@ def _mark_entry(mark: Mark) -> Any:
 
 def _obstacle_dict(obs: Obstacle) -> dict[str, Any]:
     if isinstance(obs, BoxObstacle):
-        return {"type": "box", "name": obs.name, "x": _f(obs.x), "y": _f(obs.y), "length": _f(obs.length),
-                "width": _f(obs.width), "yaw": _f(obs.yaw), "height": _f(obs.height)}
-    return {"type": "cylinder", "name": obs.name, "x": _f(obs.x), "y": _f(obs.y), "radius": _f(obs.radius),
-            "height": _f(obs.height)}
+        out = {"type": "box", "name": obs.name, "x": _f(obs.x), "y": _f(obs.y), "length": _f(obs.length),
+               "width": _f(obs.width), "yaw": _f(obs.yaw), "height": _f(obs.height)}
+    else:
+        out = {"type": "cylinder", "name": obs.name, "x": _f(obs.x), "y": _f(obs.y),
+               "radius": _f(obs.radius), "height": _f(obs.height)}
+    motion = getattr(obs, "motion", None)
+    if motion is not None:
+        out["motion"] = _motion_dict(motion)
+        if motion.path:             # the path's first point is where it stands: no x, y
+            del out["x"], out["y"]
+    return out
+
+
+def _motion_dict(motion: Motion) -> dict[str, Any]:
+    if motion.velocity is not None:
+        return {"velocity": [_f(motion.velocity[0]), _f(motion.velocity[1])], "start": _f(motion.start)}
+    return {"path": [[_f(x), _f(y)] for x, y in motion.path], "speed": _f(motion.speed),
+            "mode": motion.mode, "start": _f(motion.start)}
 
 
 def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:

@@ -36,6 +36,8 @@ from .model import (
     Limits,
     Mark,
     Mission,
+    MOTION_MODES,
+    Motion,
     Obstacle,
     Pose,
     Reference,
@@ -77,16 +79,22 @@ SAFETY_KEYS = ("enabled", "horizon", "margin")
 MISSION_KEYS = ("start", "goal", "waypoints", "goal_tolerance", "waypoint_tolerance", "timeout")
 POSE_KEYS = ("x", "y", "yaw")
 TOLERANCE_KEYS = ("position", "yaw")
-BOX_KEYS = ("type", "name", "x", "y", "length", "width", "yaw", "height")
-CYLINDER_KEYS = ("type", "name", "x", "y", "radius", "height")
+BOX_KEYS = ("type", "name", "x", "y", "length", "width", "yaw", "height", "motion")
+CYLINDER_KEYS = ("type", "name", "x", "y", "radius", "height", "motion")
+PERSON_KEYS = CYLINDER_KEYS     # a cylinder with a person's size and walking speed as defaults
+MOTION_KEYS = ("path", "speed", "mode", "start", "velocity")
+PERSON_RADIUS = 0.25            # m
+PERSON_HEIGHT = 1.7             # m
+PERSON_SPEED = 1.3              # m/s, a typical walking speed
 SIMULATION_KEYS = ("timestep", "control_rate", "seed")
 REFERENCE_KEYS = ("file", "points")
 DRIVES = ("omni", "diff")
 SHAPES = ("box", "circle")
-OBSTACLE_TYPES = ("box", "cylinder")
+OBSTACLE_TYPES = ("box", "cylinder", "person")
 _KEY_HOMES = (("", TOP_KEYS), ("robot", ROBOT_KEYS), ("robot.footprint", FOOTPRINT_KEYS),
               ("robot.limits", LIMITS_KEYS), ("robot.lidar", LIDAR_KEYS), ("robot.safety", SAFETY_KEYS),
               ("mission", MISSION_KEYS), ("mission.goal_tolerance", TOLERANCE_KEYS), ("simulation", SIMULATION_KEYS),
+              ("obstacles[].motion", MOTION_KEYS),
               ("obstacles[]", BOX_KEYS + CYLINDER_KEYS), ("reference", REFERENCE_KEYS))
 _ALIASES = {  # common synonyms -> the spelling the format uses (for the hint)
     "omnidirectional": "omni", "holonomic": "omni", "differential": "diff", "diff-drive": "diff",
@@ -414,30 +422,91 @@ def _obstacles(ctx: _Ctx, top: _Section) -> tuple[Obstacle, ...]:
             given[name] = i
         parsed.append((kind, sec, name))
     taken = set(given)
-    counters = {"box": 0, "cylinder": 0}
+    counters = {"box": 0, "cylinder": 0, "person": 0}
+    prefixes = {"box": "box", "cylinder": "cyl", "person": "person"}
     result: list[Obstacle] = []
     for kind, sec, name in parsed:
-        if name is None:  # generated: box1, box2, cyl1 ... skipping names already given
-            prefix = "box" if kind == "box" else "cyl"
+        if name is None:  # generated: box1, box2, cyl1, person1 ... skipping names already given
             while True:
                 counters[kind] += 1
-                name = f"{prefix}{counters[kind]}"
+                name = f"{prefixes[kind]}{counters[kind]}"
                 if name not in taken:
                     break
             taken.add(name)
+        result.append(_obstacle(ctx, sec, kind, name))
+    return tuple(result)
+
+
+def _obstacle(ctx: _Ctx, sec: _Section, kind: str, name: str) -> Obstacle:
+    """One obstacle from its section; a person is a cylinder with a person's defaults."""
+    person = kind == "person"
+    motion = _motion(ctx, sec, person)
+    if motion is not None and motion.path:
+        for key in ("x", "y"):
+            if sec.has(key):
+                raise ctx.fail(f"'{key}' is given by the motion's path (the obstacle starts at its "
+                               f"first point)", _join(sec.path, key), sec.line_of(key),
+                               f"remove '{key}', or make it the path's first point")
+        x, y = motion.path[0]
+    else:
         x = sec.number("x", example="x: 0.0")
         y = sec.number("y", example="y: 0.0")
-        height = sec.number("height", 1.0, low=0, low_open=True)
-        if kind == "box":
-            result.append(BoxObstacle(name=name, x=x, y=y,
-                                      length=sec.number("length", low=0, low_open=True, example="length: 1.0"),
-                                      width=sec.number("width", low=0, low_open=True, example="width: 1.0"),
-                                      yaw=sec.number("yaw", 0.0), height=height))
-        else:
-            result.append(CylinderObstacle(name=name, x=x, y=y, height=height,
-                                           radius=sec.number("radius", low=0, low_open=True,
-                                                             example="radius: 0.5")))
-    return tuple(result)
+    height = sec.number("height", PERSON_HEIGHT if person else 1.0, low=0, low_open=True)
+    if kind == "box":
+        return BoxObstacle(name=name, x=x, y=y,
+                           length=sec.number("length", low=0, low_open=True, example="length: 1.0"),
+                           width=sec.number("width", low=0, low_open=True, example="width: 1.0"),
+                           yaw=sec.number("yaw", 0.0), height=height, motion=motion)
+    radius = sec.number("radius", PERSON_RADIUS if person else _REQUIRED, low=0, low_open=True,
+                        example="radius: 0.5")
+    return CylinderObstacle(name=name, x=x, y=y, height=height, radius=radius, motion=motion)
+
+
+def _point(ctx: _Ctx, node: YNode, field: str, line: int | None) -> tuple[float, float]:
+    """An [x, y] pair."""
+    if not isinstance(node, YSeq) or len(node.items) != 2:
+        raise ctx.fail(f"expected a point [x, y], got {describe(node)}", field,
+                       node.line or line, "write two numbers in brackets, e.g. [1.0, 2.0]")
+    return (_number(ctx, node.items[0], f"{field}[0]", line),
+            _number(ctx, node.items[1], f"{field}[1]", line))
+
+
+def _motion(ctx: _Ctx, obs: _Section, person: bool) -> Motion | None:
+    """The obstacle's ``motion`` section: a path at a speed, or a constant velocity."""
+    sec = obs.section("motion", MOTION_KEYS, "the obstacle's motion (a mapping)")
+    if sec is None:
+        return None
+    start = sec.number("start", 0.0, low=0)
+    if sec.has("velocity"):
+        for key in ("path", "speed", "mode"):
+            if sec.has(key):
+                raise ctx.fail(f"'{key}' does not go with 'velocity' (a constant velocity has no path)",
+                               _join(sec.path, key), sec.line_of(key),
+                               "give either velocity: [vx, vy], or a path with a speed")
+        vx, vy = _point(ctx, sec.get("velocity"), _join(sec.path, "velocity"), sec.line_of("velocity"))
+        return Motion(start=start, velocity=(vx, vy))
+    node = sec.get("path")
+    field, line = _join(sec.path, "path"), sec.line_of("path")
+    if node is None:
+        raise sec.missing("path", "path: [[0.0, -3.0], [0.0, 3.0]]' or 'velocity: [0.0, 1.0]")
+    if not isinstance(node, YSeq) or len(node.items) < 2:
+        got = f"{len(node.items)} point" + ("" if len(node.items) == 1 else "s") if isinstance(node, YSeq) \
+            else describe(node)
+        raise ctx.fail(f"a path needs at least two points, got {got}", field, node.line or line,
+                       "list the points it walks through, e.g. path: [[0.0, -3.0], [0.0, 3.0]]")
+    if len(node.items) > SCENARIO_LIMITS["max_obstacles"]:
+        raise ctx.fail(f"{len(node.items)} path points is more than the limit of "
+                       f"{int(SCENARIO_LIMITS['max_obstacles'])}", field, line, "thin the path out")
+    points = tuple(_point(ctx, p, f"{field}[{k}]", p.line or line) for k, p in enumerate(node.items))
+    if sum(math.dist(a, b) for a, b in zip(points, points[1:])) <= 0.0:
+        raise ctx.fail("the path has no length (all its points are the same)", field, line,
+                       "give points that differ, or remove 'motion' for a static obstacle")
+    if person:
+        speed = sec.number("speed", PERSON_SPEED, low=0, low_open=True)
+    else:
+        speed = sec.number("speed", low=0, low_open=True, example="speed: 1.0")
+    mode = sec.choice("mode", MOTION_MODES, "once")
+    return Motion(path=points, speed=speed, mode=mode, start=start)
 
 
 def _check_name(ctx: _Ctx, name: str, field: str, line: int | None, *, file_name: bool = False) -> None:
@@ -616,8 +685,12 @@ def _check_clear(scenario: Scenario, ctx: _Ctx) -> None:
     # Cheap bounding-circle test first, so thousands of obstacles cost microseconds, not polygons.
     bounds = [(o.x, o.y, math.hypot(o.length, o.width) / 2.0 if isinstance(o, BoxObstacle) else o.radius)
               for o in scenario.obstacles]
+    moving = {i for i, o in enumerate(scenario.obstacles) if getattr(o, "motion", None) is not None}
     for key, pose, reach, what in checks:
-        near = [i for i, (x, y, r) in enumerate(bounds) if math.hypot(x - pose.x, y - pose.y) <= r + reach + 1e-9]
+        # a moving obstacle must leave the start clear (where it stands at t = 0); it may cross the
+        # goal and the waypoints
+        near = [i for i, (x, y, r) in enumerate(bounds) if math.hypot(x - pose.x, y - pose.y) <= r + reach + 1e-9
+                and (key == "start" or i not in moving)]
         if not near:
             continue
         shape = (footprint_polygon(fp, pose.x, pose.y, pose.yaw_rad) if reach else Point(pose.x, pose.y))

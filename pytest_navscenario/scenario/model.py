@@ -31,6 +31,23 @@ class Pose:
         return math.radians(self.yaw)
 
 
+MOTION_MODES = ("once", "back-and-forth", "loop")
+
+
+@dataclass(frozen=True)
+class Motion:
+    """How an obstacle moves (it keeps its orientation). Either along ``path`` (two or more points,
+    the first is where it stands until ``start``) at ``speed`` m/s, ``mode`` once (then it stays at
+    the last point), back-and-forth or loop (back to the first point and round again); or, with no
+    path, at the constant ``velocity`` (m/s, world frame) from its x, y. Times in seconds from the
+    episode start. The positions are a pure function of time (scenario/motion.py)."""
+    path: tuple[tuple[float, float], ...] = ()
+    speed: float = 0.0
+    mode: Literal["once", "back-and-forth", "loop"] = "once"
+    start: float = 0.0
+    velocity: tuple[float, float] | None = None
+
+
 @dataclass(frozen=True)
 class BoxObstacle:
     """A static box centred on (x, y): ``length`` along its own x axis, rotated by ``yaw`` degrees."""
@@ -41,6 +58,7 @@ class BoxObstacle:
     width: float
     yaw: float = 0.0
     height: float = 1.0
+    motion: Motion | None = None    # None: static
     kind: Literal["box"] = field(default="box", init=False)
 
     @property
@@ -56,6 +74,7 @@ class CylinderObstacle:
     y: float
     radius: float
     height: float = 1.0
+    motion: Motion | None = None    # None: static
     kind: Literal["cylinder"] = field(default="cylinder", init=False)
 
 
@@ -210,5 +229,7 @@ def content_hash(scenario: Scenario) -> str:
     # obstacle names are labels, not content
     for obs in body.get("obstacles", []):
         obs.pop("name", None)
+        if obs.get("motion") is None:   # a static obstacle hashes as before motion existed
+            obs.pop("motion", None)
     text = json.dumps(body, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]

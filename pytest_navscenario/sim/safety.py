@@ -23,6 +23,7 @@ import numpy as np
 
 from ..scenario.geometry import footprint_radius
 from ..scenario.model import BoxObstacle, Scenario
+from ..scenario.motion import moving_indices
 
 SAMPLE_SPACING = 0.02   # m: the most any footprint point moves between two sweep samples
 MAX_SAMPLES = 64
@@ -89,8 +90,13 @@ class SafetyLayer:
         self._shape = list(zip(self.centres[:, 0].tolist(), self.centres[:, 1].tolist(),
                                self.cos.tolist(), self.sin.tolist(), self.half[:, 0].tolist(),
                                self.half[:, 1].tolist(), self.obs_r.tolist()))
-        self._circles = (list(zip(range(n), self.centres[:, 0].tolist(), self.centres[:, 1].tolist(),
-                                  self.bound.tolist())) if n <= 32 else None)
+        # moving obstacles are checked apart, where they are now and with their velocity
+        self.moving = moving_indices(obstacles)
+        self.static = np.ones(n, dtype=bool)
+        self.static[self.moving] = False
+        static = [j for j in range(n) if self.static[j]]
+        self._circles = ([(j, float(self.centres[j, 0]), float(self.centres[j, 1]), float(self.bound[j]))
+                          for j in static] if len(static) <= 32 else None)
 
     def distances(self, poses: np.ndarray, idx: np.ndarray) -> np.ndarray:
         """Exact footprint-obstacle distances (0 on overlap) for poses (k, 3) and obstacles ``idx``:
@@ -135,8 +141,13 @@ class SafetyLayer:
             d[:, box] = db
         return d
 
-    def check(self, x: float, y: float, yaw: float, vx: float, vy: float, wz: float) -> str | None:
-        """The name of the obstacle the predicted sweep would hit, or None (robot may go on)."""
+    def check(self, x: float, y: float, yaw: float, vx: float, vy: float, wz: float,
+              moving: tuple[list[int], np.ndarray, np.ndarray] | None = None) -> str | None:
+        """The name of the obstacle the predicted sweep would hit, or None (robot may go on).
+
+        ``moving``: (indices, offsets from their scenario position (k, 2), velocities (k, 2)) of
+        the moving obstacles now; each is predicted to hold its velocity over the horizon, like
+        the robot its twist, and the sweep is checked relative to it."""
         speed = math.hypot(vx, vy)
         # No point of the footprint moves farther than this over the horizon.
         travel = (speed + abs(wz) * self.robot_radius) * self.horizon
@@ -148,8 +159,9 @@ class SafetyLayer:
             near = [j for j, cx, cy, r in self._circles if hypot(cx - x, cy - y) - r < reach]
         else:
             gap = np.hypot(self.centres[:, 0] - x, self.centres[:, 1] - y) - self.bound
-            near = np.flatnonzero(gap < reach).tolist()
-        if not near:
+            near = np.flatnonzero((gap < reach) & self.static).tolist()
+        movers = self._near_movers(x, y, reach, moving) if moving is not None else []
+        if not near and not movers:
             return None
         # Tier 2, a cheap lower bound: the obstacle lies in the half-plane behind its point q
         # nearest to the robot's centre, so the robot is at least (|p - q| - the robot's extent
@@ -176,12 +188,19 @@ class SafetyLayer:
                 if gap - r - extent + min(0.0, h * (wvx * ux + wvy * uy)) - turning > limit:
                     continue
             close.append(j)
-        if not close:
+        if not close and not movers:
             return None
-        near = close
-        poses = twist_poses(x, y, yaw, vx, vy, wz, np.linspace(0.0, self.horizon, n + 1))
-        idx = np.asarray(near)
-        dist = self.distances(poses, idx)                            # (n + 1, m)
+        times = np.linspace(0.0, self.horizon, n + 1)
+        poses = twist_poses(x, y, yaw, vx, vy, wz, times)
+        idx = np.asarray(close + [j for j, _, _ in movers], dtype=int)
+        dist = np.empty((n + 1, len(idx)))
+        if close:
+            dist[:, :len(close)] = self.distances(poses, idx[:len(close)])   # (n + 1, m)
+        for col, (j, offset, vel) in enumerate(movers, start=len(close)):
+            rel = poses.copy()      # the robot relative to the obstacle's scenario position
+            rel[:, 0] -= offset[0] + vel[0] * times
+            rel[:, 1] -= offset[1] + vel[1] * times
+            dist[:, col] = self.distances(rel, idx[col:col + 1])[:, 0]
         now, future = dist[0], dist[1:]
         # hit: a future sample within the threshold, or (already within it) any approach at all
         hit = np.where(now > threshold, future <= threshold, future < now - 1e-9)
@@ -190,3 +209,18 @@ class SafetyLayer:
         first = np.where(hit.any(axis=0), hit.argmax(axis=0), n + 1)  # earliest sample per obstacle
         order = np.lexsort((future.min(axis=0), first))
         return self.names[int(idx[order[0]])]
+
+    def _near_movers(self, x: float, y: float, reach: float,
+                     moving: tuple[list[int], np.ndarray, np.ndarray]
+                     ) -> list[tuple[int, tuple[float, float], tuple[float, float]]]:
+        """The moving obstacles that may come within reach over the horizon: (index, offset,
+        velocity) each."""
+        out = []
+        indices, offsets, velocity = moving
+        for k, j in enumerate(indices):
+            ox, oy = float(offsets[k, 0]), float(offsets[k, 1])
+            ovx, ovy = float(velocity[k, 0]), float(velocity[k, 1])
+            cx, cy = float(self.centres[j, 0]) + ox, float(self.centres[j, 1]) + oy
+            if math.hypot(cx - x, cy - y) - float(self.bound[j]) < reach + math.hypot(ovx, ovy) * self.horizon:
+                out.append((j, (ox, oy), (ovx, ovy)))
+        return out

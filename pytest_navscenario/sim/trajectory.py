@@ -16,6 +16,9 @@ class Collision:
     x: float               # contact point, world frame
     y: float
     depth: float           # penetration depth (m, >= 0)
+    robot_speed: float = 0.0      # m/s, the robot's speed at the contact
+    robot_moving: bool = True     # False: the robot stood still and was hit (sim/moving.py)
+    obstacle_speed: float = 0.0   # m/s, the obstacle's speed at the contact (0: static)
 
 
 @dataclass(frozen=True)

@@ -122,23 +122,29 @@ def _add_robot(spec: mujoco.MjSpec, scenario: Scenario) -> None:
 
 
 def _add_obstacles(spec: mujoco.MjSpec, scenario: Scenario) -> None:
-    """One static world geom per obstacle (boxes and cylinders standing on z = 0)."""
+    """One geom per obstacle (boxes and cylinders standing on z = 0): static ones on the world body,
+    a moving one on its own mocap body (kinematic: the loop writes its position, MuJoCo moves its
+    geom and detects its contacts like any other; mocap_pos order = moving obstacles' order)."""
     for obs, gname in zip(scenario.obstacles, _geom_names(scenario)):
         h = obs.height
         if isinstance(obs, BoxObstacle):
             yaw = obs.yaw_rad
-            spec.worldbody.add_geom(
-                name=gname, type=mujoco.mjtGeom.mjGEOM_BOX, pos=[obs.x, obs.y, h / 2.0],
-                quat=[math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0)],
-                size=[obs.length / 2.0, obs.width / 2.0, h / 2.0], contype=2, conaffinity=1,
-                rgba=[0.6, 0.6, 0.6, 1])
+            quat = [math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0)]
+            kind, size = mujoco.mjtGeom.mjGEOM_BOX, [obs.length / 2.0, obs.width / 2.0, h / 2.0]
         elif isinstance(obs, CylinderObstacle):
-            spec.worldbody.add_geom(
-                name=gname, type=mujoco.mjtGeom.mjGEOM_CYLINDER, pos=[obs.x, obs.y, h / 2.0],
-                size=[obs.radius, h / 2.0, 0.0], contype=2, conaffinity=1, rgba=[0.6, 0.6, 0.6, 1])
+            quat = [1.0, 0.0, 0.0, 0.0]
+            kind, size = mujoco.mjtGeom.mjGEOM_CYLINDER, [obs.radius, h / 2.0, 0.0]
         else:
             raise ScenarioError(f"unknown obstacle type {type(obs).__name__}", path=scenario.source,
                                 field=f"obstacles[{obs.name}]", hint="use a box or a cylinder")
+        pos = [obs.x, obs.y, h / 2.0]
+        if getattr(obs, "motion", None) is not None:
+            body = spec.worldbody.add_body(name=f"moving:{gname}", mocap=True, pos=pos, quat=quat)
+            pos, quat, parent, rgba = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], body, [0.9, 0.5, 0.2, 1]
+        else:
+            parent, rgba = spec.worldbody, [0.6, 0.6, 0.6, 1]
+        parent.add_geom(name=gname, type=kind, pos=pos, quat=quat, size=size, contype=2, conaffinity=1,
+                        rgba=rgba)
 
 
 def build_spec(scenario: Scenario) -> mujoco.MjSpec:

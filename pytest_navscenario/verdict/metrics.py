@@ -48,7 +48,9 @@ from .paths import (
     path_through,
     reference_path,
     shortest_path,
+    static_obstacles,
 )
+from ..scenario.motion import displacement, tracks
 from ..sim.trajectory import Collision, Trajectory
 from .result import Metrics
 from ..scenario.model import Scenario
@@ -134,13 +136,36 @@ def min_clearance(scenario: Scenario, t: np.ndarray, pose: np.ndarray
     ``COARSE_STRIDE``-th pose, widened by how far the robot moves around it, keeps the windows
     that may hold the minimum; a full-rate centre pass inside them keeps the poses that may;
     only those get the exact box-to-box distance.
+
+    A moving obstacle is measured where it was at each moment: the robot's poses relative to the
+    obstacle's motion (shifted by its displacement at that time) against the obstacle where the
+    scenario places it.
     """
-    shapes = obstacle_shapes(scenario.obstacles)
     pose = np.asarray(pose, dtype=float).reshape(-1, 3)
+    t = np.asarray(t, dtype=float)
+    if not len(pose) or not scenario.obstacles:
+        return math.inf, "", NAN, NAN, NAN
+    footprint = scenario.robot.footprint
+    best = _closest(static_obstacles(scenario), footprint, pose)
+    for j, track in tracks(scenario.obstacles).items():
+        rel = pose.copy()
+        rel[:, :2] -= displacement(track, t)
+        hit = _closest((scenario.obstacles[j],), footprint, rel)
+        if hit is not None and (best is None or hit[0] < best[0] or (hit[0] == best[0] and hit[2] < best[2])):
+            best = hit
+    if best is None:
+        return math.inf, "", NAN, NAN, NAN
+    dist, name, i = best
+    return dist, name, float(t[i]), float(pose[i, 0]), float(pose[i, 1])
+
+
+def _closest(obstacles: tuple, footprint, pose: np.ndarray) -> tuple[float, str, int] | None:
+    """(distance, obstacle name, pose index) of the closest approach to static ``obstacles``."""
+    shapes = obstacle_shapes(obstacles)
     n, k = len(pose), len(shapes)
     if not k or not n:
-        return math.inf, "", NAN, NAN, NAN
-    hl, hw, rho = footprint_core(scenario.robot.footprint)
+        return None
+    hl, hw, rho = footprint_core(footprint)
     r_out, r_in = math.hypot(hl, hw) + rho, min(hl, hw) + rho
     ox, oy, oc, os_, ohl, ohw, orho = (a[:, None] for a in (
         shapes.x, shapes.y, shapes.cos, shapes.sin, shapes.hl, shapes.hw, shapes.rho))
@@ -173,7 +198,7 @@ def min_clearance(scenario: Scenario, t: np.ndarray, pose: np.ndarray
     exact = np.maximum(exact - rho - shapes.rho[kk], 0.0)
     best = int(np.argmin(exact))
     i, j = int(idx[best]), int(kk[best])
-    return float(exact[best]), shapes.names[j], float(t[i]), float(x[i]), float(y[i])
+    return float(exact[best]), shapes.names[j], i
 
 
 COARSE_STRIDE = 10  # poses per window of the coarse clearance pass

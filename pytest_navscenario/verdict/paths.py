@@ -154,10 +154,20 @@ def shape_pair_distance(a: Shapes, ia, b: Shapes, ib) -> np.ndarray:
 # Obstacle-obstacle gap
 
 
+def static_obstacles(scenario: Scenario) -> tuple[Obstacle, ...]:
+    """The obstacles that do not move: what the shortest path, path efficiency and the gap are
+    measured among (a moving obstacle is somewhere else a moment later; its clearance is measured
+    where it was, see metrics.min_clearance)."""
+    obstacles = scenario.obstacles
+    if not any(getattr(o, "motion", None) is not None for o in obstacles):
+        return tuple(obstacles)
+    return tuple(o for o in obstacles if getattr(o, "motion", None) is None)
+
+
 def min_obstacle_gap(scenario: Scenario) -> tuple[float, str, str]:
-    """The narrowest gap between two obstacles: ``(distance m, name a, name b)``, 0 when they
-    touch or overlap; ``(inf, "", "")`` with fewer than two obstacles. Exact (true circles)."""
-    key = tuple(scenario.obstacles)
+    """The narrowest gap between two static obstacles: ``(distance m, name a, name b)``, 0 when
+    they touch or overlap; ``(inf, "", "")`` with fewer than two. Exact (true circles)."""
+    key = static_obstacles(scenario)
     hit = _GAP_CACHE.get(key)
     if hit is None:
         hit = _min_gap(obstacle_shapes(key))
@@ -275,12 +285,12 @@ def path_through(scenario: Scenario, stops: Sequence[tuple[float, float]]) -> Sh
     """Shortest collision-free path for the scenario's footprint through ``stops`` (x, y) in
     order, among the scenario's obstacles; None if there is none. Cached like shortest_path."""
     stops = tuple((float(x), float(y)) for x, y in stops)
-    key = (scenario.robot.footprint, stops, tuple(scenario.obstacles))
+    key = (scenario.robot.footprint, stops, static_obstacles(scenario))
     try:
         return _PATH_CACHE[key]
     except KeyError:
         pass
-    result = _plan(np.array(stops, dtype=float).reshape(-1, 2), scenario.obstacles,
+    result = _plan(np.array(stops, dtype=float).reshape(-1, 2), key[2],
                    inflation_radius(scenario.robot.footprint))
     _remember(_PATH_CACHE, key, result)
     return result
@@ -370,12 +380,12 @@ def path_through_discs(scenario: Scenario, discs: Sequence[tuple[float, float, f
     ``inflation``: obstacle growth (default: the footprint's, as for shortest_path). Cached."""
     r = inflation_radius(scenario.robot.footprint) if inflation is None else inflation
     discs = tuple((float(x), float(y), max(float(t), 0.0)) for x, y, t in discs)
-    key = ("discs", r, discs, tuple(scenario.obstacles))
+    key = ("discs", r, discs, static_obstacles(scenario))
     try:
         return _PATH_CACHE[key]
     except KeyError:
         pass
-    result = _plan_discs(discs, scenario.obstacles, r)
+    result = _plan_discs(discs, key[3], r)
     _remember(_PATH_CACHE, key, result)
     return result
 
