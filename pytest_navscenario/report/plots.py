@@ -251,10 +251,11 @@ def draw_moving_obstacles(ax: "Axes", result: EpisodeResult) -> None:
         ax.add_collection(PolyCollection(rings[-1:], closed=True, facecolors="#ffcc80",
                                          edgecolors=MOVING_COLOUR, linewidths=1.2, zorder=5),
                           autolim=False)
-        for (t, label), poly in zip(moments, polys):
-            ax.annotate(f"{obs.name} {label}" if t == moments[0][0] else label,
-                        (poly.centroid.x, poly.centroid.y), xytext=(0, 9), textcoords="offset points",
-                        ha="center", fontsize=6, color=MOVING_COLOUR, zorder=8, bbox=_HALO)
+        for k, ((t, label), poly) in enumerate(zip(moments, polys)):
+            ax.annotate(f"{obs.name} {label}" if k == 0 else label,
+                        (poly.centroid.x, poly.centroid.y), xytext=(0, (9, -15, 20)[k % 3]),
+                        textcoords="offset points", ha="center", fontsize=6, color=MOVING_COLOUR,
+                        zorder=8, bbox=_HALO)
 
 
 def _draw_shortest_path(ax: "Axes", scenario: Any) -> None:

@@ -21,7 +21,12 @@ Defaults can be overridden in the seed's YAML ``search:`` mapping::
       goal_yaw: 0
       waypoint_dx: 0            # every waypoint gets its own dx/dy offsets
       waypoint_dy: 0
+      motion_start: [-2, 2]     # s added to a moving obstacle's start time (never below 0)
+      motion_speed: 0.5         # m/s added to a moving obstacle's speed (never below min_speed)
       min_size: 0.05            # m: sizes never shrink below this
+
+A moving obstacle's dx/dy shift its whole path (every point, or its start for a constant
+velocity); its motion_start and motion_speed move when and how fast it goes.
       frozen: [wall_left, start]  # obstacle names, start, goal, waypoints, waypoints[i]
 
 Every bound must contain 0 (the seed lies in the space); ``[lo, hi]`` with lo > hi is
@@ -50,7 +55,10 @@ DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {
     "goal_yaw": (0.0, 0.0),
     "waypoint_dx": (0.0, 0.0),
     "waypoint_dy": (0.0, 0.0),
+    "motion_start": (-2.0, 2.0),
+    "motion_speed": (-0.5, 0.5),
 }
+MIN_SPEED = 0.1         # m/s: a moving obstacle's speed never drops below this
 OTHER_KEYS = ("frozen", "min_size")
 KNOWN_KEYS = tuple(DEFAULT_BOUNDS) + OTHER_KEYS
 DEFAULT_MIN_SIZE = 0.05
@@ -96,6 +104,12 @@ class SearchSpace:
                 r = rng(f"obstacle_{attr}")
                 if r:
                     yield Param(f"obstacles.{obs.name}.{attr}", f"obstacle:{obs.name}", attr, *r)
+            if getattr(obs, "motion", None) is not None:
+                for attr in ("start", "speed"):
+                    r = rng(f"motion_{attr}")
+                    if r:
+                        yield Param(f"obstacles.{obs.name}.motion.{attr}", f"obstacle:{obs.name}",
+                                    attr, *r)
         mission = self.seed.mission
         for part in ("start", "goal"):
             if part in self.frozen:
@@ -173,17 +187,38 @@ def _mutate_pose(pose: Pose, d: Mapping[str, float] | None) -> Pose:
     return Pose(x, y, _r(yaw) if "yaw" in d else pose.yaw)
 
 
+def _mutate_motion(motion: Any, d: Mapping[str, float]) -> Any:
+    """The motion with its path shifted by dx/dy, its start and speed moved (clamped)."""
+    if motion is None:
+        return None
+    dx, dy = d.get("dx", 0.0), d.get("dy", 0.0)
+    start = _r(max(0.0, motion.start + d["start"])) if "start" in d else motion.start
+    ds = d.get("speed", 0.0)
+    if motion.velocity is not None:
+        vx, vy = motion.velocity
+        norm = math.hypot(vx, vy)
+        scale = max(MIN_SPEED, norm + ds) / norm if ds and norm > 0 else 1.0
+        return replace(motion, start=start, velocity=(_r(vx * scale), _r(vy * scale)) if scale != 1.0
+                       else motion.velocity)
+    path = (tuple((_r(px + dx), _r(py + dy)) for px, py in motion.path) if dx or dy else motion.path)
+    speed = _r(max(MIN_SPEED, motion.speed + ds)) if ds else motion.speed
+    return replace(motion, path=path, start=start, speed=speed)
+
+
 def _mutate_obstacle(obs, d: Mapping[str, float], min_size: float):
     x = _r(obs.x + d["dx"]) if "dx" in d else obs.x
     y = _r(obs.y + d["dy"]) if "dy" in d else obs.y
     ds = d.get("size", 0.0)
+    motion = _mutate_motion(getattr(obs, "motion", None), d)
+    if motion is not None and motion.path:
+        x, y = motion.path[0]       # a path's first point is where the obstacle stands
     if isinstance(obs, BoxObstacle):
-        return replace(obs, x=x, y=y,
+        return replace(obs, x=x, y=y, motion=motion,
                        length=_r(max(min_size, obs.length + ds)) if ds else obs.length,
                        width=_r(max(min_size, obs.width + ds)) if ds else obs.width,
                        yaw=_r(obs.yaw + d["yaw"]) if "yaw" in d else obs.yaw)
     if isinstance(obs, CylinderObstacle):
-        return replace(obs, x=x, y=y,
+        return replace(obs, x=x, y=y, motion=motion,
                        radius=_r(max(min_size / 2, obs.radius + ds / 2)) if ds else obs.radius)
     raise TypeError(f"unknown obstacle type {type(obs).__name__}")
 
@@ -282,10 +317,10 @@ def invalid_reason(scenario: Scenario) -> str | None:
     start = footprint_polygon(fp, m.start.x, m.start.y, m.start.yaw_rad)
     goal = footprint_polygon(fp, m.goal.x, m.goal.y, m.goal.yaw_rad)
     for obs in scenario.obstacles:
-        poly = obstacle_polygon(obs)
+        poly = obstacle_polygon(obs)     # a moving obstacle: where it stands at t = 0
         if poly.intersects(start):
             return f"start-blocked:{obs.name}"
-        if poly.intersects(goal):
+        if poly.intersects(goal) and getattr(obs, "motion", None) is None:   # one may cross it
             return f"goal-blocked:{obs.name}"
     from ..verdict.paths import path_exists
     if not path_exists(scenario):
