@@ -141,10 +141,15 @@ def cases(extra: list[str]):
     yield "divergence", blowup, lambda: Constant((1e12, 0.0, 0.0)), 0, {}
 
 
+NEWER_EVENT_FIELDS = ("robot_speed", "robot_moving", "obstacle_speed")
+
+
 def _event(ev):
     if ev is None:
         return None
     out = dataclasses.asdict(ev)
+    for key in NEWER_EVENT_FIELDS:     # who moved in a collision (issue 12): older code has none
+        out.pop(key, None)
     if out.get("traceback"):       # file paths differ between checkouts: keep the planner's last line
         last = out["traceback"].strip().splitlines()[-1]     # and modules move: drop the package path
         out["traceback"] = re.sub(r"^[\w.]+\.(\w+):", r"\1:", last)

@@ -173,8 +173,8 @@ def draw_obstacles(ax: "Axes", scenario: Any, *, involved: set[str] = frozenset(
     """The obstacles as grey polygons, with their names (on maps of more than
     MAX_NAMED_OBSTACLES obstacles, only the ``involved`` ones are named).
 
-    This is the one place that draws obstacles: a new kind of obstacle (moving ones, believed
-    versus true positions) is drawn by extending this step, not ``draw_episode``.
+    This is the one place that draws the static obstacles; moving ones are drawn by
+    ``draw_moving_obstacles`` (they need the episode's times), the step after this one.
     """
     from matplotlib.collections import PolyCollection
 

@@ -122,9 +122,10 @@ class Episode:
     5. ``step_physics``: the tick's physics steps, each state recorded and its contacts checked (a
        collision ends it), then MuJoCo's warnings (a divergence raises).
 
-    Where later features go: a world that changes over time (moving obstacles as mocap bodies)
-    writes its poses in ``step_physics`` before the first step, once per tick (MuJoCo uses them
-    from the next kinematics on: every step's contacts and the next tick's scan); sensor faults
+    Moving obstacles (mocap bodies, ``moving.py``): ``start`` puts them where they are at t = 0,
+    ``step_physics_moving`` (chosen instead of ``step_physics`` when the model has any) before each
+    state's kinematics, so every step's contacts and the next tick's scan see them where they are;
+    the safety check gets their offsets and velocities at the tick. Where later features go: sensor faults
     (range noise, latency, localisation drift) change what ``observe`` hands the planner, never
     the true state that the safety layer, the mission and the recorded trajectory use.
     """

@@ -42,11 +42,18 @@ class MovingObstacles:
         self.base = -self.rows        # no chunk yet
 
     def _fill(self, i: int) -> None:
-        """Positions for steps i .. i + rows - 1."""
+        """Positions for steps i .. i + rows - 1 (i is a tick's first step), and for each tick of
+        the chunk what the safety layer needs, as plain floats (a Python loop over them is cheaper
+        than numpy calls on a handful of obstacles)."""
         times = (i + np.arange(self.rows)) * self.dt
         for j, track in enumerate(self.tracks):
             self.table[:, j, :2] = track.positions(times)
         self.base = i
+        spt = self.spt
+        info = np.empty((CHUNK_TICKS, len(self.indices), 4))
+        info[:, :, :2] = self.table[0:-1:spt, :, :2] - self.origin
+        info[:, :, 2:] = (self.table[1::spt, :, :2] - self.table[0:-1:spt, :, :2]) / self.dt
+        self.tick_info = info.tolist()
 
     def rows_for_tick(self, i: int) -> np.ndarray:
         """The positions (spt + 1, k, 3) of steps i .. i + spt (the tick starting at step i)."""
@@ -59,13 +66,11 @@ class MovingObstacles:
         """Put the obstacles where they are at step ``i`` (outside the tick loop: start)."""
         self.mocap_pos[:] = self.rows_for_tick(i)[0]
 
-    def now(self, i: int) -> tuple[list[int], np.ndarray, np.ndarray]:
-        """(obstacle indices, offsets (k, 2) from their scenario x, y, velocities (k, 2) in m/s)
-        at step ``i``; the velocity is the motion over the next step."""
-        rows = self.rows_for_tick(i)
-        offsets = rows[0, :, :2] - self.origin
-        velocity = (rows[1, :, :2] - rows[0, :, :2]) / self.dt
-        return self.indices, offsets, velocity
+    def now(self, i: int) -> list[list[float]]:
+        """Per moving obstacle (in ``indices`` order) [dx, dy, vx, vy] at step ``i`` (a tick's
+        first step): its offset from its scenario x, y and its velocity (m/s) over the next step."""
+        self.rows_for_tick(i)
+        return self.tick_info[(i - self.base) // self.spt]
 
 
 def describe_collision(collision: Collision, scenario: Scenario, qvel: np.ndarray) -> Collision:

@@ -95,6 +95,8 @@ class SafetyLayer:
         self.static = np.ones(n, dtype=bool)
         self.static[self.moving] = False
         static = [j for j in range(n) if self.static[j]]
+        self._movers = [(j, float(self.centres[j, 0]), float(self.centres[j, 1]), float(self.bound[j]))
+                        for j in self.moving]
         self._circles = ([(j, float(self.centres[j, 0]), float(self.centres[j, 1]), float(self.bound[j]))
                           for j in static] if len(static) <= 32 else None)
 
@@ -142,12 +144,13 @@ class SafetyLayer:
         return d
 
     def check(self, x: float, y: float, yaw: float, vx: float, vy: float, wz: float,
-              moving: tuple[list[int], np.ndarray, np.ndarray] | None = None) -> str | None:
+              moving: list[list[float]] | None = None) -> str | None:
         """The name of the obstacle the predicted sweep would hit, or None (robot may go on).
 
-        ``moving``: (indices, offsets from their scenario position (k, 2), velocities (k, 2)) of
-        the moving obstacles now; each is predicted to hold its velocity over the horizon, like
-        the robot its twist, and the sweep is checked relative to it."""
+        ``moving``: per moving obstacle (in scenario order) [dx, dy, vx, vy], its offset from its
+        scenario position and its velocity now (MovingObstacles.now); each is predicted to hold its
+        velocity over the horizon, like the robot its twist, and the sweep is checked relative to
+        it."""
         speed = math.hypot(vx, vy)
         # No point of the footprint moves farther than this over the horizon.
         travel = (speed + abs(wz) * self.robot_radius) * self.horizon
@@ -210,17 +213,13 @@ class SafetyLayer:
         order = np.lexsort((future.min(axis=0), first))
         return self.names[int(idx[order[0]])]
 
-    def _near_movers(self, x: float, y: float, reach: float,
-                     moving: tuple[list[int], np.ndarray, np.ndarray]
+    def _near_movers(self, x: float, y: float, reach: float, moving: list[list[float]]
                      ) -> list[tuple[int, tuple[float, float], tuple[float, float]]]:
         """The moving obstacles that may come within reach over the horizon: (index, offset,
         velocity) each."""
         out = []
-        indices, offsets, velocity = moving
-        for k, j in enumerate(indices):
-            ox, oy = float(offsets[k, 0]), float(offsets[k, 1])
-            ovx, ovy = float(velocity[k, 0]), float(velocity[k, 1])
-            cx, cy = float(self.centres[j, 0]) + ox, float(self.centres[j, 1]) + oy
-            if math.hypot(cx - x, cy - y) - float(self.bound[j]) < reach + math.hypot(ovx, ovy) * self.horizon:
+        hypot, h = math.hypot, self.horizon
+        for (j, cx, cy, bound), (ox, oy, ovx, ovy) in zip(self._movers, moving):
+            if hypot(cx + ox - x, cy + oy - y) - bound < reach + hypot(ovx, ovy) * h:
                 out.append((j, (ox, oy), (ovx, ovy)))
         return out

@@ -12,14 +12,14 @@ from __future__ import annotations
 import logging
 import math
 from collections import OrderedDict, deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import mujoco
 import numpy as np
 
 from ..core.errors import ScenarioError
-from ..scenario.model import BoxObstacle, CylinderObstacle, Footprint, Scenario
+from ..scenario.model import BoxObstacle, CylinderObstacle, Footprint, Motion, Scenario
 from .safety import SafetyLayer
 from .trajectory import Collision
 
@@ -217,14 +217,19 @@ class World:
 
 
 _CACHE: OrderedDict[Any, World] = OrderedDict()
+_MOVES = Motion()     # stands for any motion in a cache key
 
 
 def _cache_key(scenario: Scenario) -> Any:
     # Everything the compiled model (and the safety geometry) depends on, names included (the
     # content hash ignores names, but contacts must map to the right name).
+    # A moving obstacle's timing and speed are not in the model (the loop writes its positions),
+    # so candidates of a search that differ only in those share one compiled model.
     robot = scenario.robot
-    return (robot.footprint, robot.limits, robot.safety, scenario.obstacles,
-            scenario.simulation.timestep)
+    obstacles = scenario.obstacles
+    if any(getattr(o, "motion", None) is not None for o in obstacles):
+        obstacles = tuple(o if o.motion is None else replace(o, motion=_MOVES) for o in obstacles)
+    return (robot.footprint, robot.limits, robot.safety, obstacles, scenario.simulation.timestep)
 
 
 def compiled_world(scenario: Scenario) -> World:

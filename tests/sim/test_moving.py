@@ -123,18 +123,18 @@ def test_the_safety_layer_predicts_with_the_obstacles_velocity():
     layer = SafetyLayer(sc)
     # the robot (half length 0.45) at 1.0 m from the person's edge... 2.0 - 0.25 - 0.45 = 1.3 m gap;
     # at 0.5 m/s over 0.5 s the robot alone closes 0.25 m: no halt if the person stood still
-    still = ([0], np.zeros((1, 2)), np.zeros((1, 2)))
+    still = [[0.0, 0.0, 0.0, 0.0]]
     assert layer.check(0.0, 0.0, 0.0, 0.5, 0.0, 0.0, still) is None
     # walking towards the robot at 1.3 m/s the gap closes by 0.9 m more: halt
-    oncoming = ([0], np.zeros((1, 2)), np.array([[-1.3, 0.0]]))
+    oncoming = [[0.0, 0.0, -1.3, 0.0]]
     assert layer.check(0.0, 0.0, 0.0, 0.5, 0.0, 0.0, oncoming) is None  # 1.15 m < 1.3 m: not yet
     # 0.5 m nearer (gap 0.8 m): 0.25 m + 0.65 m closes it within the horizon; standing, it would not
-    near = ([0], np.array([[-0.5, 0.0]]), np.array([[-1.3, 0.0]]))
+    near = [[-0.5, 0.0, -1.3, 0.0]]
     assert layer.check(0.0, 0.0, 0.0, 0.5, 0.0, 0.0, near) == "oncoming"
-    near_still = ([0], np.array([[-0.5, 0.0]]), np.zeros((1, 2)))
+    near_still = [[-0.5, 0.0, 0.0, 0.0]]
     assert layer.check(0.0, 0.0, 0.0, 0.5, 0.0, 0.0, near_still) is None
     # and it is where it is now, not where the scenario placed it
-    gone = ([0], np.array([[0.0, 5.0]]), np.zeros((1, 2)))
+    gone = [[0.0, 5.0, 0.0, 0.0]]
     assert layer.check(0.0, 0.0, 0.0, 0.5, 0.0, 0.0, gone) is None
 
 
@@ -240,3 +240,89 @@ def test_bad_motion_input_names_file_line_and_field(obstacle, field, message):
 def test_a_moving_obstacle_may_cross_the_goal():
     sc = scenario("  - {type: person, motion: {path: [[6, -3], [6, 3]]}}")
     assert sc.obstacles[0].motion is not None
+
+
+# ---------------------------------------------------------------- pictures, bags, search
+
+def test_the_plot_draws_the_moving_obstacle_where_it_was_at_the_key_moments(tmp_path):
+    pytest.importorskip("matplotlib")
+    from pytest_navscenario.report.plots import (moving_key_moments, obstacle_polygon_at,
+                                                 trajectory_figure)
+
+    result = run_scenario(scenario(CROSSING % (0.0, 0.0)), Still)    # walked into at t ~ 2.4 s
+    walker = result.scenario.obstacle("walker")
+    moments = moving_key_moments(result, walker)
+    assert [label.split()[0] for _, label in moments] == ["t=0", "collision"]  # closest = the end
+    end = obstacle_polygon_at(walker, moments[-1][0])
+    assert end.centroid.y == pytest.approx(-3 + 1.3 * (moments[-1][0] - 0.5), abs=1e-6)
+    fig = trajectory_figure(result)
+    ax = fig.axes[0]
+    texts = [t.get_text() for t in ax.texts]
+    assert "walker t=0" in texts and any(t.startswith("collision t=") for t in texts)
+    assert "moving obstacle's way" in ax.get_legend_handles_labels()[1] or \
+        any("moving obstacle's way" in t.get_text() for t in fig.legends[0].get_texts())
+    assert any("robot standing" in t.get_text() for leg in fig.legends for t in leg.get_texts())
+    fig.savefig(tmp_path / "walked.png")
+
+
+def test_bags_carry_the_moving_obstacles_poses_over_time(tmp_path):
+    pytest.importorskip("rosbags")
+    from rosbags.highlevel import AnyReader
+
+    from pytest_navscenario.ros.bag_writer import MOVING_TOPIC, write_episode_bag
+
+    result = run_scenario(scenario(CROSSING % (0.0, 0.0)), Still)
+    path = write_episode_bag(result, tmp_path / "bag")
+    track = Track(result.scenario.obstacle("walker"))
+    with AnyReader([path]) as reader:
+        conns = [c for c in reader.connections if c.topic == MOVING_TOPIC]
+        assert conns and conns[0].msgtype == "visualization_msgs/msg/MarkerArray"
+        msgs = [(ts, reader.deserialize(raw, c.msgtype)) for c, ts, raw in reader.messages(connections=conns)]
+        static = [c for c in reader.connections if c.topic == "/navscenario/obstacles"]
+        latched = [reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages(connections=static)]
+    assert len(msgs) > 50 and latched[0].markers == []       # the walker is not a static marker
+    for ts, msg in msgs[::10]:
+        (marker,) = msg.markers
+        x, y = track.positions(np.array([ts / 1e9]))[0]
+        assert (marker.pose.position.x, marker.pose.position.y) == pytest.approx((x, y))
+        assert marker.ns == "moving_obstacles" and marker.type == 3 and marker.text == "walker"
+    assert msgs[-1][1].markers[0].color.r == pytest.approx(0.9)   # red once it hit the robot
+
+
+def test_the_search_space_moves_a_moving_obstacles_start_speed_and_path():
+    from pytest_navscenario.search.space import SearchSpace
+
+    sc = scenario(CROSSING % (3.0, 3.0) + "\n  - {type: box, name: cart, length: 0.8, width: 0.6, x: 2, "
+                  "y: 4, motion: {velocity: [0, -0.8], start: 1}}")
+    space = SearchSpace(sc)
+    names = [p.name for p in space.params]
+    assert "obstacles.walker.motion.start" in names and "obstacles.walker.motion.speed" in names
+    assert "obstacles.cart.motion.speed" in names
+    offsets = [0.0] * len(space)
+    for name, value in (("obstacles.walker.dx", 0.5), ("obstacles.walker.motion.start", -2.0),
+                        ("obstacles.walker.motion.speed", 0.4), ("obstacles.cart.motion.speed", 0.2)):
+        offsets[space.index[name]] = value
+    moved = space.apply(offsets)
+    walker, cart = moved.obstacle("walker"), moved.obstacle("cart")
+    assert walker.motion.path == ((3.5, -3.0), (3.5, 3.0)) and (walker.x, walker.y) == (3.5, -3.0)
+    assert walker.motion.start == 0.0 and walker.motion.speed == pytest.approx(1.7)  # start clamped at 0
+    assert cart.motion.velocity == pytest.approx((0.0, -1.0))
+    assert space.apply(space.zero()) == sc
+    # a seed without moving obstacles has the same space as before
+    static = SearchSpace(scenario("  - {type: box, name: crate, x: 3, y: 0, length: 1, width: 1}"))
+    assert [p.attr for p in static.params] == ["dx", "dy", "size", "yaw"]
+
+
+# the content hashes of the five paper seeds, computed with the code before moving obstacles existed:
+# the files load unchanged and mean the same (the same hash pairs them across results files)
+SEED_HASHES = {"boxes1": "1bfa4415005c2e02", "boxes2": "aeb896a18fd92360", "corridor": "38b126911cdbd6fe",
+               "cylinders": "40b0696933c5e63c", "L-corridor": "485472539df6322b"}
+
+
+@pytest.mark.parametrize("name", sorted(SEED_HASHES))
+def test_the_paper_seeds_hash_as_before(name):
+    from pytest_navscenario.scenario.loader import load_scenario
+
+    sc = load_scenario(Path(__file__).resolve().parents[2] / "scenarios" / f"{name}.yaml")
+    assert content_hash(sc) == SEED_HASHES[name]
+    assert all(o.motion is None for o in sc.obstacles)
