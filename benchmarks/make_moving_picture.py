@@ -1,4 +1,4 @@
-"""Make docs/pictures/moving-person.png: the person-crossing seed with the person starting 1.4 s
+"""Make docs/pictures/moving-person.png (docs/pictures is examples/pictures): the person-crossing seed with the person starting 1.4 s
 later than written (a failure the search finds), run against the built-in ``dwa``.
 
     python benchmarks/make_moving_picture.py [--out docs/pictures/moving-person.png]
