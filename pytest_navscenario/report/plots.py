@@ -189,7 +189,8 @@ def draw_obstacles(ax: "Axes", scenario: Any, *, involved: set[str] = frozenset(
             continue
         if is_moving(obs):
             continue    # named at its key moments (draw_moving_obstacles)
-        ax.annotate(obs.name, (poly.centroid.x, poly.centroid.y), ha="center", va="center",
+        at = poly.centroid if poly.contains(poly.centroid) else poly.representative_point()  # a U's notch
+        ax.annotate(obs.name, (at.x, at.y), ha="center", va="center",
                     fontsize=7, zorder=8, bbox=_HALO)
 
 

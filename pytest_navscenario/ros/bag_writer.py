@@ -41,7 +41,7 @@ import numpy as np
 from ..core.errors import NavScenarioError
 from ..verdict.result import EpisodeResult
 from ..core.files import json_safe
-from ..scenario.model import BoxObstacle, CylinderObstacle
+from ..scenario.model import BoxObstacle, CylinderObstacle, MeshObstacle, PolygonObstacle
 
 FORMATS = ("mcap", "sqlite3", "ros1")
 ODOM_FRAME, BASE_FRAME, LASER_FRAME = "odom", "base_link", "laser"
@@ -237,7 +237,8 @@ def _messages(result: EpisodeResult, ros1: bool):
         "data": json.dumps(result_summary(result), sort_keys=True, allow_nan=False)}
 
 
-_COLOURS = {"box": (0.55, 0.55, 0.6), "cylinder": (0.45, 0.5, 0.65), "moving_obstacles": (0.95, 0.55, 0.15)}
+_COLOURS = {"box": (0.55, 0.55, 0.6), "cylinder": (0.45, 0.5, 0.65), "polygon": (0.5, 0.55, 0.55),
+            "mesh": (0.6, 0.5, 0.45), "moving_obstacles": (0.95, 0.55, 0.15)}
 
 
 def _markers(result: EpisodeResult) -> list[dict[str, Any]]:
@@ -260,8 +261,32 @@ def _marker(obs: Any, i: int, hit: bool, ns: str, x: float, y: float, stamp: flo
     if isinstance(obs, BoxObstacle):
         return {**common, "type": 1, "pose": _pose(x, y, obs.yaw_rad, obs.height / 2),
                 "scale": {"x": obs.length, "y": obs.width, "z": obs.height}}
+    if isinstance(obs, (PolygonObstacle, MeshObstacle)):     # TRIANGLE_LIST: the prism's faces
+        return {**common, "type": 11, "pose": _pose(x, y, obs.yaw_rad, 0.0),
+                "scale": {"x": 1.0, "y": 1.0, "z": 1.0}, "points": _prism_triangles(obs)}
     return {**common, "type": 3, "pose": _pose(x, y, 0.0, obs.height / 2),
             "scale": {"x": 2 * obs.radius, "y": 2 * obs.radius, "z": obs.height}}
+
+
+def _prism_triangles(obs: Any) -> list[dict[str, float]]:
+    """The triangles (as a flat list of points, three each) of a polygon or mesh obstacle's prism in
+    its own frame: its convex parts' top and bottom fans and the outline's walls."""
+    from ..scenario.geometry import convex_parts_local, outline_points
+
+    h = float(obs.height)
+    pts: list[dict[str, float]] = []
+
+    def p(x: float, y: float, z: float) -> dict[str, float]:
+        return {"x": float(x), "y": float(y), "z": z}
+
+    for part in convex_parts_local(tuple(outline_points(obs))):
+        for k in range(1, len(part) - 1):
+            for z in (0.0, h):
+                pts += [p(*part[0], z), p(*part[k], z), p(*part[k + 1], z)]
+    ring = list(outline_points(obs))
+    for (ax, ay), (bx, by) in zip(ring, ring[1:] + ring[:1]):
+        pts += [p(ax, ay, 0.0), p(bx, by, 0.0), p(bx, by, h), p(ax, ay, 0.0), p(bx, by, h), p(ax, ay, h)]
+    return pts
 
 
 def _moving_markers(result: EpisodeResult, times: np.ndarray):

@@ -10,7 +10,7 @@ import yaml
 
 from ..core.files import atomic_write_text
 from .loader import LIDAR_KEYS, LIMITS_KEYS
-from .model import BoxObstacle, Mark, Motion, Obstacle, Pose, Scenario
+from .model import BoxObstacle, Mark, MeshObstacle, Motion, Obstacle, PolygonObstacle, Pose, Scenario
 
 
 def _f(value: Any) -> float:
@@ -51,6 +51,12 @@ def _obstacle_dict(obs: Obstacle) -> dict[str, Any]:
     if isinstance(obs, BoxObstacle):
         out = {"type": "box", "name": obs.name, "x": _f(obs.x), "y": _f(obs.y), "length": _f(obs.length),
                "width": _f(obs.width), "yaw": _f(obs.yaw), "height": _f(obs.height)}
+    elif isinstance(obs, PolygonObstacle):
+        out = {"type": "polygon", "name": obs.name, "x": _f(obs.x), "y": _f(obs.y),
+               "points": [[_f(a), _f(b)] for a, b in obs.points], "yaw": _f(obs.yaw), "height": _f(obs.height)}
+    elif isinstance(obs, MeshObstacle):     # the outline and height come from the file again
+        out = {"type": "mesh", "name": obs.name, "x": _f(obs.x), "y": _f(obs.y), "file": obs.file,
+               "scale": [_f(v) for v in obs.scale], "yaw": _f(obs.yaw)}
     else:
         out = {"type": "cylinder", "name": obs.name, "x": _f(obs.x), "y": _f(obs.y),
                "radius": _f(obs.radius), "height": _f(obs.height)}

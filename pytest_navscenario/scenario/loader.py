@@ -37,8 +37,10 @@ from .model import (
     Mark,
     Mission,
     MOTION_MODES,
+    MeshObstacle,
     Motion,
     Obstacle,
+    PolygonObstacle,
     Pose,
     Reference,
     Robot,
@@ -82,7 +84,10 @@ TOLERANCE_KEYS = ("position", "yaw")
 BOX_KEYS = ("type", "name", "x", "y", "length", "width", "yaw", "height", "motion")
 CYLINDER_KEYS = ("type", "name", "x", "y", "radius", "height", "motion")
 PERSON_KEYS = CYLINDER_KEYS     # a cylinder with a person's size and walking speed as defaults
+POLYGON_KEYS = ("type", "name", "x", "y", "points", "yaw", "height", "motion")
+MESH_KEYS = ("type", "name", "x", "y", "file", "scale", "yaw", "motion")
 MOTION_KEYS = ("path", "speed", "mode", "start", "velocity")
+MAX_POLYGON_POINTS = 1000
 PERSON_RADIUS = 0.25            # m
 PERSON_HEIGHT = 1.7             # m
 PERSON_SPEED = 1.3              # m/s, a typical walking speed
@@ -90,12 +95,14 @@ SIMULATION_KEYS = ("timestep", "control_rate", "seed")
 REFERENCE_KEYS = ("file", "points")
 DRIVES = ("omni", "diff")
 SHAPES = ("box", "circle")
-OBSTACLE_TYPES = ("box", "cylinder", "person")
+OBSTACLE_TYPES = ("box", "cylinder", "person", "polygon", "mesh")
+TYPE_KEYS = {"box": BOX_KEYS, "cylinder": CYLINDER_KEYS, "person": PERSON_KEYS, "polygon": POLYGON_KEYS,
+             "mesh": MESH_KEYS}
 _KEY_HOMES = (("", TOP_KEYS), ("robot", ROBOT_KEYS), ("robot.footprint", FOOTPRINT_KEYS),
               ("robot.limits", LIMITS_KEYS), ("robot.lidar", LIDAR_KEYS), ("robot.safety", SAFETY_KEYS),
               ("mission", MISSION_KEYS), ("mission.goal_tolerance", TOLERANCE_KEYS), ("simulation", SIMULATION_KEYS),
               ("obstacles[].motion", MOTION_KEYS),
-              ("obstacles[]", BOX_KEYS + CYLINDER_KEYS), ("reference", REFERENCE_KEYS))
+              ("obstacles[]", BOX_KEYS + CYLINDER_KEYS + POLYGON_KEYS + MESH_KEYS), ("reference", REFERENCE_KEYS))
 _ALIASES = {  # common synonyms -> the spelling the format uses (for the hint)
     "omnidirectional": "omni", "holonomic": "omni", "differential": "diff", "diff-drive": "diff",
     "rectangle": "box", "rect": "box", "cuboid": "box", "square": "box", "cyl": "cylinder",
@@ -405,10 +412,10 @@ def _obstacles(ctx: _Ctx, top: _Section) -> tuple[Obstacle, ...]:
         if kind not in OBSTACLE_TYPES:
             raise ctx.fail(f"unknown obstacle type {describe(type_item[1])}", f"{path}.type",
                            type_item[0] or line, _did_you_mean(kind if kind is not None else "", OBSTACLE_TYPES))
-        keys, other_keys, other = ((BOX_KEYS, CYLINDER_KEYS, "cylinder") if kind == "box"
-                                   else (CYLINDER_KEYS, BOX_KEYS, "box"))
+        keys = TYPE_KEYS[kind]
         for key, (key_line, _) in item.items.items():
-            if key not in keys and key in other_keys:
+            other = next((t for t, t_keys in TYPE_KEYS.items() if key not in keys and key in t_keys), None)
+            if other is not None:
                 raise ctx.fail(f"'{key}' does not apply to type: {kind} (it is a {other} key)", f"{path}.{key}",
                                key_line or line, f"remove '{key}', or set type: {other}")
         sec = _Section(ctx, item, path, keys, line=line)
@@ -422,8 +429,8 @@ def _obstacles(ctx: _Ctx, top: _Section) -> tuple[Obstacle, ...]:
             given[name] = i
         parsed.append((kind, sec, name))
     taken = set(given)
-    counters = {"box": 0, "cylinder": 0, "person": 0}
-    prefixes = {"box": "box", "cylinder": "cyl", "person": "person"}
+    counters = dict.fromkeys(OBSTACLE_TYPES, 0)
+    prefixes = {"box": "box", "cylinder": "cyl", "person": "person", "polygon": "polygon", "mesh": "mesh"}
     result: list[Obstacle] = []
     for kind, sec, name in parsed:
         if name is None:  # generated: box1, box2, cyl1, person1 ... skipping names already given
@@ -449,9 +456,15 @@ def _obstacle(ctx: _Ctx, sec: _Section, kind: str, name: str) -> Obstacle:
                                f"remove '{key}', or make it the path's first point")
         x, y = motion.path[0]
     else:
-        x = sec.number("x", example="x: 0.0")
-        y = sec.number("y", example="y: 0.0")
+        placed = kind in ("polygon", "mesh")      # points and meshes may be written in world coordinates
+        x = sec.number("x", 0.0 if placed else _REQUIRED, example="x: 0.0")
+        y = sec.number("y", 0.0 if placed else _REQUIRED, example="y: 0.0")
+    if kind == "mesh":
+        return _mesh(ctx, sec, name, x, y, motion)
     height = sec.number("height", PERSON_HEIGHT if person else 1.0, low=0, low_open=True)
+    if kind == "polygon":
+        return PolygonObstacle(name=name, x=x, y=y, points=_polygon_points(ctx, sec), yaw=sec.number("yaw", 0.0),
+                               height=height, motion=motion)
     if kind == "box":
         return BoxObstacle(name=name, x=x, y=y,
                            length=sec.number("length", low=0, low_open=True, example="length: 1.0"),
@@ -460,6 +473,62 @@ def _obstacle(ctx: _Ctx, sec: _Section, kind: str, name: str) -> Obstacle:
     radius = sec.number("radius", PERSON_RADIUS if person else _REQUIRED, low=0, low_open=True,
                         example="radius: 0.5")
     return CylinderObstacle(name=name, x=x, y=y, height=height, radius=radius, motion=motion)
+
+
+def _polygon_points(ctx: _Ctx, sec: _Section) -> tuple[tuple[float, float], ...]:
+    """A polygon's ``points``: three or more [x, y], a simple polygon (no crossing edges)."""
+    from .geometry import polygon_problem
+
+    node = sec.get("points")
+    field, line = _join(sec.path, "points"), sec.line_of("points")
+    if node is None:
+        raise sec.missing("points", "points: [[0, 0], [2, 0], [2, 1], [0, 1]]")
+    if not isinstance(node, YSeq):
+        raise ctx.fail(f"expected a list of points [x, y], got {describe(node)}", field, line,
+                       "write e.g. points: [[0, 0], [2, 0], [2, 1], [0, 1]]")
+    if len(node.items) > MAX_POLYGON_POINTS:
+        raise ctx.fail(f"{len(node.items)} points is more than the limit of {MAX_POLYGON_POINTS}", field,
+                       line, "simplify the outline")
+    points = tuple(_point(ctx, p, f"{field}[{k}]", p.line or line) for k, p in enumerate(node.items))
+    if len(points) > 3 and points[0] == points[-1]:
+        points = points[:-1]          # a closed ring written out: the first point once
+    problem = polygon_problem(points)
+    if problem is not None:
+        raise ctx.fail(problem, field, node.line or line,
+                       "list the corners in order around the outline, without edges crossing each other")
+    return points
+
+
+def _mesh(ctx: _Ctx, sec: _Section, name: str, x: float, y: float, motion: Motion | None) -> Obstacle:
+    """A mesh obstacle: its file (beside the scenario) read now, so a bad file is an error here."""
+    from .mesh import MeshError, mesh_outline, read_mesh, resolve_mesh_path
+
+    file = sec.string("file", None)
+    if file is None:
+        raise sec.missing("file", "file: parts/press.stl")
+    scale_node = sec.get("scale")
+    field = _join(sec.path, "scale")
+    if scale_node is None:
+        scale = (1.0, 1.0, 1.0)
+    elif isinstance(scale_node, YSeq):
+        if len(scale_node.items) != 3:
+            raise ctx.fail(f"expected one number or three [sx, sy, sz], got {describe(scale_node)}", field,
+                           sec.line_of("scale"), "write e.g. scale: 0.001 (millimetres to metres)")
+        scale = tuple(_number(ctx, n, f"{field}[{k}]", sec.line_of("scale"), low=0, low_open=True)
+                      for k, n in enumerate(scale_node.items))
+    else:
+        s = _number(ctx, scale_node, field, sec.line_of("scale"), low=0, low_open=True)
+        scale = (s, s, s)
+    folder = Path(ctx.source).parent if ctx.source else Path.cwd()
+    try:
+        path = resolve_mesh_path(folder, file)
+        verts, tris = read_mesh(path)
+        outline, height = mesh_outline(verts, tris, scale, Path(file).name)
+    except MeshError as exc:
+        raise ctx.fail(str(exc), _join(sec.path, "file"), sec.line_of("file"),
+                       "fix the file or the path (relative to the scenario's folder)") from None
+    return MeshObstacle(name=name, x=x, y=y, file=file, scale=scale, yaw=sec.number("yaw", 0.0),
+                        footprint=outline, height=height, motion=motion)
 
 
 def _point(ctx: _Ctx, node: YNode, field: str, line: int | None) -> tuple[float, float]:
@@ -675,7 +744,7 @@ def _check_clear(scenario: Scenario, ctx: _Ctx) -> None:
     """Start and goal footprints and waypoints must not touch an obstacle (names the first one)."""
     from shapely.geometry import Point
 
-    from .geometry import footprint_polygon, footprint_radius, obstacle_polygon
+    from .geometry import bounding_radius, footprint_polygon, footprint_radius, obstacle_polygon
 
     mission = scenario.mission
     fp = scenario.robot.footprint
@@ -683,8 +752,7 @@ def _check_clear(scenario: Scenario, ctx: _Ctx) -> None:
               ("goal", mission.goal, footprint_radius(fp), "the robot's footprint at the goal")]
     checks += [(f"waypoints[{i}]", wp, 0.0, f"waypoint {i}") for i, wp in enumerate(mission.waypoints)]
     # Cheap bounding-circle test first, so thousands of obstacles cost microseconds, not polygons.
-    bounds = [(o.x, o.y, math.hypot(o.length, o.width) / 2.0 if isinstance(o, BoxObstacle) else o.radius)
-              for o in scenario.obstacles]
+    bounds = [(o.x, o.y, bounding_radius(o)) for o in scenario.obstacles]
     moving = {i for i, o in enumerate(scenario.obstacles) if getattr(o, "motion", None) is not None}
     for key, pose, reach, what in checks:
         # a moving obstacle must leave the start clear (where it stands at t = 0); it may cross the

@@ -78,7 +78,49 @@ class CylinderObstacle:
     kind: Literal["cylinder"] = field(default="cylinder", init=False)
 
 
-Obstacle = Union[BoxObstacle, CylinderObstacle]
+@dataclass(frozen=True)
+class PolygonObstacle:
+    """A prism standing on z = 0: any simple polygon (convex or not) of ``points`` given in the
+    obstacle's own frame (metres), placed with that frame's origin at (x, y) and turned by ``yaw``
+    degrees, extruded to ``height``."""
+    name: str
+    x: float
+    y: float
+    points: tuple[tuple[float, float], ...]
+    yaw: float = 0.0
+    height: float = 1.0
+    motion: Motion | None = None    # None: static
+    kind: Literal["polygon"] = field(default="polygon", init=False)
+
+    @property
+    def yaw_rad(self) -> float:
+        return math.radians(self.yaw)
+
+
+@dataclass(frozen=True)
+class MeshObstacle:
+    """A triangle mesh read from an STL or OBJ ``file`` beside the scenario (a path relative to the
+    scenario file's folder), scaled by ``scale`` (x, y, z), turned by ``yaw`` degrees about z and
+    placed with its origin at (x, y) and its lowest point on z = 0. ``footprint`` and ``height`` are
+    what the loader read from the file: the outline of the mesh seen from above (in the mesh's own
+    frame, scaled) and its height; the simulation and the verdict use them (a prism, see the docs)."""
+    name: str
+    x: float
+    y: float
+    file: str
+    scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    yaw: float = 0.0
+    footprint: tuple[tuple[float, float], ...] = field(default=(), compare=True)
+    height: float = 1.0
+    motion: Motion | None = None
+    kind: Literal["mesh"] = field(default="mesh", init=False)
+
+    @property
+    def yaw_rad(self) -> float:
+        return math.radians(self.yaw)
+
+
+Obstacle = Union[BoxObstacle, CylinderObstacle, PolygonObstacle, MeshObstacle]
 
 
 @dataclass(frozen=True)
@@ -231,5 +273,6 @@ def content_hash(scenario: Scenario) -> str:
         obs.pop("name", None)
         if obs.get("motion") is None:   # a static obstacle hashes as before motion existed
             obs.pop("motion", None)
+        obs.pop("file", None)           # a mesh is its outline and height (hashed), wherever its file is
     text = json.dumps(body, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]

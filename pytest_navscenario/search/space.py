@@ -21,6 +21,7 @@ Defaults can be overridden in the seed's YAML ``search:`` mapping::
       goal_yaw: 0
       waypoint_dx: 0            # every waypoint gets its own dx/dy offsets
       waypoint_dy: 0
+      polygon_vertex: 0.2       # m: each polygon corner's own dx/dy (default 0: off)
       motion_start: [-2, 2]     # s added to a moving obstacle's start time (never below 0)
       motion_speed: 0.5         # m/s added to a moving obstacle's speed (never below min_speed)
       min_size: 0.05            # m: sizes never shrink below this
@@ -40,7 +41,7 @@ from dataclasses import dataclass, replace
 from typing import Any, Mapping, Sequence
 
 from ..core.errors import ScenarioError
-from ..scenario.model import BoxObstacle, CylinderObstacle, Pose, Scenario
+from ..scenario.model import BoxObstacle, CylinderObstacle, MeshObstacle, PolygonObstacle, Pose, Scenario
 
 DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {
     "obstacle_dx": (-0.5, 0.5),
@@ -55,6 +56,7 @@ DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {
     "goal_yaw": (0.0, 0.0),
     "waypoint_dx": (0.0, 0.0),
     "waypoint_dy": (0.0, 0.0),
+    "polygon_vertex": (0.0, 0.0),
     "motion_start": (-2.0, 2.0),
     "motion_speed": (-0.5, 0.5),
 }
@@ -99,11 +101,19 @@ class SearchSpace:
         for obs in self.seed.obstacles:
             if obs.name in self.frozen:
                 continue
-            attrs = ["dx", "dy", "size"] + (["yaw"] if isinstance(obs, BoxObstacle) else [])
+            outlined = isinstance(obs, (PolygonObstacle, MeshObstacle))
+            attrs = ["dx", "dy"] + ([] if outlined else ["size"]) + (
+                ["yaw"] if isinstance(obs, (BoxObstacle, PolygonObstacle, MeshObstacle)) else [])
             for attr in attrs:
                 r = rng(f"obstacle_{attr}")
                 if r:
                     yield Param(f"obstacles.{obs.name}.{attr}", f"obstacle:{obs.name}", attr, *r)
+            r = rng("polygon_vertex")
+            if r and isinstance(obs, PolygonObstacle):
+                for k in range(len(obs.points)):
+                    for axis in ("x", "y"):
+                        yield Param(f"obstacles.{obs.name}.points[{k}].d{axis}", f"obstacle:{obs.name}",
+                                    f"v{k}{axis}", *r)
             if getattr(obs, "motion", None) is not None:
                 for attr in ("start", "speed"):
                     r = rng(f"motion_{attr}")
@@ -217,6 +227,13 @@ def _mutate_obstacle(obs, d: Mapping[str, float], min_size: float):
                        length=_r(max(min_size, obs.length + ds)) if ds else obs.length,
                        width=_r(max(min_size, obs.width + ds)) if ds else obs.width,
                        yaw=_r(obs.yaw + d["yaw"]) if "yaw" in d else obs.yaw)
+    if isinstance(obs, PolygonObstacle):
+        points = tuple((_r(px + d.get(f"v{k}x", 0.0)), _r(py + d.get(f"v{k}y", 0.0)))
+                       if f"v{k}x" in d or f"v{k}y" in d else (px, py) for k, (px, py) in enumerate(obs.points))
+        return replace(obs, x=x, y=y, motion=motion, points=points,
+                       yaw=_r(obs.yaw + d["yaw"]) if "yaw" in d else obs.yaw)
+    if isinstance(obs, MeshObstacle):
+        return replace(obs, x=x, y=y, motion=motion, yaw=_r(obs.yaw + d["yaw"]) if "yaw" in d else obs.yaw)
     if isinstance(obs, CylinderObstacle):
         return replace(obs, x=x, y=y, motion=motion,
                        radius=_r(max(min_size / 2, obs.radius + ds / 2)) if ds else obs.radius)
@@ -308,11 +325,17 @@ def _validate(seed: Scenario, mapping: Mapping[str, Any]):
 def invalid_reason(scenario: Scenario) -> str | None:
     """Why a candidate is not a test (a broken scenario, not a planner failure), or None.
 
-    Obstacles covering the start or goal footprint, or no collision-free path for the
-    footprint at all (``paths.path_exists``).
+    A polygon whose corners were moved into a self-intersecting outline, obstacles covering the
+    start or goal footprint, or no collision-free path for the footprint at all
+    (``paths.path_exists``).
     """
     from ..scenario.geometry import footprint_polygon, obstacle_polygon
 
+    from ..scenario.geometry import polygon_problem
+
+    for obs in scenario.obstacles:          # corners moved across an edge: not a polygon any more
+        if isinstance(obs, PolygonObstacle) and polygon_problem(obs.points) is not None:
+            return f"polygon-invalid:{obs.name}"
     m, fp = scenario.mission, scenario.robot.footprint
     start = footprint_polygon(fp, m.start.x, m.start.y, m.start.yaw_rad)
     goal = footprint_polygon(fp, m.goal.x, m.goal.y, m.goal.yaw_rad)

@@ -33,12 +33,11 @@ class MovingObstacles:
         self.indices = moving_indices(obstacles)
         self.tracks = [Track(obstacles[i]) for i in self.indices]
         self.origin = np.array([t.origin for t in self.tracks], dtype=float).reshape(-1, 2)
-        self.z = np.array([obstacles[i].height / 2.0 for i in self.indices])
         self.mocap_pos = mocap_pos
         self.dt, self.spt = dt, spt
         self.rows = CHUNK_TICKS * spt + 1
         self.table = np.empty((self.rows, len(self.indices), 3))
-        self.table[:, :, 2] = self.z
+        self.table[:, :, 2] = 0.0         # a mocap body's origin is on the floor, its geoms above it
         self.base = -self.rows        # no chunk yet
 
     def _fill(self, i: int) -> None:

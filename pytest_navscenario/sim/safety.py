@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from ..scenario.geometry import footprint_radius
-from ..scenario.model import BoxObstacle, Scenario
+from ..scenario.geometry import bounding_radius, convex_parts, footprint_part_distance, footprint_radius
+from ..scenario.model import BoxObstacle, MeshObstacle, PolygonObstacle, Scenario
 from ..scenario.motion import moving_indices
 
 SAMPLE_SPACING = 0.02   # m: the most any footprint point moves between two sweep samples
@@ -78,7 +78,12 @@ class SafetyLayer:
         self.cos, self.sin = np.cos(yaw), np.sin(yaw)
         self.half = np.array([(o.length / 2.0, o.width / 2.0) if isinstance(o, BoxObstacle)
                               else (0.0, 0.0) for o in obstacles], dtype=float).reshape(n, 2)
-        self.obs_r = np.array([0.0 if isinstance(o, BoxObstacle) else o.radius for o in obstacles])
+        # polygons and meshes: their convex parts (world frame), a bounding circle for the bounds
+        self.parts = {j: convex_parts(o) for j, o in enumerate(obstacles)
+                      if isinstance(o, (PolygonObstacle, MeshObstacle))}
+        self.obs_r = np.array([0.0 if isinstance(o, BoxObstacle) else
+                               bounding_radius(o) if j in self.parts else o.radius
+                               for j, o in enumerate(obstacles)])
         # world corners of box obstacles (n, 4, 2); cylinders: their centre repeated
         local = np.stack([self.half * sign for sign in ((1, 1), (-1, 1), (-1, -1), (1, -1))], axis=1)
         self.corners = np.empty((n, 4, 2))
@@ -178,7 +183,11 @@ class SafetyLayer:
         turning = abs(wz) * h * (speed * h / 2.0 + self.robot_radius)
         limit = self.margin
         close = []
+        parts = self.parts
         for j in near:
+            if j in parts:          # no cheap bound for a polygon: its exact distance decides
+                close.append(j)
+                continue
             cx, cy, oc, os_, hx, hy, r = self._shape[j]
             dx, dy = x - cx, y - cy
             px, py = dx * oc + dy * os_, -dx * os_ + dy * oc        # robot centre, obstacle frame
@@ -198,12 +207,12 @@ class SafetyLayer:
         idx = np.asarray(close + [j for j, _, _ in movers], dtype=int)
         dist = np.empty((n + 1, len(idx)))
         if close:
-            dist[:, :len(close)] = self.distances(poses, idx[:len(close)])   # (n + 1, m)
+            dist[:, :len(close)] = self._columns(poses, close)   # (n + 1, m)
         for col, (j, offset, vel) in enumerate(movers, start=len(close)):
             rel = poses.copy()      # the robot relative to the obstacle's scenario position
             rel[:, 0] -= offset[0] + vel[0] * times
             rel[:, 1] -= offset[1] + vel[1] * times
-            dist[:, col] = self.distances(rel, idx[col:col + 1])[:, 0]
+            dist[:, col] = self._columns(rel, [j])[:, 0]
         now, future = dist[0], dist[1:]
         # hit: a future sample within the threshold, or (already within it) any approach at all
         hit = np.where(now > threshold, future <= threshold, future < now - 1e-9)
@@ -212,6 +221,27 @@ class SafetyLayer:
         first = np.where(hit.any(axis=0), hit.argmax(axis=0), n + 1)  # earliest sample per obstacle
         order = np.lexsort((future.min(axis=0), first))
         return self.names[int(idx[order[0]])]
+
+    def _columns(self, poses: np.ndarray, indices: list[int]) -> np.ndarray:
+        """Distances (k, len(indices)) of the footprint at ``poses`` to the obstacles ``indices``:
+        boxes and cylinders analytically (``distances``), polygons and meshes part by part."""
+        parts = self.parts
+        if not any(j in parts for j in indices):
+            return self.distances(poses, np.asarray(indices))
+        out = np.empty((len(poses), len(indices)))
+        simple = [k for k, j in enumerate(indices) if j not in parts]
+        if simple:
+            out[:, simple] = self.distances(poses, np.asarray([indices[k] for k in simple]))
+        for k, j in enumerate(indices):
+            if j in parts:
+                out[:, k] = np.min([self._convex_distance(poses, verts) for verts in parts[j]], axis=0)
+        return out
+
+    def _convex_distance(self, poses: np.ndarray, verts: np.ndarray) -> np.ndarray:
+        """Exact distance (k,) of the footprint at ``poses`` to one convex part (V, 2), 0 on overlap."""
+        if self.circle_robot:
+            return footprint_part_distance(0.0, 0.0, self.robot_r, poses, verts)
+        return footprint_part_distance(self.hl, self.hw, 0.0, poses, verts)
 
     def _near_movers(self, x: float, y: float, reach: float, moving: list[list[float]]
                      ) -> list[tuple[int, tuple[float, float], tuple[float, float]]]:

@@ -19,7 +19,9 @@ import mujoco
 import numpy as np
 
 from ..core.errors import ScenarioError
-from ..scenario.model import BoxObstacle, CylinderObstacle, Footprint, Motion, Scenario
+from ..scenario.geometry import convex_parts_local, outline_points
+from ..scenario.model import (BoxObstacle, CylinderObstacle, Footprint, MeshObstacle, Motion, PolygonObstacle,
+                              Scenario)
 from .safety import SafetyLayer
 from .trajectory import Collision
 
@@ -122,29 +124,48 @@ def _add_robot(spec: mujoco.MjSpec, scenario: Scenario) -> None:
 
 
 def _add_obstacles(spec: mujoco.MjSpec, scenario: Scenario) -> None:
-    """One geom per obstacle (boxes and cylinders standing on z = 0): static ones on the world body,
-    a moving one on its own mocap body (kinematic: the loop writes its position, MuJoCo moves its
-    geom and detects its contacts like any other; mocap_pos order = moving obstacles' order)."""
+    """One geom per obstacle standing on z = 0 (a polygon or mesh: one convex prism geom per convex
+    part, named ``<name>/<k>``): static ones on the world body, a moving one on its own mocap body
+    (kinematic: the loop writes its position, MuJoCo moves its geoms and detects their contacts like
+    any other; mocap_pos order = moving obstacles' order)."""
     for obs, gname in zip(scenario.obstacles, _geom_names(scenario)):
         h = obs.height
+        yaw = getattr(obs, "yaw_rad", 0.0)
+        quat = [math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0)]
+        if getattr(obs, "motion", None) is not None:
+            parent = spec.worldbody.add_body(name=f"moving:{gname}", mocap=True, pos=[obs.x, obs.y, 0.0],
+                                             quat=quat)
+            pos, quat, rgba = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.9, 0.5, 0.2, 1]
+        else:
+            parent, pos, rgba = spec.worldbody, [obs.x, obs.y, 0.0], [0.6, 0.6, 0.6, 1]
+        common = dict(contype=2, conaffinity=1, rgba=rgba, quat=quat)
         if isinstance(obs, BoxObstacle):
-            yaw = obs.yaw_rad
-            quat = [math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0)]
-            kind, size = mujoco.mjtGeom.mjGEOM_BOX, [obs.length / 2.0, obs.width / 2.0, h / 2.0]
+            parent.add_geom(name=gname, type=mujoco.mjtGeom.mjGEOM_BOX, pos=[pos[0], pos[1], h / 2.0],
+                            size=[obs.length / 2.0, obs.width / 2.0, h / 2.0], **common)
         elif isinstance(obs, CylinderObstacle):
-            quat = [1.0, 0.0, 0.0, 0.0]
-            kind, size = mujoco.mjtGeom.mjGEOM_CYLINDER, [obs.radius, h / 2.0, 0.0]
+            parent.add_geom(name=gname, type=mujoco.mjtGeom.mjGEOM_CYLINDER, pos=[pos[0], pos[1], h / 2.0],
+                            size=[obs.radius, h / 2.0, 0.0], **common)
+        elif isinstance(obs, (PolygonObstacle, MeshObstacle)):
+            for k, part in enumerate(convex_parts_local(tuple(outline_points(obs)))):
+                mesh = f"{gname}/{k}"
+                verts = np.concatenate([np.column_stack([part, np.zeros(len(part))]),
+                                        np.column_stack([part, np.full(len(part), h)])])
+                spec.add_mesh(name=mesh, uservert=verts.ravel().tolist())
+                parent.add_geom(name=mesh, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=mesh, pos=pos, **common)
         else:
             raise ScenarioError(f"unknown obstacle type {type(obs).__name__}", path=scenario.source,
-                                field=f"obstacles[{obs.name}]", hint="use a box or a cylinder")
-        pos = [obs.x, obs.y, h / 2.0]
-        if getattr(obs, "motion", None) is not None:
-            body = spec.worldbody.add_body(name=f"moving:{gname}", mocap=True, pos=pos, quat=quat)
-            pos, quat, parent, rgba = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], body, [0.9, 0.5, 0.2, 1]
+                                field=f"obstacles[{obs.name}]", hint="use a box, cylinder, polygon or mesh")
+
+
+def obstacle_geom_names(scenario: Scenario) -> list[list[str]]:
+    """The MuJoCo geom names of each obstacle (a polygon or mesh has one per convex part)."""
+    out = []
+    for obs, gname in zip(scenario.obstacles, _geom_names(scenario)):
+        if isinstance(obs, (PolygonObstacle, MeshObstacle)):
+            out.append([f"{gname}/{k}" for k in range(len(convex_parts_local(tuple(outline_points(obs)))))])
         else:
-            parent, rgba = spec.worldbody, [0.6, 0.6, 0.6, 1]
-        parent.add_geom(name=gname, type=kind, pos=pos, quat=quat, size=size, contype=2, conaffinity=1,
-                        rgba=rgba)
+            out.append([gname])
+    return out
 
 
 def build_spec(scenario: Scenario) -> mujoco.MjSpec:
@@ -248,7 +269,7 @@ def compiled_world(scenario: Scenario) -> World:
     robot_body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "robot")
     robot_geom = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "footprint")
     obstacle_of_geom = {mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, gname): i
-                        for i, gname in enumerate(_geom_names(scenario))}
+                        for i, names in enumerate(obstacle_geom_names(scenario)) for gname in names}
     safety = SafetyLayer(scenario) if scenario.robot.safety.enabled and scenario.obstacles else None
     world = World(model, robot_body, robot_geom, obstacle_of_geom, safety)
     _CACHE[key] = world

@@ -47,6 +47,7 @@ from .paths import (
     obstacle_shapes,
     path_through,
     reference_path,
+    is_outlined,
     shortest_path,
     static_obstacles,
 )
@@ -161,6 +162,34 @@ def min_clearance(scenario: Scenario, t: np.ndarray, pose: np.ndarray
 
 def _closest(obstacles: tuple, footprint, pose: np.ndarray) -> tuple[float, str, int] | None:
     """(distance, obstacle name, pose index) of the closest approach to static ``obstacles``."""
+    simple = tuple(o for o in obstacles if not is_outlined(o))
+    best = _closest_simple(simple, footprint, pose) if len(simple) else None
+    for obs in obstacles:
+        if is_outlined(obs):
+            hit = _closest_outlined(obs, footprint, pose, best[0] if best is not None else math.inf)
+            if hit is not None and (best is None or hit[0] < best[0] or (hit[0] == best[0] and hit[2] < best[2])):
+                best = hit
+    return best
+
+
+def _closest_outlined(obs, footprint, pose: np.ndarray, beat: float) -> tuple[float, str, int] | None:
+    """The closest approach to a polygon or mesh obstacle: exact footprint-to-part distances at the
+    poses whose centre may come closer than ``beat`` (its bounding circle decides)."""
+    from ..scenario.geometry import bounding_radius, convex_parts, footprint_part_distance
+
+    hl, hw, rho = footprint_core(footprint)
+    reach = math.hypot(hl, hw) + rho + bounding_radius(obs)
+    centre = np.hypot(pose[:, 0] - obs.x, pose[:, 1] - obs.y)
+    idx = np.flatnonzero(centre - reach <= beat + 1e-12) if math.isfinite(beat) else np.arange(len(pose))
+    if not len(idx):
+        return None
+    d = np.min([footprint_part_distance(hl, hw, rho, pose[idx], part) for part in convex_parts(obs)], axis=0)
+    k = int(np.argmin(d))
+    return float(d[k]), obs.name, int(idx[k])
+
+
+def _closest_simple(obstacles: tuple, footprint, pose: np.ndarray) -> tuple[float, str, int] | None:
+    """``_closest`` among boxes and cylinders (rounded boxes, vectorised with pruning)."""
     shapes = obstacle_shapes(obstacles)
     n, k = len(pose), len(shapes)
     if not k or not n:
