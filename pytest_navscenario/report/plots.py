@@ -180,10 +180,19 @@ def draw_obstacles(ax: "Axes", scenario: Any, *, involved: set[str] = frozenset(
 
     # Collections, not one patch each: patches re-run autoscaling per patch (slow).
     polys = [obstacle_polygon(obs) for obs in scenario.obstacles]
-    still = [p for obs, p in zip(scenario.obstacles, polys) if not is_moving(obs)]
-    ax.add_collection(PolyCollection([np.asarray(p.exterior.coords) for p in still], closed=True,
+    from ..sim.world import LIDAR_HEIGHT
+
+    seen = [p for obs, p in zip(scenario.obstacles, polys) if not is_moving(obs) and obs.height > LIDAR_HEIGHT]
+    low = [p for obs, p in zip(scenario.obstacles, polys) if not is_moving(obs) and obs.height <= LIDAR_HEIGHT]
+    ax.add_collection(PolyCollection([np.asarray(p.exterior.coords) for p in seen], closed=True,
                                      facecolors="#9e9e9e", edgecolors="#424242", linewidths=1.0,
                                      zorder=2), autolim=False)
+    if low:     # the lidar cannot see them (they still collide): hatched, in the legend
+        ax.add_collection(PolyCollection([np.asarray(p.exterior.coords) for p in low], closed=True,
+                                         facecolors="#e0e0e0", edgecolors="#424242", linewidths=1.0,
+                                         hatch="////", zorder=2,
+                                         label=f"below the lidar ({LIDAR_HEIGHT:g} m): unseen"),
+                          autolim=False)
     for obs, poly in zip(scenario.obstacles, polys):
         if len(polys) > MAX_NAMED_OBSTACLES and obs.name not in involved:
             continue

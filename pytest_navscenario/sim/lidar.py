@@ -13,7 +13,7 @@ import mujoco
 import numpy as np
 
 from ..scenario.model import Scenario
-from .world import LIDAR_HEIGHT, MODEL_CACHE_SIZE, TWO_PI, World
+from .world import LIDAR_HEIGHT, MODEL_CACHE_SIZE, PARTS_GROUP, TWO_PI, World
 
 
 def lidar_angles(scenario: Scenario) -> np.ndarray:
@@ -88,6 +88,11 @@ class Lidar:
         self.readonly = self.record.view()
         self.readonly.flags.writeable = False
         self.model, self.data, self.body = world.model, d, world.robot_body
+        # with non-convex obstacles the lidar skips their convex parts (it sees their prism mesh)
+        self.groups = None
+        if (world.model.geom_group == PARTS_GROUP).any():
+            self.groups = np.ones(6, dtype=np.uint8)
+            self.groups[PARTS_GROUP] = 0
 
     def scan(self, tick: int, x: float, y: float, c: float, s: float) -> np.ndarray:
         """Ranges (read-only float32) of the robot at (x, y) with heading (cos, sin) = (c, s),
@@ -100,7 +105,7 @@ class Lidar:
         pnt = self.pnt
         pnt[0], pnt[1] = x, y
         if self.beams:
-            mujoco.mj_multiRay(self.model, self.data, pnt, self.dirs_flat, None, 1, self.body,
+            mujoco.mj_multiRay(self.model, self.data, pnt, self.dirs_flat, self.groups, 1, self.body,
                                self.geom, dist, None, self.beams, rmax)
         row = self.record[tick]
         if self.rng is None:

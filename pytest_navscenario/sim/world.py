@@ -31,6 +31,8 @@ LIDAR_HEIGHT = 0.2         # m; the lidar plane. Obstacles lower than this are i
 TRACKING_TAU = 0.05        # s; velocity tracking time constant of the actuators (kv = inertia / tau)
 FORCE_HEADROOM = 1.5       # actuator force limit = inertia * max acceleration * headroom
 MODEL_CACHE_SIZE = 64      # compiled models kept (the search and repeats re-run the same layout)
+PARTS_GROUP = 3            # geom group of a non-convex obstacle's convex parts: they collide, the lidar
+                           # skips them and sees the obstacle's one exact prism mesh instead
 
 TWO_PI = 2.0 * math.pi
 
@@ -146,15 +148,49 @@ def _add_obstacles(spec: mujoco.MjSpec, scenario: Scenario) -> None:
             parent.add_geom(name=gname, type=mujoco.mjtGeom.mjGEOM_CYLINDER, pos=[pos[0], pos[1], h / 2.0],
                             size=[obs.radius, h / 2.0, 0.0], **common)
         elif isinstance(obs, (PolygonObstacle, MeshObstacle)):
-            for k, part in enumerate(convex_parts_local(tuple(outline_points(obs)))):
+            parts = convex_parts_local(tuple(outline_points(obs)))
+            for k, part in enumerate(parts):
                 mesh = f"{gname}/{k}"
                 verts = np.concatenate([np.column_stack([part, np.zeros(len(part))]),
                                         np.column_stack([part, np.full(len(part), h)])])
                 spec.add_mesh(name=mesh, uservert=verts.ravel().tolist())
-                parent.add_geom(name=mesh, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=mesh, pos=pos, **common)
+                parent.add_geom(name=mesh, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=mesh, pos=pos,
+                                group=PARTS_GROUP if len(parts) > 1 else 0, **common)
+            if len(parts) > 1:      # the lidar sees one mesh of the exact prism (cheaper than the parts)
+                verts, faces = prism_mesh(outline_points(obs), h)
+                spec.add_mesh(name=f"{gname}/outline", uservert=verts.ravel().tolist(),
+                              userface=faces.ravel().tolist())
+                parent.add_geom(name=f"{gname}/outline", type=mujoco.mjtGeom.mjGEOM_MESH,
+                                meshname=f"{gname}/outline", pos=pos, contype=0, conaffinity=0,
+                                rgba=rgba, quat=common["quat"])
         else:
             raise ScenarioError(f"unknown obstacle type {type(obs).__name__}", path=scenario.source,
                                 field=f"obstacles[{obs.name}]", hint="use a box, cylinder, polygon or mesh")
+
+
+def prism_mesh(points, h: float) -> tuple[np.ndarray, np.ndarray]:
+    """(vertices (2n, 3), triangles (m, 3)) of a simple polygon extruded from 0 to ``h``: its
+    constrained Delaunay triangles as floor and top, two triangles per wall, facing outwards."""
+    import shapely
+    import shapely.geometry.polygon
+    from shapely.geometry import Polygon
+
+    pts = np.asarray(points, dtype=float)
+    n = len(pts)
+    ccw = shapely.geometry.polygon.orient(Polygon(pts), 1.0)
+    if not np.allclose(np.asarray(ccw.exterior.coords)[0], pts[0]) or not Polygon(pts).exterior.is_ccw:
+        pts = np.asarray(ccw.exterior.coords)[:-1]
+    index = {tuple(p): i for i, p in enumerate(pts.tolist())}
+    faces = []
+    for tri in shapely.constrained_delaunay_triangles(Polygon(pts)).geoms:
+        a, b, c = (index[tuple(p)] for p in np.asarray(shapely.geometry.polygon.orient(tri, 1.0)
+                                                       .exterior.coords)[:-1].tolist())
+        faces += [(a, c, b), (a + n, b + n, c + n)]
+    for i in range(n):
+        j = (i + 1) % n
+        faces += [(i, j, j + n), (i, j + n, i + n)]
+    verts = np.concatenate([np.column_stack([pts, np.zeros(n)]), np.column_stack([pts, np.full(n, h)])])
+    return verts, np.array(faces, dtype=int)
 
 
 def obstacle_geom_names(scenario: Scenario) -> list[list[str]]:

@@ -173,19 +173,32 @@ def _closest(obstacles: tuple, footprint, pose: np.ndarray) -> tuple[float, str,
 
 
 def _closest_outlined(obs, footprint, pose: np.ndarray, beat: float) -> tuple[float, str, int] | None:
-    """The closest approach to a polygon or mesh obstacle: exact footprint-to-part distances at the
-    poses whose centre may come closer than ``beat`` (its bounding circle decides)."""
-    from ..scenario.geometry import bounding_radius, convex_parts, footprint_part_distance
+    """The closest approach to a polygon or mesh obstacle: exact footprint-to-part distances, only
+    at the poses whose centre may come closer than the best so far (``beat``, or the exact distance
+    at the pose nearest to the obstacle's centre), part by part within its bounding circle."""
+    from ..scenario.geometry import convex_parts, footprint_part_distance
 
     hl, hw, rho = footprint_core(footprint)
-    reach = math.hypot(hl, hw) + rho + bounding_radius(obs)
-    centre = np.hypot(pose[:, 0] - obs.x, pose[:, 1] - obs.y)
-    idx = np.flatnonzero(centre - reach <= beat + 1e-12) if math.isfinite(beat) else np.arange(len(pose))
-    if not len(idx):
-        return None
-    d = np.min([footprint_part_distance(hl, hw, rho, pose[idx], part) for part in convex_parts(obs)], axis=0)
-    k = int(np.argmin(d))
-    return float(d[k]), obs.name, int(idx[k])
+    r_out = math.hypot(hl, hw) + rho
+    parts = convex_parts(obs)
+    centres = [p.mean(axis=0) for p in parts]
+    radii = [float(np.hypot(*(p - c).T).max()) for p, c in zip(parts, centres)]
+    gaps = np.min([np.hypot(pose[:, 0] - c[0], pose[:, 1] - c[1]) - r for c, r in zip(centres, radii)], axis=0)
+    nearest = int(np.argmin(gaps))
+    beat = min(beat, min(float(footprint_part_distance(hl, hw, rho, pose[nearest:nearest + 1], p)[0])
+                         for p in parts))
+    best = None
+    for part, c, r in zip(parts, centres, radii):
+        idx = np.flatnonzero(np.hypot(pose[:, 0] - c[0], pose[:, 1] - c[1]) - r - r_out <= beat + 1e-12)
+        if not len(idx):
+            continue
+        d = footprint_part_distance(hl, hw, rho, pose[idx], part)
+        k = int(np.argmin(d))
+        hit = (float(d[k]), obs.name, int(idx[k]))
+        if best is None or hit[0] < best[0] or (hit[0] == best[0] and hit[2] < best[2]):
+            best = hit
+            beat = min(beat, hit[0])
+    return best
 
 
 def _closest_simple(obstacles: tuple, footprint, pose: np.ndarray) -> tuple[float, str, int] | None:
