@@ -182,8 +182,15 @@ def draw_obstacles(ax: "Axes", scenario: Any, *, involved: set[str] = frozenset(
     polys = [obstacle_polygon(obs) for obs in scenario.obstacles]
     from ..sim.world import LIDAR_HEIGHT
 
-    seen = [p for obs, p in zip(scenario.obstacles, polys) if not is_moving(obs) and obs.height > LIDAR_HEIGHT]
-    low = [p for obs, p in zip(scenario.obstacles, polys) if not is_moving(obs) and obs.height <= LIDAR_HEIGHT]
+    still = [(obs, p) for obs, p in zip(scenario.obstacles, polys) if not is_moving(obs)]
+    glass = [p for obs, p in still if not getattr(obs, "visible_to_lidar", True)]
+    seen = [p for obs, p in still if getattr(obs, "visible_to_lidar", True) and obs.height > LIDAR_HEIGHT]
+    low = [p for obs, p in still if getattr(obs, "visible_to_lidar", True) and obs.height <= LIDAR_HEIGHT]
+    if glass:   # visible_to_lidar: false (glass): see-through, dashed
+        ax.add_collection(PolyCollection([np.asarray(p.exterior.coords) for p in glass], closed=True,
+                                         facecolors="#b3e5fc", edgecolors="#0277bd", linewidths=1.0,
+                                         linestyles="--", alpha=0.8, zorder=2,
+                                         label="unseen by the lidar (glass)"), autolim=False)
     ax.add_collection(PolyCollection([np.asarray(p.exterior.coords) for p in seen], closed=True,
                                      facecolors="#9e9e9e", edgecolors="#424242", linewidths=1.0,
                                      zorder=2), autolim=False)

@@ -60,6 +60,8 @@ def _obstacle_dict(obs: Obstacle) -> dict[str, Any]:
     else:
         out = {"type": "cylinder", "name": obs.name, "x": _f(obs.x), "y": _f(obs.y),
                "radius": _f(obs.radius), "height": _f(obs.height)}
+    if not getattr(obs, "visible_to_lidar", True):
+        out["visible_to_lidar"] = False
     motion = getattr(obs, "motion", None)
     if motion is not None:
         out["motion"] = _motion_dict(motion)

@@ -81,11 +81,11 @@ SAFETY_KEYS = ("enabled", "horizon", "margin")
 MISSION_KEYS = ("start", "goal", "waypoints", "goal_tolerance", "waypoint_tolerance", "timeout")
 POSE_KEYS = ("x", "y", "yaw")
 TOLERANCE_KEYS = ("position", "yaw")
-BOX_KEYS = ("type", "name", "x", "y", "length", "width", "yaw", "height", "motion")
-CYLINDER_KEYS = ("type", "name", "x", "y", "radius", "height", "motion")
+BOX_KEYS = ("type", "name", "x", "y", "length", "width", "yaw", "height", "motion", "visible_to_lidar")
+CYLINDER_KEYS = ("type", "name", "x", "y", "radius", "height", "motion", "visible_to_lidar")
 PERSON_KEYS = CYLINDER_KEYS     # a cylinder with a person's size and walking speed as defaults
-POLYGON_KEYS = ("type", "name", "x", "y", "points", "yaw", "height", "motion")
-MESH_KEYS = ("type", "name", "x", "y", "file", "scale", "yaw", "motion")
+POLYGON_KEYS = ("type", "name", "x", "y", "points", "yaw", "height", "motion", "visible_to_lidar")
+MESH_KEYS = ("type", "name", "x", "y", "file", "scale", "yaw", "motion", "visible_to_lidar")
 MOTION_KEYS = ("path", "speed", "mode", "start", "velocity")
 MAX_POLYGON_POINTS = 1000
 PERSON_RADIUS = 0.25            # m
@@ -445,7 +445,16 @@ def _obstacles(ctx: _Ctx, top: _Section) -> tuple[Obstacle, ...]:
 
 
 def _obstacle(ctx: _Ctx, sec: _Section, kind: str, name: str) -> Obstacle:
-    """One obstacle from its section; a person is a cylinder with a person's defaults."""
+    """One obstacle from its section, with ``visible_to_lidar``."""
+    import dataclasses
+
+    obs = _shape(ctx, sec, kind, name)
+    visible = sec.boolean("visible_to_lidar", True)
+    return obs if visible else dataclasses.replace(obs, visible_to_lidar=False)
+
+
+def _shape(ctx: _Ctx, sec: _Section, kind: str, name: str) -> Obstacle:
+    """One obstacle's shape, place and motion; a person is a cylinder with a person's defaults."""
     person = kind == "person"
     motion = _motion(ctx, sec, person)
     if motion is not None and motion.path:

@@ -59,6 +59,7 @@ class BoxObstacle:
     yaw: float = 0.0
     height: float = 1.0
     motion: Motion | None = None    # None: static
+    visible_to_lidar: bool = True   # False: glass, thin wires (it still collides)
     kind: Literal["box"] = field(default="box", init=False)
 
     @property
@@ -75,6 +76,7 @@ class CylinderObstacle:
     radius: float
     height: float = 1.0
     motion: Motion | None = None    # None: static
+    visible_to_lidar: bool = True
     kind: Literal["cylinder"] = field(default="cylinder", init=False)
 
 
@@ -90,6 +92,7 @@ class PolygonObstacle:
     yaw: float = 0.0
     height: float = 1.0
     motion: Motion | None = None    # None: static
+    visible_to_lidar: bool = True
     kind: Literal["polygon"] = field(default="polygon", init=False)
 
     @property
@@ -113,6 +116,7 @@ class MeshObstacle:
     footprint: tuple[tuple[float, float], ...] = field(default=(), compare=True)
     height: float = 1.0
     motion: Motion | None = None
+    visible_to_lidar: bool = True
     kind: Literal["mesh"] = field(default="mesh", init=False)
 
     @property
@@ -274,5 +278,7 @@ def content_hash(scenario: Scenario) -> str:
         if obs.get("motion") is None:   # a static obstacle hashes as before motion existed
             obs.pop("motion", None)
         obs.pop("file", None)           # a mesh is its outline and height (hashed), wherever its file is
+        if obs.get("visible_to_lidar", True) is True:    # the default hashes as before it existed
+            obs.pop("visible_to_lidar", None)
     text = json.dumps(body, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]

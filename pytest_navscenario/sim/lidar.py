@@ -13,7 +13,7 @@ import mujoco
 import numpy as np
 
 from ..scenario.model import Scenario
-from .world import LIDAR_HEIGHT, MODEL_CACHE_SIZE, PARTS_GROUP, TWO_PI, World
+from .world import LIDAR_HEIGHT, MODEL_CACHE_SIZE, PARTS_GROUP, TWO_PI, UNSEEN_GROUP, World
 
 
 def lidar_angles(scenario: Scenario) -> np.ndarray:
@@ -89,10 +89,12 @@ class Lidar:
         self.readonly.flags.writeable = False
         self.model, self.data, self.body = world.model, d, world.robot_body
         # with non-convex obstacles the lidar skips their convex parts (it sees their prism mesh)
+        # and obstacles the lidar cannot see (visible_to_lidar: false) are skipped altogether
         self.groups = None
-        if (world.model.geom_group == PARTS_GROUP).any():
+        skipped = [g for g in (PARTS_GROUP, UNSEEN_GROUP) if (world.model.geom_group == g).any()]
+        if skipped:
             self.groups = np.ones(6, dtype=np.uint8)
-            self.groups[PARTS_GROUP] = 0
+            self.groups[skipped] = 0
 
     def scan(self, tick: int, x: float, y: float, c: float, s: float) -> np.ndarray:
         """Ranges (read-only float32) of the robot at (x, y) with heading (cos, sin) = (c, s),

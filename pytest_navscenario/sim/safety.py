@@ -96,9 +96,14 @@ class SafetyLayer:
                                self.cos.tolist(), self.sin.tolist(), self.half[:, 0].tolist(),
                                self.half[:, 1].tolist(), self.obs_r.tolist()))
         # moving obstacles are checked apart, where they are now and with their velocity
-        self.moving = moving_indices(obstacles)
+        # an obstacle the lidar cannot see (glass) is not seen by this layer either (a real one
+        # works on the same sensor); moving ones are checked apart, with their velocity
+        unseen = [j for j, o in enumerate(obstacles) if not getattr(o, "visible_to_lidar", True)]
+        self.moving = [j for j in moving_indices(obstacles) if j not in unseen]
+        self.moving_slots = [k for k, j in enumerate(moving_indices(obstacles)) if j not in unseen]
         self.static = np.ones(n, dtype=bool)
-        self.static[self.moving] = False
+        self.static[moving_indices(obstacles)] = False
+        self.static[unseen] = False
         static = [j for j in range(n) if self.static[j]]
         self._movers = [(j, float(self.centres[j, 0]), float(self.centres[j, 1]), float(self.bound[j]))
                         for j in self.moving]
@@ -249,6 +254,8 @@ class SafetyLayer:
         velocity) each."""
         out = []
         hypot, h = math.hypot, self.horizon
+        if len(self.moving_slots) != len(moving):
+            moving = [moving[k] for k in self.moving_slots]
         for (j, cx, cy, bound), (ox, oy, ovx, ovy) in zip(self._movers, moving):
             if hypot(cx + ox - x, cy + oy - y) - bound < reach + hypot(ovx, ovy) * h:
                 out.append((j, (ox, oy), (ovx, ovy)))

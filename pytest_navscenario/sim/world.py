@@ -33,6 +33,7 @@ FORCE_HEADROOM = 1.5       # actuator force limit = inertia * max acceleration *
 MODEL_CACHE_SIZE = 64      # compiled models kept (the search and repeats re-run the same layout)
 PARTS_GROUP = 3            # geom group of a non-convex obstacle's convex parts: they collide, the lidar
                            # skips them and sees the obstacle's one exact prism mesh instead
+UNSEEN_GROUP = 4           # geom group of obstacles with visible_to_lidar: false (glass): the lidar skips it
 
 TWO_PI = 2.0 * math.pi
 
@@ -140,7 +141,10 @@ def _add_obstacles(spec: mujoco.MjSpec, scenario: Scenario) -> None:
             pos, quat, rgba = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.9, 0.5, 0.2, 1]
         else:
             parent, pos, rgba = spec.worldbody, [obs.x, obs.y, 0.0], [0.6, 0.6, 0.6, 1]
-        common = dict(contype=2, conaffinity=1, rgba=rgba, quat=quat)
+        unseen = not getattr(obs, "visible_to_lidar", True)
+        if unseen:
+            rgba = [0.6, 0.85, 0.95, 0.4]
+        common = dict(contype=2, conaffinity=1, rgba=rgba, quat=quat, group=UNSEEN_GROUP if unseen else 0)
         if isinstance(obs, BoxObstacle):
             parent.add_geom(name=gname, type=mujoco.mjtGeom.mjGEOM_BOX, pos=[pos[0], pos[1], h / 2.0],
                             size=[obs.length / 2.0, obs.width / 2.0, h / 2.0], **common)
@@ -154,9 +158,10 @@ def _add_obstacles(spec: mujoco.MjSpec, scenario: Scenario) -> None:
                 verts = np.concatenate([np.column_stack([part, np.zeros(len(part))]),
                                         np.column_stack([part, np.full(len(part), h)])])
                 spec.add_mesh(name=mesh, uservert=verts.ravel().tolist())
+                group = UNSEEN_GROUP if unseen else (PARTS_GROUP if len(parts) > 1 else 0)
                 parent.add_geom(name=mesh, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=mesh, pos=pos,
-                                group=PARTS_GROUP if len(parts) > 1 else 0, **common)
-            if len(parts) > 1:      # the lidar sees one mesh of the exact prism (cheaper than the parts)
+                                **{**common, "group": group})
+            if len(parts) > 1 and not unseen:   # the lidar sees one exact prism mesh (cheaper than the parts)
                 verts, faces = prism_mesh(outline_points(obs), h)
                 spec.add_mesh(name=f"{gname}/outline", uservert=verts.ravel().tolist(),
                               userface=faces.ravel().tolist())

@@ -12,7 +12,7 @@ from pytest_navscenario.search.engine import run_search
 from pytest_navscenario.subjects.loading import load_subject
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
-SEEDS = ("person-crossing", "forklift-aisle", "workshop-irregular")
+SEEDS = ("person-crossing", "forklift-aisle", "workshop-irregular", "glass-door")
 
 
 @pytest.mark.parametrize("name", SEEDS)
