@@ -131,6 +131,10 @@ def _extent(result: EpisodeResult, margin: float = 0.8) -> tuple[float, float, f
         pose = np.asarray(result.trajectory.pose)
         xs += [float(pose[:, 0].min()), float(pose[:, 0].max())]
         ys += [float(pose[:, 1].min()), float(pose[:, 1].max())]
+    believed = getattr(result.trajectory, "believed", None)
+    if believed is not None and len(believed):
+        xs += [float(np.min(believed[:, 0])), float(np.max(believed[:, 0]))]
+        ys += [float(np.min(believed[:, 1])), float(np.max(believed[:, 1]))]
     return min(xs) - margin, max(xs) + margin, min(ys) - margin, max(ys) + margin
 
 
@@ -153,6 +157,7 @@ def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
     draw_moving_obstacles(ax, result)
     _draw_shortest_path(ax, s)
     mapping = _draw_footprint_path(ax, result, norm=norm, outline_every=outline_every)
+    _draw_believed(ax, result)
     _draw_mission(ax, s.mission)
     _draw_min_clearance(ax, result)
     _draw_narrowest_gap(ax, s, result.metrics)
@@ -305,6 +310,23 @@ def _draw_footprint_path(ax: "Axes", result: EpisodeResult, *, norm: Any,
     mapping = _draw_speed_path(ax, pose, _speed(result), norm)
     _draw_time_labels(ax, pose, t, duration)
     return mapping
+
+
+def _draw_believed(ax: "Axes", result: EpisodeResult) -> None:
+    """With localisation drift: the path the planner believed it drove (dashed purple, per tick)
+    beside the true one, and at the end a line from where it believed it was to where it was."""
+    believed = getattr(result.trajectory, "believed", None)
+    if believed is None or not len(believed):
+        return
+    b = np.asarray(believed, dtype=float)
+    ax.plot(b[:, 0], b[:, 1], ls="--", lw=1.4, color="#7b1fa2", zorder=6,
+            label="believed pose (localisation drift)")
+    pose = np.asarray(result.trajectory.pose, dtype=float)
+    ax.plot([b[-1, 0], pose[-1, 0]], [b[-1, 1], pose[-1, 1]], ls=":", lw=1.0, color="#7b1fa2", zorder=6)
+    ax.plot(b[-1, 0], b[-1, 1], marker="o", ms=5, mfc="white", mec="#7b1fa2", zorder=9, ls="none")
+    err = math.hypot(b[-1, 0] - pose[-1, 0], b[-1, 1] - pose[-1, 1])
+    ax.annotate(f"believed: {err:.2f} m off", (b[-1, 0], b[-1, 1]), xytext=(6, -10),
+                textcoords="offset points", fontsize=6, color="#7b1fa2", zorder=11, bbox=_HALO)
 
 
 def _draw_swept_area(ax: "Axes", fp: Any, pose: np.ndarray) -> None:

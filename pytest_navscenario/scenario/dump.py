@@ -9,7 +9,7 @@ from typing import Any, Mapping
 import yaml
 
 from ..core.files import atomic_write_text
-from .loader import LIDAR_KEYS, LIMITS_KEYS
+from .loader import LATENCY_KEYS, LIDAR_KEYS, LIMITS_KEYS, LOCALISATION_KEYS
 from .model import BoxObstacle, Mark, MeshObstacle, Motion, Obstacle, PolygonObstacle, Pose, Scenario
 
 
@@ -103,9 +103,17 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
         "footprint": footprint,
         "drive": r.drive,
         "limits": {k: _f(getattr(lim, k)) for k in LIMITS_KEYS},
-        "lidar": {"beams": int(lid.beams), **{k: _f(getattr(lid, k)) for k in LIDAR_KEYS[1:]}},
+        "lidar": {"beams": int(lid.beams), **{k: _f(getattr(lid, k)) for k in LIDAR_KEYS[1:6]}},
         "safety": {"enabled": bool(saf.enabled), "horizon": _f(saf.horizon), "margin": _f(saf.margin)},
     }
+    # the sensor and localisation faults: written when set (files without them stay as they were)
+    for key in LIDAR_KEYS[6:]:
+        if getattr(lid, key) not in (0.0, None):
+            out["robot"]["lidar"][key] = _f(getattr(lid, key))
+    if r.localisation.drifts:
+        out["robot"]["localisation"] = {k: _f(getattr(r.localisation, k)) for k in LOCALISATION_KEYS}
+    if r.latency.observation or r.latency.command:
+        out["robot"]["latency"] = {k: _f(getattr(r.latency, k)) for k in LATENCY_KEYS}
     m = s.mission
     mission: dict[str, Any] = {"start": _pose_dict(m.start), "goal": _pose_dict(m.goal)}
     if m.waypoints:

@@ -32,8 +32,10 @@ from .model import (
     CylinderObstacle,
     Footprint,
     GoalTolerance,
+    Latency,
     Lidar,
     Limits,
+    Localisation,
     Mark,
     Mission,
     MOTION_MODES,
@@ -73,10 +75,13 @@ _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 
 TOP_KEYS = ("version", "name", "family", "description", "marks", "robot", "mission", "obstacles",
             "simulation", "reference", "search", "provenance")
-ROBOT_KEYS = ("footprint", "drive", "limits", "lidar", "safety")
+ROBOT_KEYS = ("footprint", "drive", "limits", "lidar", "safety", "localisation", "latency")
 FOOTPRINT_KEYS = ("shape", "length", "width", "radius")
 LIMITS_KEYS = ("max_speed", "max_lateral_speed", "max_yaw_rate", "max_accel", "max_yaw_accel")
-LIDAR_KEYS = ("beams", "fov", "range_min", "range_max", "noise_sigma", "dropout")
+LIDAR_KEYS = ("beams", "fov", "range_min", "range_max", "noise_sigma", "dropout", "noise_per_metre",
+              "dropout_at_max", "spurious")
+LOCALISATION_KEYS = ("drift_per_metre", "drift_per_second", "yaw_drift_per_metre")
+LATENCY_KEYS = ("observation", "command")
 SAFETY_KEYS = ("enabled", "horizon", "margin")
 MISSION_KEYS = ("start", "goal", "waypoints", "goal_tolerance", "waypoint_tolerance", "timeout")
 POSE_KEYS = ("x", "y", "yaw")
@@ -100,6 +105,7 @@ TYPE_KEYS = {"box": BOX_KEYS, "cylinder": CYLINDER_KEYS, "person": PERSON_KEYS, 
              "mesh": MESH_KEYS}
 _KEY_HOMES = (("", TOP_KEYS), ("robot", ROBOT_KEYS), ("robot.footprint", FOOTPRINT_KEYS),
               ("robot.limits", LIMITS_KEYS), ("robot.lidar", LIDAR_KEYS), ("robot.safety", SAFETY_KEYS),
+              ("robot.localisation", LOCALISATION_KEYS), ("robot.latency", LATENCY_KEYS),
               ("mission", MISSION_KEYS), ("mission.goal_tolerance", TOLERANCE_KEYS), ("simulation", SIMULATION_KEYS),
               ("obstacles[].motion", MOTION_KEYS),
               ("obstacles[]", BOX_KEYS + CYLINDER_KEYS + POLYGON_KEYS + MESH_KEYS), ("reference", REFERENCE_KEYS))
@@ -347,7 +353,10 @@ def _robot(ctx: _Ctx, top: _Section) -> Robot:
         lidar = Lidar(beams=beams, fov=s.number("fov", d.fov, low=0, low_open=True, high=360.0),
                       range_min=range_min, range_max=range_max,
                       noise_sigma=s.number("noise_sigma", d.noise_sigma, low=0),
-                      dropout=s.number("dropout", d.dropout, low=0, high=1.0))
+                      dropout=s.number("dropout", d.dropout, low=0, high=1.0),
+                      noise_per_metre=s.number("noise_per_metre", d.noise_per_metre, low=0, high=1.0),
+                      dropout_at_max=s.number("dropout_at_max", None, low=0, high=1.0),
+                      spurious=s.number("spurious", d.spurious, low=0, high=1.0))
     safety = Safety()
     s = sec.section("safety", SAFETY_KEYS, "the safety layer settings (a mapping)")
     if s is not None:
@@ -355,7 +364,19 @@ def _robot(ctx: _Ctx, top: _Section) -> Robot:
         safety = Safety(enabled=s.boolean("enabled", d.enabled),
                         horizon=s.number("horizon", d.horizon, low=0, low_open=True),
                         margin=s.number("margin", d.margin, low=0))
-    return Robot(footprint=fp, drive=drive, limits=limits, lidar=lidar, safety=safety)
+    localisation = Localisation()
+    s = sec.section("localisation", LOCALISATION_KEYS, "the localisation error (a mapping)")
+    if s is not None:
+        localisation = Localisation(drift_per_metre=s.number("drift_per_metre", 0.0, low=0, high=10.0),
+                                    drift_per_second=s.number("drift_per_second", 0.0, low=0, high=10.0),
+                                    yaw_drift_per_metre=s.number("yaw_drift_per_metre", 0.0, low=0, high=90.0))
+    latency = Latency()
+    s = sec.section("latency", LATENCY_KEYS, "the delays (a mapping)")
+    if s is not None:
+        latency = Latency(observation=s.number("observation", 0.0, low=0, high=10.0),
+                          command=s.number("command", 0.0, low=0, high=10.0))
+    return Robot(footprint=fp, drive=drive, limits=limits, lidar=lidar, safety=safety,
+                 localisation=localisation, latency=latency)
 
 
 def _pose(ctx: _Ctx, node: YNode | None, path: str, line: int | None, what: str) -> Pose:
@@ -745,6 +766,15 @@ def check_scenario(scenario: Scenario, *, _ctx: _Ctx | None = None) -> None:
                        f"{episode_steps:.3g} physics steps, more than {SCENARIO_LIMITS['max_episode_steps']:g}",
                        "mission.timeout", lines.get("mission.timeout", lines.get("mission")),
                        "shorten the timeout or lengthen the timestep")
+    for key in ("observation", "command"):
+        delay = getattr(scenario.robot.latency, key)
+        ticks = delay * sim.control_rate
+        if abs(ticks - round(ticks)) > 1e-6:
+            field = f"robot.latency.{key}"
+            raise ctx.fail(f"a delay of {delay!r} s is not a whole number of control periods "
+                           f"({1.0 / sim.control_rate:g} s at {sim.control_rate:g} Hz)", field,
+                           lines.get(field, lines.get("robot.latency")),
+                           f"e.g. {key}: {round(ticks) / sim.control_rate:g}")
     if scenario.obstacles:
         _check_clear(scenario, ctx)
 

@@ -155,6 +155,10 @@ class Lidar:
     range_max: float = 8.0          # m; no return reads as range_max
     noise_sigma: float = 0.0        # m, Gaussian noise on each range
     dropout: float = 0.0            # probability a beam reads as no return
+    # a datasheet's noise model (all off by default; see the docs' "sensor faults")
+    noise_per_metre: float = 0.0    # m of noise sigma added per metre of range (range-proportional)
+    dropout_at_max: float | None = None  # dropout probability at range_max (linear from `dropout` at 0 m)
+    spurious: float = 0.0           # probability a beam returns a spurious range short of the true one
 
     @property
     def fov_rad(self) -> float:
@@ -171,12 +175,38 @@ class Safety:
 
 
 @dataclass(frozen=True)
+class Localisation:
+    """What the planner believes of the robot's pose: the truth plus an error that is a random walk
+    (seeded per episode): its standard deviation grows by ``drift_per_metre`` per square-root
+    metre travelled and ``drift_per_second`` per square-root second (so after 1 m, or 1 s, it is
+    that much), the heading's by ``yaw_drift_per_metre`` degrees per square-root metre. The
+    verdict, the metrics and the pictures use the true pose."""
+    drift_per_metre: float = 0.0    # m / sqrt(m)
+    drift_per_second: float = 0.0   # m / sqrt(s)
+    yaw_drift_per_metre: float = 0.0  # deg / sqrt(m)
+
+    @property
+    def drifts(self) -> bool:
+        return bool(self.drift_per_metre or self.drift_per_second or self.yaw_drift_per_metre)
+
+
+@dataclass(frozen=True)
+class Latency:
+    """Delays, in seconds, whole multiples of the control period: the planner sees observations
+    ``observation`` seconds old; its commands take effect ``command`` seconds after it answered."""
+    observation: float = 0.0
+    command: float = 0.0
+
+
+@dataclass(frozen=True)
 class Robot:
     footprint: Footprint = Footprint()
     drive: Literal["omni", "diff"] = "omni"
     limits: Limits = Limits()
     lidar: Lidar = Lidar()
     safety: Safety = Safety()
+    localisation: Localisation = Localisation()
+    latency: Latency = Latency()
 
 
 @dataclass(frozen=True)
@@ -246,6 +276,10 @@ class Scenario:
 
 
 _NOT_CONTENT = {"name", "family", "description", "marks", "provenance", "source", "search"}
+# Fields added after scenarios were first hashed: at their default they are left out of the hash,
+# so a file written before them keeps its hash (results files pair scenarios by it).
+_ADDED_DEFAULTS: dict[str, Any] = {"noise_per_metre": 0.0, "dropout_at_max": None, "spurious": 0.0,
+                                   "localisation": Localisation(), "latency": Latency()}
 
 
 def content_hash(scenario: Scenario) -> str:
@@ -262,7 +296,8 @@ def content_hash(scenario: Scenario) -> str:
     def plain(value: Any) -> Any:
         if dataclasses.is_dataclass(value):
             return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)
-                    if f.name not in _NOT_CONTENT}
+                    if f.name not in _NOT_CONTENT
+                    and not (f.name in _ADDED_DEFAULTS and getattr(value, f.name) == _ADDED_DEFAULTS[f.name])}
         if isinstance(value, (list, tuple)):
             return [plain(v) for v in value]
         if isinstance(value, Mapping):

@@ -22,6 +22,9 @@ Defaults can be overridden in the seed's YAML ``search:`` mapping::
       waypoint_dx: 0            # every waypoint gets its own dx/dy offsets
       waypoint_dy: 0
       polygon_vertex: 0.2       # m: each polygon corner's own dx/dy (default 0: off)
+      drift_per_metre: [0, 0.1] # sensor and localisation faults (default 0: off): lidar_noise_per_metre,
+                                # lidar_dropout_at_max, lidar_spurious, drift_per_metre,
+                                # drift_per_second, yaw_drift_per_metre; added to the seed's value
       motion_start: [-2, 2]     # s added to a moving obstacle's start time (never below 0)
       motion_speed: 0.5         # m/s added to a moving obstacle's speed (never below min_speed)
       min_size: 0.05            # m: sizes never shrink below this
@@ -59,7 +62,16 @@ DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {
     "polygon_vertex": (0.0, 0.0),
     "motion_start": (-2.0, 2.0),
     "motion_speed": (-0.5, 0.5),
+    # sensor and localisation faults: off unless a seed opts in (offsets added, never below 0)
+    "lidar_noise_per_metre": (0.0, 0.0),
+    "lidar_dropout_at_max": (0.0, 0.0),
+    "lidar_spurious": (0.0, 0.0),
+    "drift_per_metre": (0.0, 0.0),
+    "drift_per_second": (0.0, 0.0),
+    "yaw_drift_per_metre": (0.0, 0.0),
 }
+ROBOT_PARAMS = ("lidar_noise_per_metre", "lidar_dropout_at_max", "lidar_spurious", "drift_per_metre",
+                "drift_per_second", "yaw_drift_per_metre")
 MIN_SPEED = 0.1         # m/s: a moving obstacle's speed never drops below this
 OTHER_KEYS = ("frozen", "min_size")
 KNOWN_KEYS = tuple(DEFAULT_BOUNDS) + OTHER_KEYS
@@ -120,6 +132,10 @@ class SearchSpace:
                     if r:
                         yield Param(f"obstacles.{obs.name}.motion.{attr}", f"obstacle:{obs.name}",
                                     attr, *r)
+        for key in ROBOT_PARAMS:
+            r = rng(key)
+            if r and "robot" not in self.frozen:
+                yield Param(f"robot.{key}", "robot", key, *r)
         mission = self.seed.mission
         for part in ("start", "goal"):
             if part in self.frozen:
@@ -176,7 +192,8 @@ class SearchSpace:
         waypoints = tuple(_mutate_pose(w, by_part.get(f"waypoints[{i}]"))
                           for i, w in enumerate(m.waypoints))
         mission = replace(m, start=start, goal=goal, waypoints=waypoints)
-        return replace(self.seed, obstacles=tuple(obstacles), mission=mission)
+        robot = _mutate_robot(self.seed.robot, by_part.get("robot"))
+        return replace(self.seed, obstacles=tuple(obstacles), mission=mission, robot=robot)
 
     def describe(self) -> str:
         return ", ".join(f"{p.name} in [{p.lo:g}, {p.hi:g}]" for p in self.params) or "(nothing to mutate)"
@@ -195,6 +212,25 @@ def _mutate_pose(pose: Pose, d: Mapping[str, float] | None) -> Pose:
     x = _r(pose.x + d["dx"]) if "dx" in d else pose.x
     y = _r(pose.y + d["dy"]) if "dy" in d else pose.y
     return Pose(x, y, _r(yaw) if "yaw" in d else pose.yaw)
+
+
+def _mutate_robot(robot: Any, d: Mapping[str, float] | None) -> Any:
+    """The robot with the opted-in sensor and localisation fault offsets added (clamped to their
+    ranges: never below 0, probabilities at most 1)."""
+    if not d:
+        return robot
+    lidar, loc = robot.lidar, robot.localisation
+    changes: dict[str, Any] = {}
+    if "lidar_noise_per_metre" in d:
+        changes["noise_per_metre"] = _r(min(1.0, max(0.0, lidar.noise_per_metre + d["lidar_noise_per_metre"])))
+    if "lidar_dropout_at_max" in d:
+        base = lidar.dropout if lidar.dropout_at_max is None else lidar.dropout_at_max
+        changes["dropout_at_max"] = _r(min(1.0, max(0.0, base + d["lidar_dropout_at_max"])))
+    if "lidar_spurious" in d:
+        changes["spurious"] = _r(min(1.0, max(0.0, lidar.spurious + d["lidar_spurious"])))
+    drift = {k: _r(min(90.0, max(0.0, getattr(loc, k) + d[k])))
+             for k in ("drift_per_metre", "drift_per_second", "yaw_drift_per_metre") if k in d}
+    return replace(robot, lidar=replace(lidar, **changes), localisation=replace(loc, **drift))
 
 
 def _mutate_motion(motion: Any, d: Mapping[str, float]) -> Any:
@@ -308,7 +344,7 @@ def _validate(seed: Scenario, mapping: Mapping[str, Any]):
     if not isinstance(frozen_raw, (list, tuple)):
         raise _err(seed, "frozen", f"must be a list of part names, got {frozen_raw!r}",
                    "write e.g. frozen: [wall_left, start]")
-    parts = [o.name for o in seed.obstacles] + ["start", "goal", "waypoints"] + [
+    parts = [o.name for o in seed.obstacles] + ["start", "goal", "waypoints", "robot"] + [
         f"waypoints[{i}]" for i in range(len(seed.mission.waypoints))]
     for i, name in enumerate(frozen_raw):
         if name not in parts:

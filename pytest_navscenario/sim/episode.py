@@ -29,6 +29,7 @@ from ..subjects.protocol import Observation
 from .command import Drive, call_planner, planner_traceback, validate_command
 from .deadline import PlannerTimeout, TickDeadline
 from .lidar import Lidar
+from .faults import Faults
 from .moving import MovingObstacles, describe_collision
 from .trajectory import Collision, SafetyStop, SubjectFailure, Trajectory
 from .world import (MUJOCO_WARNINGS, TWO_PI, compiled_world, divergence_message, on_mujoco_warning,
@@ -153,6 +154,10 @@ class Episode:
         self.lidar = Lidar(scenario, world, d, self.n_ticks + 1, seed)
         self.moving = (MovingObstacles(scenario, d.mocap_pos, dt, spt) if world.model.nmocap else None)
         self._allocate_records(self.n_ticks * spt + 1)
+        robot = scenario.robot
+        self.faults = (Faults(scenario, seed, self.seen, spt * dt)
+                       if robot.localisation.drifts or robot.latency.observation or robot.latency.command
+                       else None)
         self.i = 0              # physics step index of the current state
         self.tick = 0           # control ticks run
         self.t_physics = self.t_rays = self.t_planner = self.t_safety = 0.0
@@ -231,6 +236,8 @@ class Episode:
 
     def run_ticks(self) -> None:
         """Control ticks until one of the steps ends the episode (raises EpisodeOver)."""
+        if self.faults is not None:
+            return self.run_ticks_with_faults()
         observe, safety_check, act, record, step_physics = (
             self.observe, self.safety_check, self.act, self.record,
             self.step_physics if self.moving is None else self.step_physics_moving)
@@ -239,6 +246,19 @@ class Episode:
             safety_check(state)
             setpoint = act(obs)
             record(obs.time, setpoint)
+            step_physics(setpoint)
+
+    def run_ticks_with_faults(self) -> None:
+        """``run_ticks`` with localisation drift and latency (sim/faults.py): the planner gets the
+        drifted, delayed observation, its setpoint takes effect later; the truth is recorded."""
+        faults = self.faults
+        step_physics = self.step_physics if self.moving is None else self.step_physics_moving
+        while True:
+            state, obs = self.observe()
+            seen = faults.observation(self.tick, state, obs)
+            self.safety_check(state)
+            setpoint = faults.applied(self.act(seen))
+            self.record(state[0], setpoint)
             step_physics(setpoint)
 
     # ------------------------------------------------------------ the steps of a tick
@@ -309,8 +329,9 @@ class Episode:
         return self.drive.setpoint(vx, vy, wz)
 
     def _planner_failed(self, obs: Observation, message: str, tb: str | None = None) -> None:
-        self.failure = SubjectFailure(message, obs.tick, obs.time, tb)
-        self.record(obs.time, HALT)
+        t = self.i * self.dt       # now (a delayed observation is older)
+        self.failure = SubjectFailure(message, self.tick, t, tb)
+        self.record(t, HALT)
         raise EpisodeOver("subject-error") from None
 
     def record(self, t: float, setpoint: tuple[float, float, float]) -> None:
@@ -416,7 +437,8 @@ class Episode:
             tick_t=np.array(self.tick_times, dtype=float),
             command=np.array(self.commands, dtype=float).reshape(-1, 3),
             ranges=self.lidar.ranges(self.tick), angles=self.lidar.angles,
-            waypoint_times=tuple(self.mission.passed_at))
+            waypoint_times=tuple(self.mission.passed_at),
+            believed=None if self.faults is None else self.faults.believed_poses())
 
     def result(self) -> SimResult:
         trajectory = self.trajectory()

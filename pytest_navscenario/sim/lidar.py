@@ -81,9 +81,12 @@ class Lidar:
         self.hit = np.empty(beams, dtype=bool)
         self.range_min, self.range_max = float(lidar.range_min), float(lidar.range_max)
         self.sigma, self.dropout = float(lidar.noise_sigma), float(lidar.dropout)
+        self.per_metre, self.spurious = float(lidar.noise_per_metre), float(lidar.spurious)
+        self.dropout_max = None if lidar.dropout_at_max is None else float(lidar.dropout_at_max)
+        self.datasheet = bool(self.per_metre or self.spurious or self.dropout_max is not None)
         # the generator is made only when there is noise to draw (seeding it costs ~20 us)
         self.rng = (np.random.Generator(np.random.PCG64(int(seed) & 0xFFFFFFFFFFFFFFFF))
-                    if self.sigma > 0.0 or self.dropout > 0.0 else None)
+                    if self.sigma > 0.0 or self.dropout > 0.0 or self.datasheet else None)
         self.record = np.full((n_rows, beams), self.range_max, dtype=np.float32)
         self.readonly = self.record.view()
         self.readonly.flags.writeable = False
@@ -117,6 +120,8 @@ class Lidar:
             np.greater_equal(self.geom, 0, out=self.hit)
             np.maximum(dist, rmin, out=dist)
             np.minimum(dist, rmax, out=row, where=self.hit, casting="same_kind")
+        elif self.datasheet:
+            self._datasheet_noise(dist, row)
         else:
             np.putmask(dist, self.geom < 0, rmax)
             if self.sigma > 0.0:
@@ -126,6 +131,27 @@ class Lidar:
             np.maximum(dist, rmin, out=dist)
             np.minimum(dist, rmax, out=row, casting="same_kind")
         return self.readonly[tick]
+
+    def _datasheet_noise(self, dist: np.ndarray, row: np.ndarray) -> None:
+        """The datasheet model: Gaussian noise of sigma ``noise_sigma + noise_per_metre * range``,
+        dropout whose probability grows linearly from ``dropout`` at 0 m to ``dropout_at_max`` at
+        range_max, and spurious returns (probability ``spurious`` per beam) uniformly between
+        range_min and the true range; each from the episode's generator, in that order."""
+        rng, rmin, rmax = self.rng, self.range_min, self.range_max
+        hit = self.geom >= 0
+        np.putmask(dist, ~hit, rmax)
+        true = dist.copy()
+        if self.sigma > 0.0 or self.per_metre > 0.0:
+            dist += rng.normal(0.0, 1.0, self.beams) * (self.sigma + self.per_metre * true)
+        p = self.dropout if self.dropout_max is None else \
+            self.dropout + (self.dropout_max - self.dropout) * np.minimum(true / rmax, 1.0)
+        if np.any(p > 0.0):
+            np.putmask(dist, rng.random(self.beams) < p, rmax)
+        if self.spurious > 0.0:
+            ghost = rng.random(self.beams) < self.spurious
+            np.putmask(dist, ghost, rmin + rng.random(self.beams) * (np.minimum(true, rmax) - rmin))
+        np.maximum(dist, rmin, out=dist)
+        np.minimum(dist, rmax, out=row, casting="same_kind")
 
     def ranges(self, ticks: int) -> np.ndarray:
         """A copy of the first ``ticks`` recorded rows, for the Trajectory."""
