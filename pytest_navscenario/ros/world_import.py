@@ -10,9 +10,8 @@
   on load). A model with plugins (which may move it) is imported where it stands, with a note that
   what the plugins do is not carried over. Planes are ignored; everything else (other meshes,
   spheres, includes, tilted shapes, non-static models without plugins) is listed in a warning,
-  never dropped silently. A file that is not quite well-formed XML (a bare ``&``, text after
-  ``</sdf>``, tags left open at the end), which Gazebo reads anyway, is repaired and read, with a
-  warning saying what was repaired.
+  never dropped silently. A file that is not quite well-formed XML but that Gazebo reads anyway (a
+  bare ``&``, more after ``</sdf>``) is repaired and read, with a warning saying what was repaired.
 
 Also home of ``write_seed``, which every importer uses to write its scenario file.
 """
@@ -183,9 +182,10 @@ def sdf_obstacles(path: str | Path) -> SdfWorld:
 
 
 def _recover(path: Path, error: ET.ParseError) -> tuple[ET.Element, str]:
-    """Gazebo's parser forgives some slips a strict XML parser refuses: a bare ``&``, text after the
-    root element, tags left open at the end of the file. Repair those, parse again, and say what was
-    done (a warning); anything else stays an error."""
+    """Gazebo's parser (tinyxml2) forgives some slips a strict XML parser refuses: a bare ``&`` (kept
+    as text), more after the root element (further top-level content). Repair those, parse again,
+    and say what was done (a warning); anything else (a truncated file, mismatched tags) stays an
+    error, as it is for Gazebo."""
     import re
 
     line = error.position[0]
@@ -201,19 +201,6 @@ def _recover(path: Path, error: ET.ParseError) -> tuple[ET.Element, str]:
     if end >= 0 and fixed[end + 6:].strip():
         fixed = fixed[:end + 6] + "\n"
         done.append("dropped the text after </sdf>")
-    if end < 0:
-        stack = []
-        for m in re.finditer(r"<(/?)([A-Za-z_][\w.:-]*)[^>]*?(/?)>", re.sub(r"<!--.*?-->|<\?.*?\?>", "", fixed, flags=re.S)):
-            closing, name, empty = m.groups()
-            if empty:
-                continue
-            if not closing:
-                stack.append(name)
-            elif stack and stack[-1] == name:
-                stack.pop()
-        if stack:
-            fixed += "".join(f"</{name}>" for name in reversed(stack)) + "\n"
-            done.append(f"closed {', '.join('<' + n + '>' for n in reversed(stack))} at the end of the file")
     try:
         root = ET.fromstring(fixed) if done else None
     except ET.ParseError:

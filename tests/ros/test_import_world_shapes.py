@@ -73,16 +73,6 @@ def test_slightly_malformed_worlds_are_repaired_and_said_so(tmp_path, models, ta
     assert "not well-formed XML" in got.warnings[0] and repaired in got.warnings[0]
 
 
-def test_tags_left_open_at_the_end_are_closed_and_said_so(tmp_path):
-    src = tmp_path / "w.world"
-    src.write_text("<sdf version='1.9'><world name='w'><model name='m'><static>1</static><link name='l'>"
-                   "<collision name='c'><geometry><box><size>1 2 1</size></box></geometry></collision>")
-    got = sdf_obstacles(src)
-    (box,) = got.obstacles
-    assert (box.length, box.width) == (1.0, 2.0)
-    assert "closed <link>, <model>, <world>, <sdf> at the end of the file" in got.warnings[0]
-
-
 def test_a_world_that_cannot_be_repaired_is_an_error_naming_the_line(tmp_path):
     src = tmp_path / "w.world"
     src.write_text("<sdf version='1.9'>\n<world name='w'>\n<model name='m'></world>\n</sdf>\n")
