@@ -1,11 +1,19 @@
-"""Benchmark of the failure search (issue 4). Run from the repository root:
+"""Benchmark of the failure search: strategies side by side against one planner (issue 13).
 
-    python benchmarks/bench_search.py                 # everything (about 20 min on 2 cores)
-    python benchmarks/bench_search.py --part speed    # budget 1000, one seed, DWA, one core
-    python benchmarks/bench_search.py --part power    # 5 seeds x 2 planners x 5 search seeds, evolve vs random
-    python benchmarks/bench_search.py --part suite    # suite generated against potential-field, re-run with DWA
+Run from the repository root (not a timed test; the machine may be shared, so use nice):
 
-Figures: medians and totals, printed as a table and saved as JSON (--out).
+    nice python benchmarks/bench_search.py --subject dwa
+    nice python benchmarks/bench_search.py --subject examples.gap_follower:FollowTheGap
+    nice python benchmarks/bench_search.py --subject dwa --part speed     # budget 1000, one core
+
+For each shipped seed x search seed (default 5) x strategy (evolve, random, hillclimb) one
+search at budget 100 without shrinking. Per seed and strategy: distinct failures (total over
+the search seeds; distinct = different cause signature, as frozen files are told apart),
+searches that found none, median simulations to the first failure (a search with none counts
+as budget + 1), lowest clearance, median CPU time per search, and beside them the rate at
+which uniformly random layouts fail for this planner and seed (random's failing simulations
+over its simulations): a ratio where random already fails on most layouts says little.
+Rows are saved as JSON (--out) and the load average is printed before and after.
 """
 from __future__ import annotations
 
@@ -21,7 +29,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 SEEDS = ("boxes1", "boxes2", "corridor", "cylinders", "L-corridor")
-PLANNERS = ("dwa", "potential-field")
+STRATEGIES = ("evolve", "random", "hillclimb")
 
 
 def _load(name):
@@ -30,113 +38,117 @@ def _load(name):
 
 
 def one_search(args):
-    seed_name, planner, strategy, seed_value, budget = args
-    from pytest_navscenario.subjects.loading import load_subject
+    seed_name, subject, strategy, seed_value, budget = args
     from pytest_navscenario.search.engine import run_search
+    from pytest_navscenario.subjects.loading import load_subject
 
     t0, c0 = time.perf_counter(), time.process_time()
-    r = run_search(_load(seed_name), load_subject(planner), budget=budget, seed_value=seed_value,
+    r = run_search(_load(seed_name), load_subject(subject), budget=budget, seed_value=seed_value,
                    strategy=strategy, shrink_budget=0)
-    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     search = [c for c in r.candidates if c.phase == "search"]
-    return {"seed": seed_name, "planner": planner, "strategy": strategy, "search_seed": seed_value,
+    return {"seed": seed_name, "subject": subject, "strategy": strategy, "search_seed": seed_value,
             "budget": budget, "sims": r.sims_used, "discarded": r.discarded_total,
             "distinct_failures": len(r.failures), "failing_sims": sum(c.failed for c in search),
-            "best_clearance": r.best_clearance, "wall": wall, "cpu": cpu,
-            "sim_wall": sum(c.wall_time for c in search),
-            "suite": [list(c.offsets) for c in search], "suite_outcomes": [c.outcome for c in search]}
+            "first_failure": r.first_failure or budget + 1, "best_clearance": r.best_clearance,
+            "wall": time.perf_counter() - t0, "cpu": time.process_time() - c0,
+            "signatures": sorted({"/".join(map(str, f.found.signature)) for f in r.failures}),
+            "distinct_by_origin": _count(f.found.origin for f in r.failures),
+            "failing_by_origin": _count(c.origin for c in search if c.failed),
+            "tries_by_origin": _count(c.origin for c in search)}
 
 
-def rerun(args):
-    seed_name, planner, offsets_list = args
+def _count(values) -> dict:
+    out: dict = {}
+    for v in values:
+        out[v] = out.get(v, 0) + 1
+    return out
+
+
+def _cell(rows, seed, strategy):
+    sel = [r for r in rows if r["seed"] == seed and r["strategy"] == strategy]
+    if not sel:
+        return None
+    return {"distinct": sum(r["distinct_failures"] for r in sel),
+            "none": sum(r["distinct_failures"] == 0 for r in sel),
+            "first": statistics.median(r["first_failure"] for r in sel),
+            "clear": min(r["best_clearance"] for r in sel),
+            "cpu": statistics.median(r["cpu"] for r in sel),
+            "fail_rate": sum(r["failing_sims"] for r in sel) / max(1, sum(r["sims"] for r in sel))}
+
+
+def table(rows, subject: str, budget: int, n_seeds: int) -> str:
+    lines = [f"subject {subject}, budget {budget}, {n_seeds} search seeds per shipped seed, no shrinking",
+             f"{'seed':<11} {'strategy':<10} {'distinct':>8} {'none':>5} {'1st fail':>8} {'min clr':>8} "
+             f"{'cpu s':>6} {'random fail rate':>17}"]
+    tot = {s: [0, 0, []] for s in STRATEGIES}
+    for seed in SEEDS:
+        rnd = _cell(rows, seed, "random")
+        for strat in STRATEGIES:
+            c = _cell(rows, seed, strat)
+            if c is None:
+                continue
+            tot[strat][0] += c["distinct"]
+            tot[strat][1] += c["none"]
+            tot[strat][2] += [r["first_failure"] for r in rows if r["seed"] == seed and r["strategy"] == strat]
+            rate = f"{rnd['fail_rate']:.1%}" if rnd else "-"
+            lines.append(f"{seed:<11} {strat:<10} {c['distinct']:>8} {c['none']:>5} {c['first']:>8g} "
+                         f"{c['clear']:>8.3f} {c['cpu']:>6.1f} {rate:>17}")
+    lines.append("totals:")
+    for strat in STRATEGIES:
+        d, none, firsts = tot[strat]
+        if firsts:
+            lines.append(f"  {strat:<10} distinct {d:>4}, searches with none {none:>3}, median first failure "
+                         f"{statistics.median(firsts):g}")
+    r = tot["random"][0]
+    for strat in ("evolve", "hillclimb"):
+        if tot[strat][2] and r:
+            lines.append(f"  {strat}/random distinct = {tot[strat][0] / r:.2f}")
+    if tot["evolve"][2] and tot["hillclimb"][0]:
+        lines.append(f"  evolve/hillclimb distinct = {tot['evolve'][0] / tot['hillclimb'][0]:.2f}")
+    return "\n".join(lines)
+
+
+def part_power(subject: str, budget: int, search_seeds: int, jobs: int, strategies) -> list[dict]:
+    tasks = [(s, subject, strat, k, budget) for s in SEEDS for strat in strategies for k in range(search_seeds)]
+    with ProcessPoolExecutor(jobs) as pool:
+        return list(pool.map(one_search, tasks))
+
+
+def part_speed(subject: str, budget: int) -> dict:
+    from pytest_navscenario.search.engine import run_search
     from pytest_navscenario.subjects.loading import load_subject
-    from pytest_navscenario.harness.runner import run_scenario
-    from pytest_navscenario.search.space import SearchSpace
 
-    space = SearchSpace(_load(seed_name))
-    factory = load_subject(planner)
-    return [run_scenario(space.apply(o), factory()).outcome.value for o in offsets_list]
-
-
-def part_speed(budget: int) -> dict:
-    r = one_search(("boxes1", "dwa", "evolve", 0, budget))
-    over = (r["wall"] - r["sim_wall"]) / budget * 1000
-    print(f"speed: budget {budget} on boxes1 vs dwa (evolve, one process): {r['wall']:.1f} s wall, "
-          f"{r['cpu']:.1f} s CPU, {r['cpu'] / budget * 1000:.1f} ms CPU per simulation, search overhead "
-          f"(wall outside episodes) {over:.1f} ms per simulation, {r['distinct_failures']} distinct failures")
-    return {"budget": budget, "wall": r["wall"], "cpu": r["cpu"], "overhead_ms": over,
-            "distinct_failures": r["distinct_failures"]}
-
-
-def part_power(budget: int, search_seeds: int, jobs: int, reuse_random: str | None = None) -> list[dict]:
-    reused = []
-    if reuse_random:  # random sampling does not depend on the evolve strategy: reuse a saved run
-        reused = [r for r in json.loads(Path(reuse_random).read_text())["power"]
-                  if r["strategy"] == "random" and r["budget"] == budget and r["search_seed"] < search_seeds]
-    strategies = ("evolve",) if reused else ("evolve", "random")
-    tasks = [(s, p, strat, k, budget) for s in SEEDS for p in PLANNERS for strat in strategies
-             for k in range(search_seeds)]
-    with ProcessPoolExecutor(jobs) as pool:
-        rows = list(pool.map(one_search, tasks)) + reused
-    print(f"\npower: budget {budget}, {search_seeds} search seeds; distinct failures (total over search "
-          f"seeds) and lowest clearance (m)")
-    print(f"{'seed':<11} {'planner':<16} {'evolve':>7} {'random':>7} {'ev.clr':>7} {'rnd.clr':>7}")
-    tot = {"evolve": 0, "random": 0}
-    for s in SEEDS:
-        for p in PLANNERS:
-            cell = {}
-            for strat in ("evolve", "random"):
-                sel = [r for r in rows if r["seed"] == s and r["planner"] == p and r["strategy"] == strat]
-                cell[strat] = (sum(r["distinct_failures"] for r in sel),
-                               min(r["best_clearance"] for r in sel))
-                tot[strat] += cell[strat][0]
-            print(f"{s:<11} {p:<16} {cell['evolve'][0]:>7} {cell['random'][0]:>7} "
-                  f"{cell['evolve'][1]:>7.3f} {cell['random'][1]:>7.3f}")
-    ratio = tot["evolve"] / tot["random"] if tot["random"] else math.inf
-    print(f"{'total':<28} {tot['evolve']:>7} {tot['random']:>7}   evolve/random = {ratio:.2f}")
-    for p in PLANNERS:
-        for strat in ("evolve", "random"):
-            walls = [r["wall"] for r in rows if r["planner"] == p and r["strategy"] == strat] or [math.nan]
-            print(f"  median wall per search, {p} {strat}: {statistics.median(walls):.1f} s")
-    return rows
-
-
-def part_suite(rows: list[dict], jobs: int) -> dict:
-    """The suite generated against potential-field (every simulated candidate of its evolve
-    searches) re-run with DWA: success rates of both on the same suite."""
-    gen = [r for r in rows if r["planner"] == "potential-field" and r["strategy"] == "evolve"]
-    pf_out = [o for r in gen for o in r["suite_outcomes"]]
-    tasks = [(r["seed"], "dwa", r["suite"]) for r in gen]
-    with ProcessPoolExecutor(jobs) as pool:
-        dwa_out = [o for outs in pool.map(rerun, tasks) for o in outs]
-    n = len(pf_out)
-    pf_rate = sum(o == "success" for o in pf_out) / n
-    dwa_rate = sum(o == "success" for o in dwa_out) / n
-    print(f"\nsuite generated against potential-field ({n} scenarios): potential-field success "
-          f"{pf_rate:.1%}, dwa success {dwa_rate:.1%}")
-    return {"n": n, "pf_success": pf_rate, "dwa_success": dwa_rate}
+    t0, c0 = time.perf_counter(), time.process_time()
+    r = run_search(_load("boxes1"), load_subject(subject), budget=budget, seed_value=0)
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    print(f"speed: budget {budget} on boxes1 vs {subject} (evolve, shrinking on, one process): {wall:.1f} s "
+          f"wall, {cpu:.1f} s CPU; {r.sims_used} search + {r.shrink_sims} shrink simulations, "
+          f"{len(r.failures)} distinct failures")
+    return {"budget": budget, "wall": wall, "cpu": cpu, "search_sims": r.sims_used, "shrink_sims": r.shrink_sims}
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--part", choices=("all", "speed", "power", "suite"), default="all")
+    ap.add_argument("--subject", default="dwa", help="planner spec: dwa, potential-field, pkg.mod:Class, exec:...")
+    ap.add_argument("--part", choices=("power", "speed"), default="power")
     ap.add_argument("--budget", type=int, default=100)
     ap.add_argument("--speed-budget", type=int, default=1000)
     ap.add_argument("--search-seeds", type=int, default=5)
+    ap.add_argument("--strategies", default=",".join(STRATEGIES))
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--out", default="bench_search.json")
-    ap.add_argument("--reuse-random", metavar="JSON", help="take the random-sampling rows from an earlier --out file")
     a = ap.parse_args()
-    out: dict = {}
-    if a.part in ("all", "speed"):
-        out["speed"] = part_speed(a.speed_budget)
-    if a.part in ("all", "power", "suite"):
-        rows = part_power(a.budget, a.search_seeds, a.jobs, a.reuse_random)
-        out["power"] = [{k: v for k, v in r.items() if not k.startswith("suite")} for r in rows]
-        if a.part in ("all", "suite"):
-            out["suite"] = part_suite(rows, a.jobs)
-    Path(a.out).write_text(json.dumps(out, indent=1, default=str))
-    sys.stdout.flush()
+    print(f"load average before: {os.getloadavg()}")
+    out: dict = {"subject": a.subject, "command": " ".join(sys.argv)}
+    if a.part == "speed":
+        out["speed"] = part_speed(a.subject, a.speed_budget)
+    else:
+        rows = part_power(a.subject, a.budget, a.search_seeds, a.jobs, a.strategies.split(","))
+        out["power"] = rows
+        print(table(rows, a.subject, a.budget, a.search_seeds))
+    print(f"load average after: {os.getloadavg()}")
+    Path(a.out).write_text(json.dumps(out, indent=1, default=lambda v: None if isinstance(v, float)
+                                      and not math.isfinite(v) else str(v)))
 
 
 if __name__ == "__main__":

@@ -21,10 +21,8 @@ glue at the top down to the scenario model (imports only point down, checked in 
 """
 from __future__ import annotations
 
-import importlib
-from typing import Any
-
 from . import _compat
+from .core.lazy import lazy_exports
 
 __version__ = "0.1.0"
 
@@ -49,9 +47,4 @@ __all__ = sorted(_EXPORTS) + ["__version__"]
 
 _compat.install()
 
-
-def __getattr__(name: str) -> Any:
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module 'pytest_navscenario' has no attribute {name!r}")
-    return getattr(importlib.import_module(f".{module}", __name__), name)
+__getattr__ = lazy_exports(__name__, _EXPORTS)

@@ -29,7 +29,8 @@ def effective_seed(scenario_seed: int, base_seed: int | None) -> int:
 
 
 def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = None,
-                 tick_limit: float | None = None, reset_timeout: float | None = None) -> EpisodeResult:
+                 tick_limit: float | None = None, reset_timeout: float | None = None,
+                 stuck_after: float | None = None) -> EpisodeResult:
     """Run ``scenario`` once against ``planner`` and return outcome, metrics and trajectory.
 
     ``planner``: None (the built-in default, "dwa"), a spec such as ``"potential-field"`` or
@@ -37,6 +38,8 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
     ``seed``: the run's base seed, mixed with ``scenario.simulation.seed`` (None/0: the scenario's
     own seed). ``tick_limit``: seconds a planner tick may take before it counts as a subject error.
     ``reset_timeout``: seconds an external (exec:) planner may take to answer reset (default 10).
+    ``stuck_after``: end the episode early as a timeout when the robot has covered no new ground
+    for that many seconds (None: run to the timeout; the search uses it to save time).
     Raises SubjectLoadError if the planner cannot be made, SimulationDivergedError if the physics
     blows up.
     """
@@ -50,12 +53,13 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
     if reset_timeout and hasattr(instance, "reset_timeout"):
         instance.reset_timeout = reset_timeout
     ep_seed = effective_seed(scenario.simulation.seed, seed)
-    facts = simulate(scenario, instance, ep_seed, tick_limit=tick_limit)
+    facts = simulate(scenario, instance, ep_seed, tick_limit=tick_limit, stuck_after=stuck_after)
     name, version = subject_identity(instance, spec)  # after reset: a planner may name itself there
     t1 = time.perf_counter()
     outcome, message = oracle.classify(
         scenario, facts.trajectory, collision=facts.collision, safety_stop=facts.safety_stop,
-        subject_failure=facts.subject_failure, goal_reached=facts.goal_reached)
+        subject_failure=facts.subject_failure, goal_reached=facts.goal_reached,
+        stuck_after=stuck_after if facts.end == "stuck" else None)
     figures = metrics.compute_metrics(scenario, facts.trajectory, collision=facts.collision)
     t2 = time.perf_counter()
     timings = dict(facts.timings)

@@ -66,7 +66,7 @@ def ini_value(config: pytest.Config, name: str, expected: str = "") -> object:
     wrong TOML type) turned into a usage error that names the option and what it expects."""
     try:
         return config.getini(name)
-    except (ValueError, TypeError) as exc:
+    except (ValueError, TypeError, pytest.UsageError) as exc:  # pytest >= 9.1 raises UsageError
         hint = f"; expected {expected}" if expected else ""
         raise pytest.UsageError(f"ini option {name}: {exc}{hint}") from None
 

@@ -4,7 +4,9 @@ With ``--navsearch`` the session runs one search item per seed name instead of t
 items (so ``-n 2`` runs two searches in parallel, one per worker). Workers attach the search
 result to the call report as ``report.navsearch`` (plain data); the controller (or the only
 process) writes the frozen failures, the search log and the JUnit file, so workers never race
-on a file. Progress is shown live in serial runs; under xdist each search reports when done.
+on a file. Progress is shown live in serial runs through the terminal reporter with capture
+suspended (as live logging does): rewritten in place on a terminal, a plain line every tenth of
+the budget (and on each new failure) in a CI log; under xdist each search reports when done.
 """
 from __future__ import annotations
 
@@ -21,7 +23,8 @@ from .options import ini_type, ini_value
 DEFAULT_BUDGET = 100
 DEFAULT_SHRINK_BUDGET = 40
 DEFAULT_OUT = "scenarios/regressions"
-STRATEGY_NAMES = ("evolve", "random")   # = search.engine.STRATEGIES (not imported: plugin load stays light)
+DEFAULT_STUCK_AFTER = 20.0
+STRATEGY_NAMES = ("evolve", "random", "hillclimb")   # = search.engine.STRATEGIES (not imported: plugin load stays light)
 OLD_OUT_INI = "nav_regressions_dir"     # the old name of the ini option navsearch_out, still read
 
 # (option, dest / ini name, metavar, help)
@@ -36,11 +39,16 @@ OPTIONS = (
      "random seed of the search (integer >= 0, default 0); the same seed, subject and budget "
      "repeat a search exactly."),
     ("--navsearch-strategy", "navsearch_strategy", "{" + ",".join(STRATEGY_NAMES) + "}",
-     "evolve (default: Hypothesis-driven, exploits the best layouts so far) or random "
-     "(uniform sampling over the same space, as a baseline)."),
+     "evolve (default: quality-diversity search drawn by Hypothesis; looks for new ways of "
+     "failing), random (uniform sampling over the same space, a baseline) or hillclimb (the "
+     "Surrealist baseline: adaptive-step hill-climb on one obstacle at a time, minimising "
+     "clearance)."),
     ("--navsearch-shrink-budget", "navsearch_shrink_budget", "N",
      f"simulations allowed to shrink each distinct failure toward the seed, on top of the "
      f"budget (default {DEFAULT_SHRINK_BUDGET}; 0 = keep failures as found)."),
+    ("--navsearch-stuck-after", "navsearch_stuck_after", "SECONDS",
+     f"end a search episode early, as a timeout, when the robot has covered no new ground for "
+     f"this long (default {DEFAULT_STUCK_AFTER:g}; 0 = run every episode to its timeout)."),
     ("--navsearch-out", "navsearch_out", "DIR",
      f"folder for frozen failures, one subfolder per seed, plus each search's log "
      f"(default {DEFAULT_OUT}; the ini option's old name {OLD_OUT_INI} is still read)."),
@@ -57,7 +65,8 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     for opt, dest, metavar, text in OPTIONS:
         kwargs: dict[str, Any] = {"action": "append"} if dest == "navsearch" else {}
         group.addoption(opt, dest=dest, default=None, metavar=metavar, help=f"{text} [ini: {dest}]", **kwargs)
-        kind = "args" if dest == "navsearch" else ini_type("int") if dest in _INT_OPTIONS else "string"
+        kind = ("args" if dest == "navsearch" else ini_type("int") if dest in _INT_OPTIONS
+                else ini_type("float") if dest == "navsearch_stuck_after" else "string")
         parser.addini(dest, text, type=kind,
                       default=[] if dest == "navsearch" else "")
 
@@ -87,6 +96,7 @@ class SearchSettings:
     shrink_budget: int
     out: Path
     junit: Path | None
+    stuck_after: float | None = DEFAULT_STUCK_AFTER
 
 
 @dataclass
@@ -173,7 +183,22 @@ def read_search_settings(config: pytest.Config) -> SearchSettings:
         junit = junit if junit.is_absolute() else base / junit
         if junit.is_dir():
             raise pytest.UsageError(f"{where}: {raw!r} is a folder; give a file name such as navsearch.xml")
-    return SearchSettings(names, budget, seed, strategy, shrink, out, junit)
+    return SearchSettings(names, budget, seed, strategy, shrink, out, junit, _stuck_after(config))
+
+
+def _stuck_after(config: pytest.Config) -> float | None:
+    raw, where, _ = _raw(config, "navsearch_stuck_after")
+    if raw in ("", None):
+        return DEFAULT_STUCK_AFTER
+    try:
+        value = float(str(raw).strip())
+    except ValueError:
+        raise pytest.UsageError(f"{where}: the stuck time must be a number of seconds, got {raw!r} "
+                                f"(e.g. 10; 0 turns the early stop off)") from None
+    if not math.isfinite(value) or value < 0:
+        raise pytest.UsageError(f"{where}: the stuck time must be >= 0 seconds, got {raw!r} "
+                                f"(0 turns the early stop off)")
+    return value or None
 
 
 def _scenario_files(folder: Path) -> list[Path]:
@@ -275,7 +300,7 @@ class NavSearchItem(pytest.Item):
         subject = core.subject.spec or core.subject.label
         report = run_search(job.seed, core.subject.factory, budget=s.budget, seed_value=s.seed,
                             strategy=s.strategy, shrink_budget=s.shrink_budget, space=job.space,
-                            subject=subject, episode_seed=core.settings.seed,
+                            subject=subject, episode_seed=core.settings.seed, stuck_after=s.stuck_after,
                             progress=None if state.is_worker else _Progress(self.config, job.name, s.budget))
         self.navsearch_payload = report_to_payload(report)
         if report.interrupted and report.stop_reason.startswith("interrupted"):
@@ -295,35 +320,58 @@ class NavSearchItem(pytest.Item):
 
 
 class _Progress:
-    """Live progress in a serial run: one rewritten line on a terminal, else a line per 10 %."""
+    """Live progress in a serial run, written through the terminal reporter with pytest's
+    capture suspended (else it would be swallowed): one line rewritten in place on a terminal,
+    else a plain line per tenth of the budget and on each new distinct failure (a CI log)."""
 
     def __init__(self, config: pytest.Config, name: str, budget: int):
         self.tr = config.pluginmanager.get_plugin("terminalreporter")
+        self.capman = config.pluginmanager.get_plugin("capturemanager")
         self.name, self.budget = name, budget
         self.step = max(1, budget // 10)
         self.last_failures = 0
+        self.last_sims = -1
         self.tty = bool(self.tr is not None and getattr(self.tr, "isatty", False))
         self.started = False
+
+    def line(self, report: Any) -> str:
+        n, nf = report.sims_used, len(report.failures)
+        out = f"navsearch {self.name}: {n}/{self.budget} sims, {nf} distinct failure(s)"
+        if math.isfinite(report.best_clearance):
+            out += f", best clearance {report.best_clearance:.3f} m"
+        rob = report.best_robustness
+        if math.isfinite(rob) and not nf:
+            out += f", closest to failing {rob:.2f}"
+        if report.shrink_sims:
+            out += f", shrinking ({report.shrink_sims} sims)"
+        return out
 
     def __call__(self, report: Any) -> None:
         if self.tr is None:
             return
         n, nf = report.sims_used, len(report.failures)
-        best = report.best_clearance
-        line = (f"navsearch {self.name}: {n}/{self.budget} sims, {nf} failure(s), best clearance "
-                f"{best:.3f} m" if math.isfinite(best) else
-                f"navsearch {self.name}: {n}/{self.budget} sims, {nf} failure(s)")
-        if report.shrink_sims:
-            line += f", shrinking ({report.shrink_sims} sims)"
-        if self.tty:
-            if not self.started:
+        due = self.tty or nf != self.last_failures or (n % self.step == 0 and n != self.last_sims
+                                                        and not report.shrink_sims)
+        self.last_failures, self.last_sims = nf, n
+        if not due:
+            return
+        with self._uncaptured():
+            if self.tty:
+                if not self.started:
+                    self.tr.write_line("")
+                    self.started = True
+                self.tr.rewrite(self.line(report), erase=True)
+            else:
                 self.tr.ensure_newline()
-                self.started = True
-            self.tr.rewrite(line, erase=True)
-        elif n % self.step == 0 and not report.shrink_sims or nf != self.last_failures:
-            self.tr.ensure_newline()
-            self.tr.write_line(line)
-        self.last_failures = nf
+                self.tr.write_line(self.line(report))
+            if hasattr(self.tr, "flush"):
+                self.tr.flush()
+
+    def _uncaptured(self) -> Any:
+        import contextlib
+        if self.capman is None:
+            return contextlib.nullcontext()
+        return self.capman.global_and_fixture_disabled()
 
 
 # -- data across processes -------------------------------------------------------------------------
@@ -335,7 +383,9 @@ def report_to_payload(report: Any) -> dict[str, Any]:
                 "culprit": c.culprit, "message": c.message,
                 "metrics": {k: (v if not isinstance(v, float) or math.isfinite(v) else None)
                             for k, v in c.metrics.items()},
-                "scenario_hash": c.scenario_hash, "wall_time": c.wall_time}
+                "scenario_hash": c.scenario_hash, "wall_time": c.wall_time,
+                "robustness": c.robustness if math.isfinite(c.robustness) else None,
+                "signature": list(c.signature), "progress": c.progress}
     index = {id(c): i for i, c in enumerate(report.candidates)}
     return {
         "seed_name": report.seed_name, "seed_source": report.seed_source, "subject": report.subject,
@@ -344,7 +394,7 @@ def report_to_payload(report: Any) -> dict[str, Any]:
         "params": report.params, "sims_used": report.sims_used, "shrink_sims": report.shrink_sims,
         "discarded": dict(report.discarded), "skipped": report.skipped, "interrupted": report.interrupted,
         "stop_reason": report.stop_reason, "wall_time": report.wall_time,
-        "episode_seed": report.episode_seed,
+        "episode_seed": report.episode_seed, "first_failure": report.first_failure,
         "candidates": [cand(c) for c in report.candidates],
         "failures": [{"found": index[id(f.found)], "shrunk": index[id(f.shrunk)],
                       "shrink_sims": f.shrink_sims, "note": f.note} for f in report.failures],
@@ -361,13 +411,16 @@ def payload_to_report(data: dict[str, Any], space: Any) -> Any:
         metrics = {k: (math.nan if v is None else v) for k, v in c["metrics"].items()}
         cands.append(Candidate(c["sim"], c["phase"], c["origin"], offsets, c["outcome"],
                                math.nan if c["clearance"] is None else c["clearance"], c["culprit"],
-                               c["message"], metrics, c["scenario_hash"], c["wall_time"], space.apply(offsets)))
+                               c["message"], metrics, c["scenario_hash"], c["wall_time"], space.apply(offsets),
+                               math.inf if c.get("robustness") is None else c["robustness"],
+                               tuple(c.get("signature", ())), c.get("progress", 0.0)))
     fields = {k: data[k] for k in ("seed_name", "seed_source", "subject", "subject_version", "strategy",
                                    "seed_value", "budget", "shrink_budget", "params", "sims_used",
                                    "shrink_sims", "discarded", "interrupted", "stop_reason", "wall_time",
                                    "episode_seed")}
     report = SearchReport(**fields)
     report.skipped = data.get("skipped", 0)
+    report.first_failure = data.get("first_failure", 0)
     report.candidates = cands
     report.failures = [Failure(cands[f["found"]], cands[f["shrunk"]], f["shrink_sims"], f["note"])
                        for f in data["failures"]]
@@ -452,7 +505,8 @@ def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
              f"{r.sims_used}/{r.budget} sims, {r.discarded_total} discarded" + (f" ({disc})" if disc else "")
              + f", {len(r.failures)} distinct failure(s) ({by}), best clearance "
              + (f"{best:.3f} m" if math.isfinite(best) else "n/a")
-             + f", {r.shrink_sims} shrink sims, {r.wall_time:.1f} s"]
+             + (f", first at sim {r.first_failure}" if r.first_failure else "")
+             + f", {r.sims_used} sims searching + {r.shrink_sims} shrinking, {r.wall_time:.1f} s"]
     if r.skipped:
         lines.append(f"  {r.skipped} candidate(s) repeating a simulated one or next to a known failure were "
                      f"redrawn without simulating them")

@@ -1,39 +1,35 @@
-"""Failure search around a seed scenario: Hypothesis-driven evolution, random baseline, shrinking.
+"""Failure search around a seed scenario: an ask/tell loop, shrinking, the report.
 
 ``run_search(seed, subject_factory, budget=..., seed_value=...)`` simulates exactly ``budget``
 valid candidates (invalid ones -- obstacles on the start/goal footprint, no path at all --
 are discarded before simulation and counted separately), keeps the *distinct* failures and
 shrinks each toward the seed with its own simulation cap.
 
-Fitness (as in the paper): lower minimum robot-obstacle clearance is better and any failing
-outcome beats every success. The ``evolve`` strategy is one Hypothesis run (``@given`` with
-``target()``); because targeting is weak at budgets of ~100, each example either explores the
-whole space or, most of the time, draws a small mutation of an elite from an archive of the
-best layouts so far (kept diverse by crowding), so the budget is spent exploiting what works.
+The loop is ask/tell: a strategy (strategies.py) proposes a generation of candidates, they are
+evaluated -- by ``evaluate_candidate``, a pure function of the candidate, in any order, in any
+number of chunks or processes -- and the results are told back in proposal order. A
+generation's size belongs to the strategy, never to the evaluator, so the same search seed
+gives the same candidates, failures and frozen files however many are evaluated at once.
 
-Distinct failures: two failures are the same when they have the same outcome, the same
-culprit obstacle (the one hit / that triggered the safety stop / nearest at timeout) and
-their offset vectors differ by less than ``DISTINCT_DISTANCE`` of every parameter's range.
+Distinct failures: two failures are the same when they have the same cause signature
+(fitness.py: outcome, culprit, where the culprit lies along the route, how far the robot got),
+which is also how the frozen files are told apart.
 """
 from __future__ import annotations
 
 import math
-import random
 import time
 from dataclasses import dataclass, field
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Iterable, Iterator, Sequence
 
 from ..scenario.model import Scenario
-from .space import SearchSpace, invalid_reason, offsets_strategy
+from .space import FLAG_ON, SearchSpace, invalid_reason, offsets_strategy
 
-STRATEGIES = ("evolve", "random")
-DISTINCT_DISTANCE = 0.1    # fraction of each parameter's range
-ARCHIVE_SIZE = 8
-CROWDING_DISTANCE = 0.05   # archive members closer than this replace each other
+STRATEGIES = ("evolve", "random", "hillclimb")
+DISTINCT_DISTANCE = 0.1    # kept for is_near_failure (fraction of each parameter's range)
 DEFAULT_SHRINK_BUDGET = 40
-EXPLOIT = 0.7              # after a short warm-up, 70 % of candidates mutate an elite, 30 % explore,
-                           # then the share follows each operator's rate of new distinct failures
-MUTATION_SCALES = (0.05, 0.15, 0.3)   # Gaussian step sd as a fraction of the parameter's range
+DEFAULT_STUCK_AFTER = 20.0  # s without new ground covered: the episode ends as a stuck timeout (the
+                            # longest stall a robot recovered from in the examples: 14.5 s)
 MAX_INVALID_FACTOR = 50    # give up after budget * this many discarded candidates in a row
 
 
@@ -47,7 +43,7 @@ class Candidate:
     """One simulated candidate."""
     sim: int                      # 1-based simulation number within its phase
     phase: str                    # "search" or "shrink"
-    origin: str                   # seed / explore / mutate / random / shrink
+    origin: str                   # seed / explore / mutate / place / insert / random / climb / shrink
     offsets: tuple[float, ...]
     outcome: str                  # Outcome value, or "harness-error" if the simulation itself failed
     clearance: float              # metrics.min_clearance (nan on harness error)
@@ -57,6 +53,11 @@ class Candidate:
     scenario_hash: str
     wall_time: float
     scenario: Scenario | None = field(default=None, repr=False, compare=False)
+    robustness: float = math.inf  # fitness.py: < 0 failed, small = near a failure
+    signature: tuple = ()         # fitness.py: the cause signature
+    progress: float = 0.0         # 0..1 along the seed's route where the episode ended
+    path: tuple = field(default=(), repr=False)      # robot centre samples (x, y)
+    closest: tuple = field(default=(), repr=False)   # (t, x, y) of the closest approach
 
     @property
     def failed(self) -> bool:
@@ -64,16 +65,17 @@ class Candidate:
 
     @property
     def fitness(self) -> tuple[int, float]:
-        """Smaller is better: failures first, then lower clearance."""
-        c = self.clearance if math.isfinite(self.clearance) else math.inf
-        return (0 if self.failed else 1, c)
+        """Smaller is better: failures first, then lower robustness (closer to failing)."""
+        r = self.robustness if math.isfinite(self.robustness) else math.inf
+        return (0 if self.failed else 1, r)
 
     def to_dict(self, space: SearchSpace) -> dict[str, Any]:
         return {"sim": self.sim, "phase": self.phase, "origin": self.origin,
                 "params": space.as_mapping(self.offsets), "outcome": self.outcome,
                 "clearance": _finite(self.clearance), "culprit": self.culprit,
                 "message": self.message, "metrics": {k: _finite(v) for k, v in self.metrics.items()},
-                "scenario_hash": self.scenario_hash, "wall_time": round(self.wall_time, 6)}
+                "scenario_hash": self.scenario_hash, "wall_time": round(self.wall_time, 6),
+                "robustness": _finite(round(self.robustness, 6)), "signature": list(self.signature)}
 
 
 @dataclass
@@ -99,13 +101,14 @@ class SearchReport:
     sims_used: int = 0
     shrink_sims: int = 0
     discarded: dict[str, int] = field(default_factory=dict)   # reason -> count
-    skipped: int = 0              # repeats and mutants next to a known failure, redrawn without simulating
+    skipped: int = 0              # repeats of a simulated candidate, redrawn without simulating
     candidates: list[Candidate] = field(default_factory=list)  # search + shrink sims, in order
     failures: list[Failure] = field(default_factory=list)
     interrupted: bool = False
     stop_reason: str = ""
     wall_time: float = 0.0
     episode_seed: int | None = None   # the run's base seed (--nav-seed) every episode used
+    first_failure: int = 0            # simulation number of the first failing candidate (0: none)
 
     @property
     def discarded_total(self) -> int:
@@ -121,6 +124,11 @@ class SearchReport:
         vals = [c.clearance for c in self.candidates if c.phase == "search" and math.isfinite(c.clearance)]
         return min(vals) if vals else math.nan
 
+    @property
+    def best_robustness(self) -> float:
+        vals = [c.robustness for c in self.candidates if c.phase == "search" and math.isfinite(c.robustness)]
+        return min(vals) if vals else math.nan
+
     def failures_by_outcome(self) -> dict[str, int]:
         out: dict[str, int] = {}
         for f in self.failures:
@@ -132,53 +140,92 @@ def _finite(v: Any) -> Any:
     return None if isinstance(v, float) and not math.isfinite(v) else v
 
 
-# -- one simulation ---------------------------------------------------------------------------
-class _Simulator:
-    """Runs candidates against the subject and counts them; never raises (except _Stop)."""
+# -- one simulation: a pure function of the candidate (any process may run it) -----------------
+@dataclass(frozen=True)
+class EvalContext:
+    """What evaluating a candidate needs besides its offsets (picklable for worker processes)."""
+    space: SearchSpace
+    subject_factory: Any
+    episode_seed: int | None = None
+    stuck_after: float | None = DEFAULT_STUCK_AFTER
 
-    def __init__(self, space: SearchSpace, subject_factory, report: SearchReport, progress, stop,
-                 episode_seed: int | None):
-        self.space, self.factory, self.report = space, subject_factory, report
-        self.progress, self.stop, self.episode_seed = progress, stop, episode_seed
+
+_ROUTES: dict[int, Any] = {}
+
+
+def _route(space: SearchSpace) -> Any:
+    from .fitness import Route
+    key = id(space)
+    if key not in _ROUTES:
+        _ROUTES.clear()
+        _ROUTES[key] = (space, Route(space.seed))
+    return _ROUTES[key][1]
+
+
+def evaluate_candidate(ctx: EvalContext, offsets: Sequence[float], origin: str) -> Candidate:
+    """Simulate one candidate; never raises for a harness failure (recorded as harness-error)."""
+    from ..harness.runner import run_scenario
+    from ..scenario.model import content_hash
+    from .fitness import read_episode
+
+    scenario = ctx.space.apply(offsets)
+    t0 = time.perf_counter()
+    try:
+        res = run_scenario(scenario, ctx.subject_factory(), seed=ctx.episode_seed, stuck_after=ctx.stuck_after)
+        reading, culprit = read_episode(res, _route(ctx.space))
+    except KeyboardInterrupt:
+        raise
+    except Exception as exc:  # the harness itself failed: record, never raise inside the loop
+        return Candidate(0, "", origin, tuple(offsets), "harness-error", math.nan, "",
+                         f"{type(exc).__name__}: {exc}", {}, content_hash(scenario),
+                         time.perf_counter() - t0, scenario, signature=("harness-error", "", 0, 0))
+    cand = Candidate(0, "", origin, tuple(offsets), res.outcome.value, float(res.metrics.min_clearance),
+                     culprit, res.message, res.metrics.as_dict(), content_hash(scenario),
+                     time.perf_counter() - t0, scenario, reading.robustness, reading.signature,
+                     reading.progress, reading.path, reading.closest)
+    cand.metrics["subject"], cand.metrics["subject_version"] = res.subject, res.subject_version
+    return cand
+
+
+def serial_evaluator(ctx: EvalContext, proposals: Sequence[tuple[tuple[float, ...], str]]) -> Iterator[Candidate]:
+    """The default evaluator: one candidate after the other, in proposal order."""
+    for offsets, origin in proposals:
+        yield evaluate_candidate(ctx, offsets, origin)
+
+
+Evaluator = Callable[[EvalContext, Sequence[tuple[tuple[float, ...], str]]], Iterable[Candidate]]
+
+
+class _Simulator:
+    """Numbers and records the candidates an evaluator returns; checks for a stop request."""
+
+    def __init__(self, ctx: EvalContext, report: SearchReport, stop, evaluator: Evaluator | None = None):
+        self.ctx, self.report, self.stop = ctx, report, stop
+        self.evaluator = evaluator or serial_evaluator
         self.counts = {"search": 0, "shrink": 0}
 
-    def simulate(self, offsets: Sequence[float], scenario: Scenario, phase: str, origin: str) -> Candidate:
-        from ..harness.runner import run_scenario
-        from ..scenario.model import content_hash
-
-        self.counts[phase] += 1
-        t0 = time.perf_counter()
-        try:
-            planner = self.factory()
-            res = run_scenario(scenario, planner, seed=self.episode_seed)
-        except KeyboardInterrupt:
-            self.counts[phase] -= 1
-            raise
-        except Exception as exc:  # the harness itself failed: record, never raise inside Hypothesis
-            cand = Candidate(self.counts[phase], phase, origin, tuple(offsets), "harness-error", math.nan,
-                             "", f"{type(exc).__name__}: {exc}", {}, content_hash(scenario),
-                             time.perf_counter() - t0, scenario)
-        else:
-            culprit = ""
-            if res.collision is not None:
-                culprit = res.collision.obstacle
-            elif res.safety_stop is not None:
-                culprit = res.safety_stop.obstacle
+    def run(self, proposals: Sequence[tuple[tuple[float, ...], str]], phase: str) -> Iterator[Candidate]:
+        """Evaluate ``proposals`` and yield each recorded candidate in proposal order."""
+        for cand in self.evaluator(self.ctx, list(proposals)):
+            self.counts[phase] += 1
+            cand.sim, cand.phase = self.counts[phase], phase
+            subject = cand.metrics.pop("subject", None)
+            version = cand.metrics.pop("subject_version", None)
+            if self.report.subject in ("", "?") and subject:
+                self.report.subject = subject
+            if self.report.subject_version is None and version:
+                self.report.subject_version = version
+            self.report.candidates.append(cand)
+            if phase == "search":
+                self.report.sims_used += 1
+                if cand.failed and not self.report.first_failure:
+                    self.report.first_failure = cand.sim
             else:
-                culprit = res.metrics.min_clearance_obstacle
-            if self.report.subject in ("", "?"):
-                self.report.subject = res.subject or "?"
-            if self.report.subject_version is None and res.subject_version:
-                self.report.subject_version = res.subject_version
-            cand = Candidate(self.counts[phase], phase, origin, tuple(offsets), res.outcome.value,
-                             float(res.metrics.min_clearance), culprit, res.message,
-                             res.metrics.as_dict(), content_hash(scenario), time.perf_counter() - t0, scenario)
-        self.report.candidates.append(cand)
-        if phase == "search":
-            self.report.sims_used += 1
-        else:
-            self.report.shrink_sims += 1
-        return cand
+                self.report.shrink_sims += 1
+            yield cand
+
+    def simulate(self, offsets: Sequence[float], phase: str, origin: str) -> Candidate:
+        return next(iter(self.run([(tuple(offsets), origin)], phase)))
 
     def check_stop(self) -> None:
         if self.stop is not None and self.stop():
@@ -187,196 +234,43 @@ class _Simulator:
             raise _Stop()
 
 
-# -- archive and distinct failures -----------------------------------------------------------
-class _Archive:
-    """The best layouts so far, kept diverse: a newcomer within CROWDING_DISTANCE of a member
-    replaces it only if fitter; otherwise it replaces the worst member if fitter than it."""
-
-    def __init__(self, space: SearchSpace, size: int = ARCHIVE_SIZE):
-        self.space, self.size, self.members = space, size, []
-
-    def add(self, cand: Candidate) -> None:
-        if cand.outcome == "harness-error":
-            return
-        for i, m in enumerate(self.members):
-            if self.space.normalised_distance(m.offsets, cand.offsets) < CROWDING_DISTANCE:
-                if cand.fitness < m.fitness:
-                    self.members[i] = cand
-                    self.members.sort(key=lambda c: c.fitness)
-                return
-        self.members.append(cand)
-        self.members.sort(key=lambda c: c.fitness)
-        del self.members[self.size:]
-
-
 def is_duplicate(space: SearchSpace, cand: Candidate, kept: Sequence[Candidate]) -> bool:
-    """Same outcome, same culprit obstacle and within DISTINCT_DISTANCE of a kept failure."""
-    return any(k.outcome == cand.outcome and k.culprit == cand.culprit
-               and space.normalised_distance(k.offsets, cand.offsets) < DISTINCT_DISTANCE for k in kept)
+    """Same cause signature as a kept failure (fitness.py): the same way of failing."""
+    return any(k.signature == cand.signature for k in kept)
 
 
 def is_near_failure(space: SearchSpace, offsets: Sequence[float], failures: Sequence[Failure]) -> bool:
     return any(space.normalised_distance(f.found.offsets, offsets) < DISTINCT_DISTANCE for f in failures)
 
 
-# -- strategies -------------------------------------------------------------------------------
-def _evolve(space: SearchSpace, sim: _Simulator, budget: int, seed_value: int, on_result) -> None:
-    from hypothesis import HealthCheck, Phase, Verbosity, given, reject, settings, target
-    from hypothesis import seed as hseed
-    from hypothesis import strategies as st
-
-    archive = _Archive(space)
-    n = len(space)
-    parts: dict[str, list[int]] = {}
-    for i, p in enumerate(space.params):
-        parts.setdefault(p.part, []).append(i)
-    groups = list(parts.values())
-    invalid_run = [0]
-    counter = [0]
-    simulated: set[tuple[float, ...]] = set()
-    # operator statistics: [tries, new distinct failures] for uniform exploration and mutation
-    stats = {"explore": [0, 0], "mutate": [0, 0]}
-
-    def exploit_share() -> float:
-        """Share of mutations: EXPLOIT at first, then following which operator has been finding
-        new distinct failures (so where uniform sampling already fails often, the search does
-        not fall behind it)."""
-        (te, he), (tm, hm) = stats["explore"], stats["mutate"]
-        if te + tm < 10:
-            return EXPLOIT
-        re_, rm = (he + 1) / (te + 2), (hm + 1) / (tm + 2)
-        return min(0.85, max(0.15, rm / (re_ + rm)))
-
-    def draw_candidate(data) -> tuple[tuple[float, ...], str]:
-        # Every example draws the same choices whatever the archive holds (Hypothesis checks
-        # that generation does not depend on external state); the archive only decides how
-        # the drawn values are used. Uniform exploration and Gaussian steps come from a
-        # Hypothesis-drawn Random (Hypothesis's own floats favour bounds and round values).
-        pick = data.draw(st.integers(0, ARCHIVE_SIZE - 1), label="elite")   # shrinks toward the best
-        k = data.draw(st.integers(0, 3), label="k")
-        # One drawn integer seeds a Random, mixed with the example counter: Hypothesis often
-        # repeats a draw (simplest values, mutations), and a repeated seed would repeat the
-        # candidate and waste a simulation.
-        drawn = data.draw(st.integers(0, 2**64 - 1), label="rng")
-        counter[0] += 1
-        rnd = random.Random(f"{seed_value}:{counter[0]}:{drawn}")
-        used = sim.report.sims_used
-        if used == 0:
-            return space.zero(), "seed"
-        warmup = used <= max(2, min(10, budget // 10))
-        if warmup or not archive.members or rnd.random() >= exploit_share():
-            return tuple(rnd.uniform(p.lo, p.hi) for p in space.params), "explore"
-        failures = [f.found for f in sim.report.failures]
-        if failures and rnd.random() < 0.5:
-            parent = rnd.choice(failures)      # around a known failure: look for its neighbours
-        else:
-            parent = archive.members[pick % len(archive.members)]
-        offsets = list(parent.offsets)
-        # k = 0: every parameter moves; 1: one obstacle's (or pose's); 2-3: that many parameters
-        if k == 0:
-            idx = list(range(n))
-        elif k == 1:
-            idx = rnd.choice(groups)
-        else:
-            idx = sorted({rnd.randrange(n) for _ in range(k)})
-        scale = rnd.choice(MUTATION_SCALES[1:] if parent.failed else MUTATION_SCALES)
-        for i in idx:
-            offsets[i] += rnd.gauss(0.0, 1.0) * scale * space.params[i].width
-        if parent.failed:  # a failure's child must be a new failure, not the same one again
-            i = rnd.choice(idx)
-            jump = rnd.uniform(DISTINCT_DISTANCE, 3 * DISTINCT_DISTANCE) * space.params[i].width
-            offsets[i] = parent.offsets[i] + (jump if rnd.random() < 0.5 else -jump)
-        return space.clip(offsets), "mutate"
-
-    def body(data):
-        offsets, origin = draw_candidate(data)   # draw first: a stop must not change what is drawn
+# -- the ask/tell loop ----------------------------------------------------------------------------
+def _search_loop(strategy: Any, sim: _Simulator, budget: int, on_result: Callable[[Candidate], None]) -> None:
+    """Ask a generation, evaluate it, tell the results back, until the budget is spent."""
+    report = sim.report
+    while report.sims_used < budget:
         sim.check_stop()
-        if sim.report.sims_used >= budget:
-            raise _Stop()
-        scenario = space.apply(offsets)
-        reason = invalid_reason(scenario)
-        if reason is not None:
-            key = reason.split(":")[0]
-            sim.report.discarded[key] = sim.report.discarded.get(key, 0) + 1
-            invalid_run[0] += 1
-            if invalid_run[0] > MAX_INVALID_FACTOR * max(budget, 1):
-                sim.report.stop_reason = (f"gave up after {invalid_run[0]} invalid candidates in a row: "
-                                          "the search bounds are too wide for this seed, or every nearby layout fails already")
-                raise _Stop()
-            reject()
-        key = tuple(round(v, 6) for v in offsets)
-        if key in simulated or (origin == "mutate" and is_near_failure(space, offsets, sim.report.failures)):
-            sim.report.skipped += 1   # would most likely repeat a known failure: not worth a simulation
-            invalid_run[0] += 1
-            reject()
-        invalid_run[0] = 0
-        simulated.add(key)
-        cand = sim.simulate(offsets, scenario, "search", origin)
-        archive.add(cand)
-        before = len(sim.report.failures)
-        on_result(cand)
-        if origin in stats:
-            stats[origin][0] += 1
-            stats[origin][1] += len(sim.report.failures) - before
-        clearance = cand.clearance if math.isfinite(cand.clearance) else 10.0
-        target(-clearance + (10.0 if cand.failed else 0.0), label="fitness")
-
-    # One Hypothesis run normally spends the whole budget (each simulated candidate is one
-    # valid example, rejected ones are free); if Hypothesis stops early, run again with a
-    # derived seed for the remainder.
-    for round_no in range(8):
-        remaining = budget - sim.report.sims_used
-        if remaining <= 0:
+        proposals = strategy.ask(budget - report.sims_used)
+        if not proposals:
+            report.stop_reason = report.stop_reason or "the strategy had no new candidate to propose"
             break
-        prop = settings(max_examples=remaining, database=None, deadline=None,
-                        phases=[Phase.generate, Phase.target], suppress_health_check=list(HealthCheck),
-                        verbosity=Verbosity.quiet, derandomize=False, report_multiple_bugs=False,
-                        print_blob=False)(hseed(seed_value + 7919 * round_no)(given(st.data())(body)))
-        try:
-            prop()
-        except _Stop:
-            pass
-        if sim.report.stop_reason or sim.report.interrupted or sim.report.sims_used == budget - remaining:
-            break
-
-
-def _random(space: SearchSpace, sim: _Simulator, budget: int, seed_value: int, on_result) -> None:
-    rng = random.Random(seed_value)
-    invalid_run = 0
-    while sim.report.sims_used < budget:
-        sim.check_stop()
-        offsets = tuple(rng.uniform(p.lo, p.hi) for p in space.params)
-        scenario = space.apply(offsets)
-        reason = invalid_reason(scenario)
-        if reason is not None:
-            key = reason.split(":")[0]
-            sim.report.discarded[key] = sim.report.discarded.get(key, 0) + 1
-            invalid_run += 1
-            if invalid_run > MAX_INVALID_FACTOR * budget:
-                sim.report.stop_reason = (f"gave up after {invalid_run} invalid candidates in a row: "
-                                          "the search bounds are too wide for this seed")
-                return
-            continue
-        invalid_run = 0
-        on_result(sim.simulate(offsets, scenario, "search", "random"))
+        results = []
+        for cand in sim.run(proposals[: budget - report.sims_used], "search"):
+            results.append(cand)
+            on_result(cand)
+            if report.sims_used < budget:
+                sim.check_stop()
+        strategy.tell(results)
 
 
 # -- shrinking --------------------------------------------------------------------------------
 def shrink_failure(space: SearchSpace, sim: _Simulator, found: Candidate, cap: int) -> Failure:
-    """Reduce ``found`` toward the seed with at most ``cap`` simulations (Hypothesis's shrinker
-    on the offset vector, started from this failure): the result fails with the same outcome."""
-    from hypothesis import Phase, Verbosity, find, settings
-    from hypothesis.database import InMemoryExampleDatabase, choices_to_bytes
-    from hypothesis.errors import NoSuchExample
-
+    """Reduce ``found`` toward the seed with at most ``cap`` simulations: first drop inserted
+    obstacles and restore removed ones, one at a time, then Hypothesis's shrinker on the offset
+    vector. The result fails with the same cause signature as ``found``."""
     failure = Failure(found=found, shrunk=found)
     if cap <= 0 or not any(found.offsets):
         return failure
-    best = [found]
-    used = [0]
-    db = InMemoryExampleDatabase()
-    key = b"navsearch-shrink"
-    db.save(key + b".secondary", choices_to_bytes(found.offsets))
+    best, used = [found], [0]
 
     def still_fails(offsets) -> bool:
         offsets = tuple(offsets)
@@ -386,27 +280,54 @@ def shrink_failure(space: SearchSpace, sim: _Simulator, found: Candidate, cap: i
         if used[0] >= cap:
             failure.note = f"shrink cap of {cap} simulations reached"
             raise _Stop()
-        scenario = space.apply(offsets)
-        if invalid_reason(scenario) is not None:
+        if invalid_reason(space.apply(offsets)) is not None:
             return False
         used[0] += 1
-        cand = sim.simulate(offsets, scenario, "shrink", "shrink")
-        ok = cand.outcome == found.outcome
+        cand = sim.simulate(offsets, "shrink", "shrink")
+        ok = cand.signature == found.signature
         if ok and _simpler(offsets, best[0].offsets):
             best[0] = cand
         return ok
 
     try:
-        find(offsets_strategy(space), still_fails, database_key=key,
-             settings=settings(database=db, phases=[Phase.reuse, Phase.shrink], verbosity=Verbosity.quiet,
-                               deadline=None, max_examples=max(cap, 1)))
+        _drop_structure(space, still_fails, best)
+        _hypothesis_shrink(space, still_fails, best[0].offsets)
     except _Stop:
         pass
-    except NoSuchExample:
+    except _NoExample:
         failure.note = "did not reproduce when re-simulated: kept as found"
     failure.shrunk = best[0]
     failure.shrink_sims = used[0]
     return failure
+
+
+class _NoExample(Exception):
+    pass
+
+
+def _drop_structure(space: SearchSpace, still_fails, best: list) -> None:
+    """Turn off each inserted obstacle and restore each removed one, keeping what still fails."""
+    for i in space.inserted_slots() + space.removal_flags():
+        current = list(best[0].offsets)
+        if current[i] >= FLAG_ON:
+            current[i] = 0.0
+            still_fails(tuple(current))
+
+
+def _hypothesis_shrink(space: SearchSpace, still_fails, start: Sequence[float]) -> None:
+    from hypothesis import Phase, Verbosity, find, settings
+    from hypothesis.database import InMemoryExampleDatabase, choices_to_bytes
+    from hypothesis.errors import NoSuchExample
+
+    db = InMemoryExampleDatabase()
+    key = b"navsearch-shrink"
+    db.save(key + b".secondary", choices_to_bytes(tuple(start)))
+    try:
+        find(offsets_strategy(space), still_fails, database_key=key,
+             settings=settings(database=db, phases=[Phase.reuse, Phase.shrink], verbosity=Verbosity.quiet,
+                               deadline=None, max_examples=1000))
+    except NoSuchExample:
+        raise _NoExample() from None
 
 
 def _simpler(a: Sequence[float], b: Sequence[float]) -> bool:
@@ -417,25 +338,11 @@ def _simpler(a: Sequence[float], b: Sequence[float]) -> bool:
 
 
 # -- entry point -------------------------------------------------------------------------------
-def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: int, seed_value: int = 0,
-               strategy: str = "evolve", shrink_budget: int = DEFAULT_SHRINK_BUDGET,
-               progress: Callable[[SearchReport], None] | None = None,
-               stop: Callable[[], bool] | None = None, space: SearchSpace | None = None,
-               subject: str = "", episode_seed: int | None = None) -> SearchReport:
-    """Search for failures of ``subject_factory()`` planners around ``seed``.
-
-    Exactly ``budget`` simulations of valid candidates (fewer only if interrupted or if the
-    bounds leave almost no valid candidate, said in ``stop_reason``), then each distinct
-    failure is shrunk with at most ``shrink_budget`` more simulations. ``progress(report)`` is
-    called after each simulation; ``stop()`` returning True ends the search early (as does
-    Ctrl-C): the report then keeps every failure found so far, unshrunk, with ``interrupted``.
-    Deterministic given ``seed_value`` (and a deterministic subject).
-    """
+def _check_inputs(seed: Scenario, strategy: str, budget: int, space: SearchSpace) -> None:
     if strategy not in STRATEGIES:
         raise ValueError(f"unknown search strategy {strategy!r}; use one of {', '.join(STRATEGIES)}")
     if budget <= 0:
         raise ValueError(f"budget must be a positive number of simulations, got {budget}")
-    space = space if space is not None else SearchSpace(seed)
     if not space.params:
         raise ValueError(f"the search space of seed {seed.name!r} is empty (every part frozen or bounds "
                          f"[0, 0]); widen its search: bounds")
@@ -444,10 +351,34 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
         from ..core.errors import ScenarioError
         raise ScenarioError(f"the seed itself is not a valid scenario ({reason}): fix the seed first",
                             path=seed.source or seed.name)
+
+
+def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: int, seed_value: int = 0,
+               strategy: str = "evolve", shrink_budget: int = DEFAULT_SHRINK_BUDGET,
+               progress: Callable[[SearchReport], None] | None = None,
+               stop: Callable[[], bool] | None = None, space: SearchSpace | None = None,
+               subject: str = "", episode_seed: int | None = None,
+               stuck_after: float | None = DEFAULT_STUCK_AFTER, evaluator: Evaluator | None = None) -> SearchReport:
+    """Search for failures of ``subject_factory()`` planners around ``seed``.
+
+    Exactly ``budget`` simulations of valid candidates (fewer only if interrupted or if the
+    bounds leave almost no valid candidate, said in ``stop_reason``), then each distinct
+    failure is shrunk with at most ``shrink_budget`` more simulations. ``progress(report)`` is
+    called after each simulation; ``stop()`` returning True ends the search early (as does
+    Ctrl-C): the report then keeps every failure found so far, unshrunk, with ``interrupted``.
+    ``stuck_after`` (s, None = off) ends an episode early as a timeout when the robot covers no
+    new ground. ``evaluator(ctx, proposals)`` evaluates a generation (default: serially); the
+    result does not depend on it. Deterministic given ``seed_value`` (and a deterministic subject).
+    """
+    from .strategies import GaveUp, make_strategy
+
+    space = space if space is not None else SearchSpace(seed)
+    _check_inputs(seed, strategy, budget, space)
     report = SearchReport(seed_name=seed.name, seed_source=seed.source, subject=subject or "?",
                           subject_version=None, strategy=strategy, seed_value=seed_value, budget=budget,
-                          shrink_budget=shrink_budget, params=[p.name for p in space.params], episode_seed=episode_seed)
-    sim = _Simulator(space, subject_factory, report, progress, stop, episode_seed)
+                          shrink_budget=shrink_budget, params=[p.name for p in space.params],
+                          episode_seed=episode_seed)
+    sim = _Simulator(EvalContext(space, subject_factory, episode_seed, stuck_after), report, stop, evaluator)
     kept: list[Candidate] = []
 
     def on_result(cand: Candidate) -> None:
@@ -459,14 +390,14 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
 
     t0 = time.perf_counter()
     try:
-        (_evolve if strategy == "evolve" else _random)(space, sim, budget, seed_value, on_result)
+        _search_loop(make_strategy(strategy, space, report, budget, seed_value), sim, budget, on_result)
         for i, f in enumerate(report.failures):
             sim.check_stop()
             report.failures[i] = shrink_failure(space, sim, f.found, shrink_budget)
             if progress is not None:
                 progress(report)
-    except _Stop:
-        pass  # stop() said so: check_stop marked the report interrupted
+    except (_Stop, GaveUp):
+        pass  # stop() said so, or the strategy gave up (stop_reason says why)
     except KeyboardInterrupt:
         report.interrupted = True
         report.stop_reason = "interrupted (Ctrl-C)"

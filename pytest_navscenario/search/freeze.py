@@ -7,6 +7,8 @@ Layout under the regressions folder (``--navsearch-out`` / ini ``navsearch_out``
 
 A frozen file's name comes from ``scenario.content_hash()``, so the same failure found again
 maps to the same file: it is not duplicated (the first file, and its provenance, are kept).
+Failures whose shrunk layouts fail the same way (the same cause signature, fitness.py) are
+frozen once: no near-copies.
 Every file is written atomically, so an interrupted run never leaves half a file.
 """
 from __future__ import annotations
@@ -84,8 +86,18 @@ def frozen_scenario(report: SearchReport, failure: Failure, space: SearchSpace, 
         provenance["note"] = failure.note
     return replace(scenario, name=name, family=seed.name,
                    description=(f"{cand.outcome} of {provenance['subject']} found by navsearch around "
-                                f"{seed.name} (search seed {report.seed_value}); culprit {cand.culprit or '-'}"),
+                                f"{seed.name} (search seed {report.seed_value}); culprit {cand.culprit or '-'}"
+                                + _where(cand)),
                    marks=(), search=None, provenance=provenance, reference=seed.reference)
+
+
+def _where(cand: Any) -> str:
+    """Where along the seed's route the failure happened (from the cause signature)."""
+    if len(cand.signature) < 4:
+        return ""
+    quarters = ("first", "second", "third", "last")
+    return (f" (beside the {quarters[cand.signature[2]]} quarter of the route), robot stopped in the "
+            f"{quarters[cand.signature[3]]} quarter")
 
 
 def freeze_failures(report: SearchReport, space: SearchSpace, out_dir: str | Path, *,
@@ -96,12 +108,16 @@ def freeze_failures(report: SearchReport, space: SearchSpace, out_dir: str | Pat
     folder = Path(out_dir) / space.seed.name
     written: list[FrozenFile] = []
     seen: set[Path] = set()
+    causes: set[tuple] = set()
     for failure in report.failures:
         scenario = frozen_scenario(report, failure, space, subject=subject, root=root)
         path = folder / f"{scenario.name}.yaml"
-        if path in seen:     # two distinct failures that shrank to the same layout
+        cause = tuple(failure.shrunk.signature)
+        # two distinct failures that shrank to the same layout, or to the same way of failing
+        if path in seen or (cause and cause in causes):
             continue
         seen.add(path)
+        causes.add(cause)
         new = not path.exists()
         if new:
             folder.mkdir(parents=True, exist_ok=True)

@@ -21,17 +21,30 @@ Defaults can be overridden in the seed's YAML ``search:`` mapping::
       goal_yaw: 0
       waypoint_dx: 0            # every waypoint gets its own dx/dy offsets
       waypoint_dy: 0
+      min_size: 0.05            # m: sizes never shrink below this
+      frozen: [wall_left, start]  # obstacle names, start, goal, waypoints, waypoints[i]
+      insert: 2                 # at most this many new box obstacles (0 = none)
+      insert_size: [0.3, 1.0]   # m: side length of an inserted box
+      insert_margin: 1.0        # m: inserted boxes lie in the route's bounding box grown by this
+      remove: 0                 # at most this many of the seed's obstacles may be removed
       polygon_vertex: 0.2       # m: each polygon corner's own dx/dy (default 0: off)
+      motion_start: [-2, 2]     # s added to a moving obstacle's start time (never below 0)
+      motion_speed: 0.5         # m/s added to a moving obstacle's speed (never below MIN_SPEED)
       drift_per_metre: [0, 0.1] # sensor and localisation faults (default 0: off): lidar_noise_per_metre,
                                 # lidar_dropout_at_max, lidar_spurious, drift_per_metre,
                                 # drift_per_second, yaw_drift_per_metre; added to the seed's value
-      motion_start: [-2, 2]     # s added to a moving obstacle's start time (never below 0)
-      motion_speed: 0.5         # m/s added to a moving obstacle's speed (never below min_speed)
-      min_size: 0.05            # m: sizes never shrink below this
 
 A moving obstacle's dx/dy shift its whole path (every point, or its start for a constant
-velocity); its motion_start and motion_speed move when and how fast it goes.
-      frozen: [wall_left, start]  # obstacle names, start, goal, waypoints, waypoints[i]
+velocity); its motion_start and motion_speed move when and how fast it goes. A polygon or mesh is
+moved and turned like a box (no size change). Fault parameters live on the part ``robot``.
+
+Insertion and removal are parameters like the others and zero means "as in the seed": an
+inserted obstacle exists when its ``on`` flag is >= 0.5 (flags shrink to 0, so shrinking removes
+inserted obstacles), a seed obstacle is removed when its ``removed`` flag is >= 0.5.
+
+The parameter model is open: a parameter kind is a ``Param`` plus a builder (``BUILDERS``) that
+yields the params of a seed and an applier (``APPLIERS``) that turns their values into a changed
+scenario. Moving obstacles or sensor faults add one builder and one applier each.
 
 Every bound must contain 0 (the seed lies in the space); ``[lo, hi]`` with lo > hi is
 inverted and lo == hi != 0 is empty: both are errors naming the seed file and field.
@@ -47,8 +60,8 @@ from ..core.errors import ScenarioError
 from ..scenario.model import BoxObstacle, CylinderObstacle, MeshObstacle, PolygonObstacle, Pose, Scenario
 
 DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {
-    "obstacle_dx": (-0.5, 0.5),
-    "obstacle_dy": (-0.5, 0.5),
+    "obstacle_dx": (-1.0, 1.0),
+    "obstacle_dy": (-1.0, 1.0),
     "obstacle_size": (-0.1, 0.3),
     "obstacle_yaw": (-30.0, 30.0),
     "start_dx": (0.0, 0.0),
@@ -73,7 +86,13 @@ DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {
 ROBOT_PARAMS = ("lidar_noise_per_metre", "lidar_dropout_at_max", "lidar_spurious", "drift_per_metre",
                 "drift_per_second", "yaw_drift_per_metre")
 MIN_SPEED = 0.1         # m/s: a moving obstacle's speed never drops below this
-OTHER_KEYS = ("frozen", "min_size")
+OTHER_KEYS = ("frozen", "min_size", "insert", "insert_size", "insert_margin", "remove")
+DEFAULT_INSERT = 2
+DEFAULT_INSERT_SIZE = (0.3, 1.0)
+DEFAULT_INSERT_MARGIN = 1.0
+DEFAULT_REMOVE = 0
+INSERT_PREFIX = "navsearch_inserted_"   # names of inserted obstacles (index from 1)
+FLAG_ON = 0.5                           # a flag parameter is set when its value is >= this
 KNOWN_KEYS = tuple(DEFAULT_BOUNDS) + OTHER_KEYS
 DEFAULT_MIN_SIZE = 0.05
 POSITION_DECIMALS = 4   # candidate values are rounded (0.1 mm, 0.0001 deg) so YAML is short and exact
@@ -87,10 +106,22 @@ class Param:
     attr: str        # dx, dy, size, yaw
     lo: float
     hi: float
+    kind: str = "offset"   # offset: added to a seed value; flag: set when >= FLAG_ON; value: absolute
 
     @property
     def width(self) -> float:
         return self.hi - self.lo
+
+
+@dataclass(frozen=True)
+class Limits:
+    """The non-range settings of a ``search:`` section, validated."""
+    frozen: frozenset
+    min_size: float
+    insert: int
+    insert_size: tuple[float, float]
+    insert_margin: float
+    remove: int
 
 
 class SearchSpace:
@@ -100,59 +131,16 @@ class SearchSpace:
         self.seed = seed
         merged: dict[str, Any] = dict(seed.search or {})
         merged.update(overrides or {})
-        self.bounds, self.frozen, self.min_size = _validate(seed, merged)
-        self.params: tuple[Param, ...] = tuple(self._build_params())
+        self.bounds, self.limits = _validate(seed, merged)
+        self.frozen, self.min_size = self.limits.frozen, self.limits.min_size
+        self.region = _insert_region(seed, self.limits.insert_margin)
+        self.params: tuple[Param, ...] = tuple(p for build in BUILDERS for p in build(self))
         self.index = {p.name: i for i, p in enumerate(self.params)}
+        self.groups: tuple[tuple[int, ...], ...] = _groups(self.params)
 
-    # -- construction -------------------------------------------------------------------
-    def _build_params(self):
-        def rng(key):
-            lo, hi = self.bounds[key]
-            return (lo, hi) if (lo, hi) != (0.0, 0.0) else None
-
-        for obs in self.seed.obstacles:
-            if obs.name in self.frozen:
-                continue
-            outlined = isinstance(obs, (PolygonObstacle, MeshObstacle))
-            attrs = ["dx", "dy"] + ([] if outlined else ["size"]) + (
-                ["yaw"] if isinstance(obs, (BoxObstacle, PolygonObstacle, MeshObstacle)) else [])
-            for attr in attrs:
-                r = rng(f"obstacle_{attr}")
-                if r:
-                    yield Param(f"obstacles.{obs.name}.{attr}", f"obstacle:{obs.name}", attr, *r)
-            r = rng("polygon_vertex")
-            if r and isinstance(obs, PolygonObstacle):
-                for k in range(len(obs.points)):
-                    for axis in ("x", "y"):
-                        yield Param(f"obstacles.{obs.name}.points[{k}].d{axis}", f"obstacle:{obs.name}",
-                                    f"v{k}{axis}", *r)
-            if getattr(obs, "motion", None) is not None:
-                for attr in ("start", "speed"):
-                    r = rng(f"motion_{attr}")
-                    if r:
-                        yield Param(f"obstacles.{obs.name}.motion.{attr}", f"obstacle:{obs.name}",
-                                    attr, *r)
-        for key in ROBOT_PARAMS:
-            r = rng(key)
-            if r and "robot" not in self.frozen:
-                yield Param(f"robot.{key}", "robot", key, *r)
-        mission = self.seed.mission
-        for part in ("start", "goal"):
-            if part in self.frozen:
-                continue
-            for attr in ("dx", "dy", "yaw"):
-                r = rng(f"{part}_{attr}")
-                if r:
-                    yield Param(f"mission.{part}.{attr}", part, attr, *r)
-        if "waypoints" not in self.frozen:
-            for i in range(len(mission.waypoints)):
-                part = f"waypoints[{i}]"
-                if part in self.frozen:
-                    continue
-                for attr in ("dx", "dy"):
-                    r = rng(f"waypoint_{attr}")
-                    if r:
-                        yield Param(f"mission.{part}.{attr}", part, attr, *r)
+    def range_of(self, key: str) -> tuple[float, float] | None:
+        lo, hi = self.bounds[key]
+        return (lo, hi) if (lo, hi) != (0.0, 0.0) else None
 
     # -- use ------------------------------------------------------------------------------
     def __len__(self) -> int:
@@ -174,29 +162,163 @@ class SearchSpace:
         return {p.name: round(float(v), POSITION_DECIMALS)
                 for p, v in zip(self.params, offsets) if v != 0}
 
-    def apply(self, offsets: Sequence[float]) -> Scenario:
-        """The seed with ``offsets`` added (values rounded; sizes clamped to ``min_size``)."""
-        if len(offsets) != len(self.params):
-            raise ValueError(f"expected {len(self.params)} offsets for this space, got {len(offsets)}")
-        by_part: dict[str, dict[str, float]] = {}
+    def by_part(self, offsets: Sequence[float]) -> dict[str, dict[str, float]]:
+        """Non-zero values grouped by part (``obstacle:box1``, ``inserted[0]``, ``start``, ...)."""
+        out: dict[str, dict[str, float]] = {}
         for p, v in zip(self.params, offsets):
             if v:
-                by_part.setdefault(p.part, {})[p.attr] = float(v)
-        obstacles = []
-        for obs in self.seed.obstacles:
-            d = by_part.get(f"obstacle:{obs.name}")
-            obstacles.append(_mutate_obstacle(obs, d, self.min_size) if d else obs)
-        m = self.seed.mission
-        start = _mutate_pose(m.start, by_part.get("start"))
-        goal = _mutate_pose(m.goal, by_part.get("goal"))
-        waypoints = tuple(_mutate_pose(w, by_part.get(f"waypoints[{i}]"))
-                          for i, w in enumerate(m.waypoints))
-        mission = replace(m, start=start, goal=goal, waypoints=waypoints)
-        robot = _mutate_robot(self.seed.robot, by_part.get("robot"))
-        return replace(self.seed, obstacles=tuple(obstacles), mission=mission, robot=robot)
+                out.setdefault(p.part, {})[p.attr] = float(v)
+        return out
+
+    def apply(self, offsets: Sequence[float]) -> Scenario:
+        """The seed with ``offsets`` applied (values rounded; sizes clamped to ``min_size``)."""
+        if len(offsets) != len(self.params):
+            raise ValueError(f"expected {len(self.params)} offsets for this space, got {len(offsets)}")
+        parts = self.by_part(offsets)
+        scenario = self.seed
+        for applier in APPLIERS:
+            scenario = applier(self, scenario, parts)
+        return scenario
+
+    def inserted_slots(self) -> list[int]:
+        """Parameter index of each insertion slot's ``on`` flag."""
+        return [i for i, p in enumerate(self.params) if p.part.startswith("inserted[") and p.attr == "on"]
+
+    def removal_flags(self) -> list[int]:
+        return [i for i, p in enumerate(self.params) if p.attr == "removed"]
 
     def describe(self) -> str:
         return ", ".join(f"{p.name} in [{p.lo:g}, {p.hi:g}]" for p in self.params) or "(nothing to mutate)"
+
+
+def _groups(params: Sequence[Param]) -> tuple[tuple[int, ...], ...]:
+    parts: dict[str, list[int]] = {}
+    for i, p in enumerate(params):
+        parts.setdefault(p.part, []).append(i)
+    return tuple(tuple(v) for v in parts.values())
+
+
+def _insert_region(seed: Scenario, margin: float) -> tuple[float, float, float, float]:
+    """Bounding box (x0, y0, x1, y1) of start, waypoints and goal, grown by ``margin``."""
+    m = seed.mission
+    xs = [m.start.x, m.goal.x, *(w.x for w in m.waypoints)]
+    ys = [m.start.y, m.goal.y, *(w.y for w in m.waypoints)]
+    return (min(xs) - margin, min(ys) - margin, max(xs) + margin, max(ys) + margin)
+
+
+# -- parameter kinds: builders yield a seed's params, appliers turn values into a scenario -------
+def _obstacle_params(space: SearchSpace):
+    for obs in space.seed.obstacles:
+        if obs.name in space.frozen:
+            continue
+        outlined = isinstance(obs, (PolygonObstacle, MeshObstacle))
+        attrs = ["dx", "dy"] + ([] if outlined else ["size"]) + (
+            ["yaw"] if isinstance(obs, (BoxObstacle, PolygonObstacle, MeshObstacle)) else [])
+        for attr in attrs:
+            r = space.range_of(f"obstacle_{attr}")
+            if r:
+                yield Param(f"obstacles.{obs.name}.{attr}", f"obstacle:{obs.name}", attr, *r)
+        r = space.range_of("polygon_vertex")
+        if r and isinstance(obs, PolygonObstacle):
+            for k in range(len(obs.points)):
+                for axis in ("x", "y"):
+                    yield Param(f"obstacles.{obs.name}.points[{k}].d{axis}", f"obstacle:{obs.name}",
+                                f"v{k}{axis}", *r)
+        if getattr(obs, "motion", None) is not None:
+            for attr in ("start", "speed"):
+                r = space.range_of(f"motion_{attr}")
+                if r:
+                    yield Param(f"obstacles.{obs.name}.motion.{attr}", f"obstacle:{obs.name}", attr, *r)
+        if space.limits.remove > 0:
+            yield Param(f"obstacles.{obs.name}.removed", f"obstacle:{obs.name}", "removed", 0.0, 1.0, "flag")
+
+
+def _inserted_params(space: SearchSpace):
+    x0, y0, x1, y1 = space.region
+    cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
+    lo, hi = space.limits.insert_size
+    for i in range(space.limits.insert):
+        part, name = f"inserted[{i}]", f"inserted[{i}]"
+        yield Param(f"{name}.on", part, "on", 0.0, 1.0, "flag")
+        yield Param(f"{name}.x", part, "x", x0 - cx, x1 - cx)     # from the region's centre
+        yield Param(f"{name}.y", part, "y", y0 - cy, y1 - cy)
+        yield Param(f"{name}.size", part, "size", 0.0, hi - lo)   # added to the smallest size
+        yield Param(f"{name}.yaw", part, "yaw", -90.0, 90.0)
+
+
+def _mission_params(space: SearchSpace):
+    mission = space.seed.mission
+    for part in ("start", "goal"):
+        if part in space.frozen:
+            continue
+        for attr in ("dx", "dy", "yaw"):
+            r = space.range_of(f"{part}_{attr}")
+            if r:
+                yield Param(f"mission.{part}.{attr}", part, attr, *r)
+    if "waypoints" in space.frozen:
+        return
+    for i in range(len(mission.waypoints)):
+        part = f"waypoints[{i}]"
+        if part in space.frozen:
+            continue
+        for attr in ("dx", "dy"):
+            r = space.range_of(f"waypoint_{attr}")
+            if r:
+                yield Param(f"mission.{part}.{attr}", part, attr, *r)
+
+
+def _apply_obstacles(space: SearchSpace, scenario: Scenario, parts) -> Scenario:
+    out, removed = [], 0
+    for obs in scenario.obstacles:
+        d = parts.get(f"obstacle:{obs.name}")
+        if d and d.get("removed", 0.0) >= FLAG_ON and removed < space.limits.remove:
+            removed += 1
+            continue
+        out.append(_mutate_obstacle(obs, d, space.min_size) if d else obs)
+    return replace(scenario, obstacles=tuple(out))
+
+
+def _apply_inserted(space: SearchSpace, scenario: Scenario, parts) -> Scenario:
+    x0, y0, x1, y1 = space.region
+    cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
+    new = []
+    for i in range(space.limits.insert):
+        d = parts.get(f"inserted[{i}]")
+        if not d or d.get("on", 0.0) < FLAG_ON:
+            continue
+        size = _r(space.limits.insert_size[0] + d.get("size", 0.0))
+        new.append(BoxObstacle(name=f"{INSERT_PREFIX}{i + 1}", x=_r(cx + d.get("x", 0.0)),
+                               y=_r(cy + d.get("y", 0.0)), length=size, width=size,
+                               yaw=_r(d.get("yaw", 0.0))))
+    return replace(scenario, obstacles=scenario.obstacles + tuple(new)) if new else scenario
+
+
+def _apply_mission(space: SearchSpace, scenario: Scenario, parts) -> Scenario:
+    m = scenario.mission
+    if not any(k in parts for k in ("start", "goal")) and not any(k.startswith("waypoints[") for k in parts):
+        return scenario
+    start = _mutate_pose(m.start, parts.get("start"))
+    goal = _mutate_pose(m.goal, parts.get("goal"))
+    waypoints = tuple(_mutate_pose(w, parts.get(f"waypoints[{i}]")) for i, w in enumerate(m.waypoints))
+    return replace(scenario, mission=replace(m, start=start, goal=goal, waypoints=waypoints))
+
+
+def _robot_params(space: SearchSpace):
+    if "robot" in space.frozen:
+        return
+    for key in ROBOT_PARAMS:
+        r = space.range_of(key)
+        if r:
+            yield Param(f"robot.{key}", "robot", key, *r)
+
+
+def _apply_robot(space: SearchSpace, scenario: Scenario, parts) -> Scenario:
+    d = parts.get("robot")
+    return replace(scenario, robot=_mutate_robot(scenario.robot, d)) if d else scenario
+
+
+BUILDERS = [_obstacle_params, _mission_params, _inserted_params, _robot_params]
+APPLIERS = [_apply_obstacles, _apply_inserted, _apply_mission, _apply_robot]
 
 
 def _r(value: float) -> float:
@@ -258,18 +380,17 @@ def _mutate_obstacle(obs, d: Mapping[str, float], min_size: float):
     motion = _mutate_motion(getattr(obs, "motion", None), d)
     if motion is not None and motion.path:
         x, y = motion.path[0]       # a path's first point is where the obstacle stands
+    yaw = _r(obs.yaw + d["yaw"]) if "yaw" in d and hasattr(obs, "yaw") else getattr(obs, "yaw", 0.0)
     if isinstance(obs, BoxObstacle):
-        return replace(obs, x=x, y=y, motion=motion,
+        return replace(obs, x=x, y=y, motion=motion, yaw=yaw,
                        length=_r(max(min_size, obs.length + ds)) if ds else obs.length,
-                       width=_r(max(min_size, obs.width + ds)) if ds else obs.width,
-                       yaw=_r(obs.yaw + d["yaw"]) if "yaw" in d else obs.yaw)
+                       width=_r(max(min_size, obs.width + ds)) if ds else obs.width)
     if isinstance(obs, PolygonObstacle):
         points = tuple((_r(px + d.get(f"v{k}x", 0.0)), _r(py + d.get(f"v{k}y", 0.0)))
                        if f"v{k}x" in d or f"v{k}y" in d else (px, py) for k, (px, py) in enumerate(obs.points))
-        return replace(obs, x=x, y=y, motion=motion, points=points,
-                       yaw=_r(obs.yaw + d["yaw"]) if "yaw" in d else obs.yaw)
+        return replace(obs, x=x, y=y, motion=motion, points=points, yaw=yaw)
     if isinstance(obs, MeshObstacle):
-        return replace(obs, x=x, y=y, motion=motion, yaw=_r(obs.yaw + d["yaw"]) if "yaw" in d else obs.yaw)
+        return replace(obs, x=x, y=y, motion=motion, yaw=yaw)
     if isinstance(obs, CylinderObstacle):
         return replace(obs, x=x, y=y, motion=motion,
                        radius=_r(max(min_size / 2, obs.radius + ds / 2)) if ds else obs.radius)
@@ -317,7 +438,7 @@ def _validate(seed: Scenario, mapping: Mapping[str, Any]):
             hint = f"did you mean {close[0]!r}?" if close else f"known keys: {', '.join(KNOWN_KEYS)}"
             raise _err(seed, str(key), "unknown search setting", hint)
         if key in OTHER_KEYS:
-            continue
+            continue   # validated below
         if isinstance(value, (list, tuple)):
             if len(value) != 2:
                 raise _err(seed, key, f"a range needs exactly two numbers [lo, hi], got {list(value)!r}",
@@ -354,7 +475,37 @@ def _validate(seed: Scenario, mapping: Mapping[str, Any]):
     min_size = _number(seed, "min_size", mapping.get("min_size", DEFAULT_MIN_SIZE))
     if min_size <= 0:
         raise _err(seed, "min_size", f"must be > 0, got {min_size:g}", "write e.g. min_size: 0.05")
-    return bounds, frozenset(frozen_raw), min_size
+    return bounds, Limits(frozenset(frozen_raw), min_size, *_insert_limits(seed, mapping))
+
+
+def _count(seed: Scenario, key: str, value: Any) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise _err(seed, key, f"must be a whole number >= 0, got {value!r}", f"write e.g. {key}: 2 (0 = none)")
+    return value
+
+
+def _insert_limits(seed: Scenario, mapping: Mapping[str, Any]):
+    """insert, insert_size, insert_margin, remove: validated, with defaults."""
+    insert = _count(seed, "insert", mapping.get("insert", DEFAULT_INSERT))
+    raw = mapping.get("insert_size", DEFAULT_INSERT_SIZE)
+    if isinstance(raw, (list, tuple)):
+        if len(raw) != 2:
+            raise _err(seed, "insert_size", f"a range needs exactly two numbers [lo, hi], got {list(raw)!r}",
+                       "write e.g. insert_size: [0.3, 1.0]")
+        lo, hi = _number(seed, "insert_size", raw[0]), _number(seed, "insert_size", raw[1])
+    else:
+        lo = hi = _number(seed, "insert_size", raw)
+    if not 0 < lo <= hi:
+        raise _err(seed, "insert_size", f"sizes must satisfy 0 < lo <= hi, got [{lo:g}, {hi:g}]",
+                   "write e.g. insert_size: [0.3, 1.0] (side length of an inserted box, m)")
+    margin = _number(seed, "insert_margin", mapping.get("insert_margin", DEFAULT_INSERT_MARGIN))
+    if margin < 0:
+        raise _err(seed, "insert_margin", f"must be >= 0, got {margin:g}", "write e.g. insert_margin: 1.0")
+    remove = _count(seed, "remove", mapping.get("remove", DEFAULT_REMOVE))
+    if remove > len(seed.obstacles):
+        raise _err(seed, "remove", f"the seed has {len(seed.obstacles)} obstacle(s), so at most that many "
+                   f"can be removed, got {remove}", f"write remove: {len(seed.obstacles)} or less")
+    return insert, (lo, hi), margin, remove
 
 
 # -- validity before simulation -------------------------------------------------------------
@@ -362,12 +513,10 @@ def invalid_reason(scenario: Scenario) -> str | None:
     """Why a candidate is not a test (a broken scenario, not a planner failure), or None.
 
     A polygon whose corners were moved into a self-intersecting outline, obstacles covering the
-    start or goal footprint, or no collision-free path for the footprint at all
-    (``paths.path_exists``).
+    start or goal footprint (a moving obstacle: the start, where it stands at t = 0; it may cross
+    the goal), or no collision-free path for the footprint at all (``paths.path_exists``).
     """
-    from ..scenario.geometry import footprint_polygon, obstacle_polygon
-
-    from ..scenario.geometry import polygon_problem
+    from ..scenario.geometry import footprint_polygon, obstacle_polygon, polygon_problem
 
     for obs in scenario.obstacles:          # corners moved across an edge: not a polygon any more
         if isinstance(obs, PolygonObstacle) and polygon_problem(obs.points) is not None:
@@ -376,10 +525,10 @@ def invalid_reason(scenario: Scenario) -> str | None:
     start = footprint_polygon(fp, m.start.x, m.start.y, m.start.yaw_rad)
     goal = footprint_polygon(fp, m.goal.x, m.goal.y, m.goal.yaw_rad)
     for obs in scenario.obstacles:
-        poly = obstacle_polygon(obs)     # a moving obstacle: where it stands at t = 0
+        poly = obstacle_polygon(obs)
         if poly.intersects(start):
             return f"start-blocked:{obs.name}"
-        if poly.intersects(goal) and getattr(obs, "motion", None) is None:   # one may cross it
+        if poly.intersects(goal) and getattr(obs, "motion", None) is None:
             return f"goal-blocked:{obs.name}"
     from ..verdict.paths import path_exists
     if not path_exists(scenario):

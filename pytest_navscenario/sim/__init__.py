@@ -15,8 +15,7 @@ Names are imported lazily so that importing this package does not import MuJoCo.
 """
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from ..core.lazy import lazy_exports
 
 _EXPORTS = {name: "world" for name in (
     "compiled_world", "clear_model_cache", "build_spec", "model_xml", "World", "steps_per_tick",
@@ -29,11 +28,5 @@ _EXPORTS.update(simulate="episode", SimResult="episode", Episode="episode", STIL
                 SubjectFailure="trajectory")
 __all__ = sorted(_EXPORTS)
 
-
-def __getattr__(name: str) -> Any:
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r} (it exports "
-                             f"{', '.join(__all__)}; see its modules episode, world, lidar, command, "
-                             f"safety, deadline, trajectory)")
-    return getattr(importlib.import_module(f".{module}", __name__), name)
+__getattr__ = lazy_exports(
+    __name__, _EXPORTS, " (see its modules episode, world, lidar, command, safety, deadline, trajectory)")

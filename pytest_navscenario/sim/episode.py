@@ -41,6 +41,7 @@ _new = object.__new__
 
 STILL = 1e-3               # m/s and rad/s: below this the robot counts as standing still
 HALT = (0.0, 0.0, 0.0)     # the command recorded for a tick that ended the episode
+STUCK_CELL = 0.25          # m: a robot that enters no new square of this size for stuck_after s is stuck
 
 
 @dataclass
@@ -51,7 +52,7 @@ class SimResult:
     safety_stop: SafetyStop | None = None
     subject_failure: SubjectFailure | None = None
     goal_reached: bool = False
-    end: str = ""              # "goal", "collision", "safety-stop", "subject-error", "timeout", "max-ticks"
+    end: str = ""              # "goal", "collision", "safety-stop", "subject-error", "timeout", "max-ticks", "stuck"
     ticks: int = 0             # planner ticks run
     timings: dict[str, float] = field(default_factory=dict)  # s: physics, rays, planner, safety, harness, total
 
@@ -132,7 +133,7 @@ class Episode:
     """
 
     def __init__(self, scenario: Scenario, planner: Any, seed: int, max_ticks: int | None = None, *,
-                 tick_limit: float | None = None):
+                 tick_limit: float | None = None, stuck_after: float | None = None):
         self.t_start = perf_counter()
         self.scenario, self.planner = scenario, planner
         self.obstacles = scenario.obstacles
@@ -165,6 +166,10 @@ class Episode:
         self.safety_stop: SafetyStop | None = None
         self.failure: SubjectFailure | None = None
         self.end = ""
+        # stuck: no new STUCK_CELL square entered for stuck_ticks ticks ends the episode early
+        self.stuck_ticks = max(1, math.ceil(stuck_after / (spt * dt) - 1e-9)) if stuck_after else 0
+        self.visited: set[tuple[int, int]] = set()
+        self.last_new = 0
 
     def _allocate_records(self, n_steps: int) -> None:
         """Physics-rate states in preallocated arrays (trimmed at the end), per-tick facts in lists
@@ -278,6 +283,8 @@ class Episode:
         tick = self.tick
         if tick >= self.n_ticks:
             raise EpisodeOver("timeout" if tick >= self.timeout_ticks else "max-ticks")
+        if self.stuck_ticks:
+            self.check_stuck(tick, x, y)
         t0 = perf_counter()
         c, s = math.cos(yaw), math.sin(yaw)
         lidar = self.lidar
@@ -292,6 +299,16 @@ class Episode:
                             ranges=ranges, angles=lidar.angles, goal=mission.goal,
                             waypoints=mission.left, obstacles=self.obstacles)
         return (t, x, y, yaw, vx, vy, wz), obs
+
+    def check_stuck(self, tick: int, x: float, y: float) -> None:
+        """End the episode ("stuck", a timeout) when the robot has entered no new square of
+        STUCK_CELL for ``stuck_after`` seconds: standing still, dithering or circling in place."""
+        cell = (math.floor(x / STUCK_CELL), math.floor(y / STUCK_CELL))
+        if cell not in self.visited:
+            self.visited.add(cell)
+            self.last_new = tick
+        elif tick - self.last_new >= self.stuck_ticks:
+            raise EpisodeOver("stuck")
 
     def safety_check(self, state: tuple[float, ...]) -> None:
         """The safety layer on the measured velocity: a robot standing still is never halted; one
@@ -451,11 +468,13 @@ class Episode:
 
 
 def simulate(scenario: Scenario, planner: Any, seed: int, max_ticks: int | None = None, *,
-             tick_limit: float | None = None) -> SimResult:
+             tick_limit: float | None = None, stuck_after: float | None = None) -> SimResult:
     """Run one episode of ``scenario`` against ``planner`` (an object with reset/act).
 
     Calls ``planner.reset(scenario)`` first. ``seed`` drives the lidar noise. ``max_ticks`` stops
     after that many planner ticks (for quick protocol checks). ``tick_limit`` (s) makes a slower
-    planner tick a subject failure. Raises SimulationDivergedError if the physics blows up.
+    planner tick a subject failure. ``stuck_after`` (s) ends the episode early (``end ==
+    "stuck"``, a timeout) when the robot has entered no new STUCK_CELL square for that long.
+    Raises SimulationDivergedError if the physics blows up.
     """
-    return Episode(scenario, planner, seed, max_ticks, tick_limit=tick_limit).run()
+    return Episode(scenario, planner, seed, max_ticks, tick_limit=tick_limit, stuck_after=stuck_after).run()

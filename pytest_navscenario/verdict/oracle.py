@@ -20,8 +20,9 @@ MAX_MESSAGE = 300  # characters of a planner's own error message kept in the one
 
 def classify(scenario: Scenario, trajectory: Trajectory, *, collision: Collision | None,
              safety_stop: SafetyStop | None, subject_failure: SubjectFailure | None,
-             goal_reached: bool) -> tuple[Outcome, str]:
-    """Return ``(outcome, message)`` for one episode; the message is one line for a failure report."""
+             goal_reached: bool, stuck_after: float | None = None) -> tuple[Outcome, str]:
+    """Return ``(outcome, message)`` for one episode; the message is one line for a failure report.
+    ``stuck_after``: the episode was ended early because the robot was stuck that long (a timeout)."""
     if subject_failure is not None:
         return Outcome.SUBJECT_ERROR, (
             f"planner error at tick {subject_failure.tick} (t={subject_failure.time:.2f} s): "
@@ -36,6 +37,12 @@ def classify(scenario: Scenario, trajectory: Trajectory, *, collision: Collision
     timeout = scenario.mission.timeout
     if goal_reached and duration <= timeout:
         return Outcome.SUCCESS, f"success in {duration:.1f} s"
+    if stuck_after is not None and not goal_reached:
+        pose = np.asarray(trajectory.pose)
+        where = (f" at ({float(pose[-1, 0]):.2f}, {float(pose[-1, 1]):.2f})" if len(pose) else "")
+        return Outcome.TIMEOUT, (f"timeout: the robot was stuck{where}, covering no new ground for "
+                                 f"{stuck_after:g} s; episode ended early at {duration:.1f} s of "
+                                 f"{timeout:.1f} s")
     return Outcome.TIMEOUT, _timeout_message(scenario, trajectory, goal_reached)
 
 

@@ -30,6 +30,7 @@ search:
   obstacle_dy: 0.5
   obstacle_size: 0
   obstacle_yaw: 0
+  insert: 0          # this seed's space is moves only (insertion has its own tests)
 """
 
 

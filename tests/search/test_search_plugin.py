@@ -115,3 +115,23 @@ def test_bad_input_is_a_usage_error(project, args, message):
     assert result.ret == pytest.ExitCode.USAGE_ERROR
     err = result.stderr.str()
     assert err.startswith("ERROR: ") and message in err, err
+
+
+def test_live_progress_shows_without_dash_s_in_a_ci_log(project):
+    """Issue 15 item 5: capture must not swallow the progress; not a terminal: plain lines."""
+    result = project.runpytest_subprocess("-p", "pytest_navscenario.plugin", SUBJECT, "--navsearch", "crate",
+                                          "--budget", "20", "--navsearch-shrink-budget", "0")
+    assert result.ret == 0, result.stdout.str()
+    lines = [line for line in result.stdout.lines if line.startswith("navsearch crate: ")]
+    counts = [int(re.match(r"navsearch crate: (\d+)/20 sims", line).group(1)) for line in lines]
+    assert {2, 10, 20} <= set(counts), lines          # a line per tenth of the budget
+    assert len(lines) <= 10 + 20 // 2, lines            # occasional lines, not one per simulation
+    assert not any("\r" in line for line in result.stdout.lines)
+
+
+def test_stuck_after_option_is_checked(project):
+    result = run(project, "--navsearch", "crate", "--navsearch-stuck-after", "-3")
+    assert result.ret != 0
+    result.stderr.fnmatch_lines(["*--navsearch-stuck-after: the stuck time must be >= 0 seconds*"])
+    result = run(project, "--navsearch", "crate", "--navsearch-strategy", "climb")
+    result.stderr.fnmatch_lines(["*unknown strategy 'climb'; use one of evolve, random, hillclimb*"])

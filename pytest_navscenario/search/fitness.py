@@ -1,0 +1,181 @@
+"""What the search reads from an episode: how close it came to failing, and how it failed.
+
+*Robustness* (lower = closer to failure; below 0 = failed) follows the robustness semantics of
+falsification tools (VerifAI, S-TaLiRo): each requirement of a navigation test gets a margin
+normalised to [0, 1] and the episode's robustness is the smallest margin, plus a small share
+of their mean so that a candidate near two failure modes ranks above one near a single mode:
+
+* time: 1 - duration / timeout (a success that needed 28 of 30 s is near a timeout);
+* clearance: min clearance / CLEARANCE_SCALE (near a collision);
+* safety: the smallest clearance of the poses the safety layer predicts (near a safety stop);
+* efficiency: path efficiency (a long detour is near a timeout too).
+
+A failure's robustness is -1 + progress / 2: failures rank before every success, and among
+failures the one that got less far ranks first.
+
+The *cause signature* tells failures apart by behaviour, not by parameters: outcome, culprit
+obstacle (inserted obstacles are one culprit "inserted", whichever slot holds them), where the
+culprit lies along the seed's route and how far along the route the robot was when it failed
+(both in PLACE_BINS bins). Two failures with the same signature fail the same way.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from .space import INSERT_PREFIX
+
+CLEARANCE_SCALE = 0.5   # m: clearance above this counts as fully safe
+SAFETY_SCALE = 0.3      # m: predicted clearance above the safety margin by this counts as safe
+MEAN_SHARE = 0.25       # weight of the mean margin beside the smallest one
+PLACE_BINS = 4          # route quarters
+PATH_POINTS = 40        # path samples kept per candidate for the placement operators
+
+
+@dataclass(frozen=True)
+class Reading:
+    """The search's view of one episode."""
+    robustness: float
+    signature: tuple[str, str, int, int]
+    progress: float                         # 0..1 along the seed's route where the robot ended/failed
+    path: tuple[tuple[float, float], ...]   # robot centre, PATH_POINTS samples
+    closest: tuple[float, float, float]     # (t, x, y) of the closest approach
+    margins: dict[str, float]
+
+
+class Route:
+    """The seed's reference route (its shortest collision-free path) for places and progress."""
+
+    def __init__(self, seed: Any):
+        import numpy as np
+        from ..verdict.paths import shortest_path
+
+        sp = shortest_path(seed)
+        m = seed.mission
+        pts = (np.asarray(sp.points, dtype=float) if sp is not None else
+               np.array([[m.start.x, m.start.y], *([w.x, w.y] for w in m.waypoints), [m.goal.x, m.goal.y]]))
+        self.points = pts.reshape(-1, 2)
+        seg = np.hypot(*np.diff(self.points, axis=0).T) if len(self.points) > 1 else np.zeros(0)
+        self.cum = np.concatenate([[0.0], np.cumsum(seg)])
+        self.length = float(self.cum[-1]) or 1.0
+
+    def fraction(self, x: float, y: float) -> float:
+        """Arc-length fraction (0..1) of the route point nearest to (x, y)."""
+        import numpy as np
+
+        p = self.points
+        if len(p) < 2:
+            return 0.0
+        a, d = p[:-1], np.diff(p, axis=0)
+        dd = np.maximum((d * d).sum(axis=1), 1e-12)
+        u = np.clip(((x - a[:, 0]) * d[:, 0] + (y - a[:, 1]) * d[:, 1]) / dd, 0.0, 1.0)
+        qx, qy = a[:, 0] + u * d[:, 0], a[:, 1] + u * d[:, 1]
+        i = int(np.argmin((qx - x) ** 2 + (qy - y) ** 2))
+        return float((self.cum[i] + u[i] * math.sqrt(dd[i])) / self.length)
+
+
+def _bin(fraction: float) -> int:
+    return min(PLACE_BINS - 1, max(0, int(fraction * PLACE_BINS)))
+
+
+def culprit_of(res: Any) -> str:
+    """The obstacle hit, the one the safety layer stopped for, or (timeout) the one nearest to
+    where the robot ended, else nearest over the run."""
+    if res.collision is not None:
+        return res.collision.obstacle
+    if res.safety_stop is not None:
+        return res.safety_stop.obstacle
+    if res.outcome.value == "timeout" and len(res.trajectory.pose):
+        from ..verdict.metrics import min_clearance
+        pose = res.trajectory.pose
+        name = min_clearance(res.scenario, res.trajectory.t[-1:], pose[-1:])[1]
+        if name:
+            return name
+    return res.metrics.min_clearance_obstacle
+
+
+def read_episode(res: Any, route: Route) -> tuple[Reading, str]:
+    """(reading, culprit) of one EpisodeResult."""
+    import numpy as np
+
+    traj, sc = res.trajectory, res.scenario
+    pose = np.asarray(traj.pose, dtype=float).reshape(-1, 3)
+    culprit = culprit_of(res)
+    end_xy = _failure_point(res, pose)
+    progress = route.fraction(*end_xy) if end_xy is not None else 0.0
+    failed = res.outcome.value != "success"
+    margins = _margins(res, pose) if not failed else {}
+    if failed:
+        robustness = -1.0 + progress / 2.0
+    else:
+        vals = list(margins.values())
+        robustness = min(vals) + MEAN_SHARE * sum(vals) / len(vals)
+    place = 0
+    if culprit:
+        try:
+            obs = sc.obstacle(culprit)
+            place = _bin(route.fraction(obs.x, obs.y))
+        except KeyError:
+            pass
+    who = "inserted" if culprit.startswith(INSERT_PREFIX) else culprit
+    signature = (res.outcome.value, who, place, _bin(progress))
+    idx = np.linspace(0, len(pose) - 1, min(PATH_POINTS, len(pose))).astype(int) if len(pose) else []
+    path = tuple((round(float(pose[i, 0]), 4), round(float(pose[i, 1]), 4)) for i in idx)
+    m = res.metrics
+    closest = (float(m.min_clearance_time), float(m.min_clearance_x), float(m.min_clearance_y))
+    return Reading(robustness, signature, progress, path, closest, margins), culprit
+
+
+def _failure_point(res: Any, pose: Any) -> tuple[float, float] | None:
+    if res.collision is not None:
+        return float(res.collision.x), float(res.collision.y)
+    if len(pose):
+        return float(pose[-1, 0]), float(pose[-1, 1])
+    return None
+
+
+def _margins(res: Any, pose: Any) -> dict[str, float]:
+    m, sc = res.metrics, res.scenario
+    timeout = sc.mission.timeout
+    out = {"time": _unit(1.0 - m.duration / timeout if timeout > 0 else 1.0),
+           "clearance": _unit(m.min_clearance / CLEARANCE_SCALE),
+           "efficiency": _unit(m.path_efficiency)}
+    safety = _safety_margin(res, pose)
+    if safety is not None:
+        out["safety"] = safety
+    return out
+
+
+def _unit(v: float) -> float:
+    return 1.0 if not math.isfinite(v) else min(1.0, max(0.0, float(v)))
+
+
+def _safety_margin(res: Any, pose: Any) -> float | None:
+    """How close the safety layer came to triggering, in [0, 1]: as the layer does, predict
+    each control tick's pose half a horizon and a full horizon ahead at the measured velocity;
+    the smallest clearance of those predicted poses, less the layer's margin, over
+    SAFETY_SCALE (0 = it would have stopped the robot)."""
+    import numpy as np
+    from ..verdict.paths import box_box_distance, footprint_core, obstacle_shapes
+
+    sc = res.scenario
+    safety = getattr(sc.robot, "safety", None)
+    if safety is None or not getattr(safety, "enabled", False) or not sc.obstacles or len(pose) < 3:
+        return None
+    t = np.asarray(res.trajectory.t, dtype=float)
+    vel = np.asarray(res.trajectory.velocity, dtype=float).reshape(-1, 3)
+    step = max(1, int(round(len(pose) / max(1.0, t[-1] * 10.0))))   # about 10 Hz
+    p, v = pose[::step], vel[::step]
+    c, sn = np.cos(p[:, 2]), np.sin(p[:, 2])
+    wx, wy = c * v[:, 0] - sn * v[:, 1], sn * v[:, 0] + c * v[:, 1]
+    s = obstacle_shapes(sc.obstacles)
+    hl, hw, rho = footprint_core(sc.robot.footprint)
+    best = np.inf
+    for h in (0.5 * safety.horizon, safety.horizon):
+        yaw = p[:, 2] + v[:, 2] * h
+        px, py = p[:, 0] + wx * h, p[:, 1] + wy * h
+        d = box_box_distance(px[:, None], py[:, None], np.cos(yaw)[:, None], np.sin(yaw)[:, None], hl, hw,
+                             s.x, s.y, s.cos, s.sin, s.hl, s.hw) - s.rho - rho
+        best = min(best, float(d.min()))
+    return _unit((best - safety.margin) / SAFETY_SCALE)

@@ -1,0 +1,327 @@
+"""The search loop of issue 13: ask/tell batches, strategies, mutations, insertion and removal,
+the stuck-robot early stop, determinism. Real MuJoCo episodes throughout."""
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from pytest_navscenario.core.errors import ScenarioError
+from pytest_navscenario.harness.runner import run_scenario
+from pytest_navscenario.scenario.loader import loads_scenario
+from pytest_navscenario.search.engine import (
+    Candidate, EvalContext, SearchReport, _search_loop, _Simulator, evaluate_candidate, run_search,
+    shrink_failure)
+from pytest_navscenario.search.space import INSERT_PREFIX, SearchSpace
+from pytest_navscenario.search.strategies import Evolve, HillClimb
+from straight_planner import Straight
+
+ROOT = Path(__file__).resolve().parents[2]
+
+OPEN_YAML = """\
+version: 1
+name: lane
+mission:
+  start: {x: 0.0, y: 0.0, yaw: 90.0}
+  goal: {x: 0.0, y: 6.0, yaw: 90.0}
+  timeout: 15.0
+obstacles:
+  - {type: box, name: crate, x: 1.5, y: 3.0, length: 0.6, width: 0.6}
+search:
+  obstacle_dx: [-1.5, 0.5]
+  obstacle_dy: 0.5
+  obstacle_size: 0
+  obstacle_yaw: 0
+  insert: 1
+  insert_size: [0.4, 0.6]
+  insert_margin: 1.5
+  remove: 1
+"""
+
+
+@pytest.fixture(scope="module")
+def lane():
+    return loads_scenario(OPEN_YAML, "lane.yaml", name="lane")
+
+
+def _report(space, strategy="evolve", budget=10):
+    return SearchReport("lane", None, "?", None, strategy, 0, budget, 0, [p.name for p in space.params])
+
+
+def _values(space, **named):
+    out = list(space.zero())
+    for name, v in named.items():
+        out[space.index[name.replace("__", ".")]] = v
+    return tuple(out)
+
+
+# -- insertion and removal ------------------------------------------------------------------------
+def test_insertion_and_removal_are_parameters_zero_is_the_seed(lane):
+    space = SearchSpace(lane)
+    names = [p.name for p in space.params]
+    assert names == ["obstacles.crate.dx", "obstacles.crate.dy", "obstacles.crate.removed",
+                     "inserted[0].on", "inserted[0].x", "inserted[0].y", "inserted[0].size", "inserted[0].yaw"]
+    assert space.apply(space.zero()) == lane
+    inserted = space.apply(_values(space, **{"inserted[0]__on": 1.0, "inserted[0]__x": 0.5, "inserted[0]__size": 0.1}))
+    new = inserted.obstacle(f"{INSERT_PREFIX}1")
+    assert (new.x, new.y, new.length, new.width) == (0.5, 3.0, 0.5, 0.5)   # region centre (0, 3) + offset
+    assert space.apply(_values(space, **{"inserted[0]__on": 0.4, "inserted[0]__x": 0.5})) == lane  # flag off
+    removed = space.apply(_values(space, **{"obstacles.crate__removed": 1.0}))
+    assert removed.obstacles == ()
+
+
+@pytest.mark.parametrize("search, message", [
+    ({"insert": -1}, "whole number >= 0"),
+    ({"insert": 1.5}, "whole number >= 0"),
+    ({"insert_size": [0.8, 0.2]}, "0 < lo <= hi"),
+    ({"insert_size": [0.1, 0.2, 0.3]}, "exactly two numbers"),
+    ({"insert_margin": -1}, "must be >= 0"),
+    ({"remove": 3}, "at most that many"),
+    ({"insrt": 1}, "did you mean 'insert'"),
+])
+def test_new_search_keys_are_validated_with_file_and_field(lane, search, message):
+    with pytest.raises(ScenarioError) as err:
+        SearchSpace(lane, search)
+    text = str(err.value)
+    assert message in text and "lane.yaml" in text and "search." in text
+
+
+def test_new_search_key_errors_give_the_line(tmp_path):
+    from pytest_navscenario.scenario.loader import load_scenario
+    path = tmp_path / "lane.yaml"
+    path.write_text(OPEN_YAML.replace("  remove: 1\n", "  remove: 7\n"))
+    with pytest.raises(ScenarioError) as err:
+        SearchSpace(load_scenario(path))
+    assert f"{path}:{OPEN_YAML.splitlines().index('  remove: 1') + 1}" in str(err.value)
+
+
+def test_shrinking_removes_an_inserted_obstacle_that_does_not_matter(lane):
+    space = SearchSpace(lane)
+    # the crate moved onto the line (the cause) plus an inserted box far off the line (noise)
+    cause = _values(space, **{"obstacles.crate__dx": -1.4, "inserted[0]__on": 1.0, "inserted[0]__x": 1.4,
+                              "inserted[0]__y": 2.5})
+    ctx = EvalContext(space, Straight)
+    found = evaluate_candidate(ctx, cause, "test")
+    assert found.failed and found.culprit == "crate"
+    sim = _Simulator(ctx, _report(space), None)
+    failure = shrink_failure(space, sim, found, 12)
+    shrunk = space.apply(failure.shrunk.offsets)
+    assert f"{INSERT_PREFIX}1" not in [o.name for o in shrunk.obstacles]
+    first = sim.report.candidates[0]   # the first shrink simulation tried dropping the inserted box
+    assert first.offsets[space.index["inserted[0].on"]] == 0.0
+    assert failure.shrunk.signature == found.signature
+    assert abs(failure.shrunk.offsets[0]) <= abs(found.offsets[0])
+
+
+def test_shrinking_keeps_an_inserted_obstacle_that_causes_the_failure(lane):
+    space = SearchSpace(lane)
+    cause = _values(space, **{"inserted[0]__on": 1.0, "inserted[0]__y": 0.5})   # on the line at y=3.5
+    ctx = EvalContext(space, Straight)
+    found = evaluate_candidate(ctx, cause, "test")
+    assert found.failed and found.culprit == f"{INSERT_PREFIX}1" and found.signature[1] == "inserted"
+    failure = shrink_failure(space, _Simulator(ctx, _report(space), None), found, 8)
+    assert failure.shrunk.offsets[space.index["inserted[0].on"]] >= 0.5
+    assert failure.shrunk.signature == found.signature
+
+
+# -- mutations that use the episode --------------------------------------------------------------
+def _parent(lane, space):
+    return evaluate_candidate(EvalContext(space, Straight), space.zero(), "seed")
+
+
+def test_insert_mutation_puts_a_new_box_on_the_robots_path(lane):
+    import random
+    space = SearchSpace(lane)
+    evo = Evolve(space, _report(space), 10, 0)
+    parent = _parent(lane, space)
+    assert not parent.failed and len(parent.path) > 10
+    for k in range(20):
+        offsets = evo._insert(parent, random.Random(k))
+        box = space.apply(offsets).obstacle(f"{INSERT_PREFIX}1")
+        lateral = min(math.hypot(box.x - x, box.y - y) for x, y in parent.path)
+        assert lateral <= 1.3 * (0.25 + box.length / 2) + 1e-6, (k, box)
+
+
+def test_place_mutation_moves_an_obstacle_onto_the_path_within_its_bounds(lane):
+    import random
+    space = SearchSpace(lane)
+    evo = Evolve(space, _report(space), 10, 0)
+    parent = _parent(lane, space)
+    moved_onto_path = 0
+    for k in range(20):
+        offsets = evo._place(parent, random.Random(k))
+        assert space.clip(offsets) == offsets
+        crate = space.apply(offsets).obstacle("crate")
+        lateral = min(math.hypot(crate.x - x, crate.y - y) for x, y in parent.path)
+        moved_onto_path += lateral <= 1.3 * (0.25 + 0.3) + 1e-6
+    assert moved_onto_path == 20   # the crate can reach the line (dx down to -1.5): it always does
+
+
+def test_place_mutation_finds_failures_where_uniform_sampling_rarely_does(lane):
+    import random
+    space = SearchSpace(lane, {"insert": 0, "remove": 0})
+    evo = Evolve(space, _report(space), 10, 0)
+    parent = _parent(lane, space)
+    ctx = EvalContext(space, Straight, stuck_after=None)
+    placed = [evaluate_candidate(ctx, evo._place(parent, random.Random(k)), "place").failed for k in range(8)]
+    rnd = random.Random(0)
+    uniform = [evaluate_candidate(ctx, tuple(rnd.uniform(p.lo, p.hi) for p in space.params), "u").failed
+               for _ in range(8)]
+    assert sum(placed) >= 5 and sum(placed) > sum(uniform)   # lateral offsets up to 1.3x contact: most hit
+
+
+# -- hill-climb -------------------------------------------------------------------------------------
+def test_hillclimb_lowers_clearance_monotonically(lane):
+    space = SearchSpace(lane, {"insert": 0, "remove": 0})
+    report = _report(space, "hillclimb", 16)
+    climb = HillClimb(space, report, 16, 0)
+    _search_loop(climb, _Simulator(EvalContext(space, Straight), report, None), 16, lambda c: None)
+    seed_clearance = report.candidates[0].clearance
+    assert sum(len(c) for c in climb.climbs) >= 2 and climb.climbs[0][0] < seed_clearance
+    for steps in climb.climbs:   # a climb restarts from the seed after it found a failure
+        assert all(b < a for a, b in zip([seed_clearance] + steps, steps)), climb.climbs
+    assert all(c.origin in ("seed", "climb") for c in report.candidates)
+    # one coordinate at a time: each probe differs from the point it climbs from in one parameter
+    assert all(sum(v != 0 for v in c.offsets) <= 2 for c in report.candidates)
+
+
+def test_hillclimb_is_a_strategy_of_run_search(lane):
+    report = run_search(lane, Straight, budget=12, strategy="hillclimb", shrink_budget=0)
+    assert report.sims_used == 12 and report.strategy == "hillclimb"
+    assert report.best_clearance < report.candidates[0].clearance
+
+
+# -- stuck-robot early stop -------------------------------------------------------------------------
+class WaitThenGo(Straight):
+    """Stands still for ``wait`` seconds, then drives straight at its target."""
+    wait = 4.0
+
+    def act(self, obs):
+        return (0.0, 0.0, 0.0) if obs.time < self.wait else super().act(obs)
+
+
+class Dither(Straight):
+    """Drives back and forth on the spot for ever."""
+
+    def act(self, obs):
+        return (0.5 if int(obs.time) % 2 == 0 else -0.5, 0.0, 0.0)
+
+
+def test_stuck_stop_changes_nothing_when_the_robot_recovers_in_time(lane):
+    plain = run_scenario(lane, WaitThenGo)
+    early = run_scenario(lane, WaitThenGo, stuck_after=5.0)
+    assert plain.outcome.value == early.outcome.value == "success"
+    assert plain.metrics.duration == early.metrics.duration
+
+
+def test_stuck_robot_ends_early_as_a_timeout_that_says_so(lane):
+    plain = run_scenario(lane, Dither)
+    early = run_scenario(lane, Dither, stuck_after=3.0)
+    assert plain.outcome.value == early.outcome.value == "timeout"
+    assert plain.metrics.duration >= 14.9 and early.metrics.duration < 6.0
+    assert "stuck" in early.message and "3 s" in early.message
+    waited = run_scenario(lane, WaitThenGo, stuck_after=2.0)   # too short a window: the stop bites
+    assert waited.outcome.value == "timeout" and "stuck" in waited.message
+
+
+@pytest.mark.parametrize("name", ["boxes1", "boxes2", "corridor", "cylinders", "L-corridor"])
+def test_default_stuck_stop_changes_no_outcome_on_the_shipped_seeds(name):
+    from pytest_navscenario.scenario.loader import load_scenario
+    from pytest_navscenario.search.engine import DEFAULT_STUCK_AFTER
+
+    seed = load_scenario(ROOT / "scenarios" / f"{name}.yaml")
+    for planner in ("dwa", "potential-field"):
+        plain = run_scenario(seed, planner)
+        early = run_scenario(seed, planner, stuck_after=DEFAULT_STUCK_AFTER)
+        assert plain.outcome == early.outcome, (name, planner, early.message)
+
+
+# -- batches and determinism ------------------------------------------------------------------------
+def chunked(size, reverse=True):
+    """An evaluator that evaluates ``size`` candidates at a time, each chunk in reverse order
+    (as parallel workers finish in any order), and hands them back in proposal order."""
+    def evaluator(ctx, proposals):
+        for i in range(0, len(proposals), size):
+            chunk = list(enumerate(proposals[i:i + size]))
+            done = {j: evaluate_candidate(ctx, o, origin) for j, (o, origin) in (reversed(chunk) if reverse else chunk)}
+            yield from (done[j] for j in range(len(chunk)))
+    return evaluator
+
+
+def _fingerprint(report):
+    return ([(c.phase, c.origin, c.offsets, c.outcome, c.clearance, c.signature) for c in report.candidates],
+            [(f.found.sim, f.shrunk.offsets) for f in report.failures])
+
+
+@pytest.mark.parametrize("strategy", ["evolve", "hillclimb", "random"])
+def test_results_do_not_depend_on_how_many_are_evaluated_at_once(lane, strategy):
+    serial = run_search(lane, Straight, budget=14, seed_value=5, strategy=strategy, shrink_budget=4)
+    for size in (1, 3, 100):
+        batched = run_search(lane, Straight, budget=14, seed_value=5, strategy=strategy, shrink_budget=4,
+                             evaluator=chunked(size))
+        assert _fingerprint(batched) == _fingerprint(serial), size
+
+
+def _frozen_digest(out_dir: Path) -> str:
+    h = hashlib.sha256()
+    for path in sorted(out_dir.rglob("*.yaml")):
+        text = "\n".join(line for line in path.read_text().splitlines() if "date:" not in line)
+        h.update(path.name.encode() + text.encode())
+    return h.hexdigest()
+
+
+FREEZE_SCRIPT = """
+import sys
+sys.path.insert(0, {tests!r})
+from pathlib import Path
+from pytest_navscenario.scenario.loader import loads_scenario
+from pytest_navscenario.search.engine import run_search
+from pytest_navscenario.search.freeze import freeze_failures
+from pytest_navscenario.search.space import SearchSpace
+from straight_planner import Straight
+import test_search_loop as T
+seed = loads_scenario(T.OPEN_YAML, "lane.yaml", name="lane")
+space = SearchSpace(seed)
+report = run_search(seed, Straight, budget=12, seed_value=7, shrink_budget=6, space=space)
+freeze_failures(report, space, sys.argv[1])
+print(len(report.failures))
+"""
+
+
+def test_same_search_seed_same_frozen_files_across_hash_seeds(tmp_path):
+    script = tmp_path / "freeze.py"
+    script.write_text(FREEZE_SCRIPT.format(tests=str(Path(__file__).parent)))
+    digests = []
+    for hash_seed in ("1", "2"):
+        out = tmp_path / f"out{hash_seed}"
+        env = {**os.environ, "PYTHONHASHSEED": hash_seed, "PYTHONPATH": os.pathsep.join(
+            [str(ROOT), str(Path(__file__).parent), os.environ.get("PYTHONPATH", "")])}
+        done = subprocess.run([sys.executable, str(script), str(out)], env=env, capture_output=True, text=True,
+                              timeout=600)
+        assert done.returncode == 0, done.stderr
+        assert int(done.stdout.split()[-1]) > 0
+        digests.append(_frozen_digest(out))
+    assert digests[0] == digests[1]
+
+
+def test_distinct_failures_differ_in_cause_signature(lane):
+    report = run_search(lane, Straight, budget=20, seed_value=1, shrink_budget=0)
+    sigs = [f.found.signature for f in report.failures]
+    assert sigs and len(set(sigs)) == len(sigs)
+    failing = [c for c in report.candidates if c.failed]
+    assert {c.signature for c in failing} == set(sigs)   # every failing candidate is one of them
+    assert json.loads(json.dumps(report.candidates[0].to_dict(SearchSpace(lane))))["signature"]
+
+
+def test_candidate_is_plain_data_for_worker_processes(lane):
+    import pickle
+    space = SearchSpace(lane)
+    cand = evaluate_candidate(EvalContext(space, Straight), space.zero(), "seed")
+    again = pickle.loads(pickle.dumps(cand))
+    assert isinstance(again, Candidate) and again.signature == cand.signature and again.path == cand.path
