@@ -196,7 +196,8 @@ def test_the_search_opts_into_faults_and_frozen_drift_failures_fail_again(tmp_pa
 
     seed_file = tmp_path / "drifty.yaml"
     seed_file.write_text("version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 6, y: 0}, timeout: 15}\n"
-                         "search: {drift_per_metre: [0, 0.4], lidar_spurious: [0, 0.2], frozen: [start, goal]}\n")
+                         "search: {drift_per_metre: [0, 0.4], lidar_spurious: [0, 0.2], frozen: [start, goal], "
+                         "insert: 0}\n")
     seed = load_scenario(seed_file)
     space = SearchSpace(seed)
     assert [p.name for p in space.params] == ["robot.lidar_spurious", "robot.drift_per_metre"]

@@ -247,10 +247,10 @@ def test_the_search_moves_polygon_corners_and_discards_crossed_outlines(tmp_path
 
     sc = load_scenario(project(tmp_path, f"  - {{type: polygon, name: u, x: 3, y: -1.5, points: {U}}}\n"
                                          "  - {type: mesh, name: ell, file: ell.stl, x: 5, y: 2}"))
-    assert [p.name for p in SearchSpace(sc).params] == [
+    assert [p.name for p in SearchSpace(sc, {"insert": 0}).params] == [
         "obstacles.u.dx", "obstacles.u.dy", "obstacles.u.yaw", "obstacles.ell.dx", "obstacles.ell.dy",
         "obstacles.ell.yaw"]
-    space = SearchSpace(sc, {"polygon_vertex": 1.5})
+    space = SearchSpace(sc, {"polygon_vertex": 1.5, "insert": 0})
     offsets = [0.0] * len(space)
     offsets[space.index["obstacles.u.points[4].dy"]] = 0.5
     moved = space.apply(offsets)

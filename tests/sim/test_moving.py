@@ -309,7 +309,7 @@ def test_the_search_space_moves_a_moving_obstacles_start_speed_and_path():
     assert cart.motion.velocity == pytest.approx((0.0, -1.0))
     assert space.apply(space.zero()) == sc
     # a seed without moving obstacles has the same space as before
-    static = SearchSpace(scenario("  - {type: box, name: crate, x: 3, y: 0, length: 1, width: 1}"))
+    static = SearchSpace(scenario("  - {type: box, name: crate, x: 3, y: 0, length: 1, width: 1}"), {"insert": 0})
     assert [p.attr for p in static.params] == ["dx", "dy", "size", "yaw"]
 
 
