@@ -9,7 +9,8 @@ step physics), then ``world.py`` (the MuJoCo model built from the scenario, comp
 ``lidar.py`` (beam tables and the scan), ``command.py`` (calling the planner, validating its answer,
 the drive limits), ``safety.py`` (the collision safety layer), ``moving.py`` (moving obstacles:
 their mocap positions every physics step, their velocities for the safety layer, who moved in a
-collision) and ``deadline.py`` (the per-tick time limit).
+collision), ``faults.py`` (localisation drift and latency: what the planner is handed) and
+``deadline.py`` (the per-tick time limit).
 
 Names are imported lazily so that importing this package does not import MuJoCo.
 """
