@@ -7,8 +7,10 @@ episode (collision, safety stop, subject failure), bit-identical for the same sc
 Read first: ``episode.py`` (the control loop as an ``Episode``: observe, safety check, act, record,
 step physics), then ``world.py`` (the MuJoCo model built from the scenario, compiled and cached),
 ``lidar.py`` (beam tables and the scan), ``command.py`` (calling the planner, validating its answer,
-the drive limits), ``safety.py`` (the collision safety layer) and ``deadline.py`` (the per-tick time
-limit).
+the drive limits), ``safety.py`` (the collision safety layer), ``moving.py`` (moving obstacles:
+their mocap positions every physics step, their velocities for the safety layer, who moved in a
+collision), ``faults.py`` (localisation drift and latency: what the planner is handed) and
+``deadline.py`` (the per-tick time limit).
 
 Names are imported lazily so that importing this package does not import MuJoCo.
 """
