@@ -180,6 +180,9 @@ def run_matrix(extra: list[str]) -> dict:
         one.update(waypoint_times=traj.waypoint_times, end=res.end, ticks=res.ticks,
                    goal_reached=res.goal_reached, collision=_event(res.collision),
                    safety_stop=_event(res.safety_stop), subject_failure=_event(res.subject_failure))
+        believed = getattr(traj, "believed", None)     # localisation drift's poses, when it drifts
+        if believed is not None:
+            one["believed"] = (believed.dtype.str, believed.shape, believed.tobytes())
         facts[name] = one
     return facts
 

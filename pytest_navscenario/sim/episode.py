@@ -124,12 +124,14 @@ class Episode:
     5. ``step_physics``: the tick's physics steps, each state recorded and its contacts checked (a
        collision ends it), then MuJoCo's warnings (a divergence raises).
 
-    Moving obstacles (mocap bodies, ``moving.py``): ``start`` puts them where they are at t = 0,
-    ``step_physics_moving`` (chosen instead of ``step_physics`` when the model has any) before each
-    state's kinematics, so every step's contacts and the next tick's scan see them where they are;
-    the safety check gets their offsets and velocities at the tick. Where later features go: sensor faults
-    (range noise, latency, localisation drift) change what ``observe`` hands the planner, never
-    the true state that the safety layer, the mission and the recorded trajectory use.
+    ``steps`` chooses the variants once per episode, so a static scenario pays nothing per tick
+    for the features it does not use. Moving obstacles (mocap bodies, ``moving.py``): ``start``
+    puts them where they are at t = 0, ``step_physics_moving`` before each state's kinematics, so
+    every step's contacts and the next tick's scan see them where they are, and
+    ``safety_check_moving`` gives the safety layer their offsets and velocities at the tick.
+    Without a safety layer the check is ``_unchecked``. Sensor faults (sim/faults.py: latency,
+    localisation drift; ``run_ticks_with_faults``) change what the planner is handed, never the
+    true state that the safety layer, the mission and the recorded trajectory use.
     """
 
     def __init__(self, scenario: Scenario, planner: Any, seed: int, max_ticks: int | None = None, *,
@@ -184,7 +186,7 @@ class Episode:
         readonly.flags.writeable = False
         self.seen_pose, self.seen_vel = readonly[:, :3], readonly[:, 3:]
         self.stepping = (self.model, self.data, self.ctrl, self.qpos, self.qvel, self.pose_buf,
-                         self.qvel_buf)
+                         self.qvel_buf, range(self.spt - 1))   # a range can be iterated again
 
     # ------------------------------------------------------------ the episode
 
@@ -239,13 +241,22 @@ class Episode:
                                           f"act(observation) method", 0, 0.0)
             raise EpisodeOver("subject-error")
 
+    def steps(self) -> tuple[Any, Any, Any]:
+        """(safety check, act, physics step) for this episode, chosen once at its start: a static
+        scenario's loop never tests for moving obstacles, a safety layer or latency per tick."""
+        if self.safety is None:
+            safety_check = _unchecked
+        else:
+            safety_check = self.safety_check if self.moving is None else self.safety_check_moving
+        step_physics = self.step_physics if self.moving is None else self.step_physics_moving
+        return safety_check, self.act, step_physics
+
     def run_ticks(self) -> None:
         """Control ticks until one of the steps ends the episode (raises EpisodeOver)."""
         if self.faults is not None:
             return self.run_ticks_with_faults()
-        observe, safety_check, act, record, step_physics = (
-            self.observe, self.safety_check, self.act, self.record,
-            self.step_physics if self.moving is None else self.step_physics_moving)
+        safety_check, act, step_physics = self.steps()
+        observe, record = self.observe, self.record
         while True:
             state, obs = observe()
             safety_check(state)
@@ -257,13 +268,14 @@ class Episode:
         """``run_ticks`` with localisation drift and latency (sim/faults.py): the planner gets the
         drifted, delayed observation, its setpoint takes effect later; the truth is recorded."""
         faults = self.faults
-        step_physics = self.step_physics if self.moving is None else self.step_physics_moving
+        safety_check, act, step_physics = self.steps()
+        observe, record = self.observe, self.record
         while True:
-            state, obs = self.observe()
+            state, obs = observe()
             seen = faults.observation(self.tick, state, obs)
-            self.safety_check(state)
-            setpoint = faults.applied(self.act(seen))
-            self.record(state[0], setpoint)
+            safety_check(state)
+            setpoint = faults.applied(act(seen))
+            record(state[0], setpoint)
             step_physics(setpoint)
 
     # ------------------------------------------------------------ the steps of a tick
@@ -312,21 +324,33 @@ class Episode:
 
     def safety_check(self, state: tuple[float, ...]) -> None:
         """The safety layer on the measured velocity: a robot standing still is never halted; one
-        whose predicted sweep would hit an obstacle is halted, which ends the episode."""
-        safety = self.safety
-        if safety is None:
-            return
+        whose predicted sweep would hit an obstacle is halted, which ends the episode. (Chosen by
+        ``steps`` when the world has a safety layer; without one, ``_unchecked``.)"""
         t, x, y, yaw, vx, vy, wz = state
         if abs(vx) > STILL or abs(vy) > STILL or abs(wz) > STILL:
             t0 = perf_counter()
-            hit = safety.check(x, y, yaw, vx, vy, wz,
-                               None if self.moving is None else self.moving.now(self.i))
+            hit = self.safety.check(x, y, yaw, vx, vy, wz)
             self.t_safety += perf_counter() - t0
             if hit is not None:
-                self.safety_stop = SafetyStop(t, hit, math.hypot(vx, vy))
-                self.ctrl[:] = 0.0
-                self.record(t, HALT)
-                raise EpisodeOver("safety-stop")
+                self._halt(state, hit)
+
+    def safety_check_moving(self, state: tuple[float, ...]) -> None:
+        """``safety_check`` with the moving obstacles' offsets and velocities at the tick."""
+        t, x, y, yaw, vx, vy, wz = state
+        if abs(vx) > STILL or abs(vy) > STILL or abs(wz) > STILL:
+            t0 = perf_counter()
+            hit = self.safety.check(x, y, yaw, vx, vy, wz, self.moving.now(self.i))
+            self.t_safety += perf_counter() - t0
+            if hit is not None:
+                self._halt(state, hit)
+
+    def _halt(self, state: tuple[float, ...], hit: str) -> None:
+        """The safety layer halts the robot before ``hit``: zero control, the episode ends."""
+        t, vx, vy = state[0], state[4], state[5]
+        self.safety_stop = SafetyStop(t, hit, math.hypot(vx, vy))
+        self.ctrl[:] = 0.0
+        self.record(t, HALT)
+        raise EpisodeOver("safety-stop")
 
     def act(self, obs: Observation) -> tuple[float, float, float]:
         """The new setpoint: the planner's answer under the tick deadline, validated, within the
@@ -365,7 +389,7 @@ class Episode:
         right after it) and advances; a last mj_step1 checks the tick's final state. spt + 1 calls
         instead of 2 * spt; the physics is the same as mj_step's.
         """
-        m, d, ctrl, qpos, qvel, pose_buf, qvel_buf = self.stepping   # one attribute load a tick
+        m, d, ctrl, qpos, qvel, pose_buf, qvel_buf, inner = self.stepping   # one load a tick
         step = mujoco.mj_step
         ctrl[0], ctrl[1], ctrl[2] = setpoint     # three scalar writes: cheaper than ctrl[:] = tuple
         t0 = perf_counter()
@@ -374,7 +398,7 @@ class Episode:
         i = self.i + 1
         pose_buf[i] = qpos
         qvel_buf[i] = qvel
-        for _ in range(self.spt - 1):
+        for _ in inner:
             step(m, d)
             if d.ncon:   # contacts of state i (the data has moved on to i + 1: not recorded)
                 collision = self.world.first_collision(d, self.obstacles, i * self.dt)
@@ -389,7 +413,8 @@ class Episode:
                 collision = self.world.first_collision(d, self.obstacles, i * self.dt)
         self.i = i
         self.t_physics += perf_counter() - t0
-        self._after_physics(collision)
+        if collision is not None or MUJOCO_WARNINGS or not self.own_handler:
+            self._after_physics(collision)
 
     def _after_physics(self, collision: Collision | None) -> None:
         """End the episode on a collision (with who moved), raise on a divergence."""
@@ -405,7 +430,7 @@ class Episode:
         """``step_physics`` with moving obstacles: before each state's kinematics (mj_step's first
         half, the last mj_step1) the obstacles are put where they are at that state's time, so every
         step's contacts and the next scan see them there."""
-        m, d, ctrl, qpos, qvel, pose_buf, qvel_buf = self.stepping
+        m, d, ctrl, qpos, qvel, pose_buf, qvel_buf, _ = self.stepping
         step = mujoco.mj_step
         mocap_pos = self.moving.mocap_pos
         rows = self.moving.rows_for_tick(self.i)    # rows[k]: step self.i + k
@@ -465,6 +490,10 @@ class Episode:
                    "safety": self.t_safety, "harness": total - spent, "total": total}
         return SimResult(trajectory, self.collision, self.safety_stop, self.failure, self.end == "goal",
                          self.end, self.tick, timings)
+
+
+def _unchecked(state: tuple[float, ...]) -> None:
+    """The safety step of a world without a safety layer (disabled, or no obstacles)."""
 
 
 def simulate(scenario: Scenario, planner: Any, seed: int, max_ticks: int | None = None, *,

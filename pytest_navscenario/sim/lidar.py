@@ -13,7 +13,7 @@ import mujoco
 import numpy as np
 
 from ..scenario.model import Scenario
-from .world import LIDAR_HEIGHT, MODEL_CACHE_SIZE, PARTS_GROUP, TWO_PI, UNSEEN_GROUP, World
+from .world import LIDAR_HEIGHT, MODEL_CACHE_SIZE, TWO_PI, World
 
 
 def lidar_angles(scenario: Scenario) -> np.ndarray:
@@ -91,13 +91,7 @@ class Lidar:
         self.readonly = self.record.view()
         self.readonly.flags.writeable = False
         self.model, self.data, self.body = world.model, d, world.robot_body
-        # with non-convex obstacles the lidar skips their convex parts (it sees their prism mesh)
-        # and obstacles the lidar cannot see (visible_to_lidar: false) are skipped altogether
-        self.groups = None
-        skipped = [g for g in (PARTS_GROUP, UNSEEN_GROUP) if (world.model.geom_group == g).any()]
-        if skipped:
-            self.groups = np.ones(6, dtype=np.uint8)
-            self.groups[skipped] = 0
+        self.groups = world.lidar_groups          # convex parts and unseen obstacles skipped
 
     def scan(self, tick: int, x: float, y: float, c: float, s: float) -> np.ndarray:
         """Ranges (read-only float32) of the robot at (x, y) with heading (cos, sin) = (c, s),

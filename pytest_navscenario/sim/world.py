@@ -240,6 +240,9 @@ class World:
     robot_geom: int
     obstacle_of_geom: dict[int, int]   # geom id -> index in scenario.obstacles
     safety: SafetyLayer | None
+    # the geom groups mj_multiRay casts against: None (all) unless the model has convex parts or
+    # unseen obstacles for the lidar to skip; per model, not per episode (numpy scans of the model)
+    lidar_groups: np.ndarray | None = None
     free_data: list = field(default_factory=list)  # MjData pool: creating one costs ~1 ms
 
     def take_data(self) -> mujoco.MjData:
@@ -312,11 +315,23 @@ def compiled_world(scenario: Scenario) -> World:
     obstacle_of_geom = {mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, gname): i
                         for i, names in enumerate(obstacle_geom_names(scenario)) for gname in names}
     safety = SafetyLayer(scenario) if scenario.robot.safety.enabled and scenario.obstacles else None
-    world = World(model, robot_body, robot_geom, obstacle_of_geom, safety)
+    world = World(model, robot_body, robot_geom, obstacle_of_geom, safety, _lidar_groups(model))
     _CACHE[key] = world
     if len(_CACHE) > MODEL_CACHE_SIZE:
         _CACHE.popitem(last=False)
     return world
+
+
+def _lidar_groups(model: mujoco.MjModel) -> np.ndarray | None:
+    """The lidar's geom-group mask: it skips non-convex obstacles' convex parts (it sees their prism
+    mesh) and obstacles with visible_to_lidar: false; None when the model has neither."""
+    skipped = [g for g in (PARTS_GROUP, UNSEEN_GROUP) if (model.geom_group == g).any()]
+    if not skipped:
+        return None
+    groups = np.ones(6, dtype=np.uint8)
+    groups[skipped] = 0
+    groups.flags.writeable = False
+    return groups
 
 
 def clear_model_cache() -> None:
