@@ -231,7 +231,7 @@ def _scenario(data: BagData, obstacles: list[Obstacle], path_as: str, reference_
     if path_as in ("waypoints", "both"):
         waypoints = tuple(Pose(_r(x), _r(y)) for x, y in decimate_path(od[:, 1:3]))
     if path_as in ("reference", "both"):
-        reference = Reference(file=reference_file or "reference.csv")
+        reference = Reference(file=reference_file or "reference.csv", compare="path")  # a real robot's pace differs
     robot = _robot(data, footprint)
     limits = robot.limits
     timeout = _r(max(30.0, math.ceil(max(duration, length / max(limits.max_speed, 0.1)) * 2.0 + 10.0)), 1)
