@@ -82,3 +82,35 @@ def test_the_notes_say_which_are_searchable(tmp_path):
         [box(x - ln / 2, y - w / 2, x + ln / 2, y + w / 2) for x, y, ln, w, _, _ in WORLD.boxes]
     for o in seed.scenario.obstacles:
         assert min(obstacle_polygon(o).distance(t) for t in truth) < 0.02, o
+
+
+def test_map_background_takes_the_window_near_the_path_of_a_turned_map():
+    """A map turned 90 degrees with its origin at (1, 2): a block of cells (rows 10-11, columns
+    20-23 of 0.1 m) lies at (-0.1, 4.2) in the world, 0.4 m along the map's x (now world y); a block
+    30 m away is outside the window and left out."""
+    from pytest_navscenario.ros.bag_import.known_map import KnownMap, map_background
+
+    occ = np.zeros((400, 400), bool)
+    occ[10:12, 20:24] = True
+    occ[300:302, 300:302] = True
+    m = KnownMap(frame="map", topic="/map", occupied=occ, resolution=0.1, origin=(1.0, 2.0, math.pi / 2))
+    boxes = map_background(m, np.array([[0.0, 3.0], [0.5, 4.0]]), reach=3.0)
+    assert len(boxes) == 1
+    b = boxes[0]
+    assert (b.x, b.y, b.length, b.width, b.yaw) == pytest.approx((-0.1, 4.2, 0.4, 0.2, 90.0), abs=1e-9)
+
+
+def test_a_gap_the_robot_drove_through_is_not_closed():
+    """Two crates 0.28 m apart (closer than the merge gap) with the robot driving between them: a
+    merged outline would cover its path, so they stay two obstacles."""
+    from pytest_navscenario.ros.bag_import.simplify import merge_neighbours
+    from pytest_navscenario.scenario.model import BoxObstacle
+
+    crates = [BoxObstacle("a", -0.34, 1.0, 0.4, 0.4), BoxObstacle("b", 0.34, 1.0, 0.4, 0.4)]
+    path = np.stack([np.zeros(21), np.linspace(0.0, 2.0, 21)], 1)        # north along x = 0
+    kept, n = merge_neighbours(crates, path, clearance=0.1)
+    assert n == 0 and [o.name for o in kept] == ["a1", "b1"]
+    elsewhere = np.stack([np.full(21, 3.0), np.linspace(0.0, 2.0, 21)], 1)
+    merged, n = merge_neighbours(crates, elsewhere, clearance=0.1)
+    assert n == 1 and len(merged) == 1 and isinstance(merged[0], PolygonObstacle)
+    assert obstacle_polygon(merged[0]).area == pytest.approx(0.4 * (0.68 + 0.4), rel=0.02)   # the gap closed

@@ -84,12 +84,20 @@ def map_background(m: KnownMap, path_xy: np.ndarray, reach: float) -> list[BoxOb
     c, s = math.cos(yaw), math.sin(yaw)
     lo, hi = path_xy.min(axis=0) - reach, path_xy.max(axis=0) + reach
     h, w = m.occupied.shape
-    rows, cols = np.mgrid[0:h, 0:w]
+    # the region's corners in cells: only that window of a large map is looked at
+    corners = np.array([[lo[0], lo[1]], [hi[0], lo[1]], [lo[0], hi[1]], [hi[0], hi[1]]]) - (x0, y0)
+    cc = (c * corners[:, 0] + s * corners[:, 1]) / m.resolution
+    rr = (-s * corners[:, 0] + c * corners[:, 1]) / m.resolution
+    c0, c1 = max(int(np.floor(cc.min())), 0), min(int(np.ceil(cc.max())) + 1, w)
+    r0, r1 = max(int(np.floor(rr.min())), 0), min(int(np.ceil(rr.max())) + 1, h)
+    if not (c0 < c1 and r0 < r1):
+        return []
+    rows, cols = np.mgrid[r0:r1, c0:c1]
     lx, ly = (cols + 0.5) * m.resolution, (rows + 0.5) * m.resolution
     wx, wy = x0 + c * lx - s * ly, y0 + s * lx + c * ly
-    mask = m.occupied & (wx >= lo[0]) & (wx <= hi[0]) & (wy >= lo[1]) & (wy <= hi[1])
+    window = m.occupied[r0:r1, c0:c1] & (wx >= lo[0]) & (wx <= hi[0]) & (wy >= lo[1]) & (wy <= hi[1])
     boxes = []
-    for i, (r, col, nr, nc) in enumerate(merge_rectangles(mask), 1):
+    for i, (r, col, nr, nc) in enumerate(((r + r0, col + c0, nr, nc) for r, col, nr, nc in merge_rectangles(window)), 1):
         bx, by = (col + nc / 2.0) * m.resolution, (r + nr / 2.0) * m.resolution   # row 0 at the origin
         boxes.append(BoxObstacle(name=f"map{i}", x=round(x0 + c * bx - s * by, 4) + 0.0,
                                  y=round(y0 + s * bx + c * by, 4) + 0.0, length=round(nc * m.resolution, 4),

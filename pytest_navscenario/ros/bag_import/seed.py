@@ -148,7 +148,7 @@ def _keep_small(data: BagData, obstacles: list[Obstacle], radius: float, size: S
     path as the background and only what it lacks from the sensors; the obstacles near the driven
     path searchable, the rest (and the map) the fixed background. Returns obstacles, background names."""
     free = data.odom[:, 1:3]
-    merged, n = merge_neighbours(obstacles, free, size)
+    merged, n = merge_neighbours(obstacles, free, size, clearance=radius)
     if n:
         notes.append(f"{len(obstacles)} obstacles -> {len(merged)}: {n} merged with a neighbour closer than "
                      f"{size.merge_gap:g} m into simplified polygons (outline1, ...)")

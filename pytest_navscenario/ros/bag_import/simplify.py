@@ -43,11 +43,12 @@ def _components(n: int, pairs) -> list[list[int]]:
 
 
 def merge_neighbours(obstacles: list[Obstacle], free_xy: np.ndarray | None,
-                     s: SeedSize = SeedSize()) -> tuple[list[Obstacle], int]:
+                     s: SeedSize = SeedSize(), clearance: float = 0.0) -> tuple[list[Obstacle], int]:
     """Merge obstacles closer than ``s.merge_gap`` (and of about the same height) into one
     simplified polygon each. A group stays as it was when its outline would enclose a hole (walls
-    around a room), fall apart, or cover a pose the robot drove through. Returns the obstacles
-    (polygons named ``outline1``, ...) and how many were merged away."""
+    around a room), fall apart, or come within ``clearance`` (the footprint) of a pose the robot
+    drove through that its parts kept clear of. Returns the obstacles (polygons named
+    ``outline1``, ...) and how many were merged away."""
     import shapely
     from shapely.geometry import Polygon
 
@@ -69,8 +70,10 @@ def merge_neighbours(obstacles: list[Obstacle], free_xy: np.ndarray | None,
             half = s.merge_gap / 2
             u = shapely.unary_union([polys[i].buffer(half, join_style="mitre") for i in group])
             u = u.buffer(-half, join_style="mitre").simplify(s.tolerance, preserve_topology=True)
-            ok = (isinstance(u, Polygon) and not u.interiors and u.is_valid
-                  and (free is None or not shapely.contains(u, free).any()))
+            ok = isinstance(u, Polygon) and not u.interiors and u.is_valid
+            if ok and free is not None:
+                before = min(float(shapely.distance(polys[i], free).min()) for i in group)
+                ok = float(shapely.distance(u, free).min()) >= min(before, clearance) - 1e-3
             if ok:
                 c = u.centroid
                 pts = tuple((_r(x - c.x), _r(y - c.y)) for x, y in list(u.exterior.coords)[:-1])
