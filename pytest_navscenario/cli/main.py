@@ -31,7 +31,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
                       "commands, read-only observations, determinism, tick time"),
     "compare": ("pytest_navscenario.cli.compare",
                 "compare two results files (A baseline, B candidate), CI gate"),
-    "from-bag": ("pytest_navscenario.ros.bag_import",
+    "from-bag": ("pytest_navscenario.cli.from_bag",
                  "build a seed scenario from a ROS 1 / ROS 2 bag"),
     "from-map": ("pytest_navscenario.ros.map_import",
                  "build a seed scenario from a map_server occupancy grid"),

@@ -131,6 +131,8 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
             out["reference"] = {"file": str(s.reference.file)}
         else:
             out["reference"] = {"points": [[_f(t), _f(x), _f(y)] for t, x, y in s.reference.points]}
+        if s.reference.compare != "time":
+            out["reference"]["compare"] = s.reference.compare
     if s.search is not None:
         out["search"] = _plain(dict(s.search))
     if s.provenance is not None:

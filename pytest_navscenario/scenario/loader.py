@@ -97,7 +97,8 @@ PERSON_RADIUS = 0.25            # m
 PERSON_HEIGHT = 1.7             # m
 PERSON_SPEED = 1.3              # m/s, a typical walking speed
 SIMULATION_KEYS = ("timestep", "control_rate", "seed")
-REFERENCE_KEYS = ("file", "points")
+REFERENCE_KEYS = ("file", "points", "compare")
+REFERENCE_COMPARE = ("time", "path")
 DRIVES = ("omni", "diff")
 SHAPES = ("box", "circle")
 OBSTACLE_TYPES = ("box", "cylinder", "person", "polygon", "mesh")
@@ -649,8 +650,9 @@ def _reference(ctx: _Ctx, top: _Section) -> Reference | None:
     if sec.has("file") == sec.has("points"):
         raise ctx.fail("give exactly one of 'file' or 'points'", "reference", sec.line,
                        "file: path/to/trajectory.csv (relative to this file), or points: [[t, x, y], ...]")
+    compare = sec.choice("compare", REFERENCE_COMPARE, "time")
     if sec.has("file"):
-        return Reference(file=sec.string("file", None))
+        return Reference(file=sec.string("file", None), compare=compare)
     rows = sec.sequence("points", int(SCENARIO_LIMITS["max_reference_points"]), "reference points")
     points = []
     last_t = -math.inf
@@ -667,7 +669,7 @@ def _reference(ctx: _Ctx, top: _Section) -> Reference | None:
                            line, "sort the points by time; times must be strictly increasing")
         last_t = t
         points.append((t, x, y))
-    return Reference(points=tuple(points))
+    return Reference(points=tuple(points), compare=compare)
 
 
 def _marks(ctx: _Ctx, top: _Section) -> tuple[Mark, ...]:

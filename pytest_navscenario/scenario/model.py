@@ -245,10 +245,12 @@ class Mark:
 class Reference:
     """A recorded trajectory to compare the simulated run with (from a bag or a CSV).
 
-    ``file`` is relative to the scenario file; ``points`` are (t, x, y) rows given inline.
+    ``file`` is relative to the scenario file; ``points`` are (t, x, y) rows given inline;
+    ``compare`` says what the reference deviation metrics measure (see verdict/metrics.py).
     """
     file: str | None = None
     points: tuple[tuple[float, float, float], ...] = ()
+    compare: Literal["time", "path"] = "time"   # time: at the same times; path: the same way, whatever the pace
 
 
 @dataclass(frozen=True)

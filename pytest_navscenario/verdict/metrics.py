@@ -27,7 +27,11 @@ samples unless said otherwise; NaN means "not defined for this episode"):
 * reference_mean/max_deviation: with ``scenario.reference`` (inline (t, x, y) rows or a CSV
   file with header ``t,x,y``, relative to the scenario file's folder): the simulated position
   interpolated at each reference time inside the simulated time span, distance to the
-  reference point. Both clocks start at 0 (the episode start).
+  reference point. Both clocks start at 0 (the episode start). With ``reference.compare: path``
+  the comparison is spatial instead, blind to the pace: mean is the mean distance of the simulated
+  positions to the recorded path, max the largest distance between the two paths either way (the
+  Hausdorff distance: a run that took the same way slower is close; one that left the recorded
+  way, or stopped half-way along it, is not).
 """
 from __future__ import annotations
 
@@ -314,6 +318,8 @@ def reference_deviation(scenario: Scenario, t: np.ndarray, xy: np.ndarray) -> tu
     ref = load_reference(scenario)
     if ref is None or len(t) == 0:
         return NAN, NAN
+    if scenario.reference.compare == "path":
+        return path_deviation(ref[:, 1:3], xy)
     inside = (ref[:, 0] >= t[0]) & (ref[:, 0] <= t[-1])
     if not inside.any():
         return NAN, NAN
@@ -322,6 +328,20 @@ def reference_deviation(scenario: Scenario, t: np.ndarray, xy: np.ndarray) -> tu
     sy = np.interp(rt, t, xy[:, 1])
     dev = np.hypot(sx - ref[inside, 1], sy - ref[inside, 2])
     return float(dev.mean()), float(dev.max())
+
+
+def path_deviation(ref_xy: np.ndarray, xy: np.ndarray) -> tuple[float, float]:
+    """(mean distance of ``xy`` to the polyline ``ref_xy``, Hausdorff distance between the two
+    polylines): where both paths went, not when."""
+    import shapely
+    from shapely.geometry import LineString, Point
+
+    def line(p: np.ndarray):
+        return LineString(p) if len(p) > 1 else Point(p[0])
+    ref_line, run_line = line(ref_xy), line(xy)
+    to_ref = shapely.distance(shapely.points(xy), ref_line)
+    to_run = shapely.distance(shapely.points(ref_xy), run_line)
+    return float(to_ref.mean()), float(max(to_ref.max(), to_run.max()))
 
 
 def load_reference(scenario: Scenario) -> np.ndarray | None:

@@ -68,6 +68,13 @@ def test_turtlebot3_seed_is_driven_by_dwa(tb3, tmp_path):
     assert len(result.trajectory.waypoint_times) == len(seed.mission.waypoints)
     # the reference (the real run) is compared with the simulated one: finite, metres
     assert 0 < result.metrics.reference_mean_deviation <= result.metrics.reference_max_deviation < 10
+    # the seed compares by path (the simulated robot is faster than the real one, 57.5 s vs 91 s):
+    # the same way within a third of a metre; aligned by time it would be metres off
+    assert seed.reference.compare == "path" and result.metrics.reference_max_deviation < 0.5
+    import dataclasses
+    from pytest_navscenario.verdict.metrics import compute_metrics
+    timed = dataclasses.replace(seed, reference=dataclasses.replace(seed.reference, compare="time"))
+    assert compute_metrics(timed, result.trajectory).reference_max_deviation > 2.0
 
 
 def test_window_laser_pose_and_reference_csv(tmp_path, capsys):

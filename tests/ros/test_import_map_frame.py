@@ -144,3 +144,42 @@ def test_obstacles_not_on_the_bags_map_are_named(tmp_path):
     # in the odometry frame the map is not compared (another frame), and that is said
     seed = scenario_from_bag(tmp_path / "m", frame="odom")
     assert any("/map is in frame 'map' and the seed in 'odom'" in n for n in seed.notes)
+
+
+def test_the_bags_map_is_the_fixed_background_and_the_new_pillar_searchable(tmp_path):
+    """With the /map in the seed's frame: the map's pillars are a fixed background (search: frozen),
+    of the scans' obstacles only the pillar put there that day is kept, and the search moves only it."""
+    from pytest_navscenario.scenario.geometry import obstacle_polygon
+    from pytest_navscenario.search.space import SearchSpace
+    from shapely.geometry import Point
+
+    truth = loop_drive(n=300, dt=0.1, radius=1.8)
+    res, size = 0.05, 200
+    ys, xs = np.mgrid[0:size, 0:size]
+    cx, cy = -5 + (xs + 0.5) * res, -5 + (ys + 0.5) * res
+    grid = np.zeros((size, size), np.int8)
+    for x, y, r, _ in WORLD.pillars:
+        if (x, y) != (2.6, 2.6):
+            grid[np.hypot(cx - x, cy - y) <= r] = 100
+
+    def known(bag):
+        bag.write("/map", "nav_msgs/msg/OccupancyGrid", 0.0, {
+            "header": {"stamp": stamp(0.0), "frame_id": "map"},
+            "info": {"resolution": res, "width": size, "height": size,
+                     "origin": {"position": {"x": -5.0, "y": -5.0}, "orientation": {"w": 1.0}}},
+            "data": grid.reshape(-1)})
+    seed = scenario_from_bag(robot_bag(tmp_path / "m", WORLD, truth, drift=_drift(truth), extra=known))
+    obs = seed.scenario.obstacles
+    frozen = set(seed.scenario.search["frozen"])
+    from_map = [o for o in obs if o.name in frozen]
+    kept = [o for o in obs if o.name not in frozen]
+    assert all(o.name.startswith("map") for o in from_map) and len(from_map) == 5   # one polygon per pillar
+    for x, y, r, _ in WORLD.pillars:
+        if (x, y) != (2.6, 2.6):
+            hits = [o for o in from_map if obstacle_polygon(o).intersection(Point(x, y).buffer(r)).area > 0.8 * math.pi * r * r]
+            assert len(hits) == 1, (x, y)
+    assert len(kept) == 1 and isinstance(kept[0], CylinderObstacle)
+    assert (kept[0].x, kept[0].y, kept[0].radius) == pytest.approx((2.6, 2.6, 0.25), abs=0.05)
+    assert {p.part for p in SearchSpace(seed.scenario).params if p.part.startswith("obstacle:")} == {f"obstacle:{kept[0].name}"}
+    assert any("/map is the fixed background: 5 obstacles within 3 m of the driven path; of the sensors' "
+               "obstacles the 1 not on the map are kept" in n for n in seed.notes), seed.notes

@@ -209,6 +209,8 @@ BAD = [
      ["exactly one of 'file' or 'points'"]),
     ("reference-time", BASE + "reference:\n  points:\n  - [0, 0, 0]\n  - [0, 1, 1]\n", 10, "reference.points[1][0]",
      ["does not increase"]),
+    ("reference-compare", BASE + "reference:\n  file: a.csv\n  compare: space\n", 9, "reference.compare",
+     ["unknown compare 'space'", "use one of: time, path"]),
     ("mark", BASE + "marks: ['not valid']\n", 7, "marks[0]", ["not a valid Python identifier"]),
     ("name-path", BASE + "name: ../../etc/x\n", 7, "name", ["become file and folder names"]),
     ("family-path", BASE + "family: ..\n", 7, "family", ["become file and folder names"]),
@@ -352,3 +354,12 @@ def test_pure_python_parser_gives_the_same_results(monkeypatch, good_file):
         assert (info.value.line, info.value.field) == (line, field) and fragments[0] in str(info.value)
     with pytest.raises(ScenarioError, match="levels deep"):
         loads_scenario("version: 1\nmission: " + "[" * 5000 + "]" * 5000)
+
+
+def test_reference_compare_path_round_trips():
+    text = BASE + "reference:\n  points: [[0, 0, 0], [1, 0, 1]]\n  compare: path\n"
+    s = loads_scenario(text)
+    assert s.reference.compare == "path"
+    assert loads_scenario(dump_scenario(s)).reference == s.reference
+    plain = loads_scenario(BASE + "reference: {file: a.csv}\n")
+    assert plain.reference.compare == "time" and "compare" not in dump_scenario(plain)

@@ -249,3 +249,30 @@ def test_mismatched_trajectory_arrays_are_named():
     tr.velocity = tr.velocity[:-5]
     with pytest.raises(ValueError, match=r"t has 1001 samples, pose 1001, velocity 996"):
         compute_metrics(scenario(), tr)
+
+
+def _slow_same_way():
+    """The recorded run: the same line north, but at a third of the speed and with a 0.1 m bulge."""
+    t = np.arange(0.0, 30.05, 0.5)
+    y = t / 3.0
+    return tuple((float(a), 0.1 if 4.0 <= b <= 6.0 else 0.0, float(b)) for a, b in zip(t, y))
+
+
+def test_path_comparison_is_blind_to_the_pace():
+    """A run that took the recorded way three times faster: far off at the same times (compare:
+    time), within the 0.1 m bulge along the way (compare: path)."""
+    points = _slow_same_way()
+    timed = compute_metrics(scenario(reference=Reference(points=points)), straight_north())
+    assert timed.reference_max_deviation == pytest.approx(10.0 - 10.0 / 3.0, abs=0.05)
+    spatial = compute_metrics(scenario(reference=Reference(points=points, compare="path")), straight_north())
+    assert spatial.reference_max_deviation == pytest.approx(0.1, abs=1e-9)
+    assert 0 < spatial.reference_mean_deviation < 0.1
+
+
+def test_path_comparison_sees_a_run_that_left_the_way_or_stopped_short():
+    points = tuple((float(t), 0.0, float(t)) for t in range(11))            # north along x = 0, 10 m
+    off = compute_metrics(scenario(reference=Reference(points=points, compare="path")), straight_north(x=0.7))
+    assert off.reference_max_deviation == pytest.approx(0.7) and off.reference_mean_deviation == pytest.approx(0.7)
+    short = compute_metrics(scenario(reference=Reference(points=points, compare="path")), straight_north(length=4.0))
+    # every simulated pose lies on the recorded way, but the recorded way goes 6 m further
+    assert short.reference_mean_deviation == pytest.approx(0.0) and short.reference_max_deviation == pytest.approx(6.0)

@@ -13,6 +13,8 @@ map, else the odometry frame:
   ``/tf_static``, else the first ``/tf`` transforms, else guessed from the scans), or every point
   cloud (streamed, ground removed, the robot's height band kept), accumulated on a grid,
   clustered, and fitted as cylinders and oriented boxes (with their heights from a 3D lidar);
+  neighbours merged into simplified polygons; those near the driven path searchable, the rest
+  (and the bag's ``/map``, when there is one) a fixed background in ``search: frozen``;
 * the robot: the footprint from the URDF or Nav2, else a circle.
 
 ``--list-events`` lists candidate moments of the whole bag instead (``events``).
@@ -20,7 +22,8 @@ map, else the odometry frame:
 Modules, in the order the data flows: ``topics`` (which topic plays which part), ``reading``
 (first pass: bag -> arrays), ``frames`` (map or odometry frame), ``goal``, ``footprint``,
 ``mount`` (laser mounting), ``projection`` (scans -> grid), ``clouds`` (second pass: clouds ->
-grid), ``obstacles`` (grid -> clusters -> obstacles), ``seed`` (the scenario), ``events``,
+grid), ``obstacles`` (grid -> clusters -> obstacles), ``simplify`` (merge, searchable or fixed),
+``known_map`` (the bag's /map), ``seed`` (the scenario), ``events``,
 ``cli`` (the command line).
 """
 from __future__ import annotations

@@ -85,9 +85,16 @@ def _cloud_settings(args: argparse.Namespace) -> CloudSettings:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..world_import import write_seed
     if args.list_events:
         return _list_events(args)
+    import_bag(args)
+    return 0
+
+
+def import_bag(args: argparse.Namespace):
+    """Build the seed, write it (and its reference CSV) and print the notes; return the BagSeed
+    and the seed file's path (the command line's own layer draws the picture)."""
+    from ..world_import import write_seed
     if not args.output:
         raise BagImportError("-o/--output is required: the seed scenario YAML to write (or --list-events)")
     out = Path(args.output)
@@ -106,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
     for note in seed.notes:
         print(f"navscenario from-bag: {note}")
     print(f"navscenario from-bag: wrote {out}" + (f" and {out.parent / csv_name}" if extra else ""))
-    return 0
+    return seed, out
 
 
 def _list_events(args: argparse.Namespace) -> int:

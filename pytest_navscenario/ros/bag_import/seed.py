@@ -25,11 +25,12 @@ from .clouds import CloudSettings, grid_clouds
 from .footprint import footprint_from_bag, inner_radius
 from .frames import to_world_frame
 from .goal import choose_goal
-from .known_map import not_on_map
+from .known_map import map_background, not_on_map
 from .mount import choose_mount
 from .obstacles import FitSettings, _r, fit_obstacles, occupied_clusters
 from .projection import grid_returns
 from .reading import PATH_AS, BagData, BagImportError, read_bag
+from .simplify import SeedSize, merge_neighbours, split_near_path
 
 
 def _peak_rates(od: np.ndarray, window: float = 0.5) -> tuple[float, float]:
@@ -81,7 +82,7 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
                       settings: FitSettings = FitSettings(), frame: str = "auto", map_frame: str = "map",
                       pose_topic: str | None = None, cloud_topic: str | None = None,
                       cloud: CloudSettings = CloudSettings(), goal_topic: str | None = None,
-                      at: float | None = None, window: float = 30.0) -> BagSeed:
+                      at: float | None = None, window: float = 30.0, size: SeedSize = SeedSize()) -> BagSeed:
     """Build a seed scenario from a bag (see the package docstring). ``laser_pose`` is x, y (m),
     yaw (degrees) of the laser in the robot's base frame; ``robot_radius`` the seed's circular
     footprint (m; default: from the bag's URDF or Nav2 footprint, else 0.15 m); ``reference_file`` is the CSV name
@@ -117,9 +118,10 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
         grid, how = clouds.grid, clouds.how
         obstacles = _fit(data, grid, settings, notes, f"{data.cloud_count} clouds")
         notes += check_path_free(data, obstacles, radius, how, data.cloud_topic)
-    if data.known_map is not None and obstacles:
-        notes.append(not_on_map(data.known_map, obstacles, data.frame)[1])
+    obstacles, background = _keep_small(data, obstacles, radius, size, notes)
     scenario, summary = _scenario(data, obstacles, path_as, reference_file, name, fp, goal)
+    if background:
+        scenario = dataclasses.replace(scenario, search={"frozen": background})
     notes.append(summary)
     od = data.odom
     path_rows = np.stack([od[:, 0] - od[0, 0], od[:, 1], od[:, 2]], axis=1)
@@ -138,6 +140,38 @@ def _fit(data: BagData, grid, settings: FitSettings, notes: list[str], what: str
                  f"{n_cyl} cylinders, {len(obstacles) - n_cyl} boxes"
                  + (f" ({dropped} specks of < 3 cells ignored as noise)" if dropped else ""))
     return obstacles
+
+
+def _keep_small(data: BagData, obstacles: list[Obstacle], radius: float, size: SeedSize,
+                notes: list[str]) -> tuple[list[Obstacle], list[str]]:
+    """Neighbours merged into polygons; with the bag's /map in the seed's frame, the map near the
+    path as the background and only what it lacks from the sensors; the obstacles near the driven
+    path searchable, the rest (and the map) the fixed background. Returns obstacles, background names."""
+    free = data.odom[:, 1:3]
+    merged, n = merge_neighbours(obstacles, free, size, clearance=radius)
+    if n:
+        notes.append(f"{len(obstacles)} obstacles -> {len(merged)}: {n} merged with a neighbour closer than "
+                     f"{size.merge_gap:g} m into simplified polygons (outline1, ...)")
+    fixed_map: list[Obstacle] = []
+    if data.known_map is not None and merged:
+        new, note = not_on_map(data.known_map, merged, data.frame)
+        notes.append(note)
+        if data.known_map.frame == data.frame:
+            cells = map_background(data.known_map, free, size.map_reach)
+            fixed_map, _ = merge_neighbours(cells, free, dataclasses.replace(size, merge_gap=data.known_map.resolution))
+            fixed_map = [dataclasses.replace(o, name=f"map{i}") for i, o in enumerate(fixed_map, 1)]
+            notes.append(f"{data.known_map.topic} is the fixed background: {len(fixed_map)} obstacles within "
+                         f"{size.map_reach:g} m of the driven path; of the sensors' obstacles the "
+                         f"{len(new)} not on the map are kept")
+            merged = new
+            size = dataclasses.replace(size, near=math.inf)   # what the map lacks is the likeliest cause
+    searchable, far = split_near_path(merged, free, radius, size)
+    background = [o.name for o in fixed_map] + far
+    if background:
+        within = "not on the map" if fixed_map else f"within {size.near:g} m of the driven path"
+        notes.append(f"{len(searchable)} obstacle(s) {within} are searchable; "
+                     f"{len(background)} are a fixed background (search: frozen) that the search does not move")
+    return fixed_map + merged, background
 
 
 SYSTEMATIC = 0.2   # share of the driven path under obstacles above which the sensor's mounting is wrong
@@ -197,7 +231,7 @@ def _scenario(data: BagData, obstacles: list[Obstacle], path_as: str, reference_
     if path_as in ("waypoints", "both"):
         waypoints = tuple(Pose(_r(x), _r(y)) for x, y in decimate_path(od[:, 1:3]))
     if path_as in ("reference", "both"):
-        reference = Reference(file=reference_file or "reference.csv")
+        reference = Reference(file=reference_file or "reference.csv", compare="path")  # a real robot's pace differs
     robot = _robot(data, footprint)
     limits = robot.limits
     timeout = _r(max(30.0, math.ceil(max(duration, length / max(limits.max_speed, 0.1)) * 2.0 + 10.0)), 1)
