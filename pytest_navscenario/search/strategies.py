@@ -421,19 +421,23 @@ class Evolve:
         return self.aim
 
     def _target(self, parent: Any, rnd: random.Random, half: float, quarter: int | None,
-                squeeze: bool = False) -> tuple[float, float]:
-        """A point beside the parent's path, in route quarter ``quarter`` (None: anywhere), where
+                squeeze: bool = False, within: tuple | None = None) -> tuple[float, float, float, float]:
+        """(x, y, path x, path y): a point beside the parent's path, in route quarter ``quarter`` (None: anywhere), where
         an obstacle of half size ``half`` would meet the robot: at or a moment after the closest
         approach (time-to-impact placement) when that lies in the quarter, else anywhere there
         (the seed's route where the parent never got). Sideways by up to 1.3 times the robot's
         half width plus ``half`` (overlapping the footprint: the robot must detour); with
         ``squeeze`` by 1.0-1.3 times that, so the obstacle just clears the recorded footprint and
-        narrows the passage there."""
+        narrows the passage there. ``within`` (x0, x1, y0, y1): only path points in that box."""
         route = self._route()
         path = [p for p in parent.path[1:]] or [p[:2] for p in _route_samples(route)]
         if quarter is not None:
             inq = [p for p in path if _quarter(route.fraction(*p)) == quarter]
             path = inq or [p[:2] for p in _route_samples(route) if _quarter(p[2]) == quarter] or path
+        fp = self.space.seed.robot.footprint
+        contact = (fp.radius if fp.shape == "circle" else fp.width / 2) + half
+        if within is not None:   # path points from which the band beside the path is in the box
+            path = [p for k, p in enumerate(path) if _beside_within(path, k, 1.15 * contact, within)] or path
         n = len(path)
         j = rnd.randrange(n)
         if parent.closest and rnd.random() < 0.5 and all(math.isfinite(v) for v in parent.closest[1:]):
@@ -447,11 +451,9 @@ class Evolve:
             a, b = _route_point(route, f - 0.02), _route_point(route, f + 0.02)
         dx, dy = b[0] - a[0], b[1] - a[1]
         norm = math.hypot(dx, dy) or 1.0
-        fp = self.space.seed.robot.footprint
-        robot_half = fp.radius if fp.shape == "circle" else fp.width / 2
         lateral = rnd.uniform(*SQUEEZE_BAND) * rnd.choice((-1.0, 1.0)) if squeeze else rnd.uniform(-1.3, 1.3)
-        lateral *= robot_half + half
-        return path[j][0] - dy / norm * lateral, path[j][1] + dx / norm * lateral
+        lateral *= contact
+        return path[j][0] - dy / norm * lateral, path[j][1] + dx / norm * lateral, path[j][0], path[j][1]
 
     def _place(self, parent: Any, rnd: random.Random, squeeze: bool = False) -> tuple[float, ...]:
         """Move the seed obstacle of a target arm (culprit, quarter) beside the parent's path there."""
@@ -462,8 +464,11 @@ class Evolve:
         obs = space.seed.obstacle(space.params[group[0]].part.split(":", 1)[1])
         half = getattr(obs, "radius", None) or min(getattr(obs, "length", 0.5), getattr(obs, "width", 0.5)) / 2
         x0, x1, y0, y1 = self._reach(group)
-        for _ in range(8):   # a point the obstacle can reach within its bounds
-            tx, ty = self._target(parent, rnd, half, arm[1] if arm else None, squeeze)
+        for _ in range(8):   # a point the obstacle can reach within its bounds (or its mirror image
+            tx, ty, px, py = self._target(parent, rnd, half, arm[1] if arm else None, squeeze,   # across
+                                          (x0, x1, y0, y1))
+            if not (x0 <= tx <= x1 and y0 <= ty <= y1):                                      # the path)
+                tx, ty = 2 * px - tx, 2 * py - ty
             if x0 <= tx <= x1 and y0 <= ty <= y1:
                 break
         for i in group:
@@ -488,7 +493,7 @@ class Evolve:
         if squeeze:   # a box aligned with the path, so its face is where the band says
             values["yaw"] = 0.0
         arm = self._pick_arm(rnd, inserted=True)
-        tx, ty = self._target(parent, rnd, (lo + values["size"]) / 2, arm[1] if arm else None, squeeze)
+        tx, ty, _, _ = self._target(parent, rnd, (lo + values["size"]) / 2, arm[1] if arm else None, squeeze)
         values["x"], values["y"] = tx - (x0 + x1) / 2, ty - (y0 + y1) / 2
         for i in group:
             offsets[i] = values.get(space.params[i].attr, offsets[i])
@@ -517,6 +522,16 @@ class Evolve:
             arm = self.aims.pop(_key(cand.offsets), None)
             if arm is not None and self.targets is not None:
                 self.targets.tell(arm, cand, new_failure)
+
+
+def _beside_within(path: Sequence[tuple[float, float]], k: int, lateral: float, box: tuple) -> bool:
+    """Whether a point ``lateral`` to either side of ``path[k]`` lies in ``box`` (x0, x1, y0, y1)."""
+    a, b = path[max(0, k - 1)], path[min(len(path) - 1, k + 1)]
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    norm = math.hypot(dx, dy) or 1.0
+    x0, x1, y0, y1 = box
+    return any(x0 <= path[k][0] - dy / norm * s <= x1 and y0 <= path[k][1] + dx / norm * s <= y1
+               for s in (lateral, -lateral, 0.0))
 
 
 def _key(offsets: Sequence[float]) -> tuple:
