@@ -8,9 +8,12 @@
   signature (fitness.py) keeps the closest-to-failing candidate of each behaviour; parents are
   picked from it with a penalty on cells picked often, so the budget spreads over ways of
   failing instead of one failure's neighbours. Operators: uniform exploration, Gaussian
-  mutation, and two that use what the episode showed (PHYS-FUZZ style): move an obstacle onto
-  the robot's path at or a moment after its closest approach, or insert a new obstacle there.
-  Operator shares follow which operator has been finding new behaviours and failures.
+  mutation, and three that use what the episode showed (PHYS-FUZZ style): move an obstacle onto
+  the robot's path at or a moment after its closest approach, insert a new obstacle there, or
+  squeeze one just beside the path (narrowing the passage to little more than the footprint).
+  Operator shares follow which operator has been finding new failing signatures; where the
+  aimed operators put an obstacle (which obstacle, which quarter of the route) is a second
+  bandit rewarded for new failing signatures and divided down by re-created ones.
   Hypothesis draws each proposal (operator, parent, random stream) in one seeded Hypothesis run
   per generation.
 
