@@ -234,19 +234,6 @@ def test_target_bandit_moves_on_from_a_place_that_has_failed():
     assert picks.count(("crate", 2)) > 150
 
 
-def test_aimed_child_of_a_failure_that_keeps_its_culprit_is_not_simulated(lane):
-    space = SearchSpace(lane)
-    evo = Evolve(space, _report(space), 10, 0)
-    ctx = EvalContext(space, Straight)
-    parent = evaluate_candidate(ctx, _values(space, **{"obstacles.crate__dx": -1.5}), "test")
-    assert parent.failed and parent.culprit == "crate"
-    keeps = _values(space, **{"obstacles.crate__dx": -1.5, "inserted[0]__on": 1.0, "inserted[0]__y": 2.0})
-    moves = _values(space, **{"obstacles.crate__dx": 0.0, "inserted[0]__on": 1.0, "inserted[0]__y": 2.0})
-    assert evo._repeats(parent, keeps, "insert")       # the crate still stops it first: a repeat
-    assert not evo._repeats(parent, moves, "insert")   # the crate moved away: something new may happen
-    assert not evo._repeats(parent, keeps, "mutate")   # a large Gaussian step may still fail otherwise
-
-
 # -- hill-climb -------------------------------------------------------------------------------------
 def test_hillclimb_lowers_clearance_monotonically(lane):
     space = SearchSpace(lane, {"insert": 0, "remove": 0})
