@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
+PAPER_SEEDS = ("boxes1", "boxes2", "corridor", "cylinders", "L-corridor")
 
 
 def variants(seed, n: int, rng: np.random.Generator):
@@ -68,6 +69,8 @@ def write_suite(folder: Path, n: int) -> None:
         shutil.rmtree(folder)
     rng = np.random.default_rng(0)
     for path in sorted((ROOT / "scenarios").glob("*.yaml")):
+        if path.stem not in PAPER_SEEDS:    # the seeds of issue 12 (moving obstacles) have their own pictures
+            continue
         seed = load_scenario(path)
         family = folder / seed.name
         family.mkdir(parents=True)

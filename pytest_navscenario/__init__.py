@@ -12,6 +12,7 @@ glue at the top down to the scenario model (imports only point down, checked in 
 
     plugin/  cli/          pytest hooks, options, items; the ``navscenario`` console script
     search/  report/  ros/ failure search and freezing; results, compare, plots, HTML; bags, imports
+    dispatch/              batches of episodes on this machine's cores or as Ray tasks
     harness/               run one scenario against one subject; the planner conformance check
     verdict/               oracle (outcome), metrics, shortest paths, the episode result
     sim/                   MuJoCo world, control loop, lidar, safety layer (the only mujoco user)
@@ -21,10 +22,8 @@ glue at the top down to the scenario model (imports only point down, checked in 
 """
 from __future__ import annotations
 
-import importlib
-from typing import Any
-
 from . import _compat
+from .core.lazy import lazy_exports
 
 __version__ = "0.1.0"
 
@@ -49,9 +48,4 @@ __all__ = sorted(_EXPORTS) + ["__version__"]
 
 _compat.install()
 
-
-def __getattr__(name: str) -> Any:
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module 'pytest_navscenario' has no attribute {name!r}")
-    return getattr(importlib.import_module(f".{module}", __name__), name)
+__getattr__ = lazy_exports(__name__, _EXPORTS)

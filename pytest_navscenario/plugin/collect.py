@@ -240,6 +240,7 @@ class ScenarioItem(pytest.Item):
         self.repeat = repeat          # --nav-repeat index: 0 .. N-1
         self.family_from_folder = False  # the family is the folder's (no family: in the YAML)
         self.nav_result: Any = None   # the EpisodeResult, until the call report has taken it
+        self.nav_pending: Any = None  # with --nav-ray: the submitted episode (dispatch.Pending)
 
     @property
     def rel_path(self) -> str:
@@ -251,17 +252,34 @@ class ScenarioItem(pytest.Item):
         from ..verdict.feasibility import impassable_reason
         reason = impassable_reason(self.scenario)
         if reason is not None:
+            self.nav_pending = None
             from ..core.errors import ImpassableScenarioError
             raise ImpassableScenarioError(f"{self.rel_path}: {reason}")
 
-    def runtest(self) -> None:
-        from ..harness.runner import run_scenario
+    def episode_job(self, keep_trajectory: str) -> Any:
+        """This item's episode as a dispatch job (what runtest runs in place without --nav-ray)."""
+        import os
+
+        from ..dispatch.jobs import EpisodeJob
 
         state = get_state(self.config)
-        result = run_scenario(self.scenario, state.subject.runner_arg,
-                              seed=repeat_seed(state.settings.seed, self.repeat),
-                              tick_limit=state.settings.tick_limit,
-                              reset_timeout=state.settings.reset_timeout)
+        return EpisodeJob(self.scenario, state.subject.runner_arg,
+                          seed=repeat_seed(state.settings.seed, self.repeat),
+                          tick_limit=state.settings.tick_limit, keep_trajectory=keep_trajectory,
+                          cwd=os.getcwd(), reset_timeout=state.settings.reset_timeout)
+
+    def runtest(self) -> None:
+        pending, self.nav_pending = self.nav_pending, None
+        if pending is not None:   # submitted at the start of the run loop (--nav-ray)
+            result = pending.result()
+        else:
+            from ..harness.runner import run_scenario
+
+            state = get_state(self.config)
+            result = run_scenario(self.scenario, state.subject.runner_arg,
+                                  seed=repeat_seed(state.settings.seed, self.repeat),
+                                  tick_limit=state.settings.tick_limit,
+                                  reset_timeout=state.settings.reset_timeout)
         self.nav_result = result
         m = result.metrics
         self.user_properties.extend([

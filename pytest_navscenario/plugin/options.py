@@ -46,6 +46,12 @@ OPTIONS = (
     ("--nav-repeat", "nav_repeat",
      "run each scenario N times with different noise seeds (repeat 0 keeps the run's seed) and "
      "report the scenarios whose outcomes differ (flaky) with per-outcome counts. Default 1."),
+    ("--nav-ray", "nav_ray",
+     "run the episodes as Ray tasks (needs pip install \"pytest-navscenario[ray]\"): ADDRESS 'auto' "
+     "starts a local Ray instance (with -n N: N CPUs, else every core), HOST:PORT joins a running cluster "
+     "(`ray start --head` prints the address). Items still report one per scenario in the usual "
+     "order, with the same results as a serial run. Every node must have pytest-navscenario and "
+     "the subject; this is checked before any episode. Default: none."),
 )
 
 
@@ -66,7 +72,7 @@ def ini_value(config: pytest.Config, name: str, expected: str = "") -> object:
     wrong TOML type) turned into a usage error that names the option and what it expects."""
     try:
         return config.getini(name)
-    except (ValueError, TypeError) as exc:
+    except (ValueError, TypeError, pytest.UsageError) as exc:  # pytest >= 9.1 raises UsageError
         hint = f"; expected {expected}" if expected else ""
         raise pytest.UsageError(f"ini option {name}: {exc}{hint}") from None
 
@@ -77,7 +83,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     # a metavar shows the accepted values ({a,b}) or a unit (N, SECONDS, PATH, DIR, SPEC, NAME)
     metavars = {"nav_subject": "SPEC", "nav_seed": "N", "nav_results": "PATH", "nav_artifacts": "DIR",
                 "nav_summary": "{yes,no}", "nav_tick_limit": "SECONDS", "nav_repeat": "N",
-                "nav_reset_timeout": "SECONDS"}
+                "nav_reset_timeout": "SECONDS", "nav_ray": "ADDRESS"}
     for opt, ini, text in OPTIONS:
         group.addoption(opt, dest=ini, default=None, metavar=metavars[ini], help=text + f" [ini: {ini}]")
     parser.addini("nav_subject", helps["nav_subject"], default="")
@@ -90,6 +96,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addini("nav_repeat", helps["nav_repeat"], type=ini_type("int"), default=1)
     parser.addini("nav_reset_timeout", helps["nav_reset_timeout"], type=ini_type("float"),
                   default=DEFAULT_RESET_TIMEOUT)
+    parser.addini("nav_ray", helps["nav_ray"], default="")
     parser.addini("nav_scenario_glob",
                   "file name patterns of scenario files (space separated); files matching them are "
                   "collected when they are a YAML mapping with 'version' and 'mission' keys "
@@ -112,6 +119,7 @@ class Settings:
     globs: tuple[str, ...]
     scenario_paths: tuple[Path, ...]
     reset_timeout: float = DEFAULT_RESET_TIMEOUT   # s an exec: planner may take to answer reset
+    ray: str | None = None            # --nav-ray: "auto" or "HOST:PORT"; None: no Ray
 
 
 _EXPECTED = {"nav_seed": "a whole number >= 0", "nav_summary": "yes or no (true or false)",
@@ -210,4 +218,22 @@ def read_settings(config: pytest.Config) -> Settings:
                                 f"reset, got {raw!r} (e.g. --nav-reset-timeout=30)")
     return Settings(subject_spec=subject, seed=seed, results=results, artifacts=artifacts,
                     summary=summary, tick_limit=tick_limit, repeat=repeat, globs=globs,
-                    scenario_paths=paths, reset_timeout=reset_timeout)
+                    scenario_paths=paths, reset_timeout=reset_timeout, ray=read_ray_address(config))
+
+
+_HOST_PORT = re.compile(r"^(ray://)?[A-Za-z0-9_.\-]+:[0-9]{1,5}$|^(ray://)?\[[0-9A-Fa-f:]+\]:[0-9]{1,5}$")
+
+
+def read_ray_address(config: pytest.Config) -> str | None:
+    """--nav-ray / ini nav_ray: "auto", "HOST:PORT" or None (off). UsageError otherwise."""
+    raw, where, _ = _value(config, "nav_ray")
+    value = raw.strip()
+    if value.lower() in ("", "none", "no", "off"):
+        return None
+    if value.lower() == "auto":
+        return "auto"
+    if not _HOST_PORT.match(value):
+        raise pytest.UsageError(f"{where}: expected 'auto' (start a local Ray instance) or the address "
+                                f"of a running Ray cluster as HOST:PORT (e.g. 10.0.0.5:6379, printed by "
+                                f"`ray start --head`), got {raw!r}")
+    return value

@@ -1,12 +1,14 @@
 """pytest hooks of the failure search: ``pytest --navsearch boxes1 --budget 100``.
 
 With ``--navsearch`` the session runs one search item per seed name instead of the scenario
-items (so ``-n 2`` runs two searches in parallel, one per worker). Workers attach the search
-result to the call report as ``report.navsearch`` (plain data); the controller (or the only
-process) writes the frozen failures, the search log and the JUnit file, so workers never race
-on a file. Progress is shown live in serial runs through the terminal reporter with capture
-suspended (as live logging does): rewritten in place on a terminal, a plain line every tenth of
-the budget (and on each new failure) in a CI log; under xdist each search reports when done.
+items. ``-n N`` does not start xdist workers here: this process runs the searches one after the
+other, each evaluating its generations on N local worker processes (plugin/parallel.py), so one
+search uses every core with the results of a serial run; ``--nav-ray`` evaluates them as Ray
+tasks. The search result goes on the call report as ``report.navsearch`` (plain data), from
+which this process writes the frozen failures, the search log and the JUnit file (also after
+Ctrl-C: what was found is kept). Progress is shown live through the terminal reporter with
+capture suspended (as live logging does): rewritten in place on a terminal, a plain line every
+tenth of the budget (and on each new failure) in a CI log.
 """
 from __future__ import annotations
 
@@ -292,16 +294,19 @@ class NavSearchItem(pytest.Item):
 
     def runtest(self) -> None:
         from ..search.engine import run_search
+        from .parallel import search_subject_and_evaluator
         from .state import get_state
 
         core = get_state(self.config)
         state = self.config.stash[STATE_KEY]
         s, job = state.settings, state.jobs[self.job_name]
         subject = core.subject.spec or core.subject.label
-        report = run_search(job.seed, core.subject.factory, budget=s.budget, seed_value=s.seed,
+        factory, evaluator = search_subject_and_evaluator(self.config)   # -n N / --nav-ray: workers
+        report = run_search(job.seed, factory, budget=s.budget, seed_value=s.seed,
                             strategy=s.strategy, shrink_budget=s.shrink_budget, space=job.space,
                             subject=subject, episode_seed=core.settings.seed, stuck_after=s.stuck_after,
-                            progress=None if state.is_worker else _Progress(self.config, job.name, s.budget))
+                            progress=None if state.is_worker else _Progress(self.config, job.name, s.budget),
+                            evaluator=evaluator)
         self.navsearch_payload = report_to_payload(report)
         if report.interrupted and report.stop_reason.startswith("interrupted"):
             self.session.shouldstop = (f"navsearch {job.name} was cut short by Ctrl-C after "

@@ -22,6 +22,8 @@ class NavState:
     results_error: str | None = None   # controller: why the results file could not be written
     not_scenarios: list[tuple[str, str]] = field(default_factory=list)   # (path, why): skipped.py
     scenario_folders: set[str] = field(default_factory=set)   # folders holding collected scenarios
+    executor: Any = None          # controller with --nav-ray: where episodes run (dispatch/)
+    executor_notes: list[str] = field(default_factory=list)       # header lines about it
 
 
 STATE_KEY = pytest.StashKey[NavState]()

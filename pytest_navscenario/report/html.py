@@ -108,10 +108,12 @@ def _anchor(rec: dict[str, Any]) -> str:
 
 def view_data(result: Any, max_points: int = 400) -> dict[str, Any] | None:
     """A compact, JSON-able picture of one episode for the report's interactive viewer: obstacle
-    outlines, footprint, goal, and the poses and speeds at up to ``max_points`` instants."""
+    outlines, footprint, goal, and the poses and speeds at up to ``max_points`` instants; moving
+    obstacles (``mov``: index into ``obs``, offsets dx/dy at the same instants) move with the slider."""
     import numpy as np
 
     from ..scenario.geometry import obstacle_polygon
+    from ..scenario.motion import displacement, tracks
 
     traj = result.trajectory
     n = len(traj.t)
@@ -122,7 +124,13 @@ def view_data(result: Any, max_points: int = 400) -> dict[str, Any] | None:
     vel = np.asarray(traj.velocity, dtype=float)[idx]
     s = result.scenario
     fp = s.robot.footprint
+    times = np.asarray(traj.t, dtype=float)[idx]
+    mov = []
+    for j, track in tracks(s.obstacles).items():
+        off = displacement(track, times)
+        mov.append({"i": j, "dx": np.round(off[:, 0], 3).tolist(), "dy": np.round(off[:, 1], 3).tolist()})
     return {
+        "mov": mov,
         "t": np.round(np.asarray(traj.t, dtype=float)[idx], 2).tolist(),
         "x": np.round(pose[:, 0], 3).tolist(), "y": np.round(pose[:, 1], 3).tolist(),
         "yaw": np.round(pose[:, 2], 3).tolist(), "v": np.round(np.hypot(vel[:, 0], vel[:, 1]), 2).tolist(),

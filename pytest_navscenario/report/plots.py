@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any, Sequence
 import numpy as np
 
 from ..scenario.geometry import footprint_polygon, footprint_polygons, obstacle_polygon
+from ..scenario.motion import Track, displacement, is_moving
 from ..verdict.result import EpisodeResult
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -91,15 +92,16 @@ def _gap(scenario: Any, metrics: Any) -> tuple[float, str, str]:
     else:
         from ..verdict.paths import min_obstacle_gap
         gap = min_obstacle_gap(scenario)
-    if gap[0] > 1e-6 or not 3 <= len(scenario.obstacles) <= MAX_GAP_SEARCH:
+    still = [o for o in scenario.obstacles if not is_moving(o)]
+    if gap[0] > 1e-6 or not 3 <= len(still) <= MAX_GAP_SEARCH:
         return gap
-    polys = [obstacle_polygon(o) for o in scenario.obstacles]
+    polys = [obstacle_polygon(o) for o in still]
     best = (math.inf, "", "")
     for i in range(len(polys)):
         for j in range(i + 1, len(polys)):
             d = polys[i].distance(polys[j])
             if 1e-6 < d < best[0]:
-                best = (d, scenario.obstacles[i].name, scenario.obstacles[j].name)
+                best = (d, still[i].name, still[j].name)
     return best
 
 
@@ -116,14 +118,23 @@ def _extent(result: EpisodeResult, margin: float = 0.8) -> tuple[float, float, f
     s = result.scenario
     xs = [s.mission.start.x, s.mission.goal.x] + [w.x for w in s.mission.waypoints]
     ys = [s.mission.start.y, s.mission.goal.y] + [w.y for w in s.mission.waypoints]
+    end = float(result.trajectory.t[-1]) if len(result.trajectory.t) else 0.0
     for obs in s.obstacles:
         x0, y0, x1, y1 = obstacle_polygon(obs).bounds
         xs += [x0, x1]
         ys += [y0, y1]
+        if is_moving(obs):     # where it went during the episode
+            x0, y0, x1, y1 = obstacle_polygon_at(obs, end).bounds
+            xs += [x0, x1]
+            ys += [y0, y1]
     if len(result.trajectory.t):
         pose = np.asarray(result.trajectory.pose)
         xs += [float(pose[:, 0].min()), float(pose[:, 0].max())]
         ys += [float(pose[:, 1].min()), float(pose[:, 1].max())]
+    believed = getattr(result.trajectory, "believed", None)
+    if believed is not None and len(believed):
+        xs += [float(np.min(believed[:, 0])), float(np.max(believed[:, 0]))]
+        ys += [float(np.min(believed[:, 1])), float(np.max(believed[:, 1]))]
     return min(xs) - margin, max(xs) + margin, min(ys) - margin, max(ys) + margin
 
 
@@ -143,8 +154,10 @@ def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
     """
     s = result.scenario
     draw_obstacles(ax, s, involved=_involved_obstacles(result))
+    draw_moving_obstacles(ax, result)
     _draw_shortest_path(ax, s)
     mapping = _draw_footprint_path(ax, result, norm=norm, outline_every=outline_every)
+    _draw_believed(ax, result)
     _draw_mission(ax, s.mission)
     _draw_min_clearance(ax, result)
     _draw_narrowest_gap(ax, s, result.metrics)
@@ -165,21 +178,106 @@ def draw_obstacles(ax: "Axes", scenario: Any, *, involved: set[str] = frozenset(
     """The obstacles as grey polygons, with their names (on maps of more than
     MAX_NAMED_OBSTACLES obstacles, only the ``involved`` ones are named).
 
-    This is the one place that draws obstacles: a new kind of obstacle (moving ones, believed
-    versus true positions) is drawn by extending this step, not ``draw_episode``.
+    This is the one place that draws the static obstacles; moving ones are drawn by
+    ``draw_moving_obstacles`` (they need the episode's times), the step after this one.
     """
     from matplotlib.collections import PolyCollection
 
     # Collections, not one patch each: patches re-run autoscaling per patch (slow).
     polys = [obstacle_polygon(obs) for obs in scenario.obstacles]
-    ax.add_collection(PolyCollection([np.asarray(p.exterior.coords) for p in polys], closed=True,
+    from ..sim.world import LIDAR_HEIGHT
+
+    still = [(obs, p) for obs, p in zip(scenario.obstacles, polys) if not is_moving(obs)]
+    glass = [p for obs, p in still if not getattr(obs, "visible_to_lidar", True)]
+    seen = [p for obs, p in still if getattr(obs, "visible_to_lidar", True) and obs.height > LIDAR_HEIGHT]
+    low = [p for obs, p in still if getattr(obs, "visible_to_lidar", True) and obs.height <= LIDAR_HEIGHT]
+    if glass:   # visible_to_lidar: false (glass): see-through, dashed
+        ax.add_collection(PolyCollection([np.asarray(p.exterior.coords) for p in glass], closed=True,
+                                         facecolors="#b3e5fc", edgecolors="#0277bd", linewidths=1.0,
+                                         linestyles="--", alpha=0.8, zorder=2,
+                                         label="unseen by the lidar (glass)"), autolim=False)
+    ax.add_collection(PolyCollection([np.asarray(p.exterior.coords) for p in seen], closed=True,
                                      facecolors="#9e9e9e", edgecolors="#424242", linewidths=1.0,
                                      zorder=2), autolim=False)
+    if low:     # the lidar cannot see them (they still collide): hatched, in the legend
+        ax.add_collection(PolyCollection([np.asarray(p.exterior.coords) for p in low], closed=True,
+                                         facecolors="#e0e0e0", edgecolors="#424242", linewidths=1.0,
+                                         hatch="////", zorder=2,
+                                         label=f"below the lidar ({LIDAR_HEIGHT:g} m): unseen"),
+                          autolim=False)
     for obs, poly in zip(scenario.obstacles, polys):
         if len(polys) > MAX_NAMED_OBSTACLES and obs.name not in involved:
             continue
-        ax.annotate(obs.name, (poly.centroid.x, poly.centroid.y), ha="center", va="center",
+        if is_moving(obs):
+            continue    # named at its key moments (draw_moving_obstacles)
+        at = poly.centroid if poly.contains(poly.centroid) else poly.representative_point()  # a U's notch
+        ax.annotate(obs.name, (at.x, at.y), ha="center", va="center",
                     fontsize=7, zorder=8, bbox=_HALO)
+
+
+MOVING_COLOUR = "#e65100"
+
+
+def obstacle_polygon_at(obs: Any, time: float) -> Any:
+    """The obstacle's outline where it was at ``time`` (moving obstacles translate)."""
+    poly = obstacle_polygon(obs)
+    if not is_moving(obs):
+        return poly
+    from shapely.affinity import translate
+
+    dx, dy = displacement(Track(obs), np.array([time]))[0]
+    return translate(poly, float(dx), float(dy))
+
+
+def moving_key_moments(result: EpisodeResult, obs: Any) -> list[tuple[float, str]]:
+    """(time, label) of the moments to draw a moving obstacle at: the start, its closest approach
+    to the robot, and the end (labelled with the collision or safety stop that ended it)."""
+    traj = result.trajectory
+    end = float(traj.t[-1]) if len(traj.t) else 0.0
+    moments = [(0.0, "t=0")]
+    if len(traj.t) > 1:
+        t = np.asarray(traj.t, dtype=float)
+        centre = Track(obs).positions(t)
+        pose = np.asarray(traj.pose, dtype=float)
+        k = int(np.argmin(np.hypot(centre[:, 0] - pose[:, 0], centre[:, 1] - pose[:, 1])))
+        if 0 < k < len(t) - 1:
+            moments.append((float(t[k]), f"closest t={t[k]:.1f}s"))
+    why = ("collision" if result.collision is not None else
+           "stop" if result.safety_stop is not None else "end")
+    moments.append((end, f"{why} t={end:.1f}s"))
+    return moments
+
+
+def draw_moving_obstacles(ax: "Axes", result: EpisodeResult) -> None:
+    """Each moving obstacle: the way it went during the episode (dotted, from where it stood
+    to where it was at the end) and its outline at the key moments (moving_key_moments), the
+    last one filled, each labelled with its name and time."""
+    from matplotlib.collections import PolyCollection
+
+    traj = result.trajectory
+    end = float(traj.t[-1]) if len(traj.t) else 0.0
+    for obs in result.scenario.obstacles:
+        if not is_moving(obs):
+            continue
+        times = np.linspace(0.0, end, max(2, int(end / 0.05) + 1))
+        way = Track(obs).positions(times)
+        ax.plot(way[:, 0], way[:, 1], ls=":", lw=1.4, color=MOVING_COLOUR, zorder=3,
+                label="moving obstacle's way" if not ax.get_legend_handles_labels()[1].count(
+                    "moving obstacle's way") else None)
+        moments = moving_key_moments(result, obs)
+        polys = [obstacle_polygon_at(obs, t) for t, _ in moments]
+        rings = [np.asarray(p.exterior.coords) for p in polys]
+        ax.add_collection(PolyCollection(rings[:-1], closed=True, facecolors="none",
+                                         edgecolors=MOVING_COLOUR, linewidths=0.9, linestyles="--",
+                                         zorder=5), autolim=False)
+        ax.add_collection(PolyCollection(rings[-1:], closed=True, facecolors="#ffcc80",
+                                         edgecolors=MOVING_COLOUR, linewidths=1.2, zorder=5),
+                          autolim=False)
+        for k, ((t, label), poly) in enumerate(zip(moments, polys)):
+            ax.annotate(f"{obs.name} {label}" if k == 0 else label,
+                        (poly.centroid.x, poly.centroid.y), xytext=(0, (9, -15, 20)[k % 3]),
+                        textcoords="offset points", ha="center", fontsize=6, color=MOVING_COLOUR,
+                        zorder=8, bbox=_HALO)
 
 
 def _draw_shortest_path(ax: "Axes", scenario: Any) -> None:
@@ -212,6 +310,23 @@ def _draw_footprint_path(ax: "Axes", result: EpisodeResult, *, norm: Any,
     mapping = _draw_speed_path(ax, pose, _speed(result), norm)
     _draw_time_labels(ax, pose, t, duration)
     return mapping
+
+
+def _draw_believed(ax: "Axes", result: EpisodeResult) -> None:
+    """With localisation drift: the path the planner believed it drove (dashed purple, per tick)
+    beside the true one, and at the end a line from where it believed it was to where it was."""
+    believed = getattr(result.trajectory, "believed", None)
+    if believed is None or not len(believed):
+        return
+    b = np.asarray(believed, dtype=float)
+    ax.plot(b[:, 0], b[:, 1], ls="--", lw=1.4, color="#7b1fa2", zorder=6,
+            label="believed pose (localisation drift)")
+    pose = np.asarray(result.trajectory.pose, dtype=float)
+    ax.plot([b[-1, 0], pose[-1, 0]], [b[-1, 1], pose[-1, 1]], ls=":", lw=1.0, color="#7b1fa2", zorder=6)
+    ax.plot(b[-1, 0], b[-1, 1], marker="o", ms=5, mfc="white", mec="#7b1fa2", zorder=9, ls="none")
+    err = math.hypot(b[-1, 0] - pose[-1, 0], b[-1, 1] - pose[-1, 1])
+    ax.annotate(f"believed: {err:.2f} m off", (b[-1, 0], b[-1, 1]), xytext=(6, -10),
+                textcoords="offset points", fontsize=6, color="#7b1fa2", zorder=11, bbox=_HALO)
 
 
 def _draw_swept_area(ax: "Axes", fp: Any, pose: np.ndarray) -> None:
@@ -297,7 +412,7 @@ def _draw_min_clearance(ax: "Axes", result: EpisodeResult) -> None:
     if p is None:
         p = np.array([m.min_clearance_x, m.min_clearance_y, math.radians(s.mission.start.yaw)])
     try:
-        obstacle = obstacle_polygon(s.obstacle(m.min_clearance_obstacle))
+        obstacle = obstacle_polygon_at(s.obstacle(m.min_clearance_obstacle), m.min_clearance_time)
     except KeyError:
         return
     footprint = footprint_polygon(s.robot.footprint, *p)
@@ -338,8 +453,9 @@ def _draw_events(ax: "Axes", result: EpisodeResult) -> None:
     """Where the episode ended badly: the collision's contact point, the safety stop's pose."""
     if result.collision is not None:
         c = result.collision
+        who = "" if getattr(c, "robot_moving", True) else ", robot standing"
         ax.plot(c.x, c.y, marker="X", ms=12, color="#b71c1c", mec="white", zorder=12, ls="none",
-                label=f"collision t={c.time:.1f} s")
+                label=f"collision t={c.time:.1f} s{who}")
     if result.safety_stop is not None:
         p = _pose_at(result, result.safety_stop.time)
         if p is not None:

@@ -19,6 +19,8 @@ Record fields (format_version 1)::
     passed            outcome == success
     message           one line: why this outcome
     metrics           Metrics.as_dict(); non-finite floats written as null (strict JSON)
+    collision         null, or who hit whom: {"obstacle", "time", "robot_moving" (false: the robot
+                      stood still and was hit), "robot_speed", "obstacle_speed"} (m/s)
     wall_time         s
 
 Files are written whole and atomically (``atomic_write_text``), so an interrupted run leaves
@@ -73,8 +75,17 @@ def make_record(result: EpisodeResult, *, nodeid: str, path: str, repeat: int = 
         "passed": result.passed,
         "message": result.message,
         "metrics": json_safe(result.metrics.as_dict()),
+        "collision": _collision_record(result),
         "wall_time": result.wall_time,
     }
+
+
+def _collision_record(result: EpisodeResult) -> dict[str, Any] | None:
+    c = result.collision
+    if c is None:
+        return None
+    return {"obstacle": c.obstacle, "time": c.time, "robot_moving": bool(c.robot_moving),
+            "robot_speed": c.robot_speed, "obstacle_speed": c.obstacle_speed}
 
 
 def write_results(path: str | os.PathLike, records: Iterable[dict[str, Any]]) -> None:

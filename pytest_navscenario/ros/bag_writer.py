@@ -14,7 +14,9 @@ topic                            type                                rate
 /cmd_vel                         geometry_msgs/Twist (commanded)     control ticks
 /goal_pose                       geometry_msgs/PoseStamped           once, latched
 /navscenario/waypoints           nav_msgs/Path                       once, latched
-/navscenario/obstacles           visualization_msgs/MarkerArray      once, latched
+/navscenario/obstacles           visualization_msgs/MarkerArray      once, latched (static ones)
+/navscenario/moving_obstacles    visualization_msgs/MarkerArray      with /odom, only when
+                                 (moving obstacles where they are)   obstacles move
 /navscenario/result              std_msgs/String (JSON)              once, at the end
 /navscenario/scenario            std_msgs/String (scenario YAML)     once, latched
 ===============================  ==================================  =====================
@@ -39,7 +41,7 @@ import numpy as np
 from ..core.errors import NavScenarioError
 from ..verdict.result import EpisodeResult
 from ..core.files import json_safe
-from ..scenario.model import BoxObstacle, CylinderObstacle
+from ..scenario.model import BoxObstacle, CylinderObstacle, MeshObstacle, PolygonObstacle
 
 FORMATS = ("mcap", "sqlite3", "ros1")
 ODOM_FRAME, BASE_FRAME, LASER_FRAME = "odom", "base_link", "laser"
@@ -57,6 +59,7 @@ TOPICS: dict[str, str] = {
     "/navscenario/result": "std_msgs/msg/String",
     "/navscenario/scenario": "std_msgs/msg/String",
 }
+MOVING_TOPIC = "/navscenario/moving_obstacles"     # only in bags of episodes with moving obstacles
 LATCHED = ("/tf_static", "/goal_pose", "/navscenario/waypoints", "/navscenario/obstacles",
            "/navscenario/result", "/navscenario/scenario")
 
@@ -196,6 +199,7 @@ def _messages(result: EpisodeResult, ros1: bool):
     idx = list(range(0, len(t), stride))
     if idx and idx[-1] != len(t) - 1:
         idx.append(len(t) - 1)  # the final pose always makes it into the bag
+    yield from _moving_markers(result, t[idx])
     for i in idx:
         x, y, yaw = (float(v) for v in pose[i])
         ti = float(t[i])
@@ -233,25 +237,74 @@ def _messages(result: EpisodeResult, ros1: bool):
         "data": json.dumps(result_summary(result), sort_keys=True, allow_nan=False)}
 
 
-_COLOURS = {"box": (0.55, 0.55, 0.6), "cylinder": (0.45, 0.5, 0.65)}
+_COLOURS = {"box": (0.55, 0.55, 0.6), "cylinder": (0.45, 0.5, 0.65), "polygon": (0.5, 0.55, 0.55),
+            "mesh": (0.6, 0.5, 0.45), "moving_obstacles": (0.95, 0.55, 0.15)}
 
 
 def _markers(result: EpisodeResult) -> list[dict[str, Any]]:
     hit = {result.collision.obstacle} if result.collision else set()
     if result.safety_stop:
         hit.add(result.safety_stop.obstacle)
-    markers = []
-    for i, obs in enumerate(result.scenario.obstacles):
-        r, g, b = (0.9, 0.2, 0.15) if obs.name in hit else _COLOURS[obs.kind]
-        common = {"header": {"frame_id": ODOM_FRAME}, "ns": "obstacles", "id": i,
-                  "action": 0, "color": {"r": r, "g": g, "b": b, "a": 0.8}, "text": obs.name}
-        if isinstance(obs, BoxObstacle):
-            markers.append({**common, "type": 1, "pose": _pose(obs.x, obs.y, obs.yaw_rad, obs.height / 2),
-                            "scale": {"x": obs.length, "y": obs.width, "z": obs.height}})
-        elif isinstance(obs, CylinderObstacle):
-            markers.append({**common, "type": 3, "pose": _pose(obs.x, obs.y, 0.0, obs.height / 2),
-                            "scale": {"x": 2 * obs.radius, "y": 2 * obs.radius, "z": obs.height}})
-    return markers
+    return [_marker(obs, i, obs.name in hit, "obstacles", obs.x, obs.y)
+            for i, obs in enumerate(result.scenario.obstacles) if getattr(obs, "motion", None) is None]
+
+
+def _marker(obs: Any, i: int, hit: bool, ns: str, x: float, y: float, stamp: float | None = None
+            ) -> dict[str, Any]:
+    """A CUBE or CYLINDER marker of the obstacle with its centre at (x, y); red if it was hit."""
+    r, g, b = (0.9, 0.2, 0.15) if hit else _COLOURS[ns if ns in _COLOURS else obs.kind]
+    header: dict[str, Any] = {"frame_id": ODOM_FRAME}
+    if stamp is not None:
+        header["stamp"] = _stamp(stamp)
+    common = {"header": header, "ns": ns, "id": i,
+              "action": 0, "color": {"r": r, "g": g, "b": b, "a": 0.8}, "text": obs.name}
+    if isinstance(obs, BoxObstacle):
+        return {**common, "type": 1, "pose": _pose(x, y, obs.yaw_rad, obs.height / 2),
+                "scale": {"x": obs.length, "y": obs.width, "z": obs.height}}
+    if isinstance(obs, (PolygonObstacle, MeshObstacle)):     # TRIANGLE_LIST: the prism's faces
+        return {**common, "type": 11, "pose": _pose(x, y, obs.yaw_rad, 0.0),
+                "scale": {"x": 1.0, "y": 1.0, "z": 1.0}, "points": _prism_triangles(obs)}
+    return {**common, "type": 3, "pose": _pose(x, y, 0.0, obs.height / 2),
+            "scale": {"x": 2 * obs.radius, "y": 2 * obs.radius, "z": obs.height}}
+
+
+def _prism_triangles(obs: Any) -> list[dict[str, float]]:
+    """The triangles (as a flat list of points, three each) of a polygon or mesh obstacle's prism in
+    its own frame: its convex parts' top and bottom fans and the outline's walls."""
+    from ..scenario.geometry import convex_parts_local, outline_points
+
+    h = float(obs.height)
+    pts: list[dict[str, float]] = []
+
+    def p(x: float, y: float, z: float) -> dict[str, float]:
+        return {"x": float(x), "y": float(y), "z": z}
+
+    for part in convex_parts_local(tuple(outline_points(obs))):
+        for k in range(1, len(part) - 1):
+            for z in (0.0, h):
+                pts += [p(*part[0], z), p(*part[k], z), p(*part[k + 1], z)]
+    ring = list(outline_points(obs))
+    for (ax, ay), (bx, by) in zip(ring, ring[1:] + ring[:1]):
+        pts += [p(ax, ay, 0.0), p(bx, by, 0.0), p(bx, by, h), p(ax, ay, 0.0), p(bx, by, h), p(ax, ay, h)]
+    return pts
+
+
+def _moving_markers(result: EpisodeResult, times: np.ndarray):
+    """The moving obstacles where they are, at the /odom instants (one MarkerArray each; the
+    same id per obstacle, so a viewer moves it instead of adding one)."""
+    from ..scenario.motion import tracks
+
+    moving = tracks(result.scenario.obstacles)
+    if not moving:
+        return
+    hit_at = result.collision.time if result.collision else math.inf
+    hit_name = result.collision.obstacle if result.collision else ""
+    where = {j: track.positions(times) for j, track in moving.items()}
+    for k, tk in enumerate(times.tolist()):
+        yield MOVING_TOPIC, tk, {"markers": [
+            _marker(result.scenario.obstacles[j], j, hit_name == result.scenario.obstacles[j].name
+                    and tk >= hit_at - 1e-9, "moving_obstacles", float(xy[k, 0]), float(xy[k, 1]), tk)
+            for j, xy in where.items()]}
 
 
 # ---------------------------------------------------------------- writing
@@ -293,7 +346,10 @@ def _write(result: EpisodeResult, path: Path, fmt: str) -> None:
         serialize = ts.serialize_cdr
     with writer:
         conns = {}
-        for topic, msgtype in TOPICS.items():
+        topics = dict(TOPICS)
+        if any(getattr(o, "motion", None) is not None for o in result.scenario.obstacles):
+            topics[MOVING_TOPIC] = TOPICS["/navscenario/obstacles"]
+        for topic, msgtype in topics.items():
             if ros1:
                 conns[topic] = writer.add_connection(topic, msgtype, typestore=ts,
                                                      latching=1 if topic in LATCHED else None)
@@ -302,7 +358,7 @@ def _write(result: EpisodeResult, path: Path, fmt: str) -> None:
                 conns[topic] = writer.add_connection(topic, msgtype, typestore=ts,
                                                      offered_qos_profiles=qos)
         for topic, time_s, values in msgs:
-            msgtype = TOPICS[topic]
+            msgtype = topics[topic]
             data = serialize(build(ts, msgtype, values), msgtype)
             writer.write(conns[topic], int(round(time_s * 1e9)), data)
 

@@ -4,10 +4,14 @@
   obstacles, and start, goal and waypoints from the QGroundControl mission file beside it
   (see ``aerialist.py``); every key not carried over is listed with its file and line.
 * ``navscenario import sdf world.world --start x,y,yaw --goal x,y,yaw -o s.yaml``: a Gazebo SDF
-  world. The box and cylinder collision geometry of static models becomes obstacles, with the
-  model, link and collision poses composed (a world ``<state>`` pose overrides the model's,
-  as Gazebo does on load). Planes are ignored; everything else (meshes, spheres, includes,
-  tilted shapes, non-static models) is listed in a warning, never dropped silently.
+  world. The box, cylinder, polyline (a polygon obstacle) and mesh (STL/OBJ found beside the world,
+  copied beside the seed) collision geometry of static models becomes obstacles, with the model,
+  link and collision poses composed (a world ``<state>`` pose overrides the model's, as Gazebo does
+  on load). A model with plugins (which may move it) is imported where it stands, with a note that
+  what the plugins do is not carried over. Planes are ignored; everything else (other meshes,
+  spheres, includes, tilted shapes, non-static models without plugins) is listed in a warning,
+  never dropped silently. A file that is not quite well-formed XML but that Gazebo reads anyway (a
+  bare ``&``, more after ``</sdf>``) is repaired and read, with a warning saying what was repaired.
 
 Also home of ``write_seed``, which every importer uses to write its scenario file.
 """
@@ -33,9 +37,10 @@ class WorldImportError(NavScenarioError):
 
 # ------------------------------------------------------------------ writing seeds
 
-def write_seed(scenario: Scenario, out: str | Path, *, extra_files: dict[str, str] | None = None,
+def write_seed(scenario: Scenario, out: str | Path, *, extra_files: dict[str, str | bytes] | None = None,
                force: bool = False) -> Path:
-    """Write ``scenario`` as YAML at ``out`` (plus ``extra_files``: name -> text, beside it).
+    """Write ``scenario`` as YAML at ``out`` (plus ``extra_files``: name -> text or bytes, beside it,
+    e.g. the mesh files its mesh obstacles name).
 
     Every file is written to a temporary name first and renamed only when all are complete,
     so a failure leaves no partial output. Refuses to replace an existing file unless ``force``.
@@ -54,8 +59,12 @@ def write_seed(scenario: Scenario, out: str | Path, *, extra_files: dict[str, st
         import dataclasses
         scenario = dataclasses.replace(scenario, name=out.stem)
     text = dump_scenario(scenario)
-    try:
-        loads_scenario(text)  # what a user will load must load: catch it here, before writing
+    try:   # what a user will load must load: catch it here, before writing (meshes beside it)
+        with tempfile.TemporaryDirectory() as tmp:
+            for name, data in (extra_files or {}).items():
+                (Path(tmp) / name).parent.mkdir(parents=True, exist_ok=True)
+                (Path(tmp) / name).write_bytes(data if isinstance(data, bytes) else data.encode("utf-8"))
+            loads_scenario(text, source=Path(tmp) / out.name)
     except ScenarioError as exc:
         raise WorldImportError(f"{out}: not written, the imported scenario is invalid: {exc}") from None
     targets[out] = text
@@ -63,10 +72,11 @@ def write_seed(scenario: Scenario, out: str | Path, *, extra_files: dict[str, st
     staged: list[tuple[str, Path]] = []
     try:
         for path, text in targets.items():
+            path.parent.mkdir(parents=True, exist_ok=True)
             fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
             staged.append((tmp, path))
-            with os.fdopen(fd, "w", encoding="utf-8") as fh:
-                fh.write(text)
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(text if isinstance(text, bytes) else text.encode("utf-8"))
         for tmp, path in staged:
             os.replace(tmp, path)
     finally:
@@ -99,6 +109,8 @@ class SdfWorld:
     warnings: list[str] = field(default_factory=list)
     ignored_planes: int = 0
     names: set[str] = field(default_factory=set)
+    notes: list[str] = field(default_factory=list)          # imported, but not all of it (said how)
+    meshes: dict[str, bytes] = field(default_factory=dict)   # files to write beside the seed
 
 
 def _pose6(elem: ET.Element | None, where: str, path: Path) -> tuple[float, ...]:
@@ -139,12 +151,13 @@ def _floats(elem: ET.Element | None, n: int, where: str, path: Path) -> list[flo
 def sdf_obstacles(path: str | Path) -> SdfWorld:
     """Box and cylinder collisions of the static models of an SDF world (see module docstring)."""
     path = Path(path)
+    recovered = None
     try:
         root = ET.parse(path).getroot()
     except FileNotFoundError:
         raise WorldImportError(f"{path}: no such file") from None
     except ET.ParseError as exc:
-        raise WorldImportError(f"{path}:{exc.position[0]}: not an SDF world: not well-formed XML ({exc})") from None
+        root, recovered = _recover(path, exc)
     except OSError as exc:
         raise WorldImportError(f"{path}: cannot read: {exc}") from None
     world = root.find("world") if root.tag == "sdf" else None
@@ -153,6 +166,8 @@ def sdf_obstacles(path: str | Path) -> SdfWorld:
     state = world.find("state")
     state_poses = {m.get("name"): m.find("pose") for m in (state.findall("model") if state is not None else [])}
     out = SdfWorld(obstacles=[])
+    if recovered:
+        out.warnings.append(recovered)
     for inc in world.findall("include"):
         uri = (inc.findtext("uri") or "?").strip()
         out.warnings.append(f"<include> {uri}: included models are not resolved (not imported)")
@@ -166,14 +181,49 @@ def sdf_obstacles(path: str | Path) -> SdfWorld:
     return out
 
 
+def _recover(path: Path, error: ET.ParseError) -> tuple[ET.Element, str]:
+    """Gazebo's parser (tinyxml2) forgives some slips a strict XML parser refuses: a bare ``&`` (kept
+    as text), more after the root element (further top-level content). Repair those, parse again,
+    and say what was done (a warning); anything else (a truncated file, mismatched tags) stays an
+    error, as it is for Gazebo."""
+    import re
+
+    line = error.position[0]
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace").lstrip("\ufeff \t\r\n")
+    except OSError as exc:
+        raise WorldImportError(f"{path}: cannot read: {exc}") from None
+    done = []
+    fixed = re.sub(r"&(?!(amp|lt|gt|quot|apos|#\d+|#x[0-9a-fA-F]+);)", "&amp;", text)
+    if fixed != text:
+        done.append("escaped bare '&'")
+    end = fixed.rfind("</sdf>")
+    if end >= 0 and fixed[end + 6:].strip():
+        fixed = fixed[:end + 6] + "\n"
+        done.append("dropped the text after </sdf>")
+    try:
+        root = ET.fromstring(fixed) if done else None
+    except ET.ParseError:
+        root = None
+    if root is None:
+        raise WorldImportError(f"{path}:{line}: not an SDF world: not well-formed XML ({error})") from None
+    return root, (f"{path.name}:{line}: not well-formed XML ({error}); read it as Gazebo would after "
+                  f"repairing it ({'; '.join(done)}): check the imported obstacles")
+
+
 def _model(path: Path, model: ET.Element, parent: tuple[float, ...], state_poses: dict, out: SdfWorld,
-           tilt: float, top: bool) -> None:
+           tilt: float, top: bool, moved_by: tuple[str, ...] = ()) -> None:
     mname = model.get("name", "?")
     pose_elem = state_poses.get(mname) if top and state_poses.get(mname) is not None else model.find("pose")
     mpose = _compose(parent, _pose6(pose_elem, f"model {mname}", path))
     static = (model.findtext("static") or "0").strip().lower() in ("1", "true")
+    plugins = tuple(f"{p.get('name', '?')} ({p.get('filename', '?')})" for p in model.findall("plugin"))
+    moved_by = moved_by + plugins
+    if plugins:
+        out.notes.append(f"model {mname}: plugin(s) {', '.join(plugins)} may move or change it: imported "
+                         f"where it stands in the world file; what the plugins do is not carried over")
     for inner in model.findall("model"):
-        _model(path, inner, mpose, {}, out, tilt, top=False)
+        _model(path, inner, mpose, {}, out, tilt, top=False, moved_by=moved_by)
     for inc in model.findall("include"):
         uri = (inc.findtext("uri") or "?").strip()
         out.warnings.append(f"model {mname}: <include> {uri}: included models are not resolved (not imported)")
@@ -191,10 +241,13 @@ def _model(path: Path, model: ET.Element, parent: tuple[float, ...], state_poses
             if shape.tag == "plane":
                 out.ignored_planes += 1
                 continue
-            if not static:
+            if not static and not moved_by:
                 out.warnings.append(f"{where}: {shape.tag} of a non-static model (not imported)")
                 continue
             cpose = _compose(lpose, _pose6(col.find("pose"), where, path))
+            if shape.tag in ("polyline", "mesh") and not (abs(cpose[3]) > tilt or abs(cpose[4]) > tilt):
+                _outlined(path, mname, lname, cname, where, geom, shape, cpose, out)
+                continue
             if shape.tag not in ("box", "cylinder"):
                 out.warnings.append(f"{where}: {shape.tag} geometry cannot be represented (not imported)")
                 continue
@@ -216,6 +269,67 @@ def _model(path: Path, model: ET.Element, parent: tuple[float, ...], state_poses
                                                       radius=_num(r), height=_num(length)))
 
 
+def _outlined(path: Path, mname: str, lname: str, cname: str, where: str, geom: ET.Element,
+              shape: ET.Element, cpose: tuple[float, ...], out: SdfWorld) -> None:
+    """A polyline (one polygon obstacle per <polyline>) or a mesh (an STL/OBJ file found beside the
+    world, copied beside the seed) of a collision."""
+    from ..scenario.geometry import polygon_problem
+    from ..scenario.mesh import MeshError, mesh_outline, read_mesh
+    from ..scenario.model import MeshObstacle, PolygonObstacle
+
+    name = mname if mname not in out.names else f"{mname}/{lname}/{cname}"
+    x, y, yaw = _num(cpose[0]), _num(cpose[1]), _num(math.degrees(cpose[5]), 3)
+    if shape.tag == "polyline":
+        for k, line in enumerate(geom.findall("polyline")):
+            points = tuple((_num(px), _num(py)) for px, py in
+                           (_floats(pt, 2, f"{where} polyline point", path) for pt in line.findall("point")))
+            (height,) = _floats(line.find("height"), 1, f"{where} polyline height", path)
+            problem = polygon_problem(points)
+            if problem is not None:
+                out.warnings.append(f"{where}: polyline {k}: {problem} (not imported)")
+                continue
+            pname = name if k == 0 else f"{name}/{k}"
+            out.names.add(pname)
+            out.obstacles.append(PolygonObstacle(name=pname, x=x, y=y, yaw=yaw, points=points, height=_num(height)))
+        return
+    uri = (shape.findtext("uri") or "").strip()
+    scale = tuple(_floats(shape.find("scale"), 3, f"{where} mesh scale", path)) if shape.find("scale") is not None \
+        else (1.0, 1.0, 1.0)
+    found = _find_mesh(path, uri)
+    if found is None:
+        out.warnings.append(f"{where}: mesh {uri or '(no uri)'}: no such file beside the world, looked in "
+                            f"{path.parent} and its models/ folder (not imported)")
+        return
+    try:
+        verts, tris = read_mesh(found)
+        outline, height = mesh_outline(verts, tris, scale, found.name)
+    except MeshError as exc:
+        out.warnings.append(f"{where}: mesh {uri}: {exc} (not imported)")
+        return
+    rel = f"meshes/{found.stem}{found.suffix.lower()}"
+    if rel in out.meshes and out.meshes[rel] != found.read_bytes():
+        rel = f"meshes/{found.stem}-{len(out.meshes)}{found.suffix.lower()}"
+    out.meshes[rel] = found.read_bytes()
+    out.names.add(name)
+    out.obstacles.append(MeshObstacle(name=name, x=x, y=y, yaw=yaw, file=rel, scale=scale,
+                                      footprint=outline, height=height))
+
+
+def _find_mesh(world: Path, uri: str) -> Path | None:
+    """The file of a mesh ``uri``: file://, a path relative to the world, or model://<model>/<path>
+    under the world's folder or its models/ folder (as GAZEBO_MODEL_PATH would often have it)."""
+    if not uri:
+        return None
+    if uri.startswith("file://"):
+        candidates = [Path(uri[len("file://"):])]
+    elif uri.startswith("model://"):
+        rest = uri[len("model://"):]
+        candidates = [world.parent / rest, world.parent / "models" / rest]
+    else:
+        candidates = [world.parent / uri]
+    return next((c for c in candidates if c.is_file()), None)
+
+
 # ------------------------------------------------------------------ CLI
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -235,6 +349,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     src = Path(args.file)
     notes: list[str] = []
+    extra: dict[str, bytes] = {}
     if args.format == "aerialist":
         obstacles, start, goal, waypoints = _aerialist(args, src, notes)
     else:
@@ -244,6 +359,8 @@ def run(args: argparse.Namespace) -> int:
         waypoints = ()
         world = sdf_obstacles(src)
         obstacles = world.obstacles
+        extra = world.meshes
+        notes.extend(world.notes)
         if world.ignored_planes:
             notes.append(f"{world.ignored_planes} plane(s) ignored (the ground)")
         for w in world.warnings:
@@ -254,7 +371,7 @@ def run(args: argparse.Namespace) -> int:
     scenario = Scenario(mission=Mission(start=start, goal=goal, waypoints=waypoints, timeout=args.timeout),
                         obstacles=tuple(obstacles), name=args.name,
                         description=f"Imported from {args.format} file {src.name}.")
-    write_seed(scenario, args.output, force=args.force)
+    write_seed(scenario, args.output, force=args.force, extra_files=extra)
     for note in notes:
         print(f"navscenario import: {note}")
     print(f"navscenario import: {len(obstacles)} obstacle(s) -> wrote {args.output}")

@@ -9,8 +9,8 @@ from typing import Any, Mapping
 import yaml
 
 from ..core.files import atomic_write_text
-from .loader import LIDAR_KEYS, LIMITS_KEYS
-from .model import BoxObstacle, Mark, Obstacle, Pose, Scenario
+from .loader import LATENCY_KEYS, LIDAR_KEYS, LIMITS_KEYS, LOCALISATION_KEYS
+from .model import BoxObstacle, Mark, MeshObstacle, Motion, Obstacle, PolygonObstacle, Pose, Scenario
 
 
 def _f(value: Any) -> float:
@@ -49,10 +49,32 @@ def _mark_entry(mark: Mark) -> Any:
 
 def _obstacle_dict(obs: Obstacle) -> dict[str, Any]:
     if isinstance(obs, BoxObstacle):
-        return {"type": "box", "name": obs.name, "x": _f(obs.x), "y": _f(obs.y), "length": _f(obs.length),
-                "width": _f(obs.width), "yaw": _f(obs.yaw), "height": _f(obs.height)}
-    return {"type": "cylinder", "name": obs.name, "x": _f(obs.x), "y": _f(obs.y), "radius": _f(obs.radius),
-            "height": _f(obs.height)}
+        out = {"type": "box", "name": obs.name, "x": _f(obs.x), "y": _f(obs.y), "length": _f(obs.length),
+               "width": _f(obs.width), "yaw": _f(obs.yaw), "height": _f(obs.height)}
+    elif isinstance(obs, PolygonObstacle):
+        out = {"type": "polygon", "name": obs.name, "x": _f(obs.x), "y": _f(obs.y),
+               "points": [[_f(a), _f(b)] for a, b in obs.points], "yaw": _f(obs.yaw), "height": _f(obs.height)}
+    elif isinstance(obs, MeshObstacle):     # the outline and height come from the file again
+        out = {"type": "mesh", "name": obs.name, "x": _f(obs.x), "y": _f(obs.y), "file": obs.file,
+               "scale": [_f(v) for v in obs.scale], "yaw": _f(obs.yaw)}
+    else:
+        out = {"type": "cylinder", "name": obs.name, "x": _f(obs.x), "y": _f(obs.y),
+               "radius": _f(obs.radius), "height": _f(obs.height)}
+    if not getattr(obs, "visible_to_lidar", True):
+        out["visible_to_lidar"] = False
+    motion = getattr(obs, "motion", None)
+    if motion is not None:
+        out["motion"] = _motion_dict(motion)
+        if motion.path:             # the path's first point is where it stands: no x, y
+            del out["x"], out["y"]
+    return out
+
+
+def _motion_dict(motion: Motion) -> dict[str, Any]:
+    if motion.velocity is not None:
+        return {"velocity": [_f(motion.velocity[0]), _f(motion.velocity[1])], "start": _f(motion.start)}
+    return {"path": [[_f(x), _f(y)] for x, y in motion.path], "speed": _f(motion.speed),
+            "mode": motion.mode, "start": _f(motion.start)}
 
 
 def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
@@ -81,9 +103,17 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
         "footprint": footprint,
         "drive": r.drive,
         "limits": {k: _f(getattr(lim, k)) for k in LIMITS_KEYS},
-        "lidar": {"beams": int(lid.beams), **{k: _f(getattr(lid, k)) for k in LIDAR_KEYS[1:]}},
+        "lidar": {"beams": int(lid.beams), **{k: _f(getattr(lid, k)) for k in LIDAR_KEYS[1:6]}},
         "safety": {"enabled": bool(saf.enabled), "horizon": _f(saf.horizon), "margin": _f(saf.margin)},
     }
+    # the sensor and localisation faults: written when set (files without them stay as they were)
+    for key in LIDAR_KEYS[6:]:
+        if getattr(lid, key) not in (0.0, None):
+            out["robot"]["lidar"][key] = _f(getattr(lid, key))
+    if r.localisation.drifts:
+        out["robot"]["localisation"] = {k: _f(getattr(r.localisation, k)) for k in LOCALISATION_KEYS}
+    if r.latency.observation or r.latency.command:
+        out["robot"]["latency"] = {k: _f(getattr(r.latency, k)) for k in LATENCY_KEYS}
     m = s.mission
     mission: dict[str, Any] = {"start": _pose_dict(m.start), "goal": _pose_dict(m.goal)}
     if m.waypoints:

@@ -32,11 +32,17 @@ from .model import (
     CylinderObstacle,
     Footprint,
     GoalTolerance,
+    Latency,
     Lidar,
     Limits,
+    Localisation,
     Mark,
     Mission,
+    MOTION_MODES,
+    MeshObstacle,
+    Motion,
     Obstacle,
+    PolygonObstacle,
     Pose,
     Reference,
     Robot,
@@ -69,25 +75,40 @@ _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 
 TOP_KEYS = ("version", "name", "family", "description", "marks", "robot", "mission", "obstacles",
             "simulation", "reference", "search", "provenance")
-ROBOT_KEYS = ("footprint", "drive", "limits", "lidar", "safety")
+ROBOT_KEYS = ("footprint", "drive", "limits", "lidar", "safety", "localisation", "latency")
 FOOTPRINT_KEYS = ("shape", "length", "width", "radius")
 LIMITS_KEYS = ("max_speed", "max_lateral_speed", "max_yaw_rate", "max_accel", "max_yaw_accel")
-LIDAR_KEYS = ("beams", "fov", "range_min", "range_max", "noise_sigma", "dropout")
+LIDAR_KEYS = ("beams", "fov", "range_min", "range_max", "noise_sigma", "dropout", "noise_per_metre",
+              "dropout_at_max", "spurious")
+LOCALISATION_KEYS = ("drift_per_metre", "drift_per_second", "yaw_drift_per_metre")
+LATENCY_KEYS = ("observation", "command")
 SAFETY_KEYS = ("enabled", "horizon", "margin")
 MISSION_KEYS = ("start", "goal", "waypoints", "goal_tolerance", "waypoint_tolerance", "timeout")
 POSE_KEYS = ("x", "y", "yaw")
 TOLERANCE_KEYS = ("position", "yaw")
-BOX_KEYS = ("type", "name", "x", "y", "length", "width", "yaw", "height")
-CYLINDER_KEYS = ("type", "name", "x", "y", "radius", "height")
+BOX_KEYS = ("type", "name", "x", "y", "length", "width", "yaw", "height", "motion", "visible_to_lidar")
+CYLINDER_KEYS = ("type", "name", "x", "y", "radius", "height", "motion", "visible_to_lidar")
+PERSON_KEYS = CYLINDER_KEYS     # a cylinder with a person's size and walking speed as defaults
+POLYGON_KEYS = ("type", "name", "x", "y", "points", "yaw", "height", "motion", "visible_to_lidar")
+MESH_KEYS = ("type", "name", "x", "y", "file", "scale", "yaw", "motion", "visible_to_lidar")
+MOTION_KEYS = ("path", "speed", "mode", "start", "velocity")
+MAX_POLYGON_POINTS = 1000
+PERSON_RADIUS = 0.25            # m
+PERSON_HEIGHT = 1.7             # m
+PERSON_SPEED = 1.3              # m/s, a typical walking speed
 SIMULATION_KEYS = ("timestep", "control_rate", "seed")
 REFERENCE_KEYS = ("file", "points")
 DRIVES = ("omni", "diff")
 SHAPES = ("box", "circle")
-OBSTACLE_TYPES = ("box", "cylinder")
+OBSTACLE_TYPES = ("box", "cylinder", "person", "polygon", "mesh")
+TYPE_KEYS = {"box": BOX_KEYS, "cylinder": CYLINDER_KEYS, "person": PERSON_KEYS, "polygon": POLYGON_KEYS,
+             "mesh": MESH_KEYS}
 _KEY_HOMES = (("", TOP_KEYS), ("robot", ROBOT_KEYS), ("robot.footprint", FOOTPRINT_KEYS),
               ("robot.limits", LIMITS_KEYS), ("robot.lidar", LIDAR_KEYS), ("robot.safety", SAFETY_KEYS),
+              ("robot.localisation", LOCALISATION_KEYS), ("robot.latency", LATENCY_KEYS),
               ("mission", MISSION_KEYS), ("mission.goal_tolerance", TOLERANCE_KEYS), ("simulation", SIMULATION_KEYS),
-              ("obstacles[]", BOX_KEYS + CYLINDER_KEYS), ("reference", REFERENCE_KEYS))
+              ("obstacles[].motion", MOTION_KEYS),
+              ("obstacles[]", BOX_KEYS + CYLINDER_KEYS + POLYGON_KEYS + MESH_KEYS), ("reference", REFERENCE_KEYS))
 _ALIASES = {  # common synonyms -> the spelling the format uses (for the hint)
     "omnidirectional": "omni", "holonomic": "omni", "differential": "diff", "diff-drive": "diff",
     "rectangle": "box", "rect": "box", "cuboid": "box", "square": "box", "cyl": "cylinder",
@@ -332,7 +353,10 @@ def _robot(ctx: _Ctx, top: _Section) -> Robot:
         lidar = Lidar(beams=beams, fov=s.number("fov", d.fov, low=0, low_open=True, high=360.0),
                       range_min=range_min, range_max=range_max,
                       noise_sigma=s.number("noise_sigma", d.noise_sigma, low=0),
-                      dropout=s.number("dropout", d.dropout, low=0, high=1.0))
+                      dropout=s.number("dropout", d.dropout, low=0, high=1.0),
+                      noise_per_metre=s.number("noise_per_metre", d.noise_per_metre, low=0, high=1.0),
+                      dropout_at_max=s.number("dropout_at_max", None, low=0, high=1.0),
+                      spurious=s.number("spurious", d.spurious, low=0, high=1.0))
     safety = Safety()
     s = sec.section("safety", SAFETY_KEYS, "the safety layer settings (a mapping)")
     if s is not None:
@@ -340,7 +364,19 @@ def _robot(ctx: _Ctx, top: _Section) -> Robot:
         safety = Safety(enabled=s.boolean("enabled", d.enabled),
                         horizon=s.number("horizon", d.horizon, low=0, low_open=True),
                         margin=s.number("margin", d.margin, low=0))
-    return Robot(footprint=fp, drive=drive, limits=limits, lidar=lidar, safety=safety)
+    localisation = Localisation()
+    s = sec.section("localisation", LOCALISATION_KEYS, "the localisation error (a mapping)")
+    if s is not None:
+        localisation = Localisation(drift_per_metre=s.number("drift_per_metre", 0.0, low=0, high=10.0),
+                                    drift_per_second=s.number("drift_per_second", 0.0, low=0, high=10.0),
+                                    yaw_drift_per_metre=s.number("yaw_drift_per_metre", 0.0, low=0, high=90.0))
+    latency = Latency()
+    s = sec.section("latency", LATENCY_KEYS, "the delays (a mapping)")
+    if s is not None:
+        latency = Latency(observation=s.number("observation", 0.0, low=0, high=10.0),
+                          command=s.number("command", 0.0, low=0, high=10.0))
+    return Robot(footprint=fp, drive=drive, limits=limits, lidar=lidar, safety=safety,
+                 localisation=localisation, latency=latency)
 
 
 def _pose(ctx: _Ctx, node: YNode | None, path: str, line: int | None, what: str) -> Pose:
@@ -397,10 +433,10 @@ def _obstacles(ctx: _Ctx, top: _Section) -> tuple[Obstacle, ...]:
         if kind not in OBSTACLE_TYPES:
             raise ctx.fail(f"unknown obstacle type {describe(type_item[1])}", f"{path}.type",
                            type_item[0] or line, _did_you_mean(kind if kind is not None else "", OBSTACLE_TYPES))
-        keys, other_keys, other = ((BOX_KEYS, CYLINDER_KEYS, "cylinder") if kind == "box"
-                                   else (CYLINDER_KEYS, BOX_KEYS, "box"))
+        keys = TYPE_KEYS[kind]
         for key, (key_line, _) in item.items.items():
-            if key not in keys and key in other_keys:
+            other = next((t for t, t_keys in TYPE_KEYS.items() if key not in keys and key in t_keys), None)
+            if other is not None:
                 raise ctx.fail(f"'{key}' does not apply to type: {kind} (it is a {other} key)", f"{path}.{key}",
                                key_line or line, f"remove '{key}', or set type: {other}")
         sec = _Section(ctx, item, path, keys, line=line)
@@ -414,30 +450,162 @@ def _obstacles(ctx: _Ctx, top: _Section) -> tuple[Obstacle, ...]:
             given[name] = i
         parsed.append((kind, sec, name))
     taken = set(given)
-    counters = {"box": 0, "cylinder": 0}
+    counters = dict.fromkeys(OBSTACLE_TYPES, 0)
+    prefixes = {"box": "box", "cylinder": "cyl", "person": "person", "polygon": "polygon", "mesh": "mesh"}
     result: list[Obstacle] = []
     for kind, sec, name in parsed:
-        if name is None:  # generated: box1, box2, cyl1 ... skipping names already given
-            prefix = "box" if kind == "box" else "cyl"
+        if name is None:  # generated: box1, box2, cyl1, person1 ... skipping names already given
             while True:
                 counters[kind] += 1
-                name = f"{prefix}{counters[kind]}"
+                name = f"{prefixes[kind]}{counters[kind]}"
                 if name not in taken:
                     break
             taken.add(name)
-        x = sec.number("x", example="x: 0.0")
-        y = sec.number("y", example="y: 0.0")
-        height = sec.number("height", 1.0, low=0, low_open=True)
-        if kind == "box":
-            result.append(BoxObstacle(name=name, x=x, y=y,
-                                      length=sec.number("length", low=0, low_open=True, example="length: 1.0"),
-                                      width=sec.number("width", low=0, low_open=True, example="width: 1.0"),
-                                      yaw=sec.number("yaw", 0.0), height=height))
-        else:
-            result.append(CylinderObstacle(name=name, x=x, y=y, height=height,
-                                           radius=sec.number("radius", low=0, low_open=True,
-                                                             example="radius: 0.5")))
+        result.append(_obstacle(ctx, sec, kind, name))
     return tuple(result)
+
+
+def _obstacle(ctx: _Ctx, sec: _Section, kind: str, name: str) -> Obstacle:
+    """One obstacle from its section, with ``visible_to_lidar``."""
+    import dataclasses
+
+    obs = _shape(ctx, sec, kind, name)
+    visible = sec.boolean("visible_to_lidar", True)
+    return obs if visible else dataclasses.replace(obs, visible_to_lidar=False)
+
+
+def _shape(ctx: _Ctx, sec: _Section, kind: str, name: str) -> Obstacle:
+    """One obstacle's shape, place and motion; a person is a cylinder with a person's defaults."""
+    person = kind == "person"
+    motion = _motion(ctx, sec, person)
+    if motion is not None and motion.path:
+        for key in ("x", "y"):
+            if sec.has(key):
+                raise ctx.fail(f"'{key}' is given by the motion's path (the obstacle starts at its "
+                               f"first point)", _join(sec.path, key), sec.line_of(key),
+                               f"remove '{key}', or make it the path's first point")
+        x, y = motion.path[0]
+    else:
+        placed = kind in ("polygon", "mesh")      # points and meshes may be written in world coordinates
+        x = sec.number("x", 0.0 if placed else _REQUIRED, example="x: 0.0")
+        y = sec.number("y", 0.0 if placed else _REQUIRED, example="y: 0.0")
+    if kind == "mesh":
+        return _mesh(ctx, sec, name, x, y, motion)
+    height = sec.number("height", PERSON_HEIGHT if person else 1.0, low=0, low_open=True)
+    if kind == "polygon":
+        return PolygonObstacle(name=name, x=x, y=y, points=_polygon_points(ctx, sec), yaw=sec.number("yaw", 0.0),
+                               height=height, motion=motion)
+    if kind == "box":
+        return BoxObstacle(name=name, x=x, y=y,
+                           length=sec.number("length", low=0, low_open=True, example="length: 1.0"),
+                           width=sec.number("width", low=0, low_open=True, example="width: 1.0"),
+                           yaw=sec.number("yaw", 0.0), height=height, motion=motion)
+    radius = sec.number("radius", PERSON_RADIUS if person else _REQUIRED, low=0, low_open=True,
+                        example="radius: 0.5")
+    return CylinderObstacle(name=name, x=x, y=y, height=height, radius=radius, motion=motion)
+
+
+def _polygon_points(ctx: _Ctx, sec: _Section) -> tuple[tuple[float, float], ...]:
+    """A polygon's ``points``: three or more [x, y], a simple polygon (no crossing edges)."""
+    from .geometry import polygon_problem
+
+    node = sec.get("points")
+    field, line = _join(sec.path, "points"), sec.line_of("points")
+    if node is None:
+        raise sec.missing("points", "points: [[0, 0], [2, 0], [2, 1], [0, 1]]")
+    if not isinstance(node, YSeq):
+        raise ctx.fail(f"expected a list of points [x, y], got {describe(node)}", field, line,
+                       "write e.g. points: [[0, 0], [2, 0], [2, 1], [0, 1]]")
+    if len(node.items) > MAX_POLYGON_POINTS:
+        raise ctx.fail(f"{len(node.items)} points is more than the limit of {MAX_POLYGON_POINTS}", field,
+                       line, "simplify the outline")
+    points = tuple(_point(ctx, p, f"{field}[{k}]", p.line or line) for k, p in enumerate(node.items))
+    if len(points) > 3 and points[0] == points[-1]:
+        points = points[:-1]          # a closed ring written out: the first point once
+    problem = polygon_problem(points)
+    if problem is not None:
+        raise ctx.fail(problem, field, node.line or line,
+                       "list the corners in order around the outline, without edges crossing each other")
+    return points
+
+
+def _mesh(ctx: _Ctx, sec: _Section, name: str, x: float, y: float, motion: Motion | None) -> Obstacle:
+    """A mesh obstacle: its file (beside the scenario) read now, so a bad file is an error here."""
+    from .mesh import MeshError, mesh_outline, read_mesh, resolve_mesh_path
+
+    file = sec.string("file", None)
+    if file is None:
+        raise sec.missing("file", "file: parts/press.stl")
+    scale_node = sec.get("scale")
+    field = _join(sec.path, "scale")
+    if scale_node is None:
+        scale = (1.0, 1.0, 1.0)
+    elif isinstance(scale_node, YSeq):
+        if len(scale_node.items) != 3:
+            raise ctx.fail(f"expected one number or three [sx, sy, sz], got {describe(scale_node)}", field,
+                           sec.line_of("scale"), "write e.g. scale: 0.001 (millimetres to metres)")
+        scale = tuple(_number(ctx, n, f"{field}[{k}]", sec.line_of("scale"), low=0, low_open=True)
+                      for k, n in enumerate(scale_node.items))
+    else:
+        s = _number(ctx, scale_node, field, sec.line_of("scale"), low=0, low_open=True)
+        scale = (s, s, s)
+    folder = Path(ctx.source).parent if ctx.source else Path.cwd()
+    try:
+        path = resolve_mesh_path(folder, file)
+        verts, tris = read_mesh(path)
+        outline, height = mesh_outline(verts, tris, scale, Path(file).name)
+    except MeshError as exc:
+        raise ctx.fail(str(exc), _join(sec.path, "file"), sec.line_of("file"),
+                       "fix the file or the path (relative to the scenario's folder)") from None
+    return MeshObstacle(name=name, x=x, y=y, file=file, scale=scale, yaw=sec.number("yaw", 0.0),
+                        footprint=outline, height=height, motion=motion)
+
+
+def _point(ctx: _Ctx, node: YNode, field: str, line: int | None) -> tuple[float, float]:
+    """An [x, y] pair."""
+    if not isinstance(node, YSeq) or len(node.items) != 2:
+        raise ctx.fail(f"expected a point [x, y], got {describe(node)}", field,
+                       node.line or line, "write two numbers in brackets, e.g. [1.0, 2.0]")
+    return (_number(ctx, node.items[0], f"{field}[0]", line),
+            _number(ctx, node.items[1], f"{field}[1]", line))
+
+
+def _motion(ctx: _Ctx, obs: _Section, person: bool) -> Motion | None:
+    """The obstacle's ``motion`` section: a path at a speed, or a constant velocity."""
+    sec = obs.section("motion", MOTION_KEYS, "the obstacle's motion (a mapping)")
+    if sec is None:
+        return None
+    start = sec.number("start", 0.0, low=0)
+    if sec.has("velocity"):
+        for key in ("path", "speed", "mode"):
+            if sec.has(key):
+                raise ctx.fail(f"'{key}' does not go with 'velocity' (a constant velocity has no path)",
+                               _join(sec.path, key), sec.line_of(key),
+                               "give either velocity: [vx, vy], or a path with a speed")
+        vx, vy = _point(ctx, sec.get("velocity"), _join(sec.path, "velocity"), sec.line_of("velocity"))
+        return Motion(start=start, velocity=(vx, vy))
+    node = sec.get("path")
+    field, line = _join(sec.path, "path"), sec.line_of("path")
+    if node is None:
+        raise sec.missing("path", "path: [[0.0, -3.0], [0.0, 3.0]]' or 'velocity: [0.0, 1.0]")
+    if not isinstance(node, YSeq) or len(node.items) < 2:
+        got = f"{len(node.items)} point" + ("" if len(node.items) == 1 else "s") if isinstance(node, YSeq) \
+            else describe(node)
+        raise ctx.fail(f"a path needs at least two points, got {got}", field, node.line or line,
+                       "list the points it walks through, e.g. path: [[0.0, -3.0], [0.0, 3.0]]")
+    if len(node.items) > SCENARIO_LIMITS["max_obstacles"]:
+        raise ctx.fail(f"{len(node.items)} path points is more than the limit of "
+                       f"{int(SCENARIO_LIMITS['max_obstacles'])}", field, line, "thin the path out")
+    points = tuple(_point(ctx, p, f"{field}[{k}]", p.line or line) for k, p in enumerate(node.items))
+    if sum(math.dist(a, b) for a, b in zip(points, points[1:])) <= 0.0:
+        raise ctx.fail("the path has no length (all its points are the same)", field, line,
+                       "give points that differ, or remove 'motion' for a static obstacle")
+    if person:
+        speed = sec.number("speed", PERSON_SPEED, low=0, low_open=True)
+    else:
+        speed = sec.number("speed", low=0, low_open=True, example="speed: 1.0")
+    mode = sec.choice("mode", MOTION_MODES, "once")
+    return Motion(path=points, speed=speed, mode=mode, start=start)
 
 
 def _check_name(ctx: _Ctx, name: str, field: str, line: int | None, *, file_name: bool = False) -> None:
@@ -598,6 +766,15 @@ def check_scenario(scenario: Scenario, *, _ctx: _Ctx | None = None) -> None:
                        f"{episode_steps:.3g} physics steps, more than {SCENARIO_LIMITS['max_episode_steps']:g}",
                        "mission.timeout", lines.get("mission.timeout", lines.get("mission")),
                        "shorten the timeout or lengthen the timestep")
+    for key in ("observation", "command"):
+        delay = getattr(scenario.robot.latency, key)
+        ticks = delay * sim.control_rate
+        if abs(ticks - round(ticks)) > 1e-6:
+            field = f"robot.latency.{key}"
+            raise ctx.fail(f"a delay of {delay!r} s is not a whole number of control periods "
+                           f"({1.0 / sim.control_rate:g} s at {sim.control_rate:g} Hz)", field,
+                           lines.get(field, lines.get("robot.latency")),
+                           f"e.g. {key}: {round(ticks) / sim.control_rate:g}")
     if scenario.obstacles:
         _check_clear(scenario, ctx)
 
@@ -606,7 +783,7 @@ def _check_clear(scenario: Scenario, ctx: _Ctx) -> None:
     """Start and goal footprints and waypoints must not touch an obstacle (names the first one)."""
     from shapely.geometry import Point
 
-    from .geometry import footprint_polygon, footprint_radius, obstacle_polygon
+    from .geometry import bounding_radius, footprint_polygon, footprint_radius, obstacle_polygon
 
     mission = scenario.mission
     fp = scenario.robot.footprint
@@ -614,10 +791,13 @@ def _check_clear(scenario: Scenario, ctx: _Ctx) -> None:
               ("goal", mission.goal, footprint_radius(fp), "the robot's footprint at the goal")]
     checks += [(f"waypoints[{i}]", wp, 0.0, f"waypoint {i}") for i, wp in enumerate(mission.waypoints)]
     # Cheap bounding-circle test first, so thousands of obstacles cost microseconds, not polygons.
-    bounds = [(o.x, o.y, math.hypot(o.length, o.width) / 2.0 if isinstance(o, BoxObstacle) else o.radius)
-              for o in scenario.obstacles]
+    bounds = [(o.x, o.y, bounding_radius(o)) for o in scenario.obstacles]
+    moving = {i for i, o in enumerate(scenario.obstacles) if getattr(o, "motion", None) is not None}
     for key, pose, reach, what in checks:
-        near = [i for i, (x, y, r) in enumerate(bounds) if math.hypot(x - pose.x, y - pose.y) <= r + reach + 1e-9]
+        # a moving obstacle must leave the start clear (where it stands at t = 0); it may cross the
+        # goal and the waypoints
+        near = [i for i, (x, y, r) in enumerate(bounds) if math.hypot(x - pose.x, y - pose.y) <= r + reach + 1e-9
+                and (key == "start" or i not in moving)]
         if not near:
             continue
         shape = (footprint_polygon(fp, pose.x, pose.y, pose.yaw_rad) if reach else Point(pose.x, pose.y))

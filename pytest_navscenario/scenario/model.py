@@ -31,6 +31,23 @@ class Pose:
         return math.radians(self.yaw)
 
 
+MOTION_MODES = ("once", "back-and-forth", "loop")
+
+
+@dataclass(frozen=True)
+class Motion:
+    """How an obstacle moves (it keeps its orientation). Either along ``path`` (two or more points,
+    the first is where it stands until ``start``) at ``speed`` m/s, ``mode`` once (then it stays at
+    the last point), back-and-forth or loop (back to the first point and round again); or, with no
+    path, at the constant ``velocity`` (m/s, world frame) from its x, y. Times in seconds from the
+    episode start. The positions are a pure function of time (scenario/motion.py)."""
+    path: tuple[tuple[float, float], ...] = ()
+    speed: float = 0.0
+    mode: Literal["once", "back-and-forth", "loop"] = "once"
+    start: float = 0.0
+    velocity: tuple[float, float] | None = None
+
+
 @dataclass(frozen=True)
 class BoxObstacle:
     """A static box centred on (x, y): ``length`` along its own x axis, rotated by ``yaw`` degrees."""
@@ -41,6 +58,8 @@ class BoxObstacle:
     width: float
     yaw: float = 0.0
     height: float = 1.0
+    motion: Motion | None = None    # None: static
+    visible_to_lidar: bool = True   # False: glass, thin wires (it still collides)
     kind: Literal["box"] = field(default="box", init=False)
 
     @property
@@ -56,10 +75,56 @@ class CylinderObstacle:
     y: float
     radius: float
     height: float = 1.0
+    motion: Motion | None = None    # None: static
+    visible_to_lidar: bool = True
     kind: Literal["cylinder"] = field(default="cylinder", init=False)
 
 
-Obstacle = Union[BoxObstacle, CylinderObstacle]
+@dataclass(frozen=True)
+class PolygonObstacle:
+    """A prism standing on z = 0: any simple polygon (convex or not) of ``points`` given in the
+    obstacle's own frame (metres), placed with that frame's origin at (x, y) and turned by ``yaw``
+    degrees, extruded to ``height``."""
+    name: str
+    x: float
+    y: float
+    points: tuple[tuple[float, float], ...]
+    yaw: float = 0.0
+    height: float = 1.0
+    motion: Motion | None = None    # None: static
+    visible_to_lidar: bool = True
+    kind: Literal["polygon"] = field(default="polygon", init=False)
+
+    @property
+    def yaw_rad(self) -> float:
+        return math.radians(self.yaw)
+
+
+@dataclass(frozen=True)
+class MeshObstacle:
+    """A triangle mesh read from an STL or OBJ ``file`` beside the scenario (a path relative to the
+    scenario file's folder), scaled by ``scale`` (x, y, z), turned by ``yaw`` degrees about z and
+    placed with its origin at (x, y) and its lowest point on z = 0. ``footprint`` and ``height`` are
+    what the loader read from the file: the outline of the mesh seen from above (in the mesh's own
+    frame, scaled) and its height; the simulation and the verdict use them (a prism, see the docs)."""
+    name: str
+    x: float
+    y: float
+    file: str
+    scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    yaw: float = 0.0
+    footprint: tuple[tuple[float, float], ...] = field(default=(), compare=True)
+    height: float = 1.0
+    motion: Motion | None = None
+    visible_to_lidar: bool = True
+    kind: Literal["mesh"] = field(default="mesh", init=False)
+
+    @property
+    def yaw_rad(self) -> float:
+        return math.radians(self.yaw)
+
+
+Obstacle = Union[BoxObstacle, CylinderObstacle, PolygonObstacle, MeshObstacle]
 
 
 @dataclass(frozen=True)
@@ -90,6 +155,10 @@ class Lidar:
     range_max: float = 8.0          # m; no return reads as range_max
     noise_sigma: float = 0.0        # m, Gaussian noise on each range
     dropout: float = 0.0            # probability a beam reads as no return
+    # a datasheet's noise model (all off by default; see the docs' "sensor faults")
+    noise_per_metre: float = 0.0    # m of noise sigma added per metre of range (range-proportional)
+    dropout_at_max: float | None = None  # dropout probability at range_max (linear from `dropout` at 0 m)
+    spurious: float = 0.0           # probability a beam returns a spurious range short of the true one
 
     @property
     def fov_rad(self) -> float:
@@ -106,12 +175,38 @@ class Safety:
 
 
 @dataclass(frozen=True)
+class Localisation:
+    """What the planner believes of the robot's pose: the truth plus an error that is a random walk
+    (seeded per episode): its standard deviation grows by ``drift_per_metre`` per square-root
+    metre travelled and ``drift_per_second`` per square-root second (so after 1 m, or 1 s, it is
+    that much), the heading's by ``yaw_drift_per_metre`` degrees per square-root metre. The
+    verdict, the metrics and the pictures use the true pose."""
+    drift_per_metre: float = 0.0    # m / sqrt(m)
+    drift_per_second: float = 0.0   # m / sqrt(s)
+    yaw_drift_per_metre: float = 0.0  # deg / sqrt(m)
+
+    @property
+    def drifts(self) -> bool:
+        return bool(self.drift_per_metre or self.drift_per_second or self.yaw_drift_per_metre)
+
+
+@dataclass(frozen=True)
+class Latency:
+    """Delays, in seconds, whole multiples of the control period: the planner sees observations
+    ``observation`` seconds old; its commands take effect ``command`` seconds after it answered."""
+    observation: float = 0.0
+    command: float = 0.0
+
+
+@dataclass(frozen=True)
 class Robot:
     footprint: Footprint = Footprint()
     drive: Literal["omni", "diff"] = "omni"
     limits: Limits = Limits()
     lidar: Lidar = Lidar()
     safety: Safety = Safety()
+    localisation: Localisation = Localisation()
+    latency: Latency = Latency()
 
 
 @dataclass(frozen=True)
@@ -181,6 +276,10 @@ class Scenario:
 
 
 _NOT_CONTENT = {"name", "family", "description", "marks", "provenance", "source", "search"}
+# Fields added after scenarios were first hashed: at their default they are left out of the hash,
+# so a file written before them keeps its hash (results files pair scenarios by it).
+_ADDED_DEFAULTS: dict[str, Any] = {"noise_per_metre": 0.0, "dropout_at_max": None, "spurious": 0.0,
+                                   "localisation": Localisation(), "latency": Latency()}
 
 
 def content_hash(scenario: Scenario) -> str:
@@ -197,7 +296,8 @@ def content_hash(scenario: Scenario) -> str:
     def plain(value: Any) -> Any:
         if dataclasses.is_dataclass(value):
             return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)
-                    if f.name not in _NOT_CONTENT}
+                    if f.name not in _NOT_CONTENT
+                    and not (f.name in _ADDED_DEFAULTS and getattr(value, f.name) == _ADDED_DEFAULTS[f.name])}
         if isinstance(value, (list, tuple)):
             return [plain(v) for v in value]
         if isinstance(value, Mapping):
@@ -210,5 +310,10 @@ def content_hash(scenario: Scenario) -> str:
     # obstacle names are labels, not content
     for obs in body.get("obstacles", []):
         obs.pop("name", None)
+        if obs.get("motion") is None:   # a static obstacle hashes as before motion existed
+            obs.pop("motion", None)
+        obs.pop("file", None)           # a mesh is its outline and height (hashed), wherever its file is
+        if obs.get("visible_to_lidar", True) is True:    # the default hashes as before it existed
+            obs.pop("visible_to_lidar", None)
     text = json.dumps(body, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]

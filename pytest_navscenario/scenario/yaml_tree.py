@@ -109,6 +109,11 @@ def parse_yaml(text: str, source: str | None, *, max_depth: int, max_nodes: int,
         raise ScenarioError(f"the text is not valid Unicode ({exc.reason})", path=source,
                             hint="save the scenario as UTF-8 text") from None
     except yaml.YAMLError as exc:
+        if "nesting depth" in str(exc):  # PyYAML >= 6.0.3 has a flow-depth limit of its own
+            mark = getattr(exc, "problem_mark", None)
+            raise ScenarioError(f"the YAML nests more than {max_depth} levels deep", path=source,
+                                line=None if mark is None else mark.line + 1,
+                                hint=f"keep nesting under {max_depth} levels") from None
         raise _yaml_error(exc, source, text) from None
     except RecursionError:  # pragma: no cover - the composer is iterative; belt and braces
         raise ScenarioError("the YAML nests too deeply", path=source,

@@ -11,8 +11,7 @@ Names are imported lazily so that importing this package stays cheap.
 """
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from ..core.lazy import lazy_exports
 
 _EXPORTS = {name: "engine" for name in (
     "run_search", "shrink_failure", "Candidate", "Failure", "SearchReport", "STRATEGIES",
@@ -21,9 +20,4 @@ _EXPORTS.update(SearchSpace="space", scenarios_around="space", invalid_reason="s
                 freeze_failures="freeze", write_search_log="freeze")
 __all__ = sorted(_EXPORTS)
 
-
-def __getattr__(name: str) -> Any:
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(importlib.import_module(f".{module}", __name__), name)
+__getattr__ = lazy_exports(__name__, _EXPORTS)

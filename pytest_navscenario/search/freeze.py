@@ -121,9 +121,35 @@ def freeze_failures(report: SearchReport, space: SearchSpace, out_dir: str | Pat
         new = not path.exists()
         if new:
             folder.mkdir(parents=True, exist_ok=True)
-            save_scenario(scenario, path)
+            save_scenario(_with_mesh_copies(scenario, space.seed, folder), path)
         written.append(FrozenFile(path, new, failure.shrunk.outcome, failure.shrunk.clearance))
     return written
+
+
+def _with_mesh_copies(scenario: Scenario, seed: Scenario, folder: Path) -> Scenario:
+    """The frozen scenario with its mesh files copied beside it (``meshes/<stem>-<hash><suffix>``,
+    named by their content so equal files are stored once): a mesh path must stay inside the
+    scenario's folder, and the frozen file lives elsewhere than its seed."""
+    import hashlib
+    import shutil
+
+    from ..scenario.model import MeshObstacle
+
+    if not any(isinstance(o, MeshObstacle) for o in scenario.obstacles):
+        return scenario
+    base = Path(seed.source).parent if seed.source else Path.cwd()
+    obstacles = []
+    for obs in scenario.obstacles:
+        if isinstance(obs, MeshObstacle):
+            src = base / obs.file
+            digest = hashlib.sha256(src.read_bytes()).hexdigest()[:12]
+            rel = Path("meshes") / f"{src.stem}-{digest}{src.suffix.lower()}"
+            if not (folder / rel).exists():
+                (folder / rel.parent).mkdir(parents=True, exist_ok=True)
+                shutil.copyfile(src, folder / rel)
+            obs = replace(obs, file=rel.as_posix())
+        obstacles.append(obs)
+    return replace(scenario, obstacles=tuple(obstacles))
 
 
 def log_records(report: SearchReport, space: SearchSpace) -> list[dict[str, Any]]:

@@ -27,6 +27,16 @@ Defaults can be overridden in the seed's YAML ``search:`` mapping::
       insert_size: [0.3, 1.0]   # m: side length of an inserted box
       insert_margin: 1.0        # m: inserted boxes lie in the route's bounding box grown by this
       remove: 0                 # at most this many of the seed's obstacles may be removed
+      polygon_vertex: 0.2       # m: each polygon corner's own dx/dy (default 0: off)
+      motion_start: [-2, 2]     # s added to a moving obstacle's start time (never below 0)
+      motion_speed: 0.5         # m/s added to a moving obstacle's speed (never below MIN_SPEED)
+      drift_per_metre: [0, 0.1] # sensor and localisation faults (default 0: off): lidar_noise_per_metre,
+                                # lidar_dropout_at_max, lidar_spurious, drift_per_metre,
+                                # drift_per_second, yaw_drift_per_metre; added to the seed's value
+
+A moving obstacle's dx/dy shift its whole path (every point, or its start for a constant
+velocity); its motion_start and motion_speed move when and how fast it goes. A polygon or mesh is
+moved and turned like a box (no size change). Fault parameters live on the part ``robot``.
 
 Insertion and removal are parameters like the others and zero means "as in the seed": an
 inserted obstacle exists when its ``on`` flag is >= 0.5 (flags shrink to 0, so shrinking removes
@@ -47,7 +57,7 @@ from dataclasses import dataclass, replace
 from typing import Any, Mapping, Sequence
 
 from ..core.errors import ScenarioError
-from ..scenario.model import BoxObstacle, CylinderObstacle, Pose, Scenario
+from ..scenario.model import BoxObstacle, CylinderObstacle, MeshObstacle, PolygonObstacle, Pose, Scenario
 
 DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {
     "obstacle_dx": (-1.0, 1.0),
@@ -62,7 +72,20 @@ DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {
     "goal_yaw": (0.0, 0.0),
     "waypoint_dx": (0.0, 0.0),
     "waypoint_dy": (0.0, 0.0),
+    "polygon_vertex": (0.0, 0.0),
+    "motion_start": (-2.0, 2.0),
+    "motion_speed": (-0.5, 0.5),
+    # sensor and localisation faults: off unless a seed opts in (offsets added, never below 0)
+    "lidar_noise_per_metre": (0.0, 0.0),
+    "lidar_dropout_at_max": (0.0, 0.0),
+    "lidar_spurious": (0.0, 0.0),
+    "drift_per_metre": (0.0, 0.0),
+    "drift_per_second": (0.0, 0.0),
+    "yaw_drift_per_metre": (0.0, 0.0),
 }
+ROBOT_PARAMS = ("lidar_noise_per_metre", "lidar_dropout_at_max", "lidar_spurious", "drift_per_metre",
+                "drift_per_second", "yaw_drift_per_metre")
+MIN_SPEED = 0.1         # m/s: a moving obstacle's speed never drops below this
 OTHER_KEYS = ("frozen", "min_size", "insert", "insert_size", "insert_margin", "remove")
 DEFAULT_INSERT = 2
 DEFAULT_INSERT_SIZE = (0.3, 1.0)
@@ -188,11 +211,24 @@ def _obstacle_params(space: SearchSpace):
     for obs in space.seed.obstacles:
         if obs.name in space.frozen:
             continue
-        attrs = ["dx", "dy", "size"] + (["yaw"] if isinstance(obs, BoxObstacle) else [])
+        outlined = isinstance(obs, (PolygonObstacle, MeshObstacle))
+        attrs = ["dx", "dy"] + ([] if outlined else ["size"]) + (
+            ["yaw"] if isinstance(obs, (BoxObstacle, PolygonObstacle, MeshObstacle)) else [])
         for attr in attrs:
             r = space.range_of(f"obstacle_{attr}")
             if r:
                 yield Param(f"obstacles.{obs.name}.{attr}", f"obstacle:{obs.name}", attr, *r)
+        r = space.range_of("polygon_vertex")
+        if r and isinstance(obs, PolygonObstacle):
+            for k in range(len(obs.points)):
+                for axis in ("x", "y"):
+                    yield Param(f"obstacles.{obs.name}.points[{k}].d{axis}", f"obstacle:{obs.name}",
+                                f"v{k}{axis}", *r)
+        if getattr(obs, "motion", None) is not None:
+            for attr in ("start", "speed"):
+                r = space.range_of(f"motion_{attr}")
+                if r:
+                    yield Param(f"obstacles.{obs.name}.motion.{attr}", f"obstacle:{obs.name}", attr, *r)
         if space.limits.remove > 0:
             yield Param(f"obstacles.{obs.name}.removed", f"obstacle:{obs.name}", "removed", 0.0, 1.0, "flag")
 
@@ -267,8 +303,22 @@ def _apply_mission(space: SearchSpace, scenario: Scenario, parts) -> Scenario:
     return replace(scenario, mission=replace(m, start=start, goal=goal, waypoints=waypoints))
 
 
-BUILDERS = [_obstacle_params, _mission_params, _inserted_params]
-APPLIERS = [_apply_obstacles, _apply_inserted, _apply_mission]
+def _robot_params(space: SearchSpace):
+    if "robot" in space.frozen:
+        return
+    for key in ROBOT_PARAMS:
+        r = space.range_of(key)
+        if r:
+            yield Param(f"robot.{key}", "robot", key, *r)
+
+
+def _apply_robot(space: SearchSpace, scenario: Scenario, parts) -> Scenario:
+    d = parts.get("robot")
+    return replace(scenario, robot=_mutate_robot(scenario.robot, d)) if d else scenario
+
+
+BUILDERS = [_obstacle_params, _mission_params, _inserted_params, _robot_params]
+APPLIERS = [_apply_obstacles, _apply_inserted, _apply_mission, _apply_robot]
 
 
 def _r(value: float) -> float:
@@ -286,17 +336,63 @@ def _mutate_pose(pose: Pose, d: Mapping[str, float] | None) -> Pose:
     return Pose(x, y, _r(yaw) if "yaw" in d else pose.yaw)
 
 
+def _mutate_robot(robot: Any, d: Mapping[str, float] | None) -> Any:
+    """The robot with the opted-in sensor and localisation fault offsets added (clamped to their
+    ranges: never below 0, probabilities at most 1)."""
+    if not d:
+        return robot
+    lidar, loc = robot.lidar, robot.localisation
+    changes: dict[str, Any] = {}
+    if "lidar_noise_per_metre" in d:
+        changes["noise_per_metre"] = _r(min(1.0, max(0.0, lidar.noise_per_metre + d["lidar_noise_per_metre"])))
+    if "lidar_dropout_at_max" in d:
+        base = lidar.dropout if lidar.dropout_at_max is None else lidar.dropout_at_max
+        changes["dropout_at_max"] = _r(min(1.0, max(0.0, base + d["lidar_dropout_at_max"])))
+    if "lidar_spurious" in d:
+        changes["spurious"] = _r(min(1.0, max(0.0, lidar.spurious + d["lidar_spurious"])))
+    drift = {k: _r(min(90.0, max(0.0, getattr(loc, k) + d[k])))
+             for k in ("drift_per_metre", "drift_per_second", "yaw_drift_per_metre") if k in d}
+    return replace(robot, lidar=replace(lidar, **changes), localisation=replace(loc, **drift))
+
+
+def _mutate_motion(motion: Any, d: Mapping[str, float]) -> Any:
+    """The motion with its path shifted by dx/dy, its start and speed moved (clamped)."""
+    if motion is None:
+        return None
+    dx, dy = d.get("dx", 0.0), d.get("dy", 0.0)
+    start = _r(max(0.0, motion.start + d["start"])) if "start" in d else motion.start
+    ds = d.get("speed", 0.0)
+    if motion.velocity is not None:
+        vx, vy = motion.velocity
+        norm = math.hypot(vx, vy)
+        scale = max(MIN_SPEED, norm + ds) / norm if ds and norm > 0 else 1.0
+        return replace(motion, start=start, velocity=(_r(vx * scale), _r(vy * scale)) if scale != 1.0
+                       else motion.velocity)
+    path = (tuple((_r(px + dx), _r(py + dy)) for px, py in motion.path) if dx or dy else motion.path)
+    speed = _r(max(MIN_SPEED, motion.speed + ds)) if ds else motion.speed
+    return replace(motion, path=path, start=start, speed=speed)
+
+
 def _mutate_obstacle(obs, d: Mapping[str, float], min_size: float):
     x = _r(obs.x + d["dx"]) if "dx" in d else obs.x
     y = _r(obs.y + d["dy"]) if "dy" in d else obs.y
     ds = d.get("size", 0.0)
+    motion = _mutate_motion(getattr(obs, "motion", None), d)
+    if motion is not None and motion.path:
+        x, y = motion.path[0]       # a path's first point is where the obstacle stands
+    yaw = _r(obs.yaw + d["yaw"]) if "yaw" in d and hasattr(obs, "yaw") else getattr(obs, "yaw", 0.0)
     if isinstance(obs, BoxObstacle):
-        return replace(obs, x=x, y=y,
+        return replace(obs, x=x, y=y, motion=motion, yaw=yaw,
                        length=_r(max(min_size, obs.length + ds)) if ds else obs.length,
-                       width=_r(max(min_size, obs.width + ds)) if ds else obs.width,
-                       yaw=_r(obs.yaw + d["yaw"]) if "yaw" in d else obs.yaw)
+                       width=_r(max(min_size, obs.width + ds)) if ds else obs.width)
+    if isinstance(obs, PolygonObstacle):
+        points = tuple((_r(px + d.get(f"v{k}x", 0.0)), _r(py + d.get(f"v{k}y", 0.0)))
+                       if f"v{k}x" in d or f"v{k}y" in d else (px, py) for k, (px, py) in enumerate(obs.points))
+        return replace(obs, x=x, y=y, motion=motion, points=points, yaw=yaw)
+    if isinstance(obs, MeshObstacle):
+        return replace(obs, x=x, y=y, motion=motion, yaw=yaw)
     if isinstance(obs, CylinderObstacle):
-        return replace(obs, x=x, y=y,
+        return replace(obs, x=x, y=y, motion=motion,
                        radius=_r(max(min_size / 2, obs.radius + ds / 2)) if ds else obs.radius)
     raise TypeError(f"unknown obstacle type {type(obs).__name__}")
 
@@ -369,7 +465,7 @@ def _validate(seed: Scenario, mapping: Mapping[str, Any]):
     if not isinstance(frozen_raw, (list, tuple)):
         raise _err(seed, "frozen", f"must be a list of part names, got {frozen_raw!r}",
                    "write e.g. frozen: [wall_left, start]")
-    parts = [o.name for o in seed.obstacles] + ["start", "goal", "waypoints"] + [
+    parts = [o.name for o in seed.obstacles] + ["start", "goal", "waypoints", "robot"] + [
         f"waypoints[{i}]" for i in range(len(seed.mission.waypoints))]
     for i, name in enumerate(frozen_raw):
         if name not in parts:
@@ -416,11 +512,15 @@ def _insert_limits(seed: Scenario, mapping: Mapping[str, Any]):
 def invalid_reason(scenario: Scenario) -> str | None:
     """Why a candidate is not a test (a broken scenario, not a planner failure), or None.
 
-    Obstacles covering the start or goal footprint, or no collision-free path for the
-    footprint at all (``paths.path_exists``).
+    A polygon whose corners were moved into a self-intersecting outline, obstacles covering the
+    start or goal footprint (a moving obstacle: the start, where it stands at t = 0; it may cross
+    the goal), or no collision-free path for the footprint at all (``paths.path_exists``).
     """
-    from ..scenario.geometry import footprint_polygon, obstacle_polygon
+    from ..scenario.geometry import footprint_polygon, obstacle_polygon, polygon_problem
 
+    for obs in scenario.obstacles:          # corners moved across an edge: not a polygon any more
+        if isinstance(obs, PolygonObstacle) and polygon_problem(obs.points) is not None:
+            return f"polygon-invalid:{obs.name}"
     m, fp = scenario.mission, scenario.robot.footprint
     start = footprint_polygon(fp, m.start.x, m.start.y, m.start.yaw_rad)
     goal = footprint_polygon(fp, m.goal.x, m.goal.y, m.goal.yaw_rad)
@@ -428,7 +528,7 @@ def invalid_reason(scenario: Scenario) -> str | None:
         poly = obstacle_polygon(obs)
         if poly.intersects(start):
             return f"start-blocked:{obs.name}"
-        if poly.intersects(goal):
+        if poly.intersects(goal) and getattr(obs, "motion", None) is None:
             return f"goal-blocked:{obs.name}"
     from ..verdict.paths import path_exists
     if not path_exists(scenario):

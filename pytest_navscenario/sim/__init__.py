@@ -7,15 +7,16 @@ episode (collision, safety stop, subject failure), bit-identical for the same sc
 Read first: ``episode.py`` (the control loop as an ``Episode``: observe, safety check, act, record,
 step physics), then ``world.py`` (the MuJoCo model built from the scenario, compiled and cached),
 ``lidar.py`` (beam tables and the scan), ``command.py`` (calling the planner, validating its answer,
-the drive limits), ``safety.py`` (the collision safety layer) and ``deadline.py`` (the per-tick time
-limit).
+the drive limits), ``safety.py`` (the collision safety layer), ``moving.py`` (moving obstacles:
+their mocap positions every physics step, their velocities for the safety layer, who moved in a
+collision), ``faults.py`` (localisation drift and latency: what the planner is handed) and
+``deadline.py`` (the per-tick time limit).
 
 Names are imported lazily so that importing this package does not import MuJoCo.
 """
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from ..core.lazy import lazy_exports
 
 _EXPORTS = {name: "world" for name in (
     "compiled_world", "clear_model_cache", "build_spec", "model_xml", "World", "steps_per_tick",
@@ -28,11 +29,5 @@ _EXPORTS.update(simulate="episode", SimResult="episode", Episode="episode", STIL
                 SubjectFailure="trajectory")
 __all__ = sorted(_EXPORTS)
 
-
-def __getattr__(name: str) -> Any:
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r} (it exports "
-                             f"{', '.join(__all__)}; see its modules episode, world, lidar, command, "
-                             f"safety, deadline, trajectory)")
-    return getattr(importlib.import_module(f".{module}", __name__), name)
+__getattr__ = lazy_exports(
+    __name__, _EXPORTS, " (see its modules episode, world, lidar, command, safety, deadline, trajectory)")

@@ -29,6 +29,8 @@ from ..subjects.protocol import Observation
 from .command import Drive, call_planner, planner_traceback, validate_command
 from .deadline import PlannerTimeout, TickDeadline
 from .lidar import Lidar
+from .faults import Faults
+from .moving import MovingObstacles, describe_collision
 from .trajectory import Collision, SafetyStop, SubjectFailure, Trajectory
 from .world import (MUJOCO_WARNINGS, TWO_PI, compiled_world, divergence_message, on_mujoco_warning,
                     steps_per_tick)
@@ -122,9 +124,10 @@ class Episode:
     5. ``step_physics``: the tick's physics steps, each state recorded and its contacts checked (a
        collision ends it), then MuJoCo's warnings (a divergence raises).
 
-    Where later features go: a world that changes over time (moving obstacles as mocap bodies)
-    writes its poses in ``step_physics`` before the first step, once per tick (MuJoCo uses them
-    from the next kinematics on: every step's contacts and the next tick's scan); sensor faults
+    Moving obstacles (mocap bodies, ``moving.py``): ``start`` puts them where they are at t = 0,
+    ``step_physics_moving`` (chosen instead of ``step_physics`` when the model has any) before each
+    state's kinematics, so every step's contacts and the next tick's scan see them where they are;
+    the safety check gets their offsets and velocities at the tick. Where later features go: sensor faults
     (range noise, latency, localisation drift) change what ``observe`` hands the planner, never
     the true state that the safety layer, the mission and the recorded trajectory use.
     """
@@ -150,7 +153,12 @@ class Episode:
         self.warn_count = d.warning.number         # a live view
         self.own_handler = mujoco.get_mju_user_warning() is on_mujoco_warning
         self.lidar = Lidar(scenario, world, d, self.n_ticks + 1, seed)
+        self.moving = (MovingObstacles(scenario, d.mocap_pos, dt, spt) if world.model.nmocap else None)
         self._allocate_records(self.n_ticks * spt + 1)
+        robot = scenario.robot
+        self.faults = (Faults(scenario, seed, self.seen, spt * dt)
+                       if robot.localisation.drifts or robot.latency.observation or robot.latency.command
+                       else None)
         self.i = 0              # physics step index of the current state
         self.tick = 0           # control ticks run
         self.t_physics = self.t_rays = self.t_planner = self.t_safety = 0.0
@@ -206,6 +214,8 @@ class Episode:
         tick limit is for act only: reset may build maps)."""
         m, d, start = self.model, self.data, self.scenario.mission.start
         self.qpos[:] = (start.x, start.y, start.yaw_rad)
+        if self.moving is not None:
+            self.moving.write(0)
         mujoco.mj_step1(m, d)  # kinematics + contacts of the start state
         self.pose_buf[0] = self.qpos
         self.qvel_buf[0] = self.qvel
@@ -213,6 +223,7 @@ class Episode:
         if d.ncon:
             self.collision = self.world.first_collision(d, self.obstacles, 0.0)
             if self.collision is not None:
+                self.collision = describe_collision(self.collision, self.scenario, self.qvel_buf[0])
                 raise EpisodeOver("collision")
         t0 = perf_counter()
         try:
@@ -230,13 +241,29 @@ class Episode:
 
     def run_ticks(self) -> None:
         """Control ticks until one of the steps ends the episode (raises EpisodeOver)."""
+        if self.faults is not None:
+            return self.run_ticks_with_faults()
         observe, safety_check, act, record, step_physics = (
-            self.observe, self.safety_check, self.act, self.record, self.step_physics)
+            self.observe, self.safety_check, self.act, self.record,
+            self.step_physics if self.moving is None else self.step_physics_moving)
         while True:
             state, obs = observe()
             safety_check(state)
             setpoint = act(obs)
             record(obs.time, setpoint)
+            step_physics(setpoint)
+
+    def run_ticks_with_faults(self) -> None:
+        """``run_ticks`` with localisation drift and latency (sim/faults.py): the planner gets the
+        drifted, delayed observation, its setpoint takes effect later; the truth is recorded."""
+        faults = self.faults
+        step_physics = self.step_physics if self.moving is None else self.step_physics_moving
+        while True:
+            state, obs = self.observe()
+            seen = faults.observation(self.tick, state, obs)
+            self.safety_check(state)
+            setpoint = faults.applied(self.act(seen))
+            self.record(state[0], setpoint)
             step_physics(setpoint)
 
     # ------------------------------------------------------------ the steps of a tick
@@ -292,7 +319,8 @@ class Episode:
         t, x, y, yaw, vx, vy, wz = state
         if abs(vx) > STILL or abs(vy) > STILL or abs(wz) > STILL:
             t0 = perf_counter()
-            hit = safety.check(x, y, yaw, vx, vy, wz)
+            hit = safety.check(x, y, yaw, vx, vy, wz,
+                               None if self.moving is None else self.moving.now(self.i))
             self.t_safety += perf_counter() - t0
             if hit is not None:
                 self.safety_stop = SafetyStop(t, hit, math.hypot(vx, vy))
@@ -318,8 +346,9 @@ class Episode:
         return self.drive.setpoint(vx, vy, wz)
 
     def _planner_failed(self, obs: Observation, message: str, tb: str | None = None) -> None:
-        self.failure = SubjectFailure(message, obs.tick, obs.time, tb)
-        self.record(obs.time, HALT)
+        t = self.i * self.dt       # now (a delayed observation is older)
+        self.failure = SubjectFailure(message, self.tick, t, tb)
+        self.record(t, HALT)
         raise EpisodeOver("subject-error") from None
 
     def record(self, t: float, setpoint: tuple[float, float, float]) -> None:
@@ -360,13 +389,51 @@ class Episode:
                 collision = self.world.first_collision(d, self.obstacles, i * self.dt)
         self.i = i
         self.t_physics += perf_counter() - t0
+        self._after_physics(collision)
+
+    def _after_physics(self, collision: Collision | None) -> None:
+        """End the episode on a collision (with who moved), raise on a divergence."""
         if collision is not None:
-            self.collision = collision
+            self.collision = describe_collision(collision, self.scenario, self.qvel_buf[self.i])
             raise EpisodeOver("collision")
         # MuJoCo warns (and resets the data or zeroes the control) on NaN/huge values; our
         # handler records the first warning of each kind per episode (a cheap test)
         if MUJOCO_WARNINGS if self.own_handler else self.warn_count.any():
-            raise SimulationDivergedError(divergence_message(self.scenario, d, i * self.dt))
+            raise SimulationDivergedError(divergence_message(self.scenario, self.data, self.i * self.dt))
+
+    def step_physics_moving(self, setpoint: tuple[float, float, float]) -> None:
+        """``step_physics`` with moving obstacles: before each state's kinematics (mj_step's first
+        half, the last mj_step1) the obstacles are put where they are at that state's time, so every
+        step's contacts and the next scan see them there."""
+        m, d, ctrl, qpos, qvel, pose_buf, qvel_buf = self.stepping
+        step = mujoco.mj_step
+        mocap_pos = self.moving.mocap_pos
+        rows = self.moving.rows_for_tick(self.i)    # rows[k]: step self.i + k
+        ctrl[0], ctrl[1], ctrl[2] = setpoint
+        t0 = perf_counter()
+        collision = None
+        mujoco.mj_step2(m, d)
+        i = self.i + 1
+        pose_buf[i] = qpos
+        qvel_buf[i] = qvel
+        for k in range(1, self.spt):
+            mocap_pos[:] = rows[k]
+            step(m, d)
+            if d.ncon:
+                collision = self.world.first_collision(d, self.obstacles, i * self.dt)
+                if collision is not None:
+                    break
+            i += 1
+            pose_buf[i] = qpos
+            qvel_buf[i] = qvel
+        else:
+            mocap_pos[:] = rows[self.spt]
+            mujoco.mj_step1(m, d)
+            if d.ncon:
+                collision = self.world.first_collision(d, self.obstacles, i * self.dt)
+        self.i = i
+        self.t_physics += perf_counter() - t0
+        self._after_physics(collision)
 
     # ------------------------------------------------------------ the facts
 
@@ -387,7 +454,8 @@ class Episode:
             tick_t=np.array(self.tick_times, dtype=float),
             command=np.array(self.commands, dtype=float).reshape(-1, 3),
             ranges=self.lidar.ranges(self.tick), angles=self.lidar.angles,
-            waypoint_times=tuple(self.mission.passed_at))
+            waypoint_times=tuple(self.mission.passed_at),
+            believed=None if self.faults is None else self.faults.believed_poses())
 
     def result(self) -> SimResult:
         trajectory = self.trajectory()

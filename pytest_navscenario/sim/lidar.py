@@ -13,7 +13,7 @@ import mujoco
 import numpy as np
 
 from ..scenario.model import Scenario
-from .world import LIDAR_HEIGHT, MODEL_CACHE_SIZE, TWO_PI, World
+from .world import LIDAR_HEIGHT, MODEL_CACHE_SIZE, PARTS_GROUP, TWO_PI, UNSEEN_GROUP, World
 
 
 def lidar_angles(scenario: Scenario) -> np.ndarray:
@@ -81,13 +81,23 @@ class Lidar:
         self.hit = np.empty(beams, dtype=bool)
         self.range_min, self.range_max = float(lidar.range_min), float(lidar.range_max)
         self.sigma, self.dropout = float(lidar.noise_sigma), float(lidar.dropout)
+        self.per_metre, self.spurious = float(lidar.noise_per_metre), float(lidar.spurious)
+        self.dropout_max = None if lidar.dropout_at_max is None else float(lidar.dropout_at_max)
+        self.datasheet = bool(self.per_metre or self.spurious or self.dropout_max is not None)
         # the generator is made only when there is noise to draw (seeding it costs ~20 us)
         self.rng = (np.random.Generator(np.random.PCG64(int(seed) & 0xFFFFFFFFFFFFFFFF))
-                    if self.sigma > 0.0 or self.dropout > 0.0 else None)
+                    if self.sigma > 0.0 or self.dropout > 0.0 or self.datasheet else None)
         self.record = np.full((n_rows, beams), self.range_max, dtype=np.float32)
         self.readonly = self.record.view()
         self.readonly.flags.writeable = False
         self.model, self.data, self.body = world.model, d, world.robot_body
+        # with non-convex obstacles the lidar skips their convex parts (it sees their prism mesh)
+        # and obstacles the lidar cannot see (visible_to_lidar: false) are skipped altogether
+        self.groups = None
+        skipped = [g for g in (PARTS_GROUP, UNSEEN_GROUP) if (world.model.geom_group == g).any()]
+        if skipped:
+            self.groups = np.ones(6, dtype=np.uint8)
+            self.groups[skipped] = 0
 
     def scan(self, tick: int, x: float, y: float, c: float, s: float) -> np.ndarray:
         """Ranges (read-only float32) of the robot at (x, y) with heading (cos, sin) = (c, s),
@@ -100,7 +110,7 @@ class Lidar:
         pnt = self.pnt
         pnt[0], pnt[1] = x, y
         if self.beams:
-            mujoco.mj_multiRay(self.model, self.data, pnt, self.dirs_flat, None, 1, self.body,
+            mujoco.mj_multiRay(self.model, self.data, pnt, self.dirs_flat, self.groups, 1, self.body,
                                self.geom, dist, None, self.beams, rmax)
         row = self.record[tick]
         if self.rng is None:
@@ -110,6 +120,8 @@ class Lidar:
             np.greater_equal(self.geom, 0, out=self.hit)
             np.maximum(dist, rmin, out=dist)
             np.minimum(dist, rmax, out=row, where=self.hit, casting="same_kind")
+        elif self.datasheet:
+            self._datasheet_noise(dist, row)
         else:
             np.putmask(dist, self.geom < 0, rmax)
             if self.sigma > 0.0:
@@ -119,6 +131,27 @@ class Lidar:
             np.maximum(dist, rmin, out=dist)
             np.minimum(dist, rmax, out=row, casting="same_kind")
         return self.readonly[tick]
+
+    def _datasheet_noise(self, dist: np.ndarray, row: np.ndarray) -> None:
+        """The datasheet model: Gaussian noise of sigma ``noise_sigma + noise_per_metre * range``,
+        dropout whose probability grows linearly from ``dropout`` at 0 m to ``dropout_at_max`` at
+        range_max, and spurious returns (probability ``spurious`` per beam) uniformly between
+        range_min and the true range; each from the episode's generator, in that order."""
+        rng, rmin, rmax = self.rng, self.range_min, self.range_max
+        hit = self.geom >= 0
+        np.putmask(dist, ~hit, rmax)
+        true = dist.copy()
+        if self.sigma > 0.0 or self.per_metre > 0.0:
+            dist += rng.normal(0.0, 1.0, self.beams) * (self.sigma + self.per_metre * true)
+        p = self.dropout if self.dropout_max is None else \
+            self.dropout + (self.dropout_max - self.dropout) * np.minimum(true / rmax, 1.0)
+        if np.any(p > 0.0):
+            np.putmask(dist, rng.random(self.beams) < p, rmax)
+        if self.spurious > 0.0:
+            ghost = rng.random(self.beams) < self.spurious
+            np.putmask(dist, ghost, rmin + rng.random(self.beams) * (np.minimum(true, rmax) - rmin))
+        np.maximum(dist, rmin, out=dist)
+        np.minimum(dist, rmax, out=row, casting="same_kind")
 
     def ranges(self, ticks: int) -> np.ndarray:
         """A copy of the first ``ticks`` recorded rows, for the Trajectory."""

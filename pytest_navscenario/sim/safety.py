@@ -21,8 +21,9 @@ from typing import Any
 
 import numpy as np
 
-from ..scenario.geometry import footprint_radius
-from ..scenario.model import BoxObstacle, Scenario
+from ..scenario.geometry import bounding_radius, convex_parts, footprint_part_distance, footprint_radius
+from ..scenario.model import BoxObstacle, MeshObstacle, PolygonObstacle, Scenario
+from ..scenario.motion import moving_indices
 
 SAMPLE_SPACING = 0.02   # m: the most any footprint point moves between two sweep samples
 MAX_SAMPLES = 64
@@ -77,7 +78,12 @@ class SafetyLayer:
         self.cos, self.sin = np.cos(yaw), np.sin(yaw)
         self.half = np.array([(o.length / 2.0, o.width / 2.0) if isinstance(o, BoxObstacle)
                               else (0.0, 0.0) for o in obstacles], dtype=float).reshape(n, 2)
-        self.obs_r = np.array([0.0 if isinstance(o, BoxObstacle) else o.radius for o in obstacles])
+        # polygons and meshes: their convex parts (world frame), a bounding circle for the bounds
+        self.parts = {j: convex_parts(o) for j, o in enumerate(obstacles)
+                      if isinstance(o, (PolygonObstacle, MeshObstacle))}
+        self.obs_r = np.array([0.0 if isinstance(o, BoxObstacle) else
+                               bounding_radius(o) if j in self.parts else o.radius
+                               for j, o in enumerate(obstacles)])
         # world corners of box obstacles (n, 4, 2); cylinders: their centre repeated
         local = np.stack([self.half * sign for sign in ((1, 1), (-1, 1), (-1, -1), (1, -1))], axis=1)
         self.corners = np.empty((n, 4, 2))
@@ -89,8 +95,20 @@ class SafetyLayer:
         self._shape = list(zip(self.centres[:, 0].tolist(), self.centres[:, 1].tolist(),
                                self.cos.tolist(), self.sin.tolist(), self.half[:, 0].tolist(),
                                self.half[:, 1].tolist(), self.obs_r.tolist()))
-        self._circles = (list(zip(range(n), self.centres[:, 0].tolist(), self.centres[:, 1].tolist(),
-                                  self.bound.tolist())) if n <= 32 else None)
+        # moving obstacles are checked apart, where they are now and with their velocity
+        # an obstacle the lidar cannot see (glass) is not seen by this layer either (a real one
+        # works on the same sensor); moving ones are checked apart, with their velocity
+        unseen = [j for j, o in enumerate(obstacles) if not getattr(o, "visible_to_lidar", True)]
+        self.moving = [j for j in moving_indices(obstacles) if j not in unseen]
+        self.moving_slots = [k for k, j in enumerate(moving_indices(obstacles)) if j not in unseen]
+        self.static = np.ones(n, dtype=bool)
+        self.static[moving_indices(obstacles)] = False
+        self.static[unseen] = False
+        static = [j for j in range(n) if self.static[j]]
+        self._movers = [(j, float(self.centres[j, 0]), float(self.centres[j, 1]), float(self.bound[j]))
+                        for j in self.moving]
+        self._circles = ([(j, float(self.centres[j, 0]), float(self.centres[j, 1]), float(self.bound[j]))
+                          for j in static] if len(static) <= 32 else None)
 
     def distances(self, poses: np.ndarray, idx: np.ndarray) -> np.ndarray:
         """Exact footprint-obstacle distances (0 on overlap) for poses (k, 3) and obstacles ``idx``:
@@ -135,8 +153,14 @@ class SafetyLayer:
             d[:, box] = db
         return d
 
-    def check(self, x: float, y: float, yaw: float, vx: float, vy: float, wz: float) -> str | None:
-        """The name of the obstacle the predicted sweep would hit, or None (robot may go on)."""
+    def check(self, x: float, y: float, yaw: float, vx: float, vy: float, wz: float,
+              moving: list[list[float]] | None = None) -> str | None:
+        """The name of the obstacle the predicted sweep would hit, or None (robot may go on).
+
+        ``moving``: per moving obstacle (in scenario order) [dx, dy, vx, vy], its offset from its
+        scenario position and its velocity now (MovingObstacles.now); each is predicted to hold its
+        velocity over the horizon, like the robot its twist, and the sweep is checked relative to
+        it."""
         speed = math.hypot(vx, vy)
         # No point of the footprint moves farther than this over the horizon.
         travel = (speed + abs(wz) * self.robot_radius) * self.horizon
@@ -148,8 +172,9 @@ class SafetyLayer:
             near = [j for j, cx, cy, r in self._circles if hypot(cx - x, cy - y) - r < reach]
         else:
             gap = np.hypot(self.centres[:, 0] - x, self.centres[:, 1] - y) - self.bound
-            near = np.flatnonzero(gap < reach).tolist()
-        if not near:
+            near = np.flatnonzero((gap < reach) & self.static).tolist()
+        movers = self._near_movers(x, y, reach, moving) if moving is not None else []
+        if not near and not movers:
             return None
         # Tier 2, a cheap lower bound: the obstacle lies in the half-plane behind its point q
         # nearest to the robot's centre, so the robot is at least (|p - q| - the robot's extent
@@ -163,7 +188,11 @@ class SafetyLayer:
         turning = abs(wz) * h * (speed * h / 2.0 + self.robot_radius)
         limit = self.margin
         close = []
+        parts = self.parts
         for j in near:
+            if j in parts:          # no cheap bound for a polygon: its exact distance decides
+                close.append(j)
+                continue
             cx, cy, oc, os_, hx, hy, r = self._shape[j]
             dx, dy = x - cx, y - cy
             px, py = dx * oc + dy * os_, -dx * os_ + dy * oc        # robot centre, obstacle frame
@@ -176,12 +205,19 @@ class SafetyLayer:
                 if gap - r - extent + min(0.0, h * (wvx * ux + wvy * uy)) - turning > limit:
                     continue
             close.append(j)
-        if not close:
+        if not close and not movers:
             return None
-        near = close
-        poses = twist_poses(x, y, yaw, vx, vy, wz, np.linspace(0.0, self.horizon, n + 1))
-        idx = np.asarray(near)
-        dist = self.distances(poses, idx)                            # (n + 1, m)
+        times = np.linspace(0.0, self.horizon, n + 1)
+        poses = twist_poses(x, y, yaw, vx, vy, wz, times)
+        idx = np.asarray(close + [j for j, _, _ in movers], dtype=int)
+        dist = np.empty((n + 1, len(idx)))
+        if close:
+            dist[:, :len(close)] = self._columns(poses, close)   # (n + 1, m)
+        for col, (j, offset, vel) in enumerate(movers, start=len(close)):
+            rel = poses.copy()      # the robot relative to the obstacle's scenario position
+            rel[:, 0] -= offset[0] + vel[0] * times
+            rel[:, 1] -= offset[1] + vel[1] * times
+            dist[:, col] = self._columns(rel, [j])[:, 0]
         now, future = dist[0], dist[1:]
         # hit: a future sample within the threshold, or (already within it) any approach at all
         hit = np.where(now > threshold, future <= threshold, future < now - 1e-9)
@@ -190,3 +226,37 @@ class SafetyLayer:
         first = np.where(hit.any(axis=0), hit.argmax(axis=0), n + 1)  # earliest sample per obstacle
         order = np.lexsort((future.min(axis=0), first))
         return self.names[int(idx[order[0]])]
+
+    def _columns(self, poses: np.ndarray, indices: list[int]) -> np.ndarray:
+        """Distances (k, len(indices)) of the footprint at ``poses`` to the obstacles ``indices``:
+        boxes and cylinders analytically (``distances``), polygons and meshes part by part."""
+        parts = self.parts
+        if not any(j in parts for j in indices):
+            return self.distances(poses, np.asarray(indices))
+        out = np.empty((len(poses), len(indices)))
+        simple = [k for k, j in enumerate(indices) if j not in parts]
+        if simple:
+            out[:, simple] = self.distances(poses, np.asarray([indices[k] for k in simple]))
+        for k, j in enumerate(indices):
+            if j in parts:
+                out[:, k] = np.min([self._convex_distance(poses, verts) for verts in parts[j]], axis=0)
+        return out
+
+    def _convex_distance(self, poses: np.ndarray, verts: np.ndarray) -> np.ndarray:
+        """Exact distance (k,) of the footprint at ``poses`` to one convex part (V, 2), 0 on overlap."""
+        if self.circle_robot:
+            return footprint_part_distance(0.0, 0.0, self.robot_r, poses, verts)
+        return footprint_part_distance(self.hl, self.hw, 0.0, poses, verts)
+
+    def _near_movers(self, x: float, y: float, reach: float, moving: list[list[float]]
+                     ) -> list[tuple[int, tuple[float, float], tuple[float, float]]]:
+        """The moving obstacles that may come within reach over the horizon: (index, offset,
+        velocity) each."""
+        out = []
+        hypot, h = math.hypot, self.horizon
+        if len(self.moving_slots) != len(moving):
+            moving = [moving[k] for k in self.moving_slots]
+        for (j, cx, cy, bound), (ox, oy, ovx, ovy) in zip(self._movers, moving):
+            if hypot(cx + ox - x, cy + oy - y) - bound < reach + hypot(ovx, ovy) * h:
+                out.append((j, (ox, oy), (ovx, ovy)))
+        return out

@@ -16,6 +16,9 @@ class Collision:
     x: float               # contact point, world frame
     y: float
     depth: float           # penetration depth (m, >= 0)
+    robot_speed: float = 0.0      # m/s, the robot's speed at the contact
+    robot_moving: bool = True     # False: the robot stood still and was hit (sim/moving.py)
+    obstacle_speed: float = 0.0   # m/s, the obstacle's speed at the contact (0: static)
 
 
 @dataclass(frozen=True)
@@ -44,6 +47,7 @@ class Trajectory:
     ranges: np.ndarray       # (m, beams) float32 lidar ranges as the planner saw them (noise included)
     angles: np.ndarray       # (beams,) rad, beam directions in the robot frame
     waypoint_times: tuple[float, ...] = ()  # when each intermediate waypoint was passed
+    believed: np.ndarray | None = None      # (m, 3) the pose the planner believed at each tick (drift)
 
     @property
     def duration(self) -> float:
@@ -57,6 +61,8 @@ def trajectory_to_dict(traj: Trajectory) -> dict[str, Any]:
     """Plain lists (JSON / xdist-serialisable). Inverse: trajectory_from_dict."""
     out: dict[str, Any] = {name: np.asarray(getattr(traj, name)).tolist() for name in _TRAJ_ARRAYS}
     out["waypoint_times"] = list(traj.waypoint_times)
+    if traj.believed is not None:
+        out["believed"] = np.asarray(traj.believed).tolist()
     return out
 
 
@@ -71,4 +77,6 @@ def trajectory_from_dict(data: dict[str, Any]) -> Trajectory:
         "ranges": np.asarray(data["ranges"], dtype=np.float32).reshape(-1, beams),
         "angles": np.asarray(data["angles"], dtype=float),
     }
-    return Trajectory(**arrays, waypoint_times=tuple(data.get("waypoint_times", ())))
+    believed = data.get("believed")
+    return Trajectory(**arrays, waypoint_times=tuple(data.get("waypoint_times", ())),
+                      believed=None if believed is None else np.asarray(believed, dtype=float).reshape(-1, 3))

@@ -12,14 +12,16 @@ from __future__ import annotations
 import logging
 import math
 from collections import OrderedDict, deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import mujoco
 import numpy as np
 
 from ..core.errors import ScenarioError
-from ..scenario.model import BoxObstacle, CylinderObstacle, Footprint, Scenario
+from ..scenario.geometry import convex_parts_local, outline_points
+from ..scenario.model import (BoxObstacle, CylinderObstacle, Footprint, MeshObstacle, Motion, PolygonObstacle,
+                              Scenario)
 from .safety import SafetyLayer
 from .trajectory import Collision
 
@@ -29,6 +31,9 @@ LIDAR_HEIGHT = 0.2         # m; the lidar plane. Obstacles lower than this are i
 TRACKING_TAU = 0.05        # s; velocity tracking time constant of the actuators (kv = inertia / tau)
 FORCE_HEADROOM = 1.5       # actuator force limit = inertia * max acceleration * headroom
 MODEL_CACHE_SIZE = 64      # compiled models kept (the search and repeats re-run the same layout)
+PARTS_GROUP = 3            # geom group of a non-convex obstacle's convex parts: they collide, the lidar
+                           # skips them and sees the obstacle's one exact prism mesh instead
+UNSEEN_GROUP = 4           # geom group of obstacles with visible_to_lidar: false (glass): the lidar skips it
 
 TWO_PI = 2.0 * math.pi
 
@@ -122,23 +127,86 @@ def _add_robot(spec: mujoco.MjSpec, scenario: Scenario) -> None:
 
 
 def _add_obstacles(spec: mujoco.MjSpec, scenario: Scenario) -> None:
-    """One static world geom per obstacle (boxes and cylinders standing on z = 0)."""
+    """One geom per obstacle standing on z = 0 (a polygon or mesh: one convex prism geom per convex
+    part, named ``<name>/<k>``): static ones on the world body, a moving one on its own mocap body
+    (kinematic: the loop writes its position, MuJoCo moves its geoms and detects their contacts like
+    any other; mocap_pos order = moving obstacles' order)."""
     for obs, gname in zip(scenario.obstacles, _geom_names(scenario)):
         h = obs.height
+        yaw = getattr(obs, "yaw_rad", 0.0)
+        quat = [math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0)]
+        if getattr(obs, "motion", None) is not None:
+            parent = spec.worldbody.add_body(name=f"moving:{gname}", mocap=True, pos=[obs.x, obs.y, 0.0],
+                                             quat=quat)
+            pos, quat, rgba = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.9, 0.5, 0.2, 1]
+        else:
+            parent, pos, rgba = spec.worldbody, [obs.x, obs.y, 0.0], [0.6, 0.6, 0.6, 1]
+        unseen = not getattr(obs, "visible_to_lidar", True)
+        if unseen:
+            rgba = [0.6, 0.85, 0.95, 0.4]
+        common = dict(contype=2, conaffinity=1, rgba=rgba, quat=quat, group=UNSEEN_GROUP if unseen else 0)
         if isinstance(obs, BoxObstacle):
-            yaw = obs.yaw_rad
-            spec.worldbody.add_geom(
-                name=gname, type=mujoco.mjtGeom.mjGEOM_BOX, pos=[obs.x, obs.y, h / 2.0],
-                quat=[math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0)],
-                size=[obs.length / 2.0, obs.width / 2.0, h / 2.0], contype=2, conaffinity=1,
-                rgba=[0.6, 0.6, 0.6, 1])
+            parent.add_geom(name=gname, type=mujoco.mjtGeom.mjGEOM_BOX, pos=[pos[0], pos[1], h / 2.0],
+                            size=[obs.length / 2.0, obs.width / 2.0, h / 2.0], **common)
         elif isinstance(obs, CylinderObstacle):
-            spec.worldbody.add_geom(
-                name=gname, type=mujoco.mjtGeom.mjGEOM_CYLINDER, pos=[obs.x, obs.y, h / 2.0],
-                size=[obs.radius, h / 2.0, 0.0], contype=2, conaffinity=1, rgba=[0.6, 0.6, 0.6, 1])
+            parent.add_geom(name=gname, type=mujoco.mjtGeom.mjGEOM_CYLINDER, pos=[pos[0], pos[1], h / 2.0],
+                            size=[obs.radius, h / 2.0, 0.0], **common)
+        elif isinstance(obs, (PolygonObstacle, MeshObstacle)):
+            parts = convex_parts_local(tuple(outline_points(obs)))
+            for k, part in enumerate(parts):
+                mesh = f"{gname}/{k}"
+                verts = np.concatenate([np.column_stack([part, np.zeros(len(part))]),
+                                        np.column_stack([part, np.full(len(part), h)])])
+                spec.add_mesh(name=mesh, uservert=verts.ravel().tolist())
+                group = UNSEEN_GROUP if unseen else (PARTS_GROUP if len(parts) > 1 else 0)
+                parent.add_geom(name=mesh, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=mesh, pos=pos,
+                                **{**common, "group": group})
+            if len(parts) > 1 and not unseen:   # the lidar sees one exact prism mesh (cheaper than the parts)
+                verts, faces = prism_mesh(outline_points(obs), h)
+                spec.add_mesh(name=f"{gname}/outline", uservert=verts.ravel().tolist(),
+                              userface=faces.ravel().tolist())
+                parent.add_geom(name=f"{gname}/outline", type=mujoco.mjtGeom.mjGEOM_MESH,
+                                meshname=f"{gname}/outline", pos=pos, contype=0, conaffinity=0,
+                                rgba=rgba, quat=common["quat"])
         else:
             raise ScenarioError(f"unknown obstacle type {type(obs).__name__}", path=scenario.source,
-                                field=f"obstacles[{obs.name}]", hint="use a box or a cylinder")
+                                field=f"obstacles[{obs.name}]", hint="use a box, cylinder, polygon or mesh")
+
+
+def prism_mesh(points, h: float) -> tuple[np.ndarray, np.ndarray]:
+    """(vertices (2n, 3), triangles (m, 3)) of a simple polygon extruded from 0 to ``h``: its
+    constrained Delaunay triangles as floor and top, two triangles per wall, facing outwards."""
+    import shapely
+    import shapely.geometry.polygon
+    from shapely.geometry import Polygon
+
+    pts = np.asarray(points, dtype=float)
+    n = len(pts)
+    ccw = shapely.geometry.polygon.orient(Polygon(pts), 1.0)
+    if not np.allclose(np.asarray(ccw.exterior.coords)[0], pts[0]) or not Polygon(pts).exterior.is_ccw:
+        pts = np.asarray(ccw.exterior.coords)[:-1]
+    index = {tuple(p): i for i, p in enumerate(pts.tolist())}
+    faces = []
+    for tri in shapely.constrained_delaunay_triangles(Polygon(pts)).geoms:
+        a, b, c = (index[tuple(p)] for p in np.asarray(shapely.geometry.polygon.orient(tri, 1.0)
+                                                       .exterior.coords)[:-1].tolist())
+        faces += [(a, c, b), (a + n, b + n, c + n)]
+    for i in range(n):
+        j = (i + 1) % n
+        faces += [(i, j, j + n), (i, j + n, i + n)]
+    verts = np.concatenate([np.column_stack([pts, np.zeros(n)]), np.column_stack([pts, np.full(n, h)])])
+    return verts, np.array(faces, dtype=int)
+
+
+def obstacle_geom_names(scenario: Scenario) -> list[list[str]]:
+    """The MuJoCo geom names of each obstacle (a polygon or mesh has one per convex part)."""
+    out = []
+    for obs, gname in zip(scenario.obstacles, _geom_names(scenario)):
+        if isinstance(obs, (PolygonObstacle, MeshObstacle)):
+            out.append([f"{gname}/{k}" for k in range(len(convex_parts_local(tuple(outline_points(obs)))))])
+        else:
+            out.append([gname])
+    return out
 
 
 def build_spec(scenario: Scenario) -> mujoco.MjSpec:
@@ -211,14 +279,19 @@ class World:
 
 
 _CACHE: OrderedDict[Any, World] = OrderedDict()
+_MOVES = Motion()     # stands for any motion in a cache key
 
 
 def _cache_key(scenario: Scenario) -> Any:
     # Everything the compiled model (and the safety geometry) depends on, names included (the
     # content hash ignores names, but contacts must map to the right name).
+    # A moving obstacle's timing and speed are not in the model (the loop writes its positions),
+    # so candidates of a search that differ only in those share one compiled model.
     robot = scenario.robot
-    return (robot.footprint, robot.limits, robot.safety, scenario.obstacles,
-            scenario.simulation.timestep)
+    obstacles = scenario.obstacles
+    if any(getattr(o, "motion", None) is not None for o in obstacles):
+        obstacles = tuple(o if o.motion is None else replace(o, motion=_MOVES) for o in obstacles)
+    return (robot.footprint, robot.limits, robot.safety, obstacles, scenario.simulation.timestep)
 
 
 def compiled_world(scenario: Scenario) -> World:
@@ -237,7 +310,7 @@ def compiled_world(scenario: Scenario) -> World:
     robot_body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "robot")
     robot_geom = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "footprint")
     obstacle_of_geom = {mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, gname): i
-                        for i, gname in enumerate(_geom_names(scenario))}
+                        for i, names in enumerate(obstacle_geom_names(scenario)) for gname in names}
     safety = SafetyLayer(scenario) if scenario.robot.safety.enabled and scenario.obstacles else None
     world = World(model, robot_body, robot_geom, obstacle_of_geom, safety)
     _CACHE[key] = world

@@ -76,6 +76,8 @@ def _closest_obstacle(scenario: Scenario, stop: tuple[float, float, float],
     x, y, tol = stop
     best = None
     for obs in scenario.obstacles:
+        if getattr(obs, "motion", None) is not None:
+            continue
         d = obstacle_polygon(obs).distance(Point(x, y))
         if d + tol < r - INFLATION_TOLERANCE and (best is None or d < best[1]):
             best = (obs.name, d)

@@ -47,8 +47,11 @@ from .paths import (
     obstacle_shapes,
     path_through,
     reference_path,
+    is_outlined,
     shortest_path,
+    static_obstacles,
 )
+from ..scenario.motion import displacement, tracks
 from ..sim.trajectory import Collision, Trajectory
 from .result import Metrics
 from ..scenario.model import Scenario
@@ -134,13 +137,77 @@ def min_clearance(scenario: Scenario, t: np.ndarray, pose: np.ndarray
     ``COARSE_STRIDE``-th pose, widened by how far the robot moves around it, keeps the windows
     that may hold the minimum; a full-rate centre pass inside them keeps the poses that may;
     only those get the exact box-to-box distance.
+
+    A moving obstacle is measured where it was at each moment: the robot's poses relative to the
+    obstacle's motion (shifted by its displacement at that time) against the obstacle where the
+    scenario places it.
     """
-    shapes = obstacle_shapes(scenario.obstacles)
     pose = np.asarray(pose, dtype=float).reshape(-1, 3)
+    t = np.asarray(t, dtype=float)
+    if not len(pose) or not scenario.obstacles:
+        return math.inf, "", NAN, NAN, NAN
+    footprint = scenario.robot.footprint
+    best = _closest(static_obstacles(scenario), footprint, pose)
+    for j, track in tracks(scenario.obstacles).items():
+        rel = pose.copy()
+        rel[:, :2] -= displacement(track, t)
+        hit = _closest((scenario.obstacles[j],), footprint, rel)
+        if hit is not None and (best is None or hit[0] < best[0] or (hit[0] == best[0] and hit[2] < best[2])):
+            best = hit
+    if best is None:
+        return math.inf, "", NAN, NAN, NAN
+    dist, name, i = best
+    return dist, name, float(t[i]), float(pose[i, 0]), float(pose[i, 1])
+
+
+def _closest(obstacles: tuple, footprint, pose: np.ndarray) -> tuple[float, str, int] | None:
+    """(distance, obstacle name, pose index) of the closest approach to static ``obstacles``."""
+    simple = tuple(o for o in obstacles if not is_outlined(o))
+    best = _closest_simple(simple, footprint, pose) if len(simple) else None
+    for obs in obstacles:
+        if is_outlined(obs):
+            hit = _closest_outlined(obs, footprint, pose, best[0] if best is not None else math.inf)
+            if hit is not None and (best is None or hit[0] < best[0] or (hit[0] == best[0] and hit[2] < best[2])):
+                best = hit
+    return best
+
+
+def _closest_outlined(obs, footprint, pose: np.ndarray, beat: float) -> tuple[float, str, int] | None:
+    """The closest approach to a polygon or mesh obstacle: exact footprint-to-part distances, only
+    at the poses whose centre may come closer than the best so far (``beat``, or the exact distance
+    at the pose nearest to the obstacle's centre), part by part within its bounding circle."""
+    from ..scenario.geometry import convex_parts, footprint_part_distance
+
+    hl, hw, rho = footprint_core(footprint)
+    r_out = math.hypot(hl, hw) + rho
+    parts = convex_parts(obs)
+    centres = [p.mean(axis=0) for p in parts]
+    radii = [float(np.hypot(*(p - c).T).max()) for p, c in zip(parts, centres)]
+    gaps = np.min([np.hypot(pose[:, 0] - c[0], pose[:, 1] - c[1]) - r for c, r in zip(centres, radii)], axis=0)
+    nearest = int(np.argmin(gaps))
+    beat = min(beat, min(float(footprint_part_distance(hl, hw, rho, pose[nearest:nearest + 1], p)[0])
+                         for p in parts))
+    best = None
+    for part, c, r in zip(parts, centres, radii):
+        idx = np.flatnonzero(np.hypot(pose[:, 0] - c[0], pose[:, 1] - c[1]) - r - r_out <= beat + 1e-12)
+        if not len(idx):
+            continue
+        d = footprint_part_distance(hl, hw, rho, pose[idx], part)
+        k = int(np.argmin(d))
+        hit = (float(d[k]), obs.name, int(idx[k]))
+        if best is None or hit[0] < best[0] or (hit[0] == best[0] and hit[2] < best[2]):
+            best = hit
+            beat = min(beat, hit[0])
+    return best
+
+
+def _closest_simple(obstacles: tuple, footprint, pose: np.ndarray) -> tuple[float, str, int] | None:
+    """``_closest`` among boxes and cylinders (rounded boxes, vectorised with pruning)."""
+    shapes = obstacle_shapes(obstacles)
     n, k = len(pose), len(shapes)
     if not k or not n:
-        return math.inf, "", NAN, NAN, NAN
-    hl, hw, rho = footprint_core(scenario.robot.footprint)
+        return None
+    hl, hw, rho = footprint_core(footprint)
     r_out, r_in = math.hypot(hl, hw) + rho, min(hl, hw) + rho
     ox, oy, oc, os_, ohl, ohw, orho = (a[:, None] for a in (
         shapes.x, shapes.y, shapes.cos, shapes.sin, shapes.hl, shapes.hw, shapes.rho))
@@ -173,7 +240,7 @@ def min_clearance(scenario: Scenario, t: np.ndarray, pose: np.ndarray
     exact = np.maximum(exact - rho - shapes.rho[kk], 0.0)
     best = int(np.argmin(exact))
     i, j = int(idx[best]), int(kk[best])
-    return float(exact[best]), shapes.names[j], float(t[i]), float(x[i]), float(y[i])
+    return float(exact[best]), shapes.names[j], i
 
 
 COARSE_STRIDE = 10  # poses per window of the coarse clearance pass

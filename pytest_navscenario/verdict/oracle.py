@@ -28,9 +28,7 @@ def classify(scenario: Scenario, trajectory: Trajectory, *, collision: Collision
             f"planner error at tick {subject_failure.tick} (t={subject_failure.time:.2f} s): "
             f"{_one_line(subject_failure.message)}")
     if collision is not None:
-        return Outcome.COLLISION, (
-            f"collision with '{collision.obstacle}' at t={collision.time:.2f} s "
-            f"(depth {max(collision.depth, 0.0) * 1000:.0f} mm) at ({collision.x:.2f}, {collision.y:.2f})")
+        return Outcome.COLLISION, _collision_message(collision)
     if safety_stop is not None:
         return Outcome.SAFETY_STOP, (
             f"safety stop at t={safety_stop.time:.2f} s: predicted to hit "
@@ -46,6 +44,21 @@ def classify(scenario: Scenario, trajectory: Trajectory, *, collision: Collision
                                  f"{stuck_after:g} s; episode ended early at {duration:.1f} s of "
                                  f"{timeout:.1f} s")
     return Outcome.TIMEOUT, _timeout_message(scenario, trajectory, goal_reached)
+
+
+def _collision_message(collision: Collision) -> str:
+    """Where, and who moved: a robot standing still that a moving obstacle walked into reads
+    differently from one that drove into something (both are collisions)."""
+    text = (f"collision with '{collision.obstacle}' at t={collision.time:.2f} s "
+            f"(depth {max(collision.depth, 0.0) * 1000:.0f} mm) at ({collision.x:.2f}, {collision.y:.2f})")
+    moving = getattr(collision, "obstacle_speed", 0.0) > 0.0
+    if not getattr(collision, "robot_moving", True):
+        return text + (f": the robot stood still and '{collision.obstacle}' walked into it at "
+                       f"{collision.obstacle_speed:.2f} m/s" if moving else ": the robot stood still")
+    if moving:
+        return text + (f": the robot drove into it at {collision.robot_speed:.2f} m/s, the obstacle "
+                       f"moving at {collision.obstacle_speed:.2f} m/s")
+    return text
 
 
 def _timeout_message(scenario: Scenario, trajectory: Trajectory, goal_reached: bool) -> str:

@@ -37,7 +37,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..scenario.model import BoxObstacle, CylinderObstacle, Footprint, Obstacle, Scenario
+from ..scenario.model import (BoxObstacle, CylinderObstacle, Footprint, MeshObstacle, Obstacle, PolygonObstacle,
+                              Scenario)
 
 INFLATION_TOLERANCE = 0.01   # m: how far polygonised round parts may bulge beyond the true shape
 CACHE_SIZE = 4096            # scenarios remembered by shortest_path / min_obstacle_gap
@@ -154,15 +155,56 @@ def shape_pair_distance(a: Shapes, ia, b: Shapes, ib) -> np.ndarray:
 # Obstacle-obstacle gap
 
 
+def static_obstacles(scenario: Scenario) -> tuple[Obstacle, ...]:
+    """The obstacles that do not move: what the shortest path, path efficiency and the gap are
+    measured among (a moving obstacle is somewhere else a moment later; its clearance is measured
+    where it was, see metrics.min_clearance)."""
+    obstacles = scenario.obstacles
+    if not any(getattr(o, "motion", None) is not None for o in obstacles):
+        return tuple(obstacles)
+    return tuple(o for o in obstacles if getattr(o, "motion", None) is None)
+
+
 def min_obstacle_gap(scenario: Scenario) -> tuple[float, str, str]:
-    """The narrowest gap between two obstacles: ``(distance m, name a, name b)``, 0 when they
-    touch or overlap; ``(inf, "", "")`` with fewer than two obstacles. Exact (true circles)."""
-    key = tuple(scenario.obstacles)
+    """The narrowest gap between two static obstacles: ``(distance m, name a, name b)``, 0 when
+    they touch or overlap; ``(inf, "", "")`` with fewer than two. Exact (true circles)."""
+    key = static_obstacles(scenario)
     hit = _GAP_CACHE.get(key)
     if hit is None:
-        hit = _min_gap(obstacle_shapes(key))
+        simple = tuple(o for o in key if not is_outlined(o))
+        hit = _min_gap(obstacle_shapes(simple))
+        if len(simple) < len(key):
+            hit = min(hit, _outline_gap(key), key=lambda g: g[0])
         _remember(_GAP_CACHE, key, hit)
     return hit
+
+
+def is_outlined(obs: Obstacle) -> bool:
+    """A polygon or mesh obstacle (measured by its outline's convex parts, not as a rounded box)."""
+    return isinstance(obs, (PolygonObstacle, MeshObstacle))
+
+
+def _outline_gap(obstacles: tuple[Obstacle, ...]) -> tuple[float, str, str]:
+    """The narrowest gap of the pairs with a polygon or mesh in them (exact: outlines are
+    polygons, a cylinder is its centre's distance minus its radius)."""
+    from shapely.geometry import Point
+
+    from ..scenario.geometry import obstacle_polygon
+
+    best = (math.inf, "", "")
+    shapes = [Point(o.x, o.y) if isinstance(o, CylinderObstacle) else obstacle_polygon(o) for o in obstacles]
+    for i, a in enumerate(obstacles):
+        for j in range(i + 1, len(obstacles)):
+            b = obstacles[j]
+            if not (is_outlined(a) or is_outlined(b)):
+                continue
+            d = shapes[i].distance(shapes[j])
+            d -= (a.radius if isinstance(a, CylinderObstacle) else 0.0) + \
+                (b.radius if isinstance(b, CylinderObstacle) else 0.0)
+            d = max(d, 0.0)
+            if d < best[0]:
+                best = (d, a.name, b.name)
+    return best
 
 
 def _min_gap(shapes: Shapes) -> tuple[float, str, str]:
@@ -227,6 +269,9 @@ def _grow(obstacles: Sequence[Obstacle], r: float, tol: float = INFLATION_TOLERA
         offsets = (normals * verts).sum(-1)
         radius = np.sqrt((local ** 2).sum(-1)).max(1)
         groups.append((verts, normals, offsets, b[:, :2], radius))
+    for o in obstacles:
+        if is_outlined(o):
+            groups.extend(_grow_outline(o, r, tol))
     cyls = [o for o in obstacles if isinstance(o, CylinderObstacle)]
     by_count: dict[int, list[CylinderObstacle]] = {}
     for o in cyls:
@@ -262,6 +307,39 @@ def _grow(obstacles: Sequence[Obstacle], r: float, tol: float = INFLATION_TOLERA
     )
 
 
+def _grow_outline(obs: Obstacle, r: float, tol: float) -> list[tuple]:
+    """Each convex part of a polygon or mesh grown by ``r`` (its corners' arcs circumscribed within
+    ``tol``, like a box's): one convex polygon group each, as ``_grow`` wants them."""
+    from ..scenario.geometry import convex_parts
+
+    out = []
+    for part in convex_parts(obs):
+        edges = np.roll(part, -1, axis=0) - part
+        lengths = np.hypot(edges[:, 0], edges[:, 1])
+        keep = lengths > 1e-12
+        part, edges, lengths = part[keep], edges[keep], lengths[keep]
+        normals = np.column_stack([edges[:, 1], -edges[:, 0]]) / lengths[:, None]   # outward (CCW)
+        verts, norms = [], []
+        for i in range(len(part)):
+            n_in, n_out = normals[i - 1], normals[i]       # the edges before and after vertex i
+            a0, a1 = math.atan2(n_in[1], n_in[0]), math.atan2(n_out[1], n_out[0])
+            turn = (a1 - a0) % (2 * math.pi)
+            q = 1 if r <= 0 else int(np.clip(math.ceil(turn / (2 * math.acos(r / (r + tol)))), 1, 16))
+            step = turn / q
+            for k in range(q):     # the arc around the vertex, circumscribed: vertices at r / cos(step / 2)
+                ang = a0 + (k + 0.5) * step
+                verts.append(part[i] + (max(r, 0.0) / math.cos(step / 2)) * np.array([math.cos(ang), math.sin(ang)]))
+                nang = a0 + (k + 1) * step
+                norms.append((math.cos(nang), math.sin(nang)))
+        verts = np.array(verts)
+        norms = np.array(norms)
+        offsets = (norms * verts).sum(-1)
+        centre = part.mean(axis=0)
+        radius = float(np.hypot(*(verts - centre).T).max())
+        out.append((verts[None], norms[None], offsets[None], centre[None], np.array([radius])))
+    return out
+
+
 def shortest_path(scenario: Scenario) -> ShortestPath | None:
     """Shortest collision-free path of the footprint's centre from the start through every
     waypoint (in order) to the goal, or None if there is none (a wall closes the way, or a
@@ -275,12 +353,12 @@ def path_through(scenario: Scenario, stops: Sequence[tuple[float, float]]) -> Sh
     """Shortest collision-free path for the scenario's footprint through ``stops`` (x, y) in
     order, among the scenario's obstacles; None if there is none. Cached like shortest_path."""
     stops = tuple((float(x), float(y)) for x, y in stops)
-    key = (scenario.robot.footprint, stops, tuple(scenario.obstacles))
+    key = (scenario.robot.footprint, stops, static_obstacles(scenario))
     try:
         return _PATH_CACHE[key]
     except KeyError:
         pass
-    result = _plan(np.array(stops, dtype=float).reshape(-1, 2), scenario.obstacles,
+    result = _plan(np.array(stops, dtype=float).reshape(-1, 2), key[2],
                    inflation_radius(scenario.robot.footprint))
     _remember(_PATH_CACHE, key, result)
     return result
@@ -370,12 +448,12 @@ def path_through_discs(scenario: Scenario, discs: Sequence[tuple[float, float, f
     ``inflation``: obstacle growth (default: the footprint's, as for shortest_path). Cached."""
     r = inflation_radius(scenario.robot.footprint) if inflation is None else inflation
     discs = tuple((float(x), float(y), max(float(t), 0.0)) for x, y, t in discs)
-    key = ("discs", r, discs, tuple(scenario.obstacles))
+    key = ("discs", r, discs, static_obstacles(scenario))
     try:
         return _PATH_CACHE[key]
     except KeyError:
         pass
-    result = _plan_discs(discs, scenario.obstacles, r)
+    result = _plan_discs(discs, key[3], r)
     _remember(_PATH_CACHE, key, result)
     return result
 

@@ -7,7 +7,7 @@ import re
 
 import pytest
 
-UNITS = {"N", "SECONDS", "PATH", "DIR", "SPEC", "NAME"}
+UNITS = {"N", "SECONDS", "PATH", "DIR", "SPEC", "NAME", "ADDRESS"}   # ADDRESS: auto or HOST:PORT (--nav-ray)
 
 
 @pytest.fixture

@@ -13,6 +13,9 @@ from pathlib import Path
 import pytest
 
 from test_search import SEED_YAML
+# Before pytester's in-process runs snapshot sys.modules: a worker pool pickles functions of
+# concurrent.futures by reference, which fails if a later run re-imports that module.
+import pytest_navscenario.dispatch.local  # noqa: E402,F401
 
 STRAIGHT = (Path(__file__).parent / "straight_planner.py").read_text()
 

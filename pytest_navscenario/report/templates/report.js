@@ -11,6 +11,8 @@ function navViewer(box){
  var cv=box.querySelector('canvas'),ctx=cv.getContext('2d'),sl=box.querySelector('input'),lab=box.querySelector('.t');
  var xs=d.x.concat([d.goal[0]]),ys=d.y.concat([d.goal[1]]);
  d.obs.forEach(function(p){p.forEach(function(q){xs.push(q[0]);ys.push(q[1]);});});
+ var mov={};(d.mov||[]).forEach(function(m){mov[m.i]=m;var n=m.dx.length-1;
+  d.obs[m.i].forEach(function(q){xs.push(q[0]+m.dx[n]);ys.push(q[1]+m.dy[n]);});});
  var x0=Math.min.apply(null,xs)-1,x1=Math.max.apply(null,xs)+1,y0=Math.min.apply(null,ys)-1,y1=Math.max.apply(null,ys)+1;
  var s=Math.min(cv.width/(x1-x0),cv.height/(y1-y0));
  function X(x){return (x-x0)*s;} function Y(y){return cv.height-(y-y0)*s;}
@@ -19,7 +21,9 @@ function navViewer(box){
   if(d.fp.shape==='circle'){ctx.beginPath();ctx.arc(X(d.x[i]),Y(d.y[i]),d.fp.radius*s,0,2*Math.PI);return;}
   poly([[l,w],[-l,w],[-l,-w],[l,-w]].map(function(q){return [d.x[i]+c*q[0]-n*q[1],d.y[i]+n*q[0]+c*q[1]];}));}
  function draw(i){ctx.clearRect(0,0,cv.width,cv.height);ctx.fillStyle='#9e9e9e';
-  d.obs.forEach(function(p){poly(p);ctx.fill();});
+  d.obs.forEach(function(p,j){var m=mov[j];if(m){ctx.fillStyle='#ffb74d';
+    poly(p.map(function(q){return [q[0]+m.dx[i],q[1]+m.dy[i]];}));ctx.fill();ctx.fillStyle='#9e9e9e';}
+   else{poly(p);ctx.fill();}});
   ctx.strokeStyle='#2e7d32';ctx.beginPath();ctx.arc(X(d.goal[0]),Y(d.goal[1]),Math.max(3,d.goal[2]*s),0,2*Math.PI);ctx.stroke();
   ctx.lineWidth=2;for(var k=1;k<d.x.length;k++){var f=Math.min(1,d.v[k]/d.vmax);
    ctx.strokeStyle='hsl('+Math.round(260-200*f)+',75%,'+(k<=i?45:80)+'%)';ctx.beginPath();

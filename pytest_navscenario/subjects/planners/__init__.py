@@ -8,8 +8,7 @@ are imported lazily so that importing this package costs nothing.
 """
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from ...core.lazy import lazy_exports
 
 _EXPORTS = {
     "DynamicWindowPlanner": "dwa",
@@ -17,9 +16,4 @@ _EXPORTS = {
 }
 __all__ = sorted(_EXPORTS)
 
-
-def __getattr__(name: str) -> Any:
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module 'pytest_navscenario.subjects.planners' has no attribute {name!r}")
-    return getattr(importlib.import_module(f".{module}", __name__), name)
+__getattr__ = lazy_exports(__name__, _EXPORTS)

@@ -1,0 +1,189 @@
+"""What crosses to a worker and back: a job out (an ``EpisodeJob``, or any picklable object with
+``run()`` and ``restore(outcome)``, such as the search's candidate jobs), a compact result (or the
+job's exception) back, and ``Pending``, the handle every executor returns per job.
+
+Compact: the worker drops the scenario from the result (the caller already holds it and puts it
+back) and, unless asked for, the trajectory (the bulk: ~60-400 KiB per episode, against ~2 KiB
+for outcome, metrics and events). Numpy arrays pickle exactly, so a result that crossed is equal,
+bit for bit, to one computed in place.
+"""
+from __future__ import annotations
+
+import os
+import pickle
+import socket
+import traceback
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from ..core.errors import NavScenarioError
+from ..scenario.model import Scenario
+from ..verdict.result import EpisodeResult
+
+KEEP_CHOICES = ("all", "failed", "none")
+
+
+@dataclass(frozen=True)
+class EpisodeJob:
+    """One episode to run: ``run_scenario(scenario, subject, seed=seed, tick_limit=tick_limit)``.
+
+    ``subject``: a spec string (``dwa``, ``pkg.mod:Attr``, ``exec:PROGRAM ARGS``) or a picklable
+    planner factory. ``keep_trajectory``: which results bring their trajectory back ("all",
+    "failed": outcome not success, "none"). ``cwd``: the folder an ``exec:`` program is resolved
+    and started in (a Ray worker's own working folder is not the user's)."""
+    scenario: Scenario
+    subject: Any = None
+    seed: int | None = None
+    tick_limit: float | None = None
+    keep_trajectory: str = "all"
+    cwd: str | None = None
+    reset_timeout: float | None = None    # s an exec: planner may take to answer reset (None: its default)
+
+    def __post_init__(self) -> None:
+        if self.keep_trajectory not in KEEP_CHOICES:
+            raise ValueError(f"keep_trajectory must be one of {KEEP_CHOICES}, got {self.keep_trajectory!r}")
+
+    def run(self) -> EpisodeResult:
+        """Worker side: the episode, compacted for the way back."""
+        from ..harness.runner import run_scenario
+
+        result = run_scenario(self.scenario, _subject_for(self), seed=self.seed, tick_limit=self.tick_limit,
+                              reset_timeout=self.reset_timeout)
+        return compact(result, self.keep_trajectory)
+
+    def restore(self, result: EpisodeResult) -> EpisodeResult:
+        """Caller side: put the scenario back."""
+        result.scenario = self.scenario
+        return result
+
+
+@dataclass
+class EpisodeError:
+    """An exception an episode raised in a worker: re-raised, as itself, by ``Pending.result``."""
+    type_name: str
+    message: str
+    remote_traceback: str
+    where: str
+    pickled: bytes | None      # the exception itself when it survives pickling unchanged
+
+    @classmethod
+    def capture(cls, exc: BaseException) -> "EpisodeError":
+        pickled: bytes | None
+        try:
+            pickled = pickle.dumps(exc)
+            back = pickle.loads(pickled)
+            if type(back) is not type(exc) or str(back) != str(exc):
+                pickled = None
+        except Exception:
+            pickled = None
+        return cls(type(exc).__name__, str(exc), traceback.format_exc(), worker_name(), pickled)
+
+    def exception(self) -> BaseException:
+        exc: BaseException
+        if self.pickled is not None:
+            exc = pickle.loads(self.pickled)
+        else:
+            exc = RemoteEpisodeError(f"{self.type_name}: {self.message}")
+        if hasattr(exc, "add_note"):
+            exc.add_note(f"(raised in the episode worker {self.where}; its traceback:\n"
+                         f"{self.remote_traceback.rstrip()})")
+        return exc
+
+
+class RemoteEpisodeError(NavScenarioError):
+    """An episode raised an exception in a worker that cannot be rebuilt here (its type and
+    message are kept)."""
+
+
+def worker_name() -> str:
+    return f"pid {os.getpid()} on {socket.gethostname()}"
+
+
+# -- worker side ----------------------------------------------------------------------------------
+_FACTORIES: dict[tuple[str, str | None], Callable[[], Any]] = {}
+
+
+def _factory(spec: str, cwd: str | None) -> Callable[[], Any]:
+    """The planner factory of a spec, loaded once per process; an ``exec:`` program is resolved
+    in and started in ``cwd`` (so it is started once per process and reused)."""
+    key = (spec.strip(), cwd)
+    factory = _FACTORIES.get(key)
+    if factory is None:
+        if key[0].startswith("exec:"):
+            from ..subjects.external import exec_factory
+            factory = exec_factory(key[0][len("exec:"):].strip(), cwd=cwd)
+        else:
+            from ..subjects.loading import load_subject
+            factory = load_subject(key[0])
+        _FACTORIES[key] = factory
+    return factory
+
+
+@dataclass(frozen=True)
+class SubjectFactory:
+    """A picklable planner factory for a subject spec: whichever process calls it loads the spec
+    (once) and makes a fresh planner. What a worker gets instead of a loaded class or closure."""
+    spec: str
+    cwd: str | None = None
+
+    def __call__(self) -> Any:
+        return _factory(self.spec, self.cwd)()
+
+
+def _subject_for(job: EpisodeJob) -> Any:
+    """What run_scenario gets: the spec itself (so results name it as written), except
+    ``exec:`` with a ``cwd``, which becomes a factory bound to that folder."""
+    spec = job.subject
+    if isinstance(spec, str) and spec.strip().startswith("exec:") and job.cwd:
+        return _factory(spec, job.cwd)
+    return spec
+
+
+def compact(result: EpisodeResult, keep: str) -> EpisodeResult:
+    """Strip what need not travel: the scenario always, the trajectory unless ``keep`` wants it."""
+    result.scenario = None  # type: ignore[assignment]
+    if keep == "none" or keep == "failed" and result.passed:
+        result.trajectory = _empty_trajectory()
+    return result
+
+
+def run_job(job: Any) -> Any:
+    """Run one job here (``job.run()``) and return its result, or its exception as an
+    EpisodeError (never raises, so a pool or Ray never mistakes an episode's error for a lost
+    worker)."""
+    try:
+        return job.run()
+    except Exception as exc:
+        return EpisodeError.capture(exc)
+
+
+def restore(job: Any, outcome: Any) -> Any:
+    """Caller side: raise the job's exception, or let the job complete its result."""
+    if isinstance(outcome, EpisodeError):
+        raise outcome.exception()
+    return job.restore(outcome)
+
+
+class Pending:
+    """The handle of one submitted job. ``result()`` waits for it and returns the result (an
+    EpisodeResult for an EpisodeJob) or raises the exception the job raised."""
+
+    def __init__(self, job: Any, wait: Callable[[], Any]):
+        self.job = job
+        self._wait = wait
+        self._outcome: Any = None
+
+    def result(self) -> Any:
+        if self._outcome is None:
+            self._outcome = self._wait()
+            self._wait = None  # type: ignore[assignment]  # drop the future / object ref
+        return restore(self.job, self._outcome)
+
+
+def _empty_trajectory() -> Any:
+    import numpy as np
+
+    from ..sim.trajectory import Trajectory
+    return Trajectory(t=np.zeros(0), pose=np.zeros((0, 3)), velocity=np.zeros((0, 3)),
+                      tick_t=np.zeros(0), command=np.zeros((0, 3)),
+                      ranges=np.zeros((0, 0), dtype=np.float32), angles=np.zeros(0))

@@ -1,0 +1,121 @@
+"""A search's generations evaluated on an executor (``dispatch/``: local worker processes or Ray).
+
+``executor_evaluator(executor)`` is an evaluator for ``run_search(..., evaluator=...)``: each
+generation the strategy proposes becomes one ``CandidateJob`` per candidate, all submitted at
+once, and the candidates come back in proposal order. A candidate is a pure function of the
+evaluation context and its offsets (``engine.evaluate_candidate``), and the strategy only sees
+the generation once it is complete, so the search takes the same path, finds the same failures
+and writes the same files as a serial run with the same search seed; only the measured wall
+times differ, as they do between two serial runs.
+"""
+from __future__ import annotations
+
+import uuid
+from dataclasses import dataclass
+from typing import Any, Iterator, Sequence
+
+from .engine import Candidate, EvalContext, Failure, SearchReport, _Simulator, evaluate_candidate, shrink_failure
+
+_CONTEXTS: dict[str, EvalContext] = {}   # worker side: the first copy of each context received
+_MAX_CONTEXTS = 4
+
+
+@dataclass(frozen=True)
+class CandidateJob:
+    """One candidate to simulate in a worker (a dispatch job: ``run`` there, ``restore`` here)."""
+    ctx: EvalContext
+    offsets: tuple[float, ...]
+    origin: str
+    token: str          # names ``ctx``: a worker reuses its first copy, so per-space caches survive
+
+    def run(self) -> Candidate:
+        cand = evaluate_candidate(_context(self.token, self.ctx), self.offsets, self.origin)
+        cand.scenario = None    # rebuilt from the offsets here: no need to send it back
+        return cand
+
+    def restore(self, cand: Candidate) -> Candidate:
+        cand.scenario = self.ctx.space.apply(self.offsets)
+        return cand
+
+
+def _context(token: str, ctx: EvalContext) -> EvalContext:
+    """Worker side: the first copy of ``ctx`` this worker received (its caches survive)."""
+    cached = _CONTEXTS.get(token)
+    if cached is None:
+        if len(_CONTEXTS) >= _MAX_CONTEXTS:
+            _CONTEXTS.clear()
+        cached = _CONTEXTS[token] = ctx
+    return cached
+
+
+@dataclass(frozen=True)
+class ShrinkJob:
+    """Shrink one failure in a worker, as a serial run would (``engine.shrink_failure`` with its
+    own simulations, one after the other); the failures of a search shrink side by side."""
+    ctx: EvalContext
+    found: Candidate
+    cap: int
+    token: str
+
+    def run(self) -> tuple[int, str, int, list[Candidate]]:
+        """(index of the shrunk candidate among the shrink candidates, -1: as found; note;
+        simulations used; the shrink candidates in the order they ran, scenarios stripped)."""
+        ctx = _context(self.token, self.ctx)
+        scratch = SearchReport(seed_name="", seed_source=None, subject="", subject_version=None,
+                               strategy="", seed_value=0, budget=0, shrink_budget=self.cap, params=[])
+        failure = shrink_failure(ctx.space, _Simulator(ctx, scratch, None), self.found, self.cap)
+        cands = scratch.candidates
+        index = next((i for i, c in enumerate(cands) if c is failure.shrunk), -1)
+        for cand in cands:
+            cand.metrics["subject"], cand.metrics["subject_version"] = scratch.subject, scratch.subject_version
+            cand.scenario = None
+        return index, failure.note, failure.shrink_sims, cands
+
+    def restore(self, outcome: tuple[int, str, int, list[Candidate]]) -> tuple[int, str, int, list[Candidate]]:
+        for cand in outcome[3]:
+            cand.scenario = self.ctx.space.apply(cand.offsets)
+        return outcome
+
+
+class executor_evaluator:   # noqa: N801  (used like a function: evaluator=executor_evaluator(ex))
+    """An evaluator that runs each generation on ``executor`` (see the module docstring)."""
+
+    def __init__(self, executor: Any):
+        self.executor = executor
+        self._ctx: EvalContext | None = None
+        self._token = ""
+
+    def __call__(self, ctx: EvalContext, proposals: Sequence[tuple[tuple[float, ...], str]]) -> Iterator[Candidate]:
+        if ctx is not self._ctx:
+            self._ctx, self._token = ctx, uuid.uuid4().hex
+        pending = self.executor.submit([CandidateJob(ctx, tuple(offsets), origin, self._token)
+                                        for offsets, origin in proposals])
+        for p in pending:
+            yield p.result()
+
+    def shrink_failures(self, sim: _Simulator, cap: int, progress: Any) -> None:
+        """Shrink every distinct failure at once, one job each; record the shrink simulations
+        failure by failure, in the order a serial run records them. Ctrl-C keeps the failures
+        not yet shrunk as found (run_search notes them)."""
+        report = sim.report
+        if cap <= 0 or not report.failures:
+            return
+        sim.check_stop()
+        if sim.ctx is not self._ctx:
+            self._ctx, self._token = sim.ctx, uuid.uuid4().hex
+        found = [f.found for f in report.failures]
+        pending = self.executor.submit([ShrinkJob(sim.ctx, _stripped(c), cap, self._token) for c in found])
+        for i, p in enumerate(pending):
+            index, note, used, cands = p.result()
+            for cand in cands:
+                sim.record(cand, "shrink")
+            report.failures[i] = Failure(found=found[i], shrunk=cands[index] if index >= 0 else found[i],
+                                         shrink_sims=used, note=note)
+            if progress is not None:
+                progress(report)
+
+
+def _stripped(cand: Candidate) -> Candidate:
+    """A copy of ``cand`` without its scenario (the worker rebuilds it from the offsets)."""
+    import dataclasses
+    return dataclasses.replace(cand, scenario=None)
