@@ -8,9 +8,12 @@
   signature (fitness.py) keeps the closest-to-failing candidate of each behaviour; parents are
   picked from it with a penalty on cells picked often, so the budget spreads over ways of
   failing instead of one failure's neighbours. Operators: uniform exploration, Gaussian
-  mutation, and two that use what the episode showed (PHYS-FUZZ style): move an obstacle onto
-  the robot's path at or a moment after its closest approach, or insert a new obstacle there.
-  Operator shares follow which operator has been finding new behaviours and failures.
+  mutation, and three that use what the episode showed (PHYS-FUZZ style): move an obstacle onto
+  the robot's path at or a moment after its closest approach, insert a new obstacle there, or
+  squeeze one just beside the path (narrowing the passage to little more than the footprint).
+  Operator shares follow which operator has been finding new failing signatures; where the
+  aimed operators put an obstacle (which obstacle, which quarter of the route) is a second
+  bandit rewarded for new failing signatures and divided down by re-created ones.
   Hypothesis draws each proposal (operator, parent, random stream) in one seeded Hypothesis run
   per generation.
 
@@ -27,8 +30,9 @@ from .space import FLAG_ON, SearchSpace, invalid_reason
 
 GENERATION = 8                 # candidates per generation (evolve, random)
 MUTATION_SCALES = (0.05, 0.15, 0.3)   # Gaussian step sd as a fraction of the parameter's range
-OPERATORS = ("explore", "mutate", "place", "insert")
-MIN_SHARE = 0.15               # every usable operator keeps at least this share
+OPERATORS = ("explore", "mutate", "place", "insert", "squeeze")
+MIN_SHARE = 0.08               # every usable operator keeps at least this share
+EXPLORE_SHARE = 0.2            # uniform exploration keeps at least this share: never far below random
 PICK_PENALTY = 0.03            # robustness added per earlier pick of an archive cell (novelty)
 NEAR_COPY = 0.5                # m: a failure's child whose culprit moved less (same quarter) is skipped
 FAILURE_FLOOR = -0.3           # failure cells compete for parenthood as if this robust
@@ -37,6 +41,9 @@ HILLCLIMB_MIN_STEP = 0.02      # a coordinate is done when its step is below thi
 HILLCLIMB_STALL = 8            # misses in a row on one obstacle: move to the next
 MAX_INVALID_FACTOR = 50
 STREAM_BITS = 32               # Hypothesis-drawn bits seeding each proposal's random stream
+QUARTERS = 4                   # route quarters: the places a target aims at (fitness.PLACE_BINS)
+SQUEEZE_BAND = (1.0, 1.3)      # squeeze: obstacle centre at this many (robot half width + obstacle half)
+                               # from the path: its face just clears the footprint's recorded pose
 
 
 class GaveUp(Exception):
@@ -217,6 +224,44 @@ class _Cells:
         return self.elites[best]
 
 
+class _Targets:
+    """Novelty bandit over *where to put which obstacle*: one arm per (culprit, route quarter),
+    culprit a movable seed obstacle or "inserted". An arm is rewarded for new failure signatures
+    (a new way of failing), a little for a new closest call, and is divided down by the failures
+    it re-created and by the known failing signatures already in its cell, so once a place has
+    failed the budget moves on to places that have not."""
+
+    def __init__(self, arms: Sequence[tuple[str, int]]):
+        self.arms = list(arms)
+        self.tries = {a: 0 for a in self.arms}
+        self.credit = {a: 0.0 for a in self.arms}
+        self.repeats = {a: 0 for a in self.arms}
+        self.best = {a: math.inf for a in self.arms}
+
+    def weight(self, arm: tuple[str, int], known: set[tuple]) -> float:
+        filled = sum(1 for sig in known if (sig[1], sig[2]) == arm)
+        return (self.credit[arm] + 1.0) / (self.tries[arm] + 2.0) / (1.0 + self.repeats[arm] + filled)
+
+    def pick(self, rnd: random.Random, allowed: Sequence[tuple[str, int]], known: set[tuple]) -> tuple[str, int]:
+        weights = [self.weight(a, known) for a in allowed]
+        ticket = rnd.random() * sum(weights)
+        for arm, w in zip(allowed, weights):
+            if ticket < w:
+                return arm
+            ticket -= w
+        return allowed[-1]
+
+    def tell(self, arm: tuple[str, int], cand: Any, new_failure: bool) -> None:
+        self.tries[arm] += 1
+        if new_failure:
+            self.credit[arm] += 1.0
+        elif cand.failed:
+            self.repeats[arm] += 1
+        elif math.isfinite(cand.robustness) and cand.robustness < self.best[arm]:
+            self.best[arm] = cand.robustness
+            self.credit[arm] += 0.2
+
+
 class Evolve:
     """See the module docstring. Proposals come from one seeded Hypothesis run per generation."""
 
@@ -231,13 +276,18 @@ class Evolve:
         self.slots = [g for g in space.groups if space.params[g[0]].part.startswith("inserted[")]
         self.failure_signatures: set[tuple] = set()
         self.route: Any = None
+        self.targets: _Targets | None = None
+        self.aims: dict[tuple, tuple[str, int]] = {}   # proposal -> the target arm it aimed at
+        self.aim: tuple[str, int] | None = None         # the arm of the proposal being drawn
 
     def weights(self) -> list[float]:
         usable = {"explore": True, "mutate": bool(self.cells.elites),
-                  "place": bool(self.cells.elites and self.movable), "insert": bool(self.cells.elites and self.slots)}
+                  "place": bool(self.cells.elites and self.movable), "insert": bool(self.cells.elites and self.slots),
+                  "squeeze": bool(self.cells.elites and (self.movable or self.slots))}
         rates = {op: (self.stats[op][1] + 1.0) / (self.stats[op][0] + 2.0) for op in OPERATORS if usable[op]}
         total = sum(rates.values())
-        return [max(MIN_SHARE, rates[op] / total) if op in rates else 0.0 for op in OPERATORS]
+        return [max(EXPLORE_SHARE if op == "explore" else MIN_SHARE, rates[op] / total) if op in rates else 0.0
+                for op in OPERATORS]
 
     def ask(self, room: int) -> list[tuple[tuple[float, ...], str]]:
         self.generation += 1
@@ -280,6 +330,8 @@ class Evolve:
                 reject()
             if len(out) >= n or not self.admission.admit(offsets):
                 reject()
+            if self.aim is not None:
+                self.aims[_key(offsets)] = self.aim
             out.append((offsets, op))
 
         run = settings(max_examples=n, database=None, deadline=None, phases=[Phase.generate],
@@ -291,6 +343,7 @@ class Evolve:
 
     def propose(self, op: str, rnd: random.Random) -> tuple[tuple[float, ...], Any]:
         """(offsets, parent) of one proposal of operator ``op`` (parent None for exploration)."""
+        self.aim = None
         if op == "explore" or not self.cells.elites:
             return uniform(self.space, rnd), None
         parent = self.cells.pick(rnd)
@@ -298,12 +351,16 @@ class Evolve:
             return self._place(parent, rnd), parent
         if op == "insert" and parent.path:
             return self._insert(parent, rnd), parent
+        if op == "squeeze" and parent.path:
+            return self._squeeze(parent, rnd), parent
         return self._mutate(parent, rnd), parent
 
     def _repeats(self, parent: Any, offsets: Sequence[float]) -> bool:
         """A child of a failure that changes no parameter by 20 % of its range or more and
         leaves the culprit in place (same quarter of the route, moved < NEAR_COPY) would most
-        likely fail the same way: a near-copy, not worth a simulation."""
+        likely fail the same way: a near-copy, not worth a simulation. (Skipping every aimed
+        child that leaves the culprit in place was measured: fewer distinct failures where
+        failures are common, as the robot often fails another way before the known culprit.)"""
         if not parent.failed or not parent.culprit or self.space.normalised_distance(parent.offsets, offsets) >= 0.2:
             return False
         before, after = self.space.apply(parent.offsets), self.space.apply(offsets)
@@ -335,39 +392,87 @@ class Evolve:
                 offsets[i] += rnd.gauss(0.0, 1.0) * scale * p.width
         return space.clip(offsets)
 
-    def _target(self, parent: Any, rnd: random.Random, half: float, culprit: str) -> tuple[float, float]:
-        """A point beside the parent's path where an obstacle would be met, offset sideways by up
-        to 1.3 times the robot's half width plus ``half``: at or a moment after the closest
-        approach (time-to-impact placement), else anywhere along the path. Quarters of the route
-        where ``culprit`` already caused a known failure are avoided while others are left (a
-        new place, a new way of failing)."""
-        path, route = parent.path, self._route()
+    def _arms(self) -> _Targets:
+        """The target arms: each movable seed obstacle in each route quarter it can reach (its
+        dx/dy bounds around the seed route), and inserted boxes in every quarter."""
+        if self.targets is None:
+            route, space = self._route(), self.space
+            samples = _route_samples(route)
+            arms = []
+            for group in self.movable:
+                name = space.params[group[0]].part.split(":", 1)[1]
+                x0, x1, y0, y1 = self._reach(group)
+                arms += sorted({(name, _quarter(f)) for x, y, f in samples if x0 <= x <= x1 and y0 <= y <= y1})
+            if self.slots:
+                arms += [("inserted", q) for q in range(QUARTERS)]
+            self.targets = _Targets(arms)
+        return self.targets
+
+    def _reach(self, group: Sequence[int]) -> tuple[float, float, float, float]:
+        """Where the centre of the obstacle of ``group`` can go (x0, x1, y0, y1)."""
+        space = self.space
+        obs = space.seed.obstacle(space.params[group[0]].part.split(":", 1)[1])
+        rng = {space.params[i].attr: (space.params[i].lo, space.params[i].hi) for i in group}
+        return obs.x + rng["dx"][0], obs.x + rng["dx"][1], obs.y + rng["dy"][0], obs.y + rng["dy"][1]
+
+    def _pick_arm(self, rnd: random.Random, inserted: bool) -> tuple[str, int] | None:
+        arms = [a for a in self._arms().arms if (a[0] == "inserted") == inserted]
+        if not arms:
+            return None
+        self.aim = self.targets.pick(rnd, arms, self.failure_signatures)
+        return self.aim
+
+    def _target(self, parent: Any, rnd: random.Random, half: float, quarter: int | None,
+                squeeze: bool = False, within: tuple | None = None) -> tuple[float, float, float, float]:
+        """(x, y, path x, path y): a point beside the parent's path, in route quarter ``quarter`` (None: anywhere), where
+        an obstacle of half size ``half`` would meet the robot: at or a moment after the closest
+        approach (time-to-impact placement) when that lies in the quarter, else anywhere there
+        (the seed's route where the parent never got). Sideways by up to 1.3 times the robot's
+        half width plus ``half`` (overlapping the footprint: the robot must detour); with
+        ``squeeze`` by 1.0-1.3 times that, so the obstacle just clears the recorded footprint and
+        narrows the passage there. ``within`` (x0, x1, y0, y1): only path points in that box."""
+        route = self._route()
+        path = [p for p in parent.path[1:]] or [p[:2] for p in _route_samples(route)]
+        if quarter is not None:
+            inq = [p for p in path if _quarter(route.fraction(*p)) == quarter]
+            path = inq or [p[:2] for p in _route_samples(route) if _quarter(p[2]) == quarter] or path
+        fp = self.space.seed.robot.footprint
+        contact = (fp.radius if fp.shape == "circle" else fp.width / 2) + half
+        if within is not None:   # path points from which the band beside the path is in the box
+            path = [p for k, p in enumerate(path) if _beside_within(path, k, 1.15 * contact, within)] or path
         n = len(path)
-        known = {sig[2] for sig in self.failure_signatures if sig[1] == culprit}
-        quarter = [min(3, int(route.fraction(x, y) * 4)) for x, y in path]
-        inner = range(max(1, n // 10), max(2, n - 1))
-        allowed = [j for j in inner if j < n and quarter[j] not in known] or [j for j in inner if j < n] or [0]
-        j = rnd.choice(allowed)
-        if parent.closest and rnd.random() < 0.6 and all(math.isfinite(v) for v in parent.closest[1:]):
+        j = rnd.randrange(n)
+        if parent.closest and rnd.random() < 0.5 and all(math.isfinite(v) for v in parent.closest[1:]):
             _, cx, cy = parent.closest
             j0 = min(range(n), key=lambda k: (path[k][0] - cx) ** 2 + (path[k][1] - cy) ** 2)
-            jc = min(n - 1, j0 + rnd.randrange(0, max(2, n // 8)))
-            j = jc if quarter[jc] not in known else j
+            if math.hypot(path[j0][0] - cx, path[j0][1] - cy) < 0.5:
+                j = min(n - 1, j0 + rnd.randrange(0, max(2, n // 4)))
         a, b = path[max(0, j - 1)], path[min(n - 1, j + 1)]
+        if a == b:   # a single point: along the route there
+            f = route.fraction(*path[j])
+            a, b = _route_point(route, f - 0.02), _route_point(route, f + 0.02)
         dx, dy = b[0] - a[0], b[1] - a[1]
         norm = math.hypot(dx, dy) or 1.0
-        fp = self.space.seed.robot.footprint
-        robot_half = fp.radius if fp.shape == "circle" else fp.width / 2
-        lateral = rnd.uniform(-1.3, 1.3) * (robot_half + half)
-        return path[j][0] - dy / norm * lateral, path[j][1] + dx / norm * lateral
+        lateral = rnd.uniform(*SQUEEZE_BAND) * rnd.choice((-1.0, 1.0)) if squeeze else rnd.uniform(-1.3, 1.3)
+        lateral *= contact
+        return path[j][0] - dy / norm * lateral, path[j][1] + dx / norm * lateral, path[j][0], path[j][1]
 
-    def _place(self, parent: Any, rnd: random.Random) -> tuple[float, ...]:
+    def _place(self, parent: Any, rnd: random.Random, squeeze: bool = False) -> tuple[float, ...]:
+        """Move the seed obstacle of a target arm (culprit, quarter) beside the parent's path there."""
         space, offsets = self.space, list(parent.offsets)
-        culprit = [g for g in self.movable if space.params[g[0]].part == f"obstacle:{parent.culprit}"]
-        group = culprit[0] if culprit and rnd.random() < 0.5 else rnd.choice(self.movable)
+        arm = self._pick_arm(rnd, inserted=False)
+        group = next(g for g in self.movable if space.params[g[0]].part == f"obstacle:{arm[0]}") \
+            if arm else rnd.choice(self.movable)
         obs = space.seed.obstacle(space.params[group[0]].part.split(":", 1)[1])
         half = getattr(obs, "radius", None) or min(getattr(obs, "length", 0.5), getattr(obs, "width", 0.5)) / 2
-        tx, ty = self._target(parent, rnd, half, obs.name)
+        x0, x1, y0, y1 = self._reach(group)
+        for _ in range(8):   # a point the obstacle can reach within its bounds (or its mirror image
+            tx, ty, px, py = self._target(parent, rnd, half, arm[1] if arm else None, squeeze,   # across
+                                          (x0, x1, y0, y1))
+            if not (x0 <= tx <= x1 and y0 <= ty <= y1):                                      # the path)
+                tx, ty = 2 * px - tx, 2 * py - ty
+            if x0 <= tx <= x1 and y0 <= ty <= y1:
+                break
         for i in group:
             attr = space.params[i].attr
             if attr == "dx":
@@ -378,7 +483,8 @@ class Evolve:
                 offsets[i] = 0.0
         return space.clip(offsets)
 
-    def _insert(self, parent: Any, rnd: random.Random) -> tuple[float, ...]:
+    def _insert(self, parent: Any, rnd: random.Random, squeeze: bool = False) -> tuple[float, ...]:
+        """Add a box beside the parent's path in the quarter of a target arm ("inserted", quarter)."""
         space, offsets = self.space, list(parent.offsets)
         free = [g for g in self.slots if offsets[g[0]] < FLAG_ON]
         group = rnd.choice(free or self.slots)
@@ -386,11 +492,22 @@ class Evolve:
         lo = space.limits.insert_size[0]
         values = {"on": 1.0, "size": rnd.uniform(0.0, space.limits.insert_size[1] - lo),
                   "yaw": rnd.uniform(-90.0, 90.0)}
-        tx, ty = self._target(parent, rnd, (lo + values["size"]) / 2, "inserted")
+        if squeeze:   # a box aligned with the path, so its face is where the band says
+            values["yaw"] = 0.0
+        arm = self._pick_arm(rnd, inserted=True)
+        tx, ty, _, _ = self._target(parent, rnd, (lo + values["size"]) / 2, arm[1] if arm else None, squeeze)
         values["x"], values["y"] = tx - (x0 + x1) / 2, ty - (y0 + y1) / 2
         for i in group:
             offsets[i] = values.get(space.params[i].attr, offsets[i])
         return space.clip(offsets)
+
+    def _squeeze(self, parent: Any, rnd: random.Random) -> tuple[float, ...]:
+        """Narrow the passage: a seed obstacle or an inserted box just beside the parent's path,
+        its face within 0.3 x (robot half width + its half size) of the recorded footprint, where a
+        planner must pass closer than its clearance buffer likes or find another way."""
+        if self.movable and (not self.slots or rnd.random() < 0.5):
+            return self._place(parent, rnd, squeeze=True)
+        return self._insert(parent, rnd, squeeze=True)
 
     def tell(self, results: Sequence[Any]) -> None:
         for cand in results:
@@ -403,7 +520,41 @@ class Evolve:
                         and (before is None or cand.robustness < before.robustness))
             if cand.origin in self.stats:   # credit: new ways of failing, and moves toward failing
                 self.stats[cand.origin][0] += 1
-                self.stats[cand.origin][1] += (3.0 if new_failure else 0.0) + (0.5 if improved else 0.0)
+                self.stats[cand.origin][1] += (3.0 if new_failure else 0.0) + (0.2 if improved else 0.0)
+            arm = self.aims.pop(_key(cand.offsets), None)
+            if arm is not None and self.targets is not None:
+                self.targets.tell(arm, cand, new_failure)
+
+
+def _beside_within(path: Sequence[tuple[float, float]], k: int, lateral: float, box: tuple) -> bool:
+    """Whether a point ``lateral`` to either side of ``path[k]`` lies in ``box`` (x0, x1, y0, y1)."""
+    a, b = path[max(0, k - 1)], path[min(len(path) - 1, k + 1)]
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    norm = math.hypot(dx, dy) or 1.0
+    x0, x1, y0, y1 = box
+    return any(x0 <= path[k][0] - dy / norm * s <= x1 and y0 <= path[k][1] + dx / norm * s <= y1
+               for s in (lateral, -lateral, 0.0))
+
+
+def _key(offsets: Sequence[float]) -> tuple:
+    return tuple(round(float(v), 6) for v in offsets)
+
+
+def _quarter(fraction: float) -> int:
+    return min(QUARTERS - 1, max(0, int(fraction * QUARTERS)))
+
+
+def _route_point(route: Any, fraction: float) -> tuple[float, float]:
+    """The point at arc-length ``fraction`` (clamped to 0..1) of the seed's route."""
+    import numpy as np
+
+    s = min(1.0, max(0.0, fraction)) * route.length
+    return (float(np.interp(s, route.cum, route.points[:, 0])), float(np.interp(s, route.cum, route.points[:, 1])))
+
+
+def _route_samples(route: Any, n: int = 40) -> list[tuple[float, float, float]]:
+    """(x, y, fraction) of ``n`` points evenly spaced along the seed's route."""
+    return [(*_route_point(route, k / (n - 1)), k / (n - 1)) for k in range(n)]
 
 
 def _has(space: SearchSpace, group: Sequence[int], attr: str) -> bool:

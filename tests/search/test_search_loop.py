@@ -176,6 +176,64 @@ def test_place_mutation_finds_failures_where_uniform_sampling_rarely_does(lane):
     assert sum(placed) >= 5 and sum(placed) > sum(uniform)   # lateral offsets up to 1.3x contact: most hit
 
 
+def _lane_quarter(y):
+    return min(3, int(y / 6.0 * 4))   # the lane's route runs straight from y = 0 to y = 6
+
+
+def test_squeeze_mutation_narrows_the_passage_beside_the_path_without_blocking_it(lane):
+    import random
+    space = SearchSpace(lane)
+    evo = Evolve(space, _report(space), 10, 0)
+    parent = _parent(lane, space)
+    seen = set()
+    for k in range(20):
+        scenario = space.apply(evo._squeeze(parent, random.Random(k)))
+        moved = [o for o in scenario.obstacles if o.name.startswith(INSERT_PREFIX)
+                 or (o.name == "crate" and o.x != 1.5)]
+        assert len(moved) == 1, (k, moved)
+        box = moved[0]
+        contact = 0.25 + box.length / 2    # robot half width + the box's half size, across the path
+        lateral = min(abs(box.x - x) for x, y in parent.path if abs(y - box.y) < 0.3)
+        assert contact - 1e-6 <= lateral <= 1.3 * contact + 1e-6, (k, box, lateral)   # beside, not on it
+        seen.add(box.name)
+    assert seen == {"crate", f"{INSERT_PREFIX}1"}   # moves a seed obstacle and inserts new boxes
+
+
+def test_aimed_mutations_put_the_obstacle_in_the_quarter_of_the_route_they_aim_at(lane):
+    import random
+    space = SearchSpace(lane)
+    evo = Evolve(space, _report(space), 10, 0)
+    parent = _parent(lane, space)
+    # the crate (y 2.5-3.5 within its bounds) can reach quarters 1 and 2 of the 6 m route only
+    assert evo._arms().arms == [("crate", 1), ("crate", 2)] + [("inserted", q) for q in range(4)]
+    for k in range(30):
+        for op in (evo._place, evo._insert):
+            scenario = space.apply(op(parent, random.Random(k)))
+            name, quarter = evo.aim
+            obs = scenario.obstacle("crate" if name == "crate" else f"{INSERT_PREFIX}1")
+            assert _lane_quarter(obs.y) == quarter, (k, op.__name__, evo.aim, obs)
+
+
+def test_target_bandit_moves_on_from_a_place_that_has_failed():
+    import random
+    from pytest_navscenario.search.strategies import _Targets
+
+    class C:
+        def __init__(self, failed, robustness=-1.0):
+            self.failed, self.robustness = failed, robustness
+
+    arms = _Targets([("crate", 1), ("crate", 2)])
+    known = {("timeout", "crate", 1, 1)}
+    arms.tell(("crate", 1), C(True), new_failure=True)
+    for _ in range(3):
+        arms.tell(("crate", 1), C(True), new_failure=False)   # the same failure again and again
+    arms.tell(("crate", 2), C(False, 0.4), new_failure=False)
+    assert arms.weight(("crate", 1), known) < arms.weight(("crate", 2), known) / 3
+    rnd = random.Random(0)
+    picks = [arms.pick(rnd, arms.arms, known) for _ in range(200)]
+    assert picks.count(("crate", 2)) > 150
+
+
 # -- hill-climb -------------------------------------------------------------------------------------
 def test_hillclimb_lowers_clearance_monotonically(lane):
     space = SearchSpace(lane, {"insert": 0, "remove": 0})
