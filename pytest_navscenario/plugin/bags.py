@@ -11,12 +11,13 @@ episode, named after the node id (the artifacts' folder naming: safe and unique)
 """
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import pytest
+
+from .options import option_value as _value, resolve_path
 
 MODES = ("none", "failed", "all")
 FORMATS = ("mcap", "sqlite3", "ros1")  # = bags.FORMATS, repeated so loading the plugin imports no numpy
@@ -60,13 +61,6 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addini("nav_bag_dir", OPTIONS[2][2], default=DEFAULT_DIR)
 
 
-def _value(config: pytest.Config, name: str) -> tuple[str, str, Path]:
-    cli = config.getoption(name)
-    if cli is not None:
-        return str(cli).strip(), f"--{name.replace('_', '-')}", Path(config.invocation_params.dir)
-    return str(config.getini(name)).strip(), f"ini option {name}", Path(config.rootpath)
-
-
 def read_bag_settings(config: pytest.Config) -> BagState:
     """Parse and check the three options; pytest.UsageError names the option and the choices."""
     mode, where, _ = _value(config, "nav_bag")
@@ -79,8 +73,7 @@ def read_bag_settings(config: pytest.Config) -> BagState:
     if fmt not in FORMATS:
         raise pytest.UsageError(f"{where}: expected one of {', '.join(FORMATS)}, got {fmt!r}")
     raw, where, base = _value(config, "nav_bag_dir")
-    folder = Path(os.path.expanduser(raw or DEFAULT_DIR))
-    folder = folder if folder.is_absolute() else base / folder
+    folder = resolve_path(raw or DEFAULT_DIR, base)
     if folder.exists() and not folder.is_dir():
         raise pytest.UsageError(f"{where}: {raw!r} exists and is not a folder; give a folder (created if missing)")
     return BagState(mode=mode, fmt=fmt, folder=folder)

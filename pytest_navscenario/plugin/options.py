@@ -128,20 +128,27 @@ _EXPECTED = {"nav_seed": "a whole number >= 0", "nav_summary": "yes or no (true 
              "nav_reset_timeout": "seconds > 0"}
 
 
-def _value(config: pytest.Config, name: str) -> tuple[str, str, Path]:
-    """(raw value as text, where it came from, base folder for relative paths). An ini value
-    of a real type (a TOML number or boolean) comes back as its text: "3", "2.5", "no"."""
+def option_value(config: pytest.Config, name: str, expected: str = "") -> tuple[str, str, Path]:
+    """(value as text, where it came from, base folder for relative paths): the command line first,
+    then the ini file. An ini value of a real type (a TOML number or boolean) comes back as its
+    text: "3", "2.5", "no". Shared by every feature plugin's option reading."""
     cli = config.getoption(name)
     if cli is not None:
-        return str(cli), f"--{name.replace('_', '-')}", Path(config.invocation_params.dir)
-    raw = ini_value(config, name, _EXPECTED.get(name, ""))
+        return str(cli).strip(), f"--{name.replace('_', '-')}", Path(config.invocation_params.dir)
+    raw = ini_value(config, name, expected)
     text = ("yes" if raw else "no") if isinstance(raw, bool) else str(raw)
-    return text, f"ini option {name}", Path(config.rootpath)
+    return text.strip(), f"ini option {name}", Path(config.rootpath)
 
 
-def _path(raw: str, base: Path) -> Path:
+def resolve_path(raw: str, base: Path) -> Path:
+    """A user's path: ``~`` expanded, relative to ``base`` (the invocation folder for the command
+    line, the rootdir for the ini file) unless absolute."""
     path = Path(os.path.expanduser(raw))
     return path if path.is_absolute() else base / path
+
+
+def _value(config: pytest.Config, name: str) -> tuple[str, str, Path]:
+    return option_value(config, name, _EXPECTED.get(name, ""))
 
 
 def read_settings(config: pytest.Config) -> Settings:
@@ -159,7 +166,7 @@ def read_settings(config: pytest.Config) -> Settings:
         raise pytest.UsageError(f"{where}: seed must be between 0 and 2**63-1, got {seed}")
 
     raw, where, base = _value(config, "nav_results")
-    results = _path(raw.strip(), base) if raw.strip() else None
+    results = resolve_path(raw.strip(), base) if raw.strip() else None
     if results is not None and results.is_dir():
         raise pytest.UsageError(f"{where}: {raw!r} is a folder; give a file name such as results.jsonl")
 
@@ -168,7 +175,7 @@ def read_settings(config: pytest.Config) -> Settings:
     if raw.lower() in ("none", "no", "off", ""):
         artifacts = None
     else:
-        artifacts = _path(raw, base)
+        artifacts = resolve_path(raw, base)
         if artifacts.exists() and not artifacts.is_dir():
             raise pytest.UsageError(f"{where}: {raw!r} exists and is not a folder; give a folder "
                                     f"(created if missing) or 'none' to disable artifacts")
@@ -198,7 +205,7 @@ def read_settings(config: pytest.Config) -> Settings:
     if not globs:
         raise pytest.UsageError("ini option nav_scenario_glob is empty; give file name patterns "
                                 "such as '*.yaml *.yml'")
-    paths = tuple(_path(p.strip(), Path(config.rootpath))
+    paths = tuple(resolve_path(p.strip(), Path(config.rootpath))
                   for p in config.getini("nav_scenario_paths") if p.strip())
     raw, where, _ = _value(config, "nav_repeat")
     try:

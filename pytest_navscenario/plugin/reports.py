@@ -23,14 +23,13 @@ imports it.
 """
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from .options import ini_type, ini_value
+from .options import ini_type, option_value as _value, resolve_path
 
 PLOT_CHOICES = ("failed", "all", "none")
 MODE_CHOICES = ("fail", "warn")
@@ -107,19 +106,6 @@ def pytest_addoption(parser: pytest.Parser) -> None:
         parser.addini(ini, text, type=kind, default=default)
 
 
-def _value(config: pytest.Config, name: str) -> tuple[str, str, Path]:
-    """(raw value, where it came from, base folder for relative paths): command line first."""
-    cli = config.getoption(name)
-    if cli is not None:
-        return str(cli).strip(), f"--{name.replace('_', '-')}", Path(config.invocation_params.dir)
-    return str(ini_value(config, name)).strip(), f"ini option {name}", Path(config.rootpath)
-
-
-def _path(raw: str, base: Path) -> Path:
-    p = Path(os.path.expanduser(raw))
-    return p if p.is_absolute() else base / p
-
-
 def _choice(config: pytest.Config, name: str, choices: tuple[str, ...]) -> str:
     raw, where, _ = _value(config, name)
     value = raw.lower()
@@ -134,18 +120,18 @@ def read_report_settings(config: pytest.Config, check_files: bool = True) -> Rep
     ``check_files`` is off on xdist workers (a remote worker need not see the controller's files).
     """
     raw, where, base = _value(config, "nav_baseline")
-    baseline = _path(raw, base) if raw else None
+    baseline = resolve_path(raw, base) if raw else None
     if check_files and baseline is not None and not baseline.is_file():
         raise pytest.UsageError(f"{where}: no results file {str(baseline)!r}; write one first with "
                                 f"pytest --nav-results={raw} (with the baseline planner)")
     mode = _choice(config, "nav_baseline_mode", MODE_CHOICES)
     plots = _choice(config, "nav_plots", PLOT_CHOICES)
     raw, where, base = _value(config, "nav_plots_dir")
-    plots_dir = _path(raw, base) if raw else None
+    plots_dir = resolve_path(raw, base) if raw else None
     if plots_dir is not None and plots_dir.exists() and not plots_dir.is_dir():
         raise pytest.UsageError(f"{where}: {raw!r} exists and is not a folder")
     raw, where, base = _value(config, "nav_html")
-    html = _path(raw, base) if raw else None
+    html = resolve_path(raw, base) if raw else None
     if html is not None and html.is_dir():
         raise pytest.UsageError(f"{where}: {raw!r} is a folder; give a file name such as report.html")
     raw, where, _ = _value(config, "nav_plots_max")
