@@ -382,6 +382,15 @@ def _write_html(config: pytest.Config, state: ReportState) -> None:
     state.html_written = state.settings.html
 
 
+def _gate_line(tr: Any, mode: str, failed: str, warned: str) -> None:
+    """One line for a regression-gate finding: FAILED in red under mode ``fail``, else a warning."""
+    if mode == "fail":
+        tr.write_line(f"navscenario: FAILED the regression gate: {failed} (--nav-baseline-mode=warn to only "
+                      f"report this)", red=True, bold=True)
+    else:
+        tr.write_line(f"navscenario: warning: {warned} (--nav-baseline-mode=warn)", yellow=True, bold=True)
+
+
 def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pytest.Config) -> None:
     state = config.stash.get(REPORT_KEY, None)
     if state is None or _is_worker(config):
@@ -396,18 +405,12 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
             tr.write_line(line)
         n = len(state.comparison.broke)
         why = state.nothing_compared
-        if why and state.settings.mode == "fail":
-            tr.write_line(f"navscenario: FAILED the regression gate: nothing was compared with the baseline: "
-                          f"{why} (--nav-baseline-mode=warn to only report this)", red=True, bold=True)
-        elif why:
-            tr.write_line(f"navscenario: warning: nothing was compared with the baseline: {why} "
-                          f"(--nav-baseline-mode=warn)", yellow=True, bold=True)
-        if n and state.settings.mode == "fail":
-            tr.write_line(f"navscenario: FAILED the regression gate: {n} scenario(s) the baseline passed "
-                          f"fail now (--nav-baseline-mode=warn to only report this)", red=True, bold=True)
-        elif n:
-            tr.write_line(f"navscenario: warning: {n} regression(s) against the baseline "
-                          f"(--nav-baseline-mode=warn)", yellow=True, bold=True)
+        if why:
+            _gate_line(tr, state.settings.mode, f"nothing was compared with the baseline: {why}",
+                       f"nothing was compared with the baseline: {why}")
+        if n:
+            _gate_line(tr, state.settings.mode, f"{n} scenario(s) the baseline passed fail now",
+                       f"{n} regression(s) against the baseline")
     files = [p for p in state.plots.values() if isinstance(p, Path)]
     if files:
         folders = sorted({str(p.parent) for p in files})
