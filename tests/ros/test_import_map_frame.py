@@ -7,9 +7,8 @@ import math
 
 import numpy as np
 import pytest
-from ros_synthetic import BagOut, World, loop_drive, pose_msg, robot_bag, stamp
+from ros_synthetic import World, loop_drive, pose_msg, robot_bag, stamp
 
-from pytest_navscenario.cli import main
 from pytest_navscenario.ros.bag_import import BagImportError, scenario_from_bag
 from pytest_navscenario.scenario.model import CylinderObstacle
 
@@ -121,8 +120,9 @@ def test_late_first_correction_and_a_missing_pose_topic(tmp_path):
         scenario_from_bag(path, pose_topic="/amcl_pose")
 
 
-def test_obstacles_not_on_the_bags_map_are_named(tmp_path):
-    """The bag's /map has every pillar but the one at (2.6, 2.6), put there that day: the note names it."""
+def _bag_with_map_missing_a_pillar(path):
+    """A drifting loop around WORLD whose bag carries a /map (0.05 m cells, map frame) with every
+    pillar but the one at (2.6, 2.6): the pillar put there that day."""
     truth = loop_drive(n=300, dt=0.1, radius=1.8)
     res, size = 0.05, 200
     ys, xs = np.mgrid[0:size, 0:size]
@@ -138,7 +138,12 @@ def test_obstacles_not_on_the_bags_map_are_named(tmp_path):
             "info": {"resolution": res, "width": size, "height": size,
                      "origin": {"position": {"x": -5.0, "y": -5.0}, "orientation": {"w": 1.0}}},
             "data": grid.reshape(-1)})
-    seed = scenario_from_bag(robot_bag(tmp_path / "m", WORLD, truth, drift=_drift(truth), extra=known))
+    return robot_bag(path, WORLD, truth, drift=_drift(truth), extra=known)
+
+
+def test_obstacles_not_on_the_bags_map_are_named(tmp_path):
+    """The bag's /map has every pillar but the one at (2.6, 2.6), put there that day: the note names it."""
+    seed = scenario_from_bag(_bag_with_map_missing_a_pillar(tmp_path / "m"))
     note = next(n for n in seed.notes if n.startswith("/map (200 x 200 cells of 0.05 m)"))
     assert "1 of 6 obstacles were not on the map that day" in note and "at (2.60, 2.60)" in note, note
     # in the odometry frame the map is not compared (another frame), and that is said
@@ -153,22 +158,7 @@ def test_the_bags_map_is_the_fixed_background_and_the_new_pillar_searchable(tmp_
     from pytest_navscenario.search.space import SearchSpace
     from shapely.geometry import Point
 
-    truth = loop_drive(n=300, dt=0.1, radius=1.8)
-    res, size = 0.05, 200
-    ys, xs = np.mgrid[0:size, 0:size]
-    cx, cy = -5 + (xs + 0.5) * res, -5 + (ys + 0.5) * res
-    grid = np.zeros((size, size), np.int8)
-    for x, y, r, _ in WORLD.pillars:
-        if (x, y) != (2.6, 2.6):
-            grid[np.hypot(cx - x, cy - y) <= r] = 100
-
-    def known(bag):
-        bag.write("/map", "nav_msgs/msg/OccupancyGrid", 0.0, {
-            "header": {"stamp": stamp(0.0), "frame_id": "map"},
-            "info": {"resolution": res, "width": size, "height": size,
-                     "origin": {"position": {"x": -5.0, "y": -5.0}, "orientation": {"w": 1.0}}},
-            "data": grid.reshape(-1)})
-    seed = scenario_from_bag(robot_bag(tmp_path / "m", WORLD, truth, drift=_drift(truth), extra=known))
+    seed = scenario_from_bag(_bag_with_map_missing_a_pillar(tmp_path / "m"))
     obs = seed.scenario.obstacles
     frozen = set(seed.scenario.search["frozen"])
     from_map = [o for o in obs if o.name in frozen]
