@@ -91,13 +91,20 @@ def output_folders(config: pytest.Config) -> list[Path]:
     return [Path(os.path.abspath(f)) for f in folders]
 
 
+_OUTPUTS_KEY = pytest.StashKey[list]()
+
+
 def ignore_output_folder(collection_path: Path, config: pytest.Config) -> bool | None:
     """``pytest_ignore_collect``: True for an output folder of the plugin, None (no opinion) else.
 
     Never ignored: a folder holding the rootdir, the current folder or a path named on the command
     line (``--nav-artifacts=.`` must not hide the project; ``pytest nav-artifacts/x/scenario.yaml``
     runs that file), nor one holding or inside the frozen regressions' folder (--navsearch-out)."""
-    folders = output_folders(config)
+    folders = config.stash.get(_OUTPUTS_KEY, None)
+    if folders is None:       # called for every path pytest visits: work the folders out once
+        folders = output_folders(config)
+        if config.stash.get(STATE_KEY, None) is not None:
+            config.stash[_OUTPUTS_KEY] = folders
     path = Path(os.path.abspath(collection_path))
     if path not in folders:
         return None
