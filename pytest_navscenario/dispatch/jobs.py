@@ -109,13 +109,8 @@ def _factory(spec: str, cwd: str | None) -> Callable[[], Any]:
     key = (spec.strip(), cwd)
     factory = _FACTORIES.get(key)
     if factory is None:
-        if key[0].startswith("exec:"):
-            from ..subjects.external import exec_factory
-            factory = exec_factory(key[0][len("exec:"):].strip(), cwd=cwd)
-        else:
-            from ..subjects.loading import load_subject
-            factory = load_subject(key[0])
-        _FACTORIES[key] = factory
+        from ..subjects.loading import load_subject
+        factory = _FACTORIES[key] = load_subject(key[0], cwd=cwd)
     return factory
 
 
@@ -143,7 +138,8 @@ def compact(result: EpisodeResult, keep: str) -> EpisodeResult:
     """Strip what need not travel: the scenario always, the trajectory unless ``keep`` wants it."""
     result.scenario = None  # type: ignore[assignment]
     if keep == "none" or keep == "failed" and result.passed:
-        result.trajectory = _empty_trajectory()
+        from ..sim.trajectory import Trajectory
+        result.trajectory = Trajectory.empty()
     return result
 
 
@@ -178,12 +174,3 @@ class Pending:
             self._outcome = self._wait()
             self._wait = None  # type: ignore[assignment]  # drop the future / object ref
         return restore(self.job, self._outcome)
-
-
-def _empty_trajectory() -> Any:
-    import numpy as np
-
-    from ..sim.trajectory import Trajectory
-    return Trajectory(t=np.zeros(0), pose=np.zeros((0, 3)), velocity=np.zeros((0, 3)),
-                      tick_t=np.zeros(0), command=np.zeros((0, 3)),
-                      ranges=np.zeros((0, 0), dtype=np.float32), angles=np.zeros(0))

@@ -25,7 +25,6 @@ import dataclasses
 import math
 from typing import Any
 
-import numpy as np
 import pytest
 
 from ..sim.trajectory import (
@@ -91,12 +90,6 @@ def episode_to_payload(result: EpisodeResult, *, nodeid: str, path: str,
     }
 
 
-def _empty_trajectory() -> Trajectory:
-    return Trajectory(t=np.zeros(0), pose=np.zeros((0, 3)), velocity=np.zeros((0, 3)),
-                      tick_t=np.zeros(0), command=np.zeros((0, 3)),
-                      ranges=np.zeros((0, 0), dtype=np.float32), angles=np.zeros(0))
-
-
 def _metrics(data: dict[str, Any]) -> Metrics:
     names = {f.name for f in dataclasses.fields(Metrics)}
     return Metrics(**{k: (math.nan if v is None else v) for k, v in data.items() if k in names})
@@ -122,7 +115,7 @@ def episode_from_payload(payload: dict[str, Any]) -> EpisodeResult:
         scenario=scenario_from_dict(payload["scenario"], source=payload.get("source")),
         outcome=Outcome(rec["outcome"]),
         metrics=_metrics(payload.get("metrics") or rec["metrics"]),
-        trajectory=trajectory_from_dict(traj) if traj is not None else _empty_trajectory(),
+        trajectory=trajectory_from_dict(traj) if traj is not None else Trajectory.empty(),
         seed=rec["seed"],
         subject=rec.get("subject", ""),
         subject_version=rec.get("subject_version"),

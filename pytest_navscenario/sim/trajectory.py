@@ -53,6 +53,12 @@ class Trajectory:
     def duration(self) -> float:
         return float(self.t[-1]) if len(self.t) else 0.0
 
+    @classmethod
+    def empty(cls) -> "Trajectory":
+        """No states: what a result carries when its trajectory was not kept (payloads, workers)."""
+        return cls(t=np.zeros(0), pose=np.zeros((0, 3)), velocity=np.zeros((0, 3)), tick_t=np.zeros(0),
+                   command=np.zeros((0, 3)), ranges=np.zeros((0, 0), dtype=np.float32), angles=np.zeros(0))
+
 
 _TRAJ_ARRAYS = ("t", "pose", "velocity", "tick_t", "command", "ranges", "angles")
 

@@ -19,16 +19,17 @@ BUILTIN_SUBJECTS = {
 DEFAULT_SUBJECT = "dwa"
 
 
-def load_subject(spec: str) -> PlannerFactory:
+def load_subject(spec: str, *, cwd: str | None = None) -> PlannerFactory:
     """Resolve ``package.module:Attribute``, a built-in name such as ``dwa``, or
-    ``exec:PROGRAM [ARGS]`` (an external planner, see exec_subject.py) to a planner factory.
+    ``exec:PROGRAM [ARGS]`` (an external planner, see external.py; resolved and started in
+    ``cwd`` when given) to a planner factory.
 
     Raises SubjectLoadError with what is wrong and how to fix it.
     """
     spec = spec.strip()
     if spec.startswith("exec:"):
         from .external import exec_factory
-        return exec_factory(spec[len("exec:"):].strip())
+        return exec_factory(spec[len("exec:"):].strip(), cwd=cwd)
     target = BUILTIN_SUBJECTS.get(spec, spec)
     if ":" not in target:
         raise SubjectLoadError(
