@@ -148,7 +148,8 @@ def search(args: argparse.Namespace) -> int:
 def overhead(args: argparse.Namespace) -> int:
     import pickle
 
-    from pytest_navscenario.dispatch.jobs import EpisodeJob, _empty_trajectory
+    from pytest_navscenario.dispatch.jobs import EpisodeJob
+    from pytest_navscenario.sim.trajectory import Trajectory
     from pytest_navscenario.dispatch.local import ProcessExecutor, SerialExecutor
     from pytest_navscenario.scenario.loader import load_scenario
 
@@ -158,7 +159,7 @@ def overhead(args: argparse.Namespace) -> int:
         scenario, mission=dataclasses.replace(scenario.mission, timeout=2.0))
     jobs = [EpisodeJob(short, "dwa", seed=i, keep_trajectory="none") for i in range(args.jobs)]
     full = SerialExecutor().map([EpisodeJob(scenario, "dwa", keep_trajectory="all")])[0]
-    compact = dataclasses.replace(full, scenario=None, trajectory=_empty_trajectory())
+    compact = dataclasses.replace(full, scenario=None, trajectory=Trajectory.empty())
     print(f"payload of one result: {len(pickle.dumps(compact))} bytes compact, "
           f"{len(pickle.dumps(dataclasses.replace(full, scenario=None)))} with its trajectory "
           f"({len(full.trajectory.t)} physics rows, a full boxes1 episode), scenario {len(pickle.dumps(scenario))} "

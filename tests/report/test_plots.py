@@ -90,11 +90,11 @@ def test_trajectory_plot_size_and_content(tmp_path):
 
 def test_plot_without_trajectory_still_shows_the_layout(tmp_path):
     """Results rebuilt without a trajectory (not requested) still plot the scene and markers."""
-    from pytest_navscenario.plugin.payload import _empty_trajectory
+    from pytest_navscenario.sim.trajectory import Trajectory
     from pytest_navscenario.report.plots import save_trajectory
 
     result = make_episode("timeout")
-    result.trajectory = _empty_trajectory()
+    result.trajectory = Trajectory.empty()
     assert_picture(save_trajectory(result, tmp_path / "t.png"))
 
 
