@@ -28,7 +28,8 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-SEEDS = ("boxes1", "boxes2", "corridor", "cylinders", "L-corridor")
+SEEDS = tuple(sorted(p.stem for p in (ROOT / "scenarios").glob("*.yaml")))   # every shipped seed
+HARD = 0.30            # a seed where random fails on fewer layouts than this: a ratio means something
 STRATEGIES = ("evolve", "random", "hillclimb")
 
 
@@ -46,15 +47,44 @@ def one_search(args):
     r = run_search(_load(seed_name), load_subject(subject), budget=budget, seed_value=seed_value,
                    strategy=strategy, shrink_budget=0)
     search = [c for c in r.candidates if c.phase == "search"]
+    old = _old_signatures(_load(seed_name), search)
     return {"seed": seed_name, "subject": subject, "strategy": strategy, "search_seed": seed_value,
             "budget": budget, "sims": r.sims_used, "discarded": r.discarded_total,
             "distinct_failures": len(r.failures), "failing_sims": sum(c.failed for c in search),
+            "distinct_old": len(set(old)),
             "first_failure": r.first_failure or budget + 1, "best_clearance": r.best_clearance,
             "wall": time.perf_counter() - t0, "cpu": time.process_time() - c0,
             "signatures": sorted({"/".join(map(str, f.found.signature)) for f in r.failures}),
             "distinct_by_origin": _count(f.found.origin for f in r.failures),
             "failing_by_origin": _count(c.origin for c in search if c.failed),
             "tries_by_origin": _count(c.origin for c in search)}
+
+
+def _old_signatures(seed, search) -> list[tuple]:
+    """The failing candidates' cause signatures as defined before issue 13's second round
+    (outcome, culprit, *the culprit's route quarter*, the robot's route quarter), so a table can
+    show both counts: a seed obstacle's quarter changed when it was nudged across a quarter
+    boundary, which every paper seed's main obstacles sit on."""
+    from pytest_navscenario.search.fitness import Route
+
+    route, out = Route(seed), []
+
+    def q(f):
+        return min(3, max(0, int(f * 4)))
+
+    for c in search:
+        if not c.failed:
+            continue
+        place = 0
+        if c.culprit and c.scenario is not None:
+            try:
+                obs = c.scenario.obstacle(c.culprit)
+                place = q(route.fraction(obs.x, obs.y))
+            except KeyError:
+                pass
+        who = "inserted" if c.culprit.startswith("navsearch_inserted_") else c.culprit
+        out.append((c.outcome, who, place, q(c.progress)))
+    return out
 
 
 def _count(values) -> dict:
@@ -69,47 +99,65 @@ def _cell(rows, seed, strategy):
     if not sel:
         return None
     return {"distinct": sum(r["distinct_failures"] for r in sel),
+            "old": sum(r.get("distinct_old", 0) for r in sel),
             "none": sum(r["distinct_failures"] == 0 for r in sel),
             "first": statistics.median(r["first_failure"] for r in sel),
+            "firsts": [r["first_failure"] for r in sel],
             "clear": min(r["best_clearance"] for r in sel),
             "cpu": statistics.median(r["cpu"] for r in sel),
             "fail_rate": sum(r["failing_sims"] for r in sel) / max(1, sum(r["sims"] for r in sel))}
 
 
-def table(rows, subject: str, budget: int, n_seeds: int) -> str:
+def table(rows, subject: str, budget: int, n_seeds: int, seeds=None) -> str:
+    """Per seed and strategy, then totals: over every seed, and over the seeds where random
+    fails on fewer than HARD of its layouts (where a ratio to random means something)."""
+    seeds = [s for s in (seeds or SEEDS) if any(r["seed"] == s for r in rows)]
+    strategies = [s for s in STRATEGIES if any(r["strategy"] == s for r in rows)]
     lines = [f"subject {subject}, budget {budget}, {n_seeds} search seeds per shipped seed, no shrinking",
-             f"{'seed':<11} {'strategy':<10} {'distinct':>8} {'none':>5} {'1st fail':>8} {'min clr':>8} "
-             f"{'cpu s':>6} {'random fail rate':>17}"]
-    tot = {s: [0, 0, []] for s in STRATEGIES}
-    for seed in SEEDS:
+             f"{'seed':<19} {'strategy':<10} {'distinct':>8} {'(old)':>6} {'none':>5} {'1st fail':>8} "
+             f"{'min clr':>8} {'cpu s':>6} {'random fail rate':>17}"]
+    hard = []
+    for seed in seeds:
         rnd = _cell(rows, seed, "random")
-        for strat in STRATEGIES:
+        if rnd and rnd["fail_rate"] < HARD:
+            hard.append(seed)
+        for strat in strategies:
             c = _cell(rows, seed, strat)
             if c is None:
                 continue
-            tot[strat][0] += c["distinct"]
-            tot[strat][1] += c["none"]
-            tot[strat][2] += [r["first_failure"] for r in rows if r["seed"] == seed and r["strategy"] == strat]
             rate = f"{rnd['fail_rate']:.1%}" if rnd else "-"
-            lines.append(f"{seed:<11} {strat:<10} {c['distinct']:>8} {c['none']:>5} {c['first']:>8g} "
-                         f"{c['clear']:>8.3f} {c['cpu']:>6.1f} {rate:>17}")
-    lines.append("totals:")
-    for strat in STRATEGIES:
-        d, none, firsts = tot[strat]
-        if firsts:
-            lines.append(f"  {strat:<10} distinct {d:>4}, searches with none {none:>3}, median first failure "
-                         f"{statistics.median(firsts):g}")
-    r = tot["random"][0]
-    for strat in ("evolve", "hillclimb"):
-        if tot[strat][2] and r:
-            lines.append(f"  {strat}/random distinct = {tot[strat][0] / r:.2f}")
-    if tot["evolve"][2] and tot["hillclimb"][0]:
-        lines.append(f"  evolve/hillclimb distinct = {tot['evolve'][0] / tot['hillclimb'][0]:.2f}")
+            lines.append(f"{seed:<19} {strat:<10} {c['distinct']:>8} {c['old']:>6} {c['none']:>5} "
+                         f"{c['first']:>8g} {c['clear']:>8.3f} {c['cpu']:>6.1f} {rate:>17}")
+    for label, group in (("all seeds", seeds),
+                         (f"seeds where random fails < {HARD:.0%} ({', '.join(hard) or 'none'})", hard)):
+        lines.append(f"totals, {label}:")
+        lines += _totals(rows, group, strategies)
     return "\n".join(lines)
 
 
-def part_power(subject: str, budget: int, search_seeds: int, jobs: int, strategies) -> list[dict]:
-    tasks = [(s, subject, strat, k, budget) for s in SEEDS for strat in strategies for k in range(search_seeds)]
+def _totals(rows, seeds, strategies) -> list[str]:
+    tot = {}
+    for strat in strategies:
+        cells = [c for c in (_cell(rows, s, strat) for s in seeds) if c]
+        if cells:
+            tot[strat] = (sum(c["distinct"] for c in cells), sum(c["old"] for c in cells),
+                          sum(c["none"] for c in cells), [f for c in cells for f in c["firsts"]])
+    lines = []
+    for strat, (d, old, none, firsts) in tot.items():
+        lines.append(f"  {strat:<10} distinct {d:>4} (old signature {old:>4}), searches with none {none:>3}, "
+                     f"median first failure {statistics.median(firsts):g}")
+    if "random" in tot and tot["random"][0]:
+        for strat in ("evolve", "hillclimb"):
+            if strat in tot:
+                lines.append(f"  {strat}/random distinct = {tot[strat][0] / tot['random'][0]:.2f} "
+                             f"(old signature {tot[strat][1] / max(1, tot['random'][1]):.2f})")
+    if "evolve" in tot and tot.get("hillclimb", (0,))[0]:
+        lines.append(f"  evolve/hillclimb distinct = {tot['evolve'][0] / tot['hillclimb'][0]:.2f}")
+    return lines
+
+
+def part_power(subject: str, budget: int, search_seeds: int, jobs: int, strategies, seeds) -> list[dict]:
+    tasks = [(s, subject, strat, k, budget) for s in seeds for strat in strategies for k in range(search_seeds)]
     with ProcessPoolExecutor(jobs) as pool:
         return list(pool.map(one_search, tasks))
 
@@ -135,6 +183,10 @@ def main() -> None:
     ap.add_argument("--speed-budget", type=int, default=1000)
     ap.add_argument("--search-seeds", type=int, default=5)
     ap.add_argument("--strategies", default=",".join(STRATEGIES))
+    ap.add_argument("--seeds", default=",".join(SEEDS), help="comma-separated seed names (default: every "
+                    "seed in scenarios/)")
+    ap.add_argument("--reuse", default=None, help="a JSON file of an earlier run: its rows of strategies "
+                    "not run now are shown beside the new ones (random and hillclimb are deterministic)")
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--out", default="bench_search.json")
     a = ap.parse_args()
@@ -143,9 +195,16 @@ def main() -> None:
     if a.part == "speed":
         out["speed"] = part_speed(a.subject, a.speed_budget)
     else:
-        rows = part_power(a.subject, a.budget, a.search_seeds, a.jobs, a.strategies.split(","))
+        strategies, seeds = a.strategies.split(","), a.seeds.split(",")
+        unknown = sorted(set(seeds) - set(SEEDS))
+        if unknown:
+            ap.error(f"unknown seed(s) {', '.join(unknown)}; shipped: {', '.join(SEEDS)}")
+        rows = part_power(a.subject, a.budget, a.search_seeds, a.jobs, strategies, seeds)
+        if a.reuse:
+            rows += [r for r in json.loads(Path(a.reuse).read_text())["power"]
+                     if r["strategy"] not in strategies and r["seed"] in seeds and r["subject"] == a.subject]
         out["power"] = rows
-        print(table(rows, a.subject, a.budget, a.search_seeds))
+        print(table(rows, a.subject, a.budget, a.search_seeds, seeds))
     print(f"load average after: {os.getloadavg()}")
     Path(a.out).write_text(json.dumps(out, indent=1, default=lambda v: None if isinstance(v, float)
                                       and not math.isfinite(v) else str(v)))

@@ -59,6 +59,9 @@ class Route:
         seg = np.hypot(*np.diff(self.points, axis=0).T) if len(self.points) > 1 else np.zeros(0)
         self.cum = np.concatenate([[0.0], np.cumsum(seg)])
         self.length = float(self.cum[-1]) or 1.0
+        # a seed obstacle's place is where the seed has it: part of its identity, so a nudge across
+        # a quarter boundary (the paper seeds' obstacles sit on one) is not a new way of failing
+        self.places = {o.name: _bin(self.fraction(o.x, o.y)) for o in seed.obstacles}
 
     def fraction(self, x: float, y: float) -> float:
         """Arc-length fraction (0..1) of the route point nearest to (x, y)."""
@@ -111,20 +114,27 @@ def read_episode(res: Any, route: Route) -> tuple[Reading, str]:
     else:
         vals = list(margins.values())
         robustness = min(vals) + MEAN_SHARE * sum(vals) / len(vals)
-    place = 0
-    if culprit:
-        try:
-            obs = sc.obstacle(culprit)
-            place = _bin(route.fraction(obs.x, obs.y))
-        except KeyError:
-            pass
-    who = "inserted" if culprit.startswith(INSERT_PREFIX) else culprit
-    signature = (res.outcome.value, who, place, _bin(progress))
+    signature = (res.outcome.value, *_culprit_place(culprit, sc, route), _bin(progress))
     idx = np.linspace(0, len(pose) - 1, min(PATH_POINTS, len(pose))).astype(int) if len(pose) else []
     path = tuple((round(float(pose[i, 0]), 4), round(float(pose[i, 1]), 4)) for i in idx)
     m = res.metrics
     closest = (float(m.min_clearance_time), float(m.min_clearance_x), float(m.min_clearance_y))
     return Reading(robustness, signature, progress, path, closest, margins), culprit
+
+
+def _culprit_place(culprit: str, scenario: Any, route: Route) -> tuple[str, int]:
+    """(who, place) of a cause signature: a seed obstacle by its name and the quarter of the route
+    where the seed has it; an inserted box (any slot) as "inserted" and the quarter where it
+    stands, since where it stands is all that tells two inserted boxes apart."""
+    if not culprit:
+        return "", 0
+    if not culprit.startswith(INSERT_PREFIX):
+        return culprit, route.places.get(culprit, 0)
+    try:
+        obs = scenario.obstacle(culprit)
+    except KeyError:
+        return "inserted", 0
+    return "inserted", _bin(route.fraction(obs.x, obs.y))
 
 
 def _failure_point(res: Any, pose: Any) -> tuple[float, float] | None:

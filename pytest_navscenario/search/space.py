@@ -28,7 +28,7 @@ Defaults can be overridden in the seed's YAML ``search:`` mapping::
       insert_margin: 1.0        # m: inserted boxes lie in the route's bounding box grown by this
       remove: 0                 # at most this many of the seed's obstacles may be removed
       polygon_vertex: 0.2       # m: each polygon corner's own dx/dy (default 0: off)
-      motion_start: [-2, 2]     # s added to a moving obstacle's start time (never below 0)
+      motion_start: [-5, 5]     # s added to a moving obstacle's start time (never below 0)
       motion_speed: 0.5         # m/s added to a moving obstacle's speed (never below MIN_SPEED)
       drift_per_metre: [0, 0.1] # sensor and localisation faults (default 0: off): lidar_noise_per_metre,
                                 # lidar_dropout_at_max, lidar_spurious, drift_per_metre,
@@ -73,7 +73,7 @@ DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {
     "waypoint_dx": (0.0, 0.0),
     "waypoint_dy": (0.0, 0.0),
     "polygon_vertex": (0.0, 0.0),
-    "motion_start": (-2.0, 2.0),
+    "motion_start": (-5.0, 5.0),    # s: a robot at ~1 m/s meets it anywhere on a 10 m stretch
     "motion_speed": (-0.5, 0.5),
     # sensor and localisation faults: off unless a seed opts in (offsets added, never below 0)
     "lidar_noise_per_metre": (0.0, 0.0),
