@@ -5,7 +5,11 @@ falsification tools (VerifAI, S-TaLiRo): each requirement of a navigation test g
 normalised to [0, 1] and the episode's robustness is the smallest margin, plus a small share
 of their mean so that a candidate near two failure modes ranks above one near a single mode:
 
-* time: 1 - duration / timeout (a success that needed 28 of 30 s is near a timeout);
+* time: the share of the *spare time* (timeout less the route's length at full speed) left when
+  the goal was reached (a success that needed 28 of 30 s is near a timeout);
+* stall: 1 - the longest time the robot gained no STALL_STEP along the route, over the spare
+  time (a robot that hesitated 15 s in front of a gap before finding its way was near a stuck
+  timeout, however fast it was afterwards: the way a competent planner fails);
 * clearance: min clearance / CLEARANCE_SCALE (near a collision);
 * safety: the smallest clearance of the poses the safety layer predicts (near a safety stop);
 * efficiency: path efficiency (a long detour is near a timeout too).
@@ -31,6 +35,8 @@ SAFETY_SCALE = 0.3      # m: predicted clearance above the safety margin by this
 MEAN_SHARE = 0.25       # weight of the mean margin beside the smallest one
 PLACE_BINS = 4          # route quarters
 PATH_POINTS = 40        # path samples kept per candidate for the placement operators
+STALL_STEP = 0.25       # m along the route: gaining less than this is no progress (the stuck cell)
+PROGRESS_RATE = 10.0    # Hz: trajectory samples read for the stall
 
 
 @dataclass(frozen=True)
@@ -67,15 +73,23 @@ class Route:
         """Arc-length fraction (0..1) of the route point nearest to (x, y)."""
         import numpy as np
 
+        return float(self.fractions(np.array([[x, y]], dtype=float))[0])
+
+    def fractions(self, xy: Any) -> Any:
+        """``fraction`` of each row of an (n, 2) array."""
+        import numpy as np
+
         p = self.points
         if len(p) < 2:
-            return 0.0
+            return np.zeros(len(xy))
+        x, y = xy[:, 0:1], xy[:, 1:2]
         a, d = p[:-1], np.diff(p, axis=0)
         dd = np.maximum((d * d).sum(axis=1), 1e-12)
         u = np.clip(((x - a[:, 0]) * d[:, 0] + (y - a[:, 1]) * d[:, 1]) / dd, 0.0, 1.0)
         qx, qy = a[:, 0] + u * d[:, 0], a[:, 1] + u * d[:, 1]
-        i = int(np.argmin((qx - x) ** 2 + (qy - y) ** 2))
-        return float((self.cum[i] + u[i] * math.sqrt(dd[i])) / self.length)
+        i = np.argmin((qx - x) ** 2 + (qy - y) ** 2, axis=1)
+        rows = np.arange(len(xy))
+        return (self.cum[i] + u[rows, i] * np.sqrt(dd[i])) / self.length
 
 
 def _bin(fraction: float) -> int:
@@ -108,7 +122,7 @@ def read_episode(res: Any, route: Route) -> tuple[Reading, str]:
     end_xy = _failure_point(res, pose)
     progress = route.fraction(*end_xy) if end_xy is not None else 0.0
     failed = res.outcome.value != "success"
-    margins = _margins(res, pose) if not failed else {}
+    margins = _margins(res, pose, route) if not failed else {}
     if failed:
         robustness = -1.0 + progress / 2.0
     else:
@@ -145,16 +159,43 @@ def _failure_point(res: Any, pose: Any) -> tuple[float, float] | None:
     return None
 
 
-def _margins(res: Any, pose: Any) -> dict[str, float]:
+def _margins(res: Any, pose: Any, route: Route) -> dict[str, float]:
     m, sc = res.metrics, res.scenario
-    timeout = sc.mission.timeout
-    out = {"time": _unit(1.0 - m.duration / timeout if timeout > 0 else 1.0),
+    spare = spare_time(sc, route)
+    out = {"time": _unit((sc.mission.timeout - m.duration) / spare),
+           "stall": _unit(1.0 - longest_stall(res.trajectory.t, pose, route) / spare),
            "clearance": _unit(m.min_clearance / CLEARANCE_SCALE),
            "efficiency": _unit(m.path_efficiency)}
     safety = _safety_margin(res, pose)
     if safety is not None:
         out["safety"] = safety
     return out
+
+
+def spare_time(scenario: Any, route: Route) -> float:
+    """Seconds a robot can lose and still reach the goal in time: the timeout less the seed's
+    route at the robot's top speed (at least a tenth of the timeout)."""
+    timeout = scenario.mission.timeout
+    fastest = route.length / max(scenario.robot.limits.max_speed, 1e-6)
+    return max(timeout - fastest, 0.1 * timeout, 1e-6)
+
+
+def longest_stall(t: Any, pose: Any, route: Route) -> float:
+    """The longest time (s) in which the robot got no STALL_STEP further along the seed's route
+    than it had been (at the end of the episode: up to its end)."""
+    import numpy as np
+
+    t = np.asarray(t, dtype=float)
+    if len(pose) < 2 or len(t) != len(pose):
+        return 0.0
+    step = max(1, int(round(len(pose) / max(1.0, (t[-1] - t[0]) * PROGRESS_RATE))))
+    ts, xy = t[::step], pose[::step, :2]
+    s = route.fractions(xy) * route.length
+    best, mark, since = 0.0, s[0] + STALL_STEP, ts[0]
+    for ti, si in zip(ts, s):
+        if si >= mark:
+            best, mark, since = max(best, ti - since), si + STALL_STEP, ti
+    return float(max(best, t[-1] - since))
 
 
 def _unit(v: float) -> float:

@@ -30,7 +30,7 @@ from .space import FLAG_ON, SearchSpace, invalid_reason
 
 GENERATION = 8                 # candidates per generation (evolve, random)
 MUTATION_SCALES = (0.05, 0.15, 0.3)   # Gaussian step sd as a fraction of the parameter's range
-OPERATORS = ("explore", "mutate", "place", "insert", "squeeze")
+OPERATORS = ("explore", "mutate", "place", "insert", "squeeze", "retime")
 MIN_SHARE = 0.08               # every usable operator keeps at least this share
 EXPLORE_SHARE = 0.2            # uniform exploration keeps at least this share: never far below random
 PICK_PENALTY = 0.03            # robustness added per earlier pick of an archive cell (novelty)
@@ -44,6 +44,9 @@ STREAM_BITS = 32               # Hypothesis-drawn bits seeding each proposal's r
 QUARTERS = 4                   # route quarters: the places a target aims at (fitness.PLACE_BINS)
 SQUEEZE_BAND = (1.0, 1.3)      # squeeze: obstacle centre at this many (robot half width + obstacle half)
                                # from the path: its face just clears the footprint's recorded pose
+RETIME_STARTS = 21             # retime: start offsets tried across their range (and RETIME_SPEEDS speeds)
+RETIME_SPEEDS = 5
+RETIME_LAG = (-1.0, 0.5)       # s: the obstacle is aimed at where the robot was this much later
 
 
 class GaveUp(Exception):
@@ -239,7 +242,7 @@ class _Targets:
         self.best = {a: math.inf for a in self.arms}
 
     def weight(self, arm: tuple[str, int], known: set[tuple]) -> float:
-        filled = sum(1 for sig in known if (sig[1], sig[2]) == arm)
+        filled = sum(1 for sig in known if _in_cell(sig, arm))
         return (self.credit[arm] + 1.0) / (self.tries[arm] + 2.0) / (1.0 + self.repeats[arm] + filled)
 
     def pick(self, rnd: random.Random, allowed: Sequence[tuple[str, int]], known: set[tuple]) -> tuple[str, int]:
@@ -274,16 +277,19 @@ class Evolve:
         self.movable = [g for g in space.groups if _has(space, g, "dx") and _has(space, g, "dy")
                         and space.params[g[0]].part.startswith("obstacle:")]
         self.slots = [g for g in space.groups if space.params[g[0]].part.startswith("inserted[")]
+        self.moving = [g for g in space.groups if _has(space, g, "start") or _has(space, g, "speed")]
+        self.timing: _Targets | None = None
         self.failure_signatures: set[tuple] = set()
         self.route: Any = None
         self.targets: _Targets | None = None
-        self.aims: dict[tuple, tuple[str, int]] = {}   # proposal -> the target arm it aimed at
-        self.aim: tuple[str, int] | None = None         # the arm of the proposal being drawn
+        self.aims: dict[tuple, tuple[Any, tuple[str, int]]] = {}   # proposal -> (bandit, arm) it aimed at
+        self.aim: tuple[Any, tuple[str, int]] | None = None   # (bandit, arm) of the proposal being drawn
 
     def weights(self) -> list[float]:
         usable = {"explore": True, "mutate": bool(self.cells.elites),
                   "place": bool(self.cells.elites and self.movable), "insert": bool(self.cells.elites and self.slots),
-                  "squeeze": bool(self.cells.elites and (self.movable or self.slots))}
+                  "squeeze": bool(self.cells.elites and (self.movable or self.slots)),
+                  "retime": bool(self.cells.elites and self.moving)}
         rates = {op: (self.stats[op][1] + 1.0) / (self.stats[op][0] + 2.0) for op in OPERATORS if usable[op]}
         total = sum(rates.values())
         return [max(EXPLORE_SHARE if op == "explore" else MIN_SHARE, rates[op] / total) if op in rates else 0.0
@@ -293,7 +299,7 @@ class Evolve:
         self.generation += 1
         out: list[tuple[tuple[float, ...], str]] = []
         if self.generation == 1 and self.admission.admit(self.space.zero()):
-            out.append((self.space.zero(), "seed"))
+            return [(self.space.zero(), "seed")]   # alone: the next generation can aim at its path
         want = min(room, GENERATION)
         attempt = 0
         while len(out) < want:   # ends: the admission gives up (GaveUp) after too many misses
@@ -353,6 +359,8 @@ class Evolve:
             return self._insert(parent, rnd), parent
         if op == "squeeze" and parent.path:
             return self._squeeze(parent, rnd), parent
+        if op == "retime" and parent.path:
+            return self._retime(parent, rnd), parent
         return self._mutate(parent, rnd), parent
 
     def _repeats(self, parent: Any, offsets: Sequence[float]) -> bool:
@@ -419,8 +427,9 @@ class Evolve:
         arms = [a for a in self._arms().arms if (a[0] == "inserted") == inserted]
         if not arms:
             return None
-        self.aim = self.targets.pick(rnd, arms, self.failure_signatures)
-        return self.aim
+        arm = self.targets.pick(rnd, arms, self.failure_signatures)
+        self.aim = (self.targets, arm)
+        return arm
 
     def _target(self, parent: Any, rnd: random.Random, half: float, quarter: int | None,
                 squeeze: bool = False, within: tuple | None = None) -> tuple[float, float, float, float]:
@@ -464,7 +473,7 @@ class Evolve:
         group = next(g for g in self.movable if space.params[g[0]].part == f"obstacle:{arm[0]}") \
             if arm else rnd.choice(self.movable)
         obs = space.seed.obstacle(space.params[group[0]].part.split(":", 1)[1])
-        half = getattr(obs, "radius", None) or min(getattr(obs, "length", 0.5), getattr(obs, "width", 0.5)) / 2
+        half = _half_size(obs)
         x0, x1, y0, y1 = self._reach(group)
         for _ in range(8):   # a point the obstacle can reach within its bounds (or its mirror image
             tx, ty, px, py = self._target(parent, rnd, half, arm[1] if arm else None, squeeze,   # across
@@ -509,6 +518,83 @@ class Evolve:
             return self._place(parent, rnd, squeeze=True)
         return self._insert(parent, rnd, squeeze=True)
 
+    def _timing_arms(self) -> _Targets:
+        """The retime arms: each moving obstacle in each route quarter its track can come near
+        (its positions over the episode, shifted within its dx/dy bounds)."""
+        if self.timing is None:
+            import numpy as np
+            from ..scenario.motion import Track
+
+            space, route = self.space, self._route()
+            fp = space.seed.robot.footprint
+            reach = (fp.radius if fp.shape == "circle" else fp.width / 2) + 0.5
+            arms = []
+            for group in self.moving:
+                name = space.params[group[0]].part.split(":", 1)[1]
+                obs = space.seed.obstacle(name)
+                rng = {space.params[i].attr: (space.params[i].lo, space.params[i].hi) for i in group}
+                (dx0, dx1), (dy0, dy1) = rng.get("dx", (0.0, 0.0)), rng.get("dy", (0.0, 0.0))
+                t = np.linspace(0.0, space.seed.mission.timeout + 10.0, 200)
+                pts = Track(obs).positions(t)
+                arms += sorted({(name, _quarter(f)) for x, y, f in _route_samples(route)
+                                if np.any((pts[:, 0] + dx0 - reach <= x) & (x <= pts[:, 0] + dx1 + reach)
+                                          & (pts[:, 1] + dy0 - reach <= y) & (y <= pts[:, 1] + dy1 + reach))})
+            self.timing = _Targets(arms or [(self.space.params[g[0]].part.split(":", 1)[1], 0)
+                                            for g in self.moving])
+        return self.timing
+
+    def _retime(self, parent: Any, rnd: random.Random) -> tuple[float, ...]:
+        """Time-to-impact for a moving obstacle: choose its start time and speed (from a grid over
+        their ranges) so that it reaches a point of the parent's path when the robot was there
+        (or up to RETIME_LAG later), then shift its path (dx, dy) by what is left of the gap."""
+        import numpy as np
+        from ..scenario.motion import Track
+
+        space, route = self.space, self._route()
+        timing = self._timing_arms()
+        arm = timing.pick(rnd, timing.arms, self.failure_signatures)
+        self.aim = (timing, arm)
+        group = next(g for g in self.moving if space.params[g[0]].part == f"obstacle:{arm[0]}")
+        at = {space.params[i].attr: i for i in group}
+        n = len(parent.path)
+        duration = float(parent.metrics.get("duration") or 0.0) or space.seed.mission.timeout
+        times = np.array([k / max(1, n - 1) * duration for k in range(n)])
+        robot = np.asarray(parent.path, dtype=float).reshape(-1, 2)
+        aimed = [k for k in range(n) if _quarter(route.fraction(*parent.path[k])) == arm[1]] or list(range(n))
+        times, robot = times[aimed] + rnd.uniform(*RETIME_LAG), robot[aimed]
+        offsets = list(parent.offsets)
+        starts = ([offsets[at["start"]]] + list(np.linspace(space.params[at["start"]].lo, space.params[at["start"]].hi,
+                                                            RETIME_STARTS)) if "start" in at else [None])
+        speeds = ([offsets[at["speed"]]] + [rnd.uniform(space.params[at["speed"]].lo, space.params[at["speed"]].hi)
+                                            for _ in range(RETIME_SPEEDS - 1)] if "speed" in at else [None])
+        obs = space.seed.obstacle(arm[0])
+        fp = space.seed.robot.footprint
+        contact = (fp.radius if fp.shape == "circle" else fp.width / 2) + _half_size(obs)
+        tried = []
+        for start in starts:
+            for speed in speeds:
+                trial = list(offsets)
+                if start is not None:
+                    trial[at["start"]] = start
+                if speed is not None:
+                    trial[at["speed"]] = speed
+                pos = Track(space.apply(trial).obstacle(arm[0])).positions(times)
+                gap = robot - pos
+                k = int(np.argmin(np.hypot(gap[:, 0], gap[:, 1])))
+                tried.append((float(np.hypot(*gap[k])), trial, (float(gap[k, 0]), float(gap[k, 1]))))
+        meeting = [t for t in tried if t[0] < contact]
+        _, trial, (gx, gy) = rnd.choice(meeting) if meeting else min(tried, key=lambda t: t[0])
+        jitter = rnd.uniform(0.0, 0.8) * contact
+        angle = rnd.uniform(0.0, 2 * math.pi)
+        for attr, shift in (("dx", gx + jitter * math.cos(angle)), ("dy", gy + jitter * math.sin(angle))):
+            if attr in at and not meeting:
+                trial[at[attr]] += shift
+            elif attr in at:
+                trial[at[attr]] += jitter * (math.cos(angle) if attr == "dx" else math.sin(angle))
+        if "removed" in at:
+            trial[at["removed"]] = 0.0
+        return space.clip(trial)
+
     def tell(self, results: Sequence[Any]) -> None:
         for cand in results:
             before = self.cells.elites.get(cand.signature)
@@ -521,9 +607,17 @@ class Evolve:
             if cand.origin in self.stats:   # credit: new ways of failing, and moves toward failing
                 self.stats[cand.origin][0] += 1
                 self.stats[cand.origin][1] += (3.0 if new_failure else 0.0) + (0.2 if improved else 0.0)
-            arm = self.aims.pop(_key(cand.offsets), None)
-            if arm is not None and self.targets is not None:
-                self.targets.tell(arm, cand, new_failure)
+            aim = self.aims.pop(_key(cand.offsets), None)
+            if aim is not None:
+                aim[0].tell(aim[1], cand, new_failure)
+
+
+def _in_cell(sig: tuple, arm: tuple[str, int]) -> bool:
+    """Whether a failing cause signature belongs to a target arm's cell: an inserted box in that
+    quarter, or a seed obstacle (placed by its name) with the robot failing in that quarter."""
+    if arm[0] == "inserted":
+        return sig[1] == "inserted" and sig[2] == arm[1]
+    return sig[1] == arm[0] and sig[3] == arm[1]
 
 
 def _beside_within(path: Sequence[tuple[float, float]], k: int, lateral: float, box: tuple) -> bool:
@@ -555,6 +649,17 @@ def _route_point(route: Any, fraction: float) -> tuple[float, float]:
 def _route_samples(route: Any, n: int = 40) -> list[tuple[float, float, float]]:
     """(x, y, fraction) of ``n`` points evenly spaced along the seed's route."""
     return [(*_route_point(route, k / (n - 1)), k / (n - 1)) for k in range(n)]
+
+
+def _half_size(obs: Any) -> float:
+    """Half the smallest extent of an obstacle's outline (its radius for a cylinder or person)."""
+    if getattr(obs, "radius", None):
+        return obs.radius
+    if hasattr(obs, "length"):
+        return min(obs.length, obs.width) / 2
+    from ..scenario.geometry import obstacle_polygon
+    x0, y0, x1, y1 = obstacle_polygon(obs).bounds
+    return min(x1 - x0, y1 - y0) / 2
 
 
 def _has(space: SearchSpace, group: Sequence[int], attr: str) -> bool:

@@ -214,6 +214,78 @@ def test_aimed_mutations_put_the_obstacle_in_the_quarter_of_the_route_they_aim_a
             assert _lane_quarter(obs.y) == quarter, (k, op.__name__, evo.aim, obs)
 
 
+CROSSING_YAML = """\
+version: 1
+name: crossing
+mission:
+  start: {x: 0.0, y: 0.0, yaw: 90.0}
+  goal: {x: 0.0, y: 8.0, yaw: 90.0}
+  timeout: 20.0
+obstacles:
+  - type: person
+    name: walker
+    motion: {path: [[-2.0, 5.0], [3.0, 5.0]], speed: 1.0, start: 8.0}
+search:
+  obstacle_size: 0
+  insert: 0
+"""
+
+
+def test_retime_mutation_sends_a_moving_obstacle_to_meet_the_robot():
+    """A person who crosses long after the robot passed: retime picks a start time and speed (and
+    shifts the path with what is left) so that the person reaches a point of the robot's recorded
+    path when the robot was there, and the child episodes meet the person where uniform samples
+    of the same space do not."""
+    import random
+
+    import numpy as np
+
+    from pytest_navscenario.scenario.motion import Track
+    from pytest_navscenario.search.strategies import RETIME_LAG
+
+    seed = loads_scenario(CROSSING_YAML, "crossing.yaml", name="crossing")
+    space = SearchSpace(seed)
+    evo = Evolve(space, _report(space), 10, 0)
+    ctx = EvalContext(space, Straight, stuck_after=None)
+    parent = evaluate_candidate(ctx, space.zero(), "seed")
+    assert not parent.failed and evo.moving
+    n, duration = len(parent.path), parent.metrics["duration"]
+    times = np.array([k / (n - 1) * duration for k in range(n)])
+    robot = np.asarray(parent.path)
+    contact = 0.25 + seed.obstacle("walker").radius
+    met = 0
+    for k in range(12):
+        child = evo._retime(parent, random.Random(k))
+        assert space.clip(child) == child
+        track = Track(space.apply(child).obstacle("walker"))
+        gap = min(float(np.hypot(*(robot - track.positions(times + lag)).T).min())
+                  for lag in np.linspace(*RETIME_LAG, 31))
+        assert gap <= 1.8 * contact + 1e-6, (k, gap)     # at most the jitter (0.8 x contact) off
+        met += evaluate_candidate(ctx, child, "retime").culprit == "walker"
+    rnd = random.Random(0)
+    uniform = sum(evaluate_candidate(ctx, tuple(rnd.uniform(p.lo, p.hi) for p in space.params), "u").failed
+                  for _ in range(12))
+    assert met >= 8 and met > uniform + 4, (met, uniform)
+
+
+def test_stall_margin_sees_a_robot_that_hesitated():
+    """A success after standing still for a while ranks closer to a timeout than the same run
+    without the wait: the stall margin is the longest time without progress over the spare time."""
+    from pytest_navscenario.search.fitness import Route, longest_stall, read_episode, spare_time
+
+    lane = loads_scenario(OPEN_YAML, "lane.yaml", name="lane")
+    route = Route(lane)
+    quick = run_scenario(lane, Straight())
+    slow = run_scenario(lane, WaitThenGo())     # stands still for 4 s first
+    assert quick.outcome.value == slow.outcome.value == "success"
+    stall_quick = longest_stall(quick.trajectory.t, quick.trajectory.pose, route)
+    stall_slow = longest_stall(slow.trajectory.t, slow.trajectory.pose, route)
+    assert stall_quick < 1.0 and 4.0 <= stall_slow < 5.0, (stall_quick, stall_slow)
+    a, b = read_episode(quick, route)[0], read_episode(slow, route)[0]
+    assert b.margins["stall"] == pytest.approx(1 - stall_slow / spare_time(lane, route))
+    assert b.robustness < a.robustness
+
+
 def test_target_bandit_moves_on_from_a_place_that_has_failed():
     import random
     from pytest_navscenario.search.strategies import _Targets
