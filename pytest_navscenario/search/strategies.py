@@ -30,7 +30,7 @@ from .space import FLAG_ON, SearchSpace, invalid_reason
 
 GENERATION = 8                 # candidates per generation (evolve, random)
 MUTATION_SCALES = (0.05, 0.15, 0.3)   # Gaussian step sd as a fraction of the parameter's range
-OPERATORS = ("explore", "mutate", "place", "insert", "squeeze", "retime")
+OPERATORS = ("explore", "mutate", "place", "insert", "squeeze", "retime", "barrier")
 MIN_SHARE = 0.08               # every usable operator keeps at least this share
 EXPLORE_SHARE = 0.2            # uniform exploration keeps at least this share: never far below random
 PICK_PENALTY = 0.03            # robustness added per earlier pick of an archive cell (novelty)
@@ -283,13 +283,15 @@ class Evolve:
         self.route: Any = None
         self.targets: _Targets | None = None
         self.aims: dict[tuple, tuple[Any, tuple[str, int]]] = {}   # proposal -> (bandit, arm) it aimed at
-        self.aim: tuple[Any, tuple[str, int]] | None = None   # (bandit, arm) of the proposal being drawn
+        self.aim: tuple[str, int] | None = None         # the arm of the proposal being drawn
+        self.aim_bandit: _Targets | None = None          # and the bandit it belongs to
 
     def weights(self) -> list[float]:
         usable = {"explore": True, "mutate": bool(self.cells.elites),
                   "place": bool(self.cells.elites and self.movable), "insert": bool(self.cells.elites and self.slots),
                   "squeeze": bool(self.cells.elites and (self.movable or self.slots)),
-                  "retime": bool(self.cells.elites and self.moving)}
+                  "retime": bool(self.cells.elites and self.moving),
+                  "barrier": bool(self.cells.elites and len(self.slots) >= 2)}
         rates = {op: (self.stats[op][1] + 1.0) / (self.stats[op][0] + 2.0) for op in OPERATORS if usable[op]}
         total = sum(rates.values())
         return [max(EXPLORE_SHARE if op == "explore" else MIN_SHARE, rates[op] / total) if op in rates else 0.0
@@ -337,7 +339,7 @@ class Evolve:
             if len(out) >= n or not self.admission.admit(offsets):
                 reject()
             if self.aim is not None:
-                self.aims[_key(offsets)] = self.aim
+                self.aims[_key(offsets)] = (self.aim_bandit, self.aim)
             out.append((offsets, op))
 
         run = settings(max_examples=n, database=None, deadline=None, phases=[Phase.generate],
@@ -361,6 +363,8 @@ class Evolve:
             return self._squeeze(parent, rnd), parent
         if op == "retime" and parent.path:
             return self._retime(parent, rnd), parent
+        if op == "barrier" and parent.path:
+            return self._barrier(parent, rnd), parent
         return self._mutate(parent, rnd), parent
 
     def _repeats(self, parent: Any, offsets: Sequence[float]) -> bool:
@@ -427,9 +431,9 @@ class Evolve:
         arms = [a for a in self._arms().arms if (a[0] == "inserted") == inserted]
         if not arms:
             return None
-        arm = self.targets.pick(rnd, arms, self.failure_signatures)
-        self.aim = (self.targets, arm)
-        return arm
+        self.aim = self.targets.pick(rnd, arms, self.failure_signatures)
+        self.aim_bandit = self.targets
+        return self.aim
 
     def _target(self, parent: Any, rnd: random.Random, half: float, quarter: int | None,
                 squeeze: bool = False, within: tuple | None = None) -> tuple[float, float, float, float]:
@@ -449,7 +453,16 @@ class Evolve:
         contact = (fp.radius if fp.shape == "circle" else fp.width / 2) + half
         if within is not None:   # path points from which the band beside the path is in the box
             path = [p for k, p in enumerate(path) if _beside_within(path, k, 1.15 * contact, within)] or path
-        n = len(path)
+        (px, py), (ux, uy) = self._anchor(parent, path, rnd)
+        lateral = rnd.uniform(*SQUEEZE_BAND) * rnd.choice((-1.0, 1.0)) if squeeze else rnd.uniform(-1.3, 1.3)
+        lateral *= contact
+        return px - uy * lateral, py + ux * lateral, px, py
+
+    def _anchor(self, parent: Any, path: Sequence[tuple[float, float]], rnd: random.Random
+                ) -> tuple[tuple[float, float], tuple[float, float]]:
+        """A point of ``path`` and the unit direction of travel there: half the time at or a
+        moment after the parent's closest approach (if it lies on ``path``), else anywhere."""
+        route, n = self._route(), len(path)
         j = rnd.randrange(n)
         if parent.closest and rnd.random() < 0.5 and all(math.isfinite(v) for v in parent.closest[1:]):
             _, cx, cy = parent.closest
@@ -462,9 +475,36 @@ class Evolve:
             a, b = _route_point(route, f - 0.02), _route_point(route, f + 0.02)
         dx, dy = b[0] - a[0], b[1] - a[1]
         norm = math.hypot(dx, dy) or 1.0
-        lateral = rnd.uniform(*SQUEEZE_BAND) * rnd.choice((-1.0, 1.0)) if squeeze else rnd.uniform(-1.3, 1.3)
-        lateral *= contact
-        return path[j][0] - dy / norm * lateral, path[j][1] + dx / norm * lateral, path[j][0], path[j][1]
+        return (path[j][0], path[j][1]), (dx / norm, dy / norm)
+
+    def _barrier(self, parent: Any, rnd: random.Random) -> tuple[float, ...]:
+        """Two inserted boxes side by side across the parent's path (aligned with it, the gap
+        between them narrower than the robot), in the quarter of a target arm: a wall wider than
+        the robot that it must find its way around, where a reactive planner can be trapped."""
+        space, offsets = self.space, list(parent.offsets)
+        x0, y0, x1, y1 = space.region
+        lo, hi = space.limits.insert_size
+        arm = self._pick_arm(rnd, inserted=True)
+        route = self._route()
+        path = list(parent.path[1:]) or [p[:2] for p in _route_samples(route)]
+        if arm is not None:
+            path = [p for p in path if _quarter(route.fraction(*p)) == arm[1]] or \
+                [p[:2] for p in _route_samples(route) if _quarter(p[2]) == arm[1]] or path
+        (px, py), (ux, uy) = self._anchor(parent, path, rnd)
+        fp = space.seed.robot.footprint
+        robot_width = 2 * fp.radius if fp.shape == "circle" else fp.width
+        sizes = [rnd.uniform(lo, hi) for _ in range(2)]
+        gap = rnd.uniform(0.0, 0.8) * robot_width
+        width = sum(sizes) + gap
+        centre = rnd.uniform(-0.5, 0.5) * width      # the wall's middle, across the path
+        laterals = (centre - width / 2 + sizes[0] / 2, centre + width / 2 - sizes[1] / 2)
+        yaw = (math.degrees(math.atan2(uy, ux)) + 45.0) % 90.0 - 45.0   # a square's faces along the path
+        for group, size, lateral in zip(self.slots[:2], sizes, laterals):
+            values = {"on": 1.0, "size": size - lo, "yaw": yaw,
+                      "x": px - uy * lateral - (x0 + x1) / 2, "y": py + ux * lateral - (y0 + y1) / 2}
+            for i in group:
+                offsets[i] = values.get(space.params[i].attr, offsets[i])
+        return space.clip(offsets)
 
     def _place(self, parent: Any, rnd: random.Random, squeeze: bool = False) -> tuple[float, ...]:
         """Move the seed obstacle of a target arm (culprit, quarter) beside the parent's path there."""
@@ -552,8 +592,8 @@ class Evolve:
 
         space, route = self.space, self._route()
         timing = self._timing_arms()
-        arm = timing.pick(rnd, timing.arms, self.failure_signatures)
-        self.aim = (timing, arm)
+        arm = self.aim = timing.pick(rnd, timing.arms, self.failure_signatures)
+        self.aim_bandit = timing
         group = next(g for g in self.moving if space.params[g[0]].part == f"obstacle:{arm[0]}")
         at = {space.params[i].attr: i for i in group}
         n = len(parent.path)

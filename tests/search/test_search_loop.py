@@ -286,6 +286,25 @@ def test_stall_margin_sees_a_robot_that_hesitated():
     assert b.robustness < a.robustness
 
 
+def test_barrier_mutation_walls_off_the_path_with_two_boxes_the_robot_cannot_pass_between(lane):
+    """Two inserted boxes side by side across the robot's path, the gap between them narrower than
+    the robot: the straight line is blocked (a robot that does not go round hits one of them)."""
+    import random
+    space = SearchSpace(lane, {"insert": 2})
+    evo = Evolve(space, _report(space), 10, 0)
+    parent = _parent(lane, space)
+    ctx = EvalContext(space, Straight, stuck_after=None)
+    for k in range(10):
+        scenario = space.apply(evo._barrier(parent, random.Random(k)))
+        a, b = sorted((o for o in scenario.obstacles if o.name.startswith(INSERT_PREFIX)), key=lambda o: o.x)
+        assert abs(a.y - b.y) < 1e-3 and a.yaw == b.yaw == 0.0, (k, a, b)   # across a path along +y
+        assert b.x - b.length / 2 - (a.x + a.length / 2) < 0.5 * 0.8 + 1e-6     # gap below the robot's width
+        assert a.x - a.length / 2 <= 0.0 <= b.x + b.length / 2                   # the line is covered
+        if k < 4:
+            cand = evaluate_candidate(ctx, evo._barrier(parent, random.Random(k)), "b")
+            assert cand.failed and cand.culprit.startswith(INSERT_PREFIX), (k, cand.outcome, cand.culprit)
+
+
 def test_target_bandit_moves_on_from_a_place_that_has_failed():
     import random
     from pytest_navscenario.search.strategies import _Targets
