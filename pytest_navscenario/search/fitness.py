@@ -19,8 +19,9 @@ failures the one that got less far ranks first.
 
 The *cause signature* tells failures apart by behaviour, not by parameters: outcome, culprit
 obstacle (inserted obstacles are one culprit "inserted", whichever slot holds them), where the
-culprit lies along the seed's route and how far along the route the robot was when it failed
-(both in PLACE_BINS bins). Two failures with the same signature fail the same way.
+culprit is along the seed's route (a seed obstacle: where the seed has it, part of its identity; an
+inserted box: where it stands) and how far along the route the robot was when it failed (both in
+PLACE_BINS bins). Two failures with the same signature fail the same way.
 """
 from __future__ import annotations
 
