@@ -6,14 +6,18 @@ Run from the repository root (not a timed test; the machine may be shared, so us
     nice python benchmarks/bench_search.py --subject examples.gap_follower:FollowTheGap
     nice python benchmarks/bench_search.py --subject dwa --part speed     # budget 1000, one core
 
-For each shipped seed x search seed (default 5) x strategy (evolve, random, hillclimb) one
-search at budget 100 without shrinking. Per seed and strategy: distinct failures (total over
-the search seeds; distinct = different cause signature, as frozen files are told apart),
-searches that found none, median simulations to the first failure (a search with none counts
-as budget + 1), lowest clearance, median CPU time per search, and beside them the rate at
-which uniformly random layouts fail for this planner and seed (random's failing simulations
-over its simulations): a ratio where random already fails on most layouts says little.
-Rows are saved as JSON (--out) and the load average is printed before and after.
+For each shipped seed (every file in scenarios/, or --seeds a,b) x search seed (default 5) x
+strategy (evolve, random, hillclimb) one search at budget 100 without shrinking. Per seed and
+strategy: distinct failures (total over the search seeds; distinct = different cause signature,
+as frozen files are told apart) and, in brackets, the count under the signature before issue 13's
+second round (a seed obstacle's quarter where the candidate had it), searches that found none,
+median simulations to the first failure (a search with none counts as budget + 1), lowest
+clearance, median CPU time per search, and beside them the rate at which uniformly random
+layouts fail for this planner and seed (random's failing simulations over its simulations). The
+totals come twice: over every seed, and over the seeds where random fails on fewer than 30 % of
+its layouts, where a ratio to random means something. Rows are saved as JSON (--out; --reuse
+FILE adds an earlier run's rows of the strategies not run now: random and hillclimb are
+deterministic) and the load average is printed before and after.
 """
 from __future__ import annotations
 
