@@ -287,10 +287,11 @@ class Evolve:
         self.aim_bandit: _Targets | None = None          # and the bandit it belongs to
 
     def weights(self) -> list[float]:
-        # before any result the parent is the seed's route (_RouteParent): every operator is usable
-        usable = {"explore": True, "mutate": True, "place": bool(self.movable), "insert": bool(self.slots),
-                  "squeeze": bool(self.movable or self.slots), "retime": bool(self.moving),
-                  "barrier": len(self.slots) >= 2}
+        usable = {"explore": True, "mutate": bool(self.cells.elites),
+                  "place": bool(self.cells.elites and self.movable), "insert": bool(self.cells.elites and self.slots),
+                  "squeeze": bool(self.cells.elites and (self.movable or self.slots)),
+                  "retime": bool(self.cells.elites and self.moving),
+                  "barrier": bool(self.cells.elites and len(self.slots) >= 2)}
         rates = {op: (self.stats[op][1] + 1.0) / (self.stats[op][0] + 2.0) for op in OPERATORS if usable[op]}
         total = sum(rates.values())
         return [max(EXPLORE_SHARE if op == "explore" else MIN_SHARE, rates[op] / total) if op in rates else 0.0
@@ -300,7 +301,7 @@ class Evolve:
         self.generation += 1
         out: list[tuple[tuple[float, ...], str]] = []
         if self.generation == 1 and self.admission.admit(self.space.zero()):
-            out.append((self.space.zero(), "seed"))   # the rest aim at the seed's route (_route_parent)
+            return [(self.space.zero(), "seed")]   # alone: the next generation can aim at its path
         want = min(room, GENERATION)
         attempt = 0
         while len(out) < want:   # ends: the admission gives up (GaveUp) after too many misses
@@ -351,9 +352,9 @@ class Evolve:
     def propose(self, op: str, rnd: random.Random) -> tuple[tuple[float, ...], Any]:
         """(offsets, parent) of one proposal of operator ``op`` (parent None for exploration)."""
         self.aim = None
-        if op == "explore":
+        if op == "explore" or not self.cells.elites:
             return uniform(self.space, rnd), None
-        parent = self.cells.pick(rnd) if self.cells.elites else self._route_parent()
+        parent = self.cells.pick(rnd)
         if op == "place" and parent.path:
             return self._place(parent, rnd), parent
         if op == "insert" and parent.path:
@@ -382,14 +383,6 @@ class Evolve:
         route = self._route()
         return (int(route.fraction(a.x, a.y) * 4) == int(route.fraction(b.x, b.y) * 4)
                 and math.hypot(a.x - b.x, a.y - b.y) < NEAR_COPY)
-
-    def _route_parent(self) -> Any:
-        """Before any result: the seed driven along its route at top speed, as a parent the
-        operators can aim at (its shortest path is known without simulating it)."""
-        route = self._route()
-        speed = max(self.space.seed.robot.limits.max_speed, 1e-6)
-        return _RouteParent(self.space.zero(), tuple(p[:2] for p in _route_samples(route)),
-                            {"duration": route.length / speed})
 
     def _route(self) -> Any:
         if self.route is None:
@@ -657,14 +650,6 @@ class Evolve:
             aim = self.aims.pop(_key(cand.offsets), None)
             if aim is not None:
                 aim[0].tell(aim[1], cand, new_failure)
-
-
-class _RouteParent:
-    """A parent made from the seed's route, not from an episode (see Evolve._route_parent)."""
-    failed, culprit, closest, robustness, signature = False, "", (), math.inf, ()
-
-    def __init__(self, offsets: tuple[float, ...], path: tuple, metrics: dict):
-        self.offsets, self.path, self.metrics = offsets, path, metrics
 
 
 def _in_cell(sig: tuple, arm: tuple[str, int]) -> bool:

@@ -305,21 +305,6 @@ def test_barrier_mutation_walls_off_the_path_with_two_boxes_the_robot_cannot_pas
             assert cand.failed and cand.culprit.startswith(INSERT_PREFIX), (k, cand.outcome, cand.culprit)
 
 
-def test_first_generation_aims_at_the_seeds_route_before_any_episode(lane):
-    """Generation 1 is the seed and proposals aimed at the seed's shortest path (known without
-    simulating): a placed crate or an inserted box lies beside the straight route x = 0."""
-    space = SearchSpace(lane)
-    evo = Evolve(space, _report(space), 40, 3)
-    first = evo.ask(8)
-    assert first[0] == (space.zero(), "seed") and len(first) == 8
-    aimed = [(off, op) for off, op in first[1:] if op in ("place", "insert", "squeeze", "barrier")]
-    assert aimed, first
-    for off, op in aimed:
-        sc = space.apply(off)
-        moved = [o for o in sc.obstacles if o.name.startswith(INSERT_PREFIX) or (o.name == "crate" and o.x != 1.5)]
-        assert moved and all(abs(o.x) <= 1.3 * (0.25 + 0.3) + 0.05 for o in moved), (op, moved)
-
-
 def test_target_bandit_moves_on_from_a_place_that_has_failed():
     import random
     from pytest_navscenario.search.strategies import _Targets
