@@ -8,9 +8,12 @@
   signature (fitness.py) keeps the closest-to-failing candidate of each behaviour; parents are
   picked from it with a penalty on cells picked often, so the budget spreads over ways of
   failing instead of one failure's neighbours. Operators: uniform exploration, Gaussian
-  mutation, and three that use what the episode showed (PHYS-FUZZ style): move an obstacle onto
-  the robot's path at or a moment after its closest approach, insert a new obstacle there, or
-  squeeze one just beside the path (narrowing the passage to little more than the footprint).
+  mutation, and five that use what the episode showed (PHYS-FUZZ style): move an obstacle onto
+  the robot's path at or a moment after its closest approach, insert a new obstacle there,
+  squeeze one just beside the path (narrowing the passage to little more than the footprint),
+  wall the path off with two inserted boxes (barrier), or retime a moving obstacle so that it
+  reaches the robot's path when the robot was there (time-to-impact in time as well as space).
+  The first generation is the seed alone, so the second can aim at its episode.
   Operator shares follow which operator has been finding new failing signatures; where the
   aimed operators put an obstacle (which obstacle, which quarter of the route) is a second
   bandit rewarded for new failing signatures and divided down by re-created ones.
