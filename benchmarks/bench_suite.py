@@ -154,7 +154,7 @@ def floor(count: int, repeats: int) -> int:
             (folder / "conftest.py").write_text(PROBE)
         for i in range(count):
             (scen / f"s{i:04d}.yaml").write_text(
-                "version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 0.1, y: 0}, timeout: 0.2}\n"
+                "version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 0.32, y: 0}, timeout: 0.5}\n"
                 f"obstacles: [{{type: box, x: 3, y: {i % 7}, length: 1, width: 1}}]\n")
         for i in range(0, count, 100):
             (py / f"test_m{i}.py").write_text("".join(f"def test_{j}(): pass\n" for j in range(min(100, count - i))))
