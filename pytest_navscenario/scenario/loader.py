@@ -68,6 +68,7 @@ SCENARIO_LIMITS: Mapping[str, float] = MappingProxyType({
     "max_name_length": 200,
 })
 
+_MAX_ABS = float(SCENARIO_LIMITS["max_abs_value"])
 _LIST_LIMITS = {"obstacles": (int(SCENARIO_LIMITS["max_obstacles"]), "obstacles")}  # refused while parsing
 _REQUIRED = object()
 _NUMBER_WORD = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)[eE][-+]?\d+")  # 1e-3: a string in YAML 1.1
@@ -283,6 +284,9 @@ def _number(ctx: _Ctx, node: YNode, field: str, line: int | None, *, low: float 
     """A finite float from a YAML number (ints allowed, bools refused), within bounds."""
     line = node.line if node.line is not None else line
     value = node.value if isinstance(node, YScalar) else None
+    if type(value) is float and -_MAX_ABS <= value <= _MAX_ABS:   # the common case, checked as below
+        if (low is None or (value > low if low_open else value >= low)) and (high is None or value <= high):
+            return value
     if isinstance(value, str) and isinstance(node, YScalar) and node.plain and _NUMBER_WORD.fullmatch(value):
         value = float(value)
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
