@@ -197,13 +197,18 @@ class _Section:
 
     def number(self, key: str, default: Any = _REQUIRED, *, low: float | None = None,
                low_open: bool = False, high: float | None = None, example: str | None = None) -> float:
-        node = self.get(key)
+        item = self.node.items.get(key)    # get() and line_of() in one look-up: the loader's commonest call
+        node = None if item is None else item[1]
         if node is None or (isinstance(node, YScalar) and node.value is None and default is None):
+            if item is not None:
+                self.ctx.lines[_join(self.path, key)] = item[0] if item[0] is not None else node.line
             if default is _REQUIRED:
                 raise self.missing(key, example or f"{key}: <number>")
             return default
-        return _number(self.ctx, node, _join(self.path, key), self.line_of(key), low=low,
-                       low_open=low_open, high=high)
+        field = _join(self.path, key)
+        line = item[0] if item[0] is not None else node.line
+        self.ctx.lines[field] = line
+        return _number(self.ctx, node, field, line, low=low, low_open=low_open, high=high)
 
     def integer(self, key: str, default: Any, *, low: int, high: int) -> int:
         node = self.get(key)
@@ -440,7 +445,9 @@ def _obstacles(ctx: _Ctx, top: _Section) -> tuple[Obstacle, ...]:
                            type_item[0] or line, _did_you_mean(kind if kind is not None else "", OBSTACLE_TYPES))
         keys = TYPE_KEYS[kind]
         for key, (key_line, _) in item.items.items():
-            other = next((t for t, t_keys in TYPE_KEYS.items() if key not in keys and key in t_keys), None)
+            if key in keys:
+                continue
+            other = next((t for t, t_keys in TYPE_KEYS.items() if key in t_keys), None)
             if other is not None:
                 raise ctx.fail(f"'{key}' does not apply to type: {kind} (it is a {other} key)", f"{path}.{key}",
                                key_line or line, f"remove '{key}', or set type: {other}")
