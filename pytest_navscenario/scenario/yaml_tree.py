@@ -253,8 +253,8 @@ class _Composer:
                     cached = (_MERGE, False)
                 else:
                     cached = (self.construct(tag, event, line), not style and tag == _STR_TAG)
-                if len(_SCALARS) < 10_000 and type(cached[0]) in _IMMUTABLE:
-                    _SCALARS[key] = cached
+                if len(value) <= 200 and len(_SCALARS) < 10_000 and type(cached[0]) in _IMMUTABLE:
+                    _SCALARS[key] = cached    # short texts only: the cache lives as long as the process
             return YScalar(cached[0], line, cached[1])
         return YScalar(self.construct(tag, event, line), line, False)
 

@@ -45,3 +45,14 @@ def test_duplicate_and_unhashable_keys_still_refused():
     assert err.value.line == 3
     with pytest.raises(ScenarioError, match="more than 3 values"):
         parse_yaml("x: 1\ny: 2\n", "t.yaml", max_depth=10, max_nodes=3)
+
+
+def test_the_shared_cache_keeps_short_texts_only():
+    """The cache lives as long as the process: a long value (a hostile file's 2-million-character
+    string) must not stay in memory after its file is read."""
+    from pytest_navscenario.scenario import yaml_tree
+    long_text = "v" * 300
+    got = to_plain(parse_yaml(f"a: {long_text}\nb: short-word\n", "t.yaml", max_depth=10, max_nodes=100))
+    assert got == {"a": long_text, "b": "short-word"}
+    cached = {key[0] for key in yaml_tree._SCALARS}
+    assert "short-word" in cached and long_text not in cached
