@@ -1,11 +1,12 @@
-"""Suite speed: ``pytest`` on 500 generated scenario files, serial vs ``-n 2`` (pytest-xdist).
+"""Suite speed: ``pytest`` on 500 generated scenario files, serial vs ``-n 2`` vs xdist's workers.
 
     env -u PYTHONDONTWRITEBYTECODE python benchmarks/bench_suite.py [--count 500] [--repeats 3]
 
 The scenarios are the five shipped seeds with their obstacles moved by up to +-0.3 m (fixed RNG,
 so every run benchmarks the same files), 100 per seed in five family folders, run against the
 default built-in planner. Prints per mode the median wall time of the whole ``pytest`` process,
-the serial / -n 2 speed-up, and the plugin overhead per item: pytest's own session time minus
+the serial / -n 2 speed-up (``-n 2`` on scenario files only: the plugin's two worker processes;
+"xdist": ``-n 2 --dist load``, two pytest-xdist workers), and the plugin overhead per item: pytest's own session time minus
 the sum of the episodes' ``run_scenario`` times (``wall_time`` in the results file), divided by
 the item count, measured on the serial run (in -n 2 the episodes overlap); "marginal" is the
 difference between the full suite and a copy of its first fifth (the same share of each family),
@@ -139,6 +140,25 @@ def pytest_unconfigure(config):
 """
 
 
+def _adopt_orphans() -> None:
+    """Make this process the reaper of every descendant (Linux PR_SET_CHILD_SUBREAPER), so the CPU
+    time of worker processes that outlive pytest by a moment (a forkserver and the episode workers
+    it forked) is counted in RUSAGE_CHILDREN once they are reaped."""
+    try:
+        import ctypes
+        ctypes.CDLL(None, use_errno=True).prctl(36, 1, 0, 0, 0)   # PR_SET_CHILD_SUBREAPER
+    except (OSError, AttributeError):
+        pass
+
+
+def _reap_all() -> None:
+    while True:
+        try:
+            os.waitpid(-1, 0)
+        except ChildProcessError:
+            return
+
+
 def _children_cpu() -> float:
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
     return usage.ru_utime + usage.ru_stime
@@ -158,7 +178,9 @@ def run_pytest(target: Path, extra: list[str], results: Path | None,
     cpu0, t0 = _children_cpu(), time.perf_counter()
     proc = subprocess.run(cmd, cwd=target if target.is_dir() else target.parent, env=env,
                           capture_output=True, text=True)
-    wall, cpu = time.perf_counter() - t0, _children_cpu() - cpu0
+    wall = time.perf_counter() - t0
+    _reap_all()   # orphaned workers (the plugin's forkserver) are ours to reap: their CPU counts too
+    cpu = _children_cpu() - cpu0
     tail = proc.stdout.strip().splitlines()[-1] if proc.stdout.strip() else proc.stderr
     match = re.search(r" in ([0-9.]+)s", tail)
     if proc.returncode not in (0, 1) or not match:
@@ -226,6 +248,7 @@ def main() -> int:
                     help="only the overhead floor: COUNT scenario files whose episodes last 2 ticks vs "
                          "COUNT empty Python tests, CPU time outside the call phase per item")
     args = ap.parse_args()
+    _adopt_orphans()
     if args.floor:
         return floor(args.count, args.repeats)
     med = statistics.median
@@ -238,16 +261,17 @@ def main() -> int:
         print(f"{n} scenario files in {len(SEEDS)} families; {args.repeats} runs per mode; "
               f"{os.cpu_count()} CPUs; load average before: {os.getloadavg()[0]:.2f}; "
               f"parallel capacity of two CPU-bound processes now: {parallel_capacity():.2f}x")
-        walls: dict[str, list[float]] = {"serial": [], "-n 2": []}
-        cpus: dict[str, list[float]] = {"serial": [], "-n 2": []}
+        walls: dict[str, list[float]] = {"serial": [], "-n 2": [], "xdist": []}
+        cpus: dict[str, list[float]] = {"serial": [], "-n 2": [], "xdist": []}
         rest: dict[str, list[tuple[int, float]]] = {"all": [], "small": []}
         records: list[list[dict]] = []
         small_suite = subset(folder, Path(tmp) / "small", max(1, n // len(SEEDS) // 5))
         for r in range(args.repeats):
             for label, target, extra in [("serial", folder, []), ("-n 2", folder, ["-n", "2"]),
+                                         ("xdist", folder, ["-n", "2", "--dist", "load"]),
                                          ("small", small_suite, [])]:
                 results = Path(tmp) / f"r{r}-{len(records)}.jsonl"
-                probe = Path(tmp) / "probe.json" if label != "-n 2" else None
+                probe = Path(tmp) / "probe.json" if label in ("serial", "small") else None
                 wall, session, tail, cpu = run_pytest(target, extra, results, probe)
                 if probe is not None:
                     probes.append(dict(json.loads(probe.read_text()), label=label))
@@ -259,20 +283,23 @@ def main() -> int:
                     walls[label].append(wall)
                     cpus[label].append(cpu)
                     records.append([{k: v for k, v in rec.items() if k != "wall_time"} for rec in recs])
-                if label != "-n 2":
+                if label in ("serial", "small"):
                     rest["all" if label == "serial" else "small"].append((len(recs), session - episodes))
         collect = [run_pytest(folder, ["--collect-only"], None)[1] for _ in range(args.repeats)]
         same = all(recs == records[0] for recs in records)
-        print(f"records identical across all serial and -n 2 runs: {same}")
-        print(f"median wall: serial {med(walls['serial']):.2f} s, -n 2 {med(walls['-n 2']):.2f} s, "
-              f"speed-up {med(walls['serial']) / med(walls['-n 2']):.2f}x")
+        print(f"records identical across all serial, -n 2 and xdist runs: {same}")
+        for label in ("-n 2", "xdist"):
+            print(f"median wall: serial {med(walls['serial']):.2f} s, {label} {med(walls[label]):.2f} s, "
+                  f"speed-up {med(walls['serial']) / med(walls[label]):.2f}x")
         (n_all, _), (n_one, _) = rest["all"][0], rest["small"][0]
         extra_all = med(x for _, x in rest["all"])
         extra_one = med(x for _, x in rest["small"])
         print(f"parallel capacity after: {parallel_capacity():.2f}x (2.00 = two idle cores)")
-        print(f"median CPU time: serial {med(cpus['serial']):.2f} s, -n 2 {med(cpus['-n 2']):.2f} s "
-              f"(+{100 * (med(cpus['-n 2']) / med(cpus['serial']) - 1):.0f} %; 95 % of the capacity allows "
-              f"~+5 %); load average after: {os.getloadavg()[0]:.2f} (wall times inflate with load)")
+        for label in ("-n 2", "xdist"):
+            print(f"median CPU time: serial {med(cpus['serial']):.2f} s, {label} {med(cpus[label]):.2f} s "
+                  f"(+{100 * (med(cpus[label]) / med(cpus['serial']) - 1):.0f} %; 95 % of the capacity allows "
+                  f"~+5 %)")
+        print(f"load average after: {os.getloadavg()[0]:.2f} (wall times inflate with load)")
         print(f"session time not spent in run_scenario: {extra_all:.2f} s for {n_all} items, "
               f"{extra_one:.2f} s for {n_one} items")
         print(f"  = {1000 * extra_all / n_all:.2f} ms per item on average (fixed costs included); "

@@ -34,7 +34,8 @@ obstacles: [{{type: box, name: crate, x: {x}, y: 1, length: 0.5, width: 0.5}}]
 """
 
 
-@pytest.mark.parametrize("workers", [[], ["-p", "xdist.plugin", "-n", "2"]], ids=["serial", "xdist"])
+@pytest.mark.parametrize("workers", [[], ["-p", "xdist.plugin", "-n", "2", "--dist", "load"],
+                                     ["-p", "xdist.plugin", "-n", "2"]], ids=["serial", "xdist", "nav-workers"])
 def test_sigterm_mid_run_keeps_a_valid_results_file(tmp_path: Path, workers: list[str]):
     (tmp_path / "slow.py").write_text(SLOW_PLANNER)
     suite = tmp_path / "suite"
