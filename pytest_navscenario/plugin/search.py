@@ -569,7 +569,7 @@ def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
         lines.append(f"  suite {_rel(config, suite.folder)}/: {len(suite.files)} scenario file(s), "
                      f"{suite.failing} failing for {r.subject}"
                      + (f", {suite.replaced} of an earlier suite removed" if suite.replaced else "")
-                     + f" (re-run: pytest {_rel(config, suite.folder)} --nav-subject=...)")
+                     + f" (re-run: pytest {_rel(config, suite.folder.parent)} --nav-subject=...)")
     if entry["error"]:
         lines.append(f"  ERROR {entry['error']}")
     return lines
