@@ -8,8 +8,9 @@ Run from the repository root (not a timed test; the machine may be shared, so us
 
 For each planner P (potential-field, dwa and every --subject) the suite TS-P is generated with
 real pytest runs: ``pytest --navsearch SEED ... --nav-subject=P --budget B --navsearch-seed S
---navsearch-shrink-budget 0 --navsearch-suite WORK/TS-P`` (the default strategy), i.e. every
-candidate the search simulated around each seed, failing or not, as in the paper's TS-Exp-A.
+--navsearch-shrink-budget 0 --navsearch-suite WORK/TS-P`` (the default strategy unless --strategy
+says otherwise), i.e. every candidate the search simulated around each seed, failing or not, as in
+the paper's TS-Exp-A.
 Then every planner runs every suite, again with pytest (``pytest WORK/TS-P --nav-subject=Q
 --nav-results=...``), and the table is computed from the results files: per suite and planner,
 per seed and overall, the success and safety-stop rates (% of the suite's test cases, as in the
@@ -64,6 +65,7 @@ def generate(subject: str, seeds: list[str], a: argparse.Namespace) -> tuple[str
     """TS-<subject>: one pytest run with a search per seed, the suite kept as scenario files."""
     name = label(subject)
     args = [f"--nav-subject={subject}", "--budget", str(a.budget), "--navsearch-seed", str(a.search_seed),
+            "--navsearch-strategy", a.strategy,
             "--navsearch-shrink-budget", "0", "--navsearch-suite", str(a.work / f"TS-{name}"),
             "--navsearch-out", str(a.work / f"frozen-{name}")]
     for seed in seeds:
@@ -124,6 +126,7 @@ def parse() -> argparse.Namespace:
                    help="another planner to generate a suite against and run on every suite (repeatable)")
     p.add_argument("--budget", type=int, default=100, help="simulations per search (default 100)")
     p.add_argument("--search-seed", type=int, default=0, help="the searches' seed (default 0)")
+    p.add_argument("--strategy", default="evolve", help="the search strategy (default evolve, the plugin's default)")
     p.add_argument("--seeds", default="",
                    help="comma-separated seed names added to the paper's five, or 'all' for every "
                         "scenario in scenarios/")
@@ -146,8 +149,8 @@ def main() -> None:
     a.work.mkdir(parents=True, exist_ok=True)
     seeds = seed_names(a)
     planners = list(dict.fromkeys([*PLANNERS, *a.subject]))
-    print(f"load average before: {os.getloadavg()}; seeds {', '.join(seeds)}; budget {a.budget}, "
-          f"search seed {a.search_seed}, shrinking off; work folder {a.work}", flush=True)
+    print(f"load average before: {os.getloadavg()}; seeds {', '.join(seeds)}; strategy {a.strategy}, budget "
+          f"{a.budget}, search seed {a.search_seed}, shrinking off; work folder {a.work}", flush=True)
     t0 = time.perf_counter()
     with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
         generated = dict(pool.map(lambda s: generate(s, seeds, a), planners))
