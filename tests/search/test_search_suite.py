@@ -71,7 +71,17 @@ def test_ini_twin_is_relative_to_the_rootdir(project):
     assert len(list((project.path / "suites" / "straight" / "crate").glob("crate-sim*.yaml"))) == 3
 
 
-def test_ctrl_c_keeps_the_suite_simulated_so_far(project):
+@pytest.fixture
+def fresh_interrupt_counter():
+    """interrupted_after_five counts episodes in its module, which this process imported already
+    (test_search.py): start from zero, and leave zero for the next test that uses it."""
+    import straight_planner
+    straight_planner.CALLS[0] = 0
+    yield
+    straight_planner.CALLS[0] = 0
+
+
+def test_ctrl_c_keeps_the_suite_simulated_so_far(project, fresh_interrupt_counter):
     result = project.runpytest_inprocess(
         "-p", "pytest_navscenario.plugin", "--nav-subject=straight_planner:interrupted_after_five",
         "--navsearch", "crate", "--budget", "50", "--navsearch-seed", "3", "--navsearch-suite", "suite")
