@@ -5,10 +5,10 @@ items. ``-n N`` does not start xdist workers here: this process runs the searche
 other, each evaluating its generations on N local worker processes (plugin/parallel.py), so one
 search uses every core with the results of a serial run; ``--nav-ray`` evaluates them as Ray
 tasks. The search result goes on the call report as ``report.navsearch`` (plain data), from
-which this process writes the frozen failures, the search log and the JUnit file (also after
-Ctrl-C: what was found is kept). Progress is shown live through the terminal reporter with
-capture suspended (as live logging does): rewritten in place on a terminal, a plain line every
-tenth of the budget (and on each new failure) in a CI log.
+which this process writes the frozen failures, the search log, the JUnit file and the suite
+folder (also after Ctrl-C: what was found is kept). Progress is shown live through the terminal
+reporter with capture suspended (as live logging does): rewritten in place on a terminal, a
+plain line every tenth of the budget (and on each new failure) in a CI log.
 """
 from __future__ import annotations
 
@@ -56,6 +56,11 @@ OPTIONS = (
      f"(default {DEFAULT_OUT}; the ini option's old name {OLD_OUT_INI} is still read)."),
     ("--navsearch-junit", "navsearch_junit", "PATH",
      "also write the generated suite (every simulated candidate) as a JUnit XML file."),
+    ("--navsearch-suite", "navsearch_suite", "DIR",
+     "also keep the generated suite as scenario files: every candidate simulated in the search "
+     "phase (failing or not; not the shrink phase) as DIR/<seed>/<seed>-sim<N>-<hash>.yaml, "
+     "family = seed, replacing that seed's earlier suite there; written also when the run is cut "
+     "short. Re-run it against any planner: pytest DIR --nav-subject=..."),
 )
 
 
@@ -99,6 +104,7 @@ class SearchSettings:
     out: Path
     junit: Path | None
     stuck_after: float | None = DEFAULT_STUCK_AFTER
+    suite: Path | None = None
 
 
 @dataclass
@@ -185,7 +191,26 @@ def read_search_settings(config: pytest.Config) -> SearchSettings:
         junit = junit if junit.is_absolute() else base / junit
         if junit.is_dir():
             raise pytest.UsageError(f"{where}: {raw!r} is a folder; give a file name such as navsearch.xml")
-    return SearchSettings(names, budget, seed, strategy, shrink, out, junit, _stuck_after(config))
+    return SearchSettings(names, budget, seed, strategy, shrink, out, junit, _stuck_after(config),
+                          _suite_dir(config, out))
+
+
+def _suite_dir(config: pytest.Config, out: Path) -> Path | None:
+    """--navsearch-suite DIR: a folder (made if missing), not the frozen failures' folder."""
+    raw, where, base = _raw(config, "navsearch_suite")
+    raw = str(raw or "").strip()
+    if not raw:
+        return None
+    suite = Path(os.path.expanduser(raw))
+    suite = suite if suite.is_absolute() else base / suite
+    if suite.exists() and not suite.is_dir():
+        raise pytest.UsageError(f"{where}: {raw!r} exists and is not a folder; give a folder for the "
+                                f"generated suite, e.g. suites/dwa")
+    if suite.resolve() == out.resolve():
+        raise pytest.UsageError(f"{where}: {raw!r} is also the folder of the frozen failures "
+                                f"(--navsearch-out); give the suite a folder of its own, e.g. suites/dwa, "
+                                f"so that re-running it does not run the frozen failures too")
+    return suite
 
 
 def _stuck_after(config: pytest.Config) -> float | None:
@@ -457,14 +482,26 @@ def pytest_runtest_logreport(report: pytest.TestReport) -> None:
 
     job = next(j for j in state.jobs.values() if j.seed.name == payload["seed_name"])
     search = payload_to_report(payload, job.space)
-    entry: dict[str, Any] = {"report": search, "job": job, "files": [], "log": None, "error": ""}
+    entry: dict[str, Any] = {"report": search, "job": job, "files": [], "log": None, "error": "", "suite": None}
     try:
         entry["files"] = freeze_failures(search, job.space, state.settings.out, root=config.rootpath)
         entry["log"] = write_search_log(search, job.space, state.settings.out)
     except Exception as exc:  # never lose the summary: say what could not be written
         entry["error"] = f"could not write the frozen failures under {state.settings.out}: {type(exc).__name__}: {exc}"
+    if state.settings.suite is not None:
+        _write_suite(entry, state.settings.suite, config)
     state.done.append(entry)
     state.junit_items.append((search, job.space))
+
+
+def _write_suite(entry: dict[str, Any], folder: Path, config: pytest.Config) -> None:
+    from ..search.suite import write_suite
+
+    try:
+        entry["suite"] = write_suite(entry["report"], entry["job"].space, folder, root=config.rootpath)
+    except Exception as exc:  # never lose the summary: say what could not be written
+        entry["error"] += ("; " if entry["error"] else "") + (
+            f"could not write the generated suite under {folder}: {type(exc).__name__}: {exc}")
 
 
 def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
@@ -527,6 +564,12 @@ def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
                      + (f"{c:.3f} m" if math.isfinite(c) else "n/a") + ("" if f.new else " (already frozen)"))
     if entry["log"] is not None:
         lines.append(f"  log  {_rel(config, entry['log'])}")
+    suite = entry.get("suite")
+    if suite is not None:
+        lines.append(f"  suite {_rel(config, suite.folder)}/: {len(suite.files)} scenario file(s), "
+                     f"{suite.failing} failing for {r.subject}"
+                     + (f", {suite.replaced} of an earlier suite removed" if suite.replaced else "")
+                     + f" (re-run: pytest {_rel(config, suite.folder.parent)} --nav-subject=...)")
     if entry["error"]:
         lines.append(f"  ERROR {entry['error']}")
     return lines
