@@ -11,8 +11,9 @@
      grew by less than STUCK_CELL.
    A stop with window T changes an outcome only where an episode that did not time out stalled
    for T or longer, so the shortest safe window is the longest such stall plus one tick.
-2. Runs them all again with ``--stuck-after`` (default: the engine's DEFAULT_STUCK_AFTER) and
-   compares the outcomes with the first run: exit status 1 on any difference.
+2. Runs them all again with each window of ``--stuck-after`` (default: the engine's
+   DEFAULT_STUCK_AFTER) and compares the outcomes with the first run: exit status 1 on any
+   difference with the first window.
 3. With ``--search-budget N``: the timeouts of a search around boxes1 against dwa (shrinking
    off, stop off), and how much simulated time each measure would save on them at its own
    shortest safe window.
@@ -132,7 +133,9 @@ def main() -> int:
 
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--planners", default=",".join(PLANNERS))
-    ap.add_argument("--stuck-after", type=float, default=DEFAULT_STUCK_AFTER)
+    ap.add_argument("--stuck-after", type=lambda v: [float(x) for x in v.split(",")], default=[DEFAULT_STUCK_AFTER],
+                    help="windows to check, comma-separated (default: the engine's default); the exit "
+                         "status is 1 when the first one changes an outcome")
     ap.add_argument("--search-budget", type=int, default=0)
     a = ap.parse_args()
     planners = a.planners.split(",")
@@ -146,21 +149,24 @@ def main() -> int:
         print(f"  {measure:<8}: longest stall recovered from {worst:.1f} s ({who.get('planner')} on "
               f"{who.get('file')}, {who.get('outcome')}): a window of {worst + 0.1:.1f} s or more changes "
               f"no outcome")
-    early = run_matrix(planners, a.stuck_after)
-    diff = [(p["file"], p["planner"], p["outcome"], e["outcome"]) for p, e in zip(plain, early)
-            if p["outcome"] != e["outcome"]]
-    stopped = sum(e["duration"] < p["duration"] - 1e-9 for p, e in zip(plain, early))
-    print(f"with --navsearch-stuck-after {a.stuck_after:g}: {len(diff)} outcome(s) differ, {stopped} episode(s) "
-          f"ended early, simulated {sum(p['duration'] for p in plain):.0f} s -> "
-          f"{sum(e['duration'] for e in early):.0f} s")
-    for d in diff:
-        print("  DIFFERS:", *d)
+    diffs = 0
+    for window in a.stuck_after:
+        early = run_matrix(planners, window)
+        diff = [(p["file"], p["planner"], p["outcome"], e["outcome"]) for p, e in zip(plain, early)
+                if p["outcome"] != e["outcome"]]
+        stopped = sum(e["duration"] < p["duration"] - 1e-9 for p, e in zip(plain, early))
+        print(f"with --navsearch-stuck-after {window:g}: {len(diff)} outcome(s) differ, {stopped} episode(s) "
+              f"ended early, simulated {sum(p['duration'] for p in plain):.0f} s -> "
+              f"{sum(e['duration'] for e in early):.0f} s")
+        for d in diff:
+            print("  DIFFERS:", *d)
+        diffs += len(diff) if window == a.stuck_after[0] else 0
     if a.search_budget:
         rows = search_timeouts(a.search_budget)
         print(f"search around boxes1 vs dwa, budget {a.search_budget}, stop off: {len(rows)} timeouts")
         for measure in MEASURES:
             window = shortest_safe(plain, measure)[0] + 0.1
-            for w in sorted({window, a.stuck_after}):
+            for w in sorted({window, *a.stuck_after}):
                 full = sum(r["duration"] for r in rows)
                 short, n = 0.0, 0
                 for r in rows:
@@ -170,7 +176,7 @@ def main() -> int:
                 print(f"  {measure:<8} window {w:4.1f} s: {n}/{len(rows)} stopped early, simulated {full:.0f} s "
                       f"-> {short:.0f} s ({short / max(full, 1e-9):.0%})")
     print(f"CPU {time.process_time() - c0:.0f} s")
-    return 1 if diff else 0
+    return 1 if diffs else 0
 
 
 if __name__ == "__main__":

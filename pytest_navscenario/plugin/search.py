@@ -25,7 +25,7 @@ from .options import ini_type, ini_value
 DEFAULT_BUDGET = 100
 DEFAULT_SHRINK_BUDGET = "25%"   # = search.engine.DEFAULT_SHRINK_BUDGET
 DEFAULT_OUT = "scenarios/regressions"
-DEFAULT_STUCK_AFTER = 20.0
+DEFAULT_STUCK_AFTER = 15.0   # = search.engine.DEFAULT_STUCK_AFTER
 STRATEGY_NAMES = ("evolve", "random", "hillclimb")   # = search.engine.STRATEGIES (not imported: plugin load stays light)
 OLD_OUT_INI = "nav_regressions_dir"     # the old name of the ini option navsearch_out, still read
 
