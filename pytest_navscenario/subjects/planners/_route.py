@@ -29,6 +29,11 @@ def _disk(radius: int) -> list[tuple[int, int]]:
             if i * i + j * j <= radius * radius + radius]
 
 
+def _open_grid(i0: int, i1: int, j0: int, j1: int) -> tuple[np.ndarray, np.ndarray]:
+    """``np.ogrid[i0:i1, j0:j1]`` (the same arrays) without its generic indexing machinery."""
+    return np.arange(i0, i1)[:, None], np.arange(j0, j1)[None, :]
+
+
 def _disk_rows(disk: list[tuple[int, int]]) -> list[tuple[int, int]]:
     """The disk as rows: (row offset, half width w) for the column offsets -w..w of each row."""
     rows: dict[int, int] = {}
@@ -116,7 +121,7 @@ class LidarGrid:
             self.field = None
             return False
         free = ~_dilate(self.occupied[i0:i1, j0:j1], self._inflate_rows)
-        ii, jj = np.ogrid[i0:i1, j0:j1]
+        ii, jj = _open_grid(i0, i1, j0, j1)
         k = max(int(reach / res), 0)
         seed = ((ii - ti) ** 2 + (jj - tj) ** 2 <= k * k) & free
         if not seed.any():                   # the target is boxed in: aim at its cell anyway
@@ -164,7 +169,7 @@ class LidarGrid:
         b0, b1 = max(rj - r, 0), min(rj + r + 1, f.shape[1])
         if a0 < a1 and b0 < b1 and (f[a0:a1, b0:b1] >= 0).any():
             sub = f[a0:a1, b0:b1].astype(float)
-            ii, jj = np.ogrid[a0:a1, b0:b1]
+            ii, jj = _open_grid(a0, a1, b0, b1)
             sub += np.hypot(ii - ri, jj - rj) * 0.5      # prefer close cells at the same distance
             sub[f[a0:a1, b0:b1] < 0] = np.inf
             flat = int(np.argmin(sub))
