@@ -538,6 +538,11 @@ def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
              + (f", first at sim {r.first_failure}" if r.first_failure else "")
              + f", {r.sims_used} sims searching + {r.shrink_sims} shrinking"
              + (f" (shrink budget {r.shrink_total})" if r.shrink_total else "") + f", {r.wall_time:.1f} s"]
+    unshrunk = sum(1 for f in r.failures if f.note.startswith("not shrunk: the shrink budget"))
+    if unshrunk:
+        lines.append(f"  {unshrunk} of {len(r.failures)} failure(s) frozen as found: the shrink budget "
+                     f"({r.shrink_total} simulations) went to the most severe and earliest ones (raise "
+                     f"--navsearch-shrink-budget, e.g. 50%, to shrink more)")
     if r.skipped:
         lines.append(f"  {r.skipped} candidate(s) repeating a simulated one or next to a known failure were "
                      f"redrawn without simulating them")

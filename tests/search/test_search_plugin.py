@@ -154,6 +154,17 @@ def test_shrink_budget_is_a_share_and_the_summary_and_log_say_how_sims_were_spen
     assert sum(r["phase"] == "shrink" for r in log) == shrink
 
 
+def test_the_summary_says_when_failures_were_frozen_unshrunk(project):
+    result = run(project, "--navsearch", "crate", "--budget", "8", "--navsearch-seed", "3",
+                 "--navsearch-shrink-budget", "150%", "--navsearch-strategy", "random")
+    assert result.ret == 0, result.stdout.str()
+    line = next(x for x in result.stdout.lines if x.startswith("crate vs "))
+    failures = int(re.search(r"(\d+) distinct failure", line).group(1))
+    assert failures > 1, line     # 12 simulations: one failure shrunk with 12, the rest as found
+    result.stdout.fnmatch_lines([f"  {failures - 1} of {failures} failure(s) frozen as found: the shrink budget "
+                                 f"(12 simulations) went to the most severe and earliest ones*"])
+
+
 @pytest.mark.parametrize("where, value", [("cli", "lots"), ("cli", "-2"), ("ini", "ten percent")])
 def test_a_bad_shrink_budget_is_a_usage_error_that_says_what_works(project, where, value):
     if where == "ini":
