@@ -45,7 +45,7 @@ OPTIONS = (
      "failing), random (uniform sampling over the same space, a baseline) or hillclimb (the "
      "Surrealist baseline: adaptive-step hill-climb on one obstacle at a time, minimising "
      "clearance)."),
-    ("--navsearch-shrink-budget", "navsearch_shrink_budget", "SHARE%|N",
+    ("--navsearch-shrink-budget", "navsearch_shrink_budget", "SHARE",
      f"simulations for shrinking the distinct failures toward the seed, on top of the budget: "
      f"a share of the budget (default {DEFAULT_SHRINK_BUDGET}), shared out before shrinking "
      f"starts, most severe and earliest failure first (failures it does not reach are kept as "
@@ -69,7 +69,8 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("navsearch", "navigation failure search (pytest-navscenario)")
     for opt, dest, metavar, text in OPTIONS:
         kwargs: dict[str, Any] = {"action": "append"} if dest == "navsearch" else {}
-        group.addoption(opt, dest=dest, default=None, metavar=metavar, help=f"{text} [ini: {dest}]", **kwargs)
+        group.addoption(opt, dest=dest, default=None, metavar=metavar,   # argparse %-formats help: 25% -> 25%%
+                        help=f"{text} [ini: {dest}]".replace("%", "%%"), **kwargs)
         kind = ("args" if dest == "navsearch" else ini_type("int") if dest in _INT_OPTIONS
                 else ini_type("float") if dest == "navsearch_stuck_after" else "string")
         parser.addini(dest, text, type=kind,
