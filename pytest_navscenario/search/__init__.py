@@ -16,7 +16,7 @@ from ..core.lazy import lazy_exports
 
 _EXPORTS = {name: "engine" for name in (
     "run_search", "shrink_failure", "Candidate", "Failure", "SearchReport", "STRATEGIES",
-    "is_duplicate", "is_near_failure")}
+    "is_duplicate", "is_near_failure", "ShrinkBudget", "shrink_plan", "shrink_order", "shrink_all")}
 _EXPORTS.update(SearchSpace="space", scenarios_around="space", invalid_reason="space",
                 freeze_failures="freeze", write_search_log="freeze", write_suite="suite")
 __all__ = sorted(_EXPORTS)

@@ -181,7 +181,8 @@ def _with_mesh_copies(scenario: Scenario, seed: Scenario, folder: Path) -> Scena
 
 def log_records(report: SearchReport, space: SearchSpace) -> list[dict[str, Any]]:
     head = {"seed": report.seed_name, "subject": report.subject, "strategy": report.strategy,
-            "search_seed": report.seed_value, "budget": report.budget}
+            "search_seed": report.seed_value, "budget": report.budget, "search_sims": report.sims_used,
+            "shrink_sims": report.shrink_sims, "shrink_budget": report.shrink_total}
     return [{**head, **c.to_dict(space)} for c in report.candidates]
 
 
