@@ -37,6 +37,7 @@ from .state import STATE_KEY
 
 NUM_CPUS_KEY = pytest.StashKey[int]()
 SEARCH_WORKERS_KEY = pytest.StashKey[int]()
+SUBMIT_CHUNK = 16   # scenario items checked and submitted at a time at the start of the run loop
 SUITE_WORKERS_KEY = pytest.StashKey[tuple[int, str]]()   # (workers, which option asked for them)
 
 
@@ -286,10 +287,13 @@ def pytest_runtestloop(session: pytest.Session) -> Any:
     executor = state.executor if state is not None else None
     if executor is not None and not session.config.option.collectonly:
         # scenario items (collect.ScenarioItem, known by its method: no import, no cycle)
-        items = [i for i in session.items if hasattr(i, "episode_job") and not _skipped(i)]
         keep = keep_trajectory(session.config)
-        for item, pending in zip(items, executor.submit([i.episode_job(keep) for i in items])):
-            item.nav_pending = pending
+        # in chunks, so the first episodes run while this process checks the later items
+        items = [i for i in session.items if hasattr(i, "episode_job")]
+        for start in range(0, len(items), SUBMIT_CHUNK):
+            chunk = [i for i in items[start:start + SUBMIT_CHUNK] if not _skipped(i)]
+            for item, pending in zip(chunk, executor.submit([i.episode_job(keep) for i in chunk])):
+                item.nav_pending = pending
     return (yield)
 
 
