@@ -14,7 +14,8 @@ import uuid
 from dataclasses import dataclass
 from typing import Any, Iterator, Sequence
 
-from .engine import Candidate, EvalContext, Failure, SearchReport, _Simulator, evaluate_candidate, shrink_failure
+from .engine import (Candidate, EvalContext, Failure, SearchReport, _Simulator, evaluate_candidate, shrink_failure,
+                     shrink_order)
 
 _CONTEXTS: dict[str, EvalContext] = {}   # worker side: the first copy of each context received
 _MAX_CONTEXTS = 4
@@ -93,19 +94,22 @@ class executor_evaluator:   # noqa: N801  (used like a function: evaluator=execu
         for p in pending:
             yield p.result()
 
-    def shrink_failures(self, sim: _Simulator, cap: int, progress: Any) -> None:
-        """Shrink every distinct failure at once, one job each; record the shrink simulations
-        failure by failure, in the order a serial run records them. Ctrl-C keeps the failures
-        not yet shrunk as found (run_search notes them)."""
+    def shrink_failures(self, sim: _Simulator, caps: Sequence[int], progress: Any) -> None:
+        """Shrink every failure with a cap (engine.shrink_plan) at once, one job each; record the
+        shrink simulations failure by failure, in the order a serial run records them
+        (engine.shrink_order). Ctrl-C keeps the failures not yet shrunk as found (run_search
+        notes them)."""
         report = sim.report
-        if cap <= 0 or not report.failures:
+        order = [i for i in shrink_order(report.failures) if caps[i] > 0]
+        if not order:
             return
         sim.check_stop()
         if sim.ctx is not self._ctx:
             self._ctx, self._token = sim.ctx, uuid.uuid4().hex
-        found = [f.found for f in report.failures]
-        pending = self.executor.submit([ShrinkJob(sim.ctx, _stripped(c), cap, self._token) for c in found])
-        for i, p in enumerate(pending):
+        found = {i: report.failures[i].found for i in order}
+        pending = self.executor.submit([ShrinkJob(sim.ctx, _stripped(found[i]), caps[i], self._token)
+                                        for i in order])
+        for i, p in zip(order, pending):
             index, note, used, cands = p.result()
             for cand in cands:
                 sim.record(cand, "shrink")
