@@ -155,7 +155,7 @@ def test_shrink_budget_is_a_share_and_the_summary_and_log_say_how_sims_were_spen
 
 
 def test_the_summary_says_when_failures_were_frozen_unshrunk(project):
-    result = run(project, "--navsearch", "crate", "--budget", "8", "--navsearch-seed", "3",
+    result = run(project, "--navsearch", "crate", "--budget", "8", "--navsearch-seed", "1",
                  "--navsearch-shrink-budget", "150%", "--navsearch-strategy", "random")
     assert result.ret == 0, result.stdout.str()
     line = next(x for x in result.stdout.lines if x.startswith("crate vs "))
