@@ -8,8 +8,12 @@ shrinks each toward the seed with its own simulation cap.
 The loop is ask/tell: a strategy (strategies.py) proposes a generation of candidates, they are
 evaluated -- by ``evaluate_candidate``, a pure function of the candidate, in any order, in any
 number of chunks or processes -- and the results are told back in proposal order. A
-generation's size belongs to the strategy, never to the evaluator, so the same search seed
-gives the same candidates, failures and frozen files however many are evaluated at once.
+generation's size and the strategy's ``lag`` (how many generations later it learns a
+generation's results; 1: generation g+2 is drawn knowing generations up to g) belong to the
+strategy, never to the evaluator, so the same search seed gives the same candidates, failures
+and frozen files however many are evaluated at once. The lag keeps work in flight: while the
+strategy draws the next generation and while the slowest episode of one generation ends, worker
+processes already evaluate the next one.
 
 Distinct failures: two failures are the same when they have the same cause signature
 (fitness.py: outcome, culprit, where the culprit lies along the route, how far the robot got),
@@ -20,6 +24,7 @@ from __future__ import annotations
 import contextlib
 import math
 import time
+from collections import deque
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable, Iterator, Sequence
 
@@ -205,10 +210,15 @@ class _Simulator:
         self.evaluator = evaluator or serial_evaluator
         self.counts = {"search": 0, "shrink": 0}
 
+    def start(self, proposals: Sequence[tuple[tuple[float, ...], str]], phase: str) -> Iterator[Candidate]:
+        """Hand ``proposals`` to the evaluator now (one on worker processes starts them at once);
+        the iterator records and yields each candidate in proposal order as it is consumed."""
+        results = iter(self.evaluator(self.ctx, list(proposals)))
+        return (self.record(cand, phase) for cand in results)
+
     def run(self, proposals: Sequence[tuple[tuple[float, ...], str]], phase: str) -> Iterator[Candidate]:
         """Evaluate ``proposals`` and yield each recorded candidate in proposal order."""
-        for cand in self.evaluator(self.ctx, list(proposals)):
-            yield self.record(cand, phase)
+        yield from self.start(proposals, phase)
 
     def record(self, cand: Candidate, phase: str) -> Candidate:
         """Number ``cand`` in its phase and add it to the report."""
@@ -250,16 +260,34 @@ def is_near_failure(space: SearchSpace, offsets: Sequence[float], failures: Sequ
 
 # -- the ask/tell loop ----------------------------------------------------------------------------
 def _search_loop(strategy: Any, sim: _Simulator, budget: int, on_result: Callable[[Candidate], None]) -> None:
-    """Ask a generation, evaluate it, tell the results back, until the budget is spent."""
+    """Ask generations, evaluate them, tell the results back in order, until the budget is spent.
+
+    With the strategy's ``lag`` L, up to L + 1 generations are in flight: the next one is asked
+    for (and handed to the evaluator) before the results of the last L are told. Serial or on
+    workers, the strategy sees the same results at the same point, so the search is the same."""
+    from .strategies import GaveUp
+
     report = sim.report
-    while report.sims_used < budget:
-        sim.check_stop()
-        proposals = strategy.ask(budget - report.sims_used)
-        if not proposals:
-            report.stop_reason = report.stop_reason or "the strategy had no new candidate to propose"
+    lag = max(0, int(getattr(strategy, "lag", 0)))
+    in_flight: deque[Iterator[Candidate]] = deque()
+    planned, asking = report.sims_used, True
+    while True:
+        while asking and len(in_flight) <= lag and planned < budget:
+            sim.check_stop()
+            try:
+                proposals = strategy.ask(budget - planned)[: budget - planned]
+            except GaveUp:   # the strategy set stop_reason; what is in flight still counts
+                proposals = []
+            if not proposals:
+                report.stop_reason = report.stop_reason or "the strategy had no new candidate to propose"
+                asking = False
+                break
+            planned += len(proposals)
+            in_flight.append(sim.start(proposals, "search"))
+        if not in_flight:
             break
         results = []
-        for cand in sim.run(proposals[: budget - report.sims_used], "search"):
+        for cand in in_flight.popleft():
             results.append(cand)
             on_result(cand)
             if report.sims_used < budget:
@@ -397,10 +425,13 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
     called after each simulation; ``stop()`` returning True ends the search early (as does
     Ctrl-C): the report then keeps every failure found so far, unshrunk, with ``interrupted``.
     ``stuck_after`` (s, None = off) ends an episode early as a timeout when the robot covers no
-    new ground. ``evaluator(ctx, proposals)`` evaluates a generation (default: serially; one
-    with a ``shrink_failures(sim, cap, progress)`` method also shrinks the failures, e.g. all at
-    once on worker processes, search/parallel.py); the
-    result does not depend on it. Deterministic given ``seed_value`` (and a deterministic subject).
+    new ground. ``evaluator(ctx, proposals)`` evaluates a generation (default: serially). An
+    evaluator may also have ``start_shrink(ctx, found, cap)`` (begin shrinking a distinct failure
+    the moment it is found, while the search goes on), ``shrink_failures(sim, cap, progress)``
+    (finish shrinking them all and record the results in a serial run's order) and ``discard()``
+    (give up what is still in flight when the search ends early), as the worker-process one in
+    search/parallel.py does; the result does not depend on the evaluator. Deterministic given
+    ``seed_value`` (and a deterministic subject).
     """
     from .strategies import GaveUp, make_strategy
 
@@ -413,10 +444,14 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
     sim = _Simulator(EvalContext(space, subject_factory, episode_seed, stuck_after), report, stop, evaluator)
     kept: list[Candidate] = []
 
+    start_shrink = getattr(evaluator, "start_shrink", None)   # parallel.py: shrink while searching
+
     def on_result(cand: Candidate) -> None:
         if cand.failed and not is_duplicate(space, cand, kept):
             kept.append(cand)
             report.failures.append(Failure(found=cand, shrunk=cand))
+            if start_shrink is not None and shrink_budget > 0:
+                start_shrink(sim.ctx, cand, shrink_budget)
         if progress is not None:
             progress(report)
 
@@ -437,6 +472,10 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
     except KeyboardInterrupt:
         report.interrupted = True
         report.stop_reason = "interrupted (Ctrl-C)"
+    finally:
+        discard = getattr(evaluator, "discard", None)   # jobs still in flight if it ended early
+        if discard is not None:
+            discard()
     if report.interrupted:
         for f in report.failures:
             if f.shrink_sims == 0 and not f.note and any(f.found.offsets):

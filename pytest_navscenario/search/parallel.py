@@ -1,12 +1,16 @@
 """A search's generations evaluated on an executor (``dispatch/``: local worker processes or Ray).
 
 ``executor_evaluator(executor)`` is an evaluator for ``run_search(..., evaluator=...)``: each
-generation the strategy proposes becomes one ``CandidateJob`` per candidate, all submitted at
-once, and the candidates come back in proposal order. A candidate is a pure function of the
-evaluation context and its offsets (``engine.evaluate_candidate``), and the strategy only sees
-the generation once it is complete, so the search takes the same path, finds the same failures
-and writes the same files as a serial run with the same search seed; only the measured wall
-times differ, as they do between two serial runs.
+generation the strategy proposes becomes one ``CandidateJob`` per candidate, all submitted the
+moment the generation is proposed (the search loop proposes the next generation before it reads
+the results of this one, engine._search_loop), and the candidates come back in proposal order.
+Each distinct failure becomes one ``ShrinkJob`` the moment it is found, so its shrinking runs
+beside the rest of the search instead of after it. A candidate is a pure function of the
+evaluation context and its offsets (``engine.evaluate_candidate``), a shrink a pure function of
+the failure and its cap, and the strategy sees results at the same point as in a serial run, so
+the search takes the same path, finds the same failures and writes the same files as a serial
+run with the same search seed; only the measured wall times differ, as they do between two
+serial runs.
 """
 from __future__ import annotations
 
@@ -84,35 +88,65 @@ class executor_evaluator:   # noqa: N801  (used like a function: evaluator=execu
         self.executor = executor
         self._ctx: EvalContext | None = None
         self._token = ""
+        self._open: dict[int, Any] = {}              # id -> Pending: submitted, result not yet taken
+        self._shrinks: list[tuple[Candidate, int, Any]] = []   # (failure as found, cap, its pending shrink)
+
+    def _token_for(self, ctx: EvalContext) -> str:
+        if ctx is not self._ctx:
+            self._ctx, self._token, self._shrinks = ctx, uuid.uuid4().hex, []
+        return self._token
+
+    def _submit(self, jobs: list[Any]) -> list[Any]:
+        pending = self.executor.submit(jobs)
+        self._open.update((id(p), p) for p in pending)
+        return pending
+
+    def _take(self, pending: Any) -> Any:
+        self._open.pop(id(pending), None)
+        return pending.result()
 
     def __call__(self, ctx: EvalContext, proposals: Sequence[tuple[tuple[float, ...], str]]) -> Iterator[Candidate]:
-        if ctx is not self._ctx:
-            self._ctx, self._token = ctx, uuid.uuid4().hex
-        pending = self.executor.submit([CandidateJob(ctx, tuple(offsets), origin, self._token)
-                                        for offsets, origin in proposals])
-        for p in pending:
-            yield p.result()
+        """Submit the generation now; the iterator waits for each candidate in proposal order."""
+        token = self._token_for(ctx)
+        pending = self._submit([CandidateJob(ctx, tuple(offsets), origin, token) for offsets, origin in proposals])
+        return (self._take(p) for p in pending)
+
+    def start_shrink(self, ctx: EvalContext, found: Candidate, cap: int) -> None:
+        """Submit the shrinking of a failure just found (its simulations are recorded later, by
+        ``shrink_failures``, after the search's own, as in a serial run)."""
+        token = self._token_for(ctx)
+        self._shrinks.append((found, cap, self._submit([ShrinkJob(ctx, _stripped(found), cap, token)])[0]))
 
     def shrink_failures(self, sim: _Simulator, cap: int, progress: Any) -> None:
-        """Shrink every distinct failure at once, one job each; record the shrink simulations
-        failure by failure, in the order a serial run records them. Ctrl-C keeps the failures
-        not yet shrunk as found (run_search notes them)."""
+        """Shrink every distinct failure (those not started yet now, one job each); record the
+        shrink simulations failure by failure, in the order a serial run records them. Ctrl-C
+        keeps the failures not yet shrunk as found (run_search notes them)."""
         report = sim.report
         if cap <= 0 or not report.failures:
             return
         sim.check_stop()
-        if sim.ctx is not self._ctx:
-            self._ctx, self._token = sim.ctx, uuid.uuid4().hex
-        found = [f.found for f in report.failures]
-        pending = self.executor.submit([ShrinkJob(sim.ctx, _stripped(c), cap, self._token) for c in found])
-        for i, p in enumerate(pending):
-            index, note, used, cands = p.result()
+        started = {id(found): p for found, c, p in self._shrinks if c == cap} if sim.ctx is self._ctx else {}
+        for f in report.failures:
+            if id(f.found) not in started:
+                self.start_shrink(sim.ctx, f.found, cap)
+                started[id(f.found)] = self._shrinks[-1][2]
+        for i, f in enumerate(report.failures):
+            found = f.found
+            index, note, used, cands = self._take(started[id(found)])
             for cand in cands:
                 sim.record(cand, "shrink")
-            report.failures[i] = Failure(found=found[i], shrunk=cands[index] if index >= 0 else found[i],
+            report.failures[i] = Failure(found=found, shrunk=cands[index] if index >= 0 else found,
                                          shrink_sims=used, note=note)
             if progress is not None:
                 progress(report)
+        self._shrinks = []
+
+    def discard(self) -> None:
+        """Give up every job whose result was not taken (the search ended early)."""
+        for p in self._open.values():
+            p.cancel()
+        self._open.clear()
+        self._shrinks = []
 
 
 def _stripped(cand: Candidate) -> Candidate:

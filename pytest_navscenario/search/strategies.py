@@ -17,8 +17,10 @@
   Hypothesis draws each proposal (operator, parent, random stream) in one seeded Hypothesis run
   per generation.
 
-A generation's size is the strategy's own constant, so what is proposed never depends on how
-many candidates are evaluated at once.
+A generation's size is the strategy's own constant, and so is its ``lag``: how many generations
+later it is told a generation's results (engine._search_loop asks for the next generation before
+telling the last ``lag`` ones, so workers evaluate while the strategy draws). So what is proposed
+never depends on how many candidates are evaluated at once.
 """
 from __future__ import annotations
 
@@ -90,6 +92,8 @@ def uniform(space: SearchSpace, rnd: random.Random) -> tuple[float, ...]:
 class RandomStrategy:
     """Uniform sampling; one Random stream, so results never depend on the evaluation."""
 
+    lag = 1   # learns nothing from results: any lag is free
+
     def __init__(self, space: SearchSpace, report: Any, budget: int, seed_value: int):
         self.space, self.admission = space, _Admission(space, report, budget)
         self.rnd = random.Random(seed_value)
@@ -113,6 +117,8 @@ class HillClimb:
     coordinate's step by 1.5, a miss halves it; the climb moves to the next obstacle when every
     step of this one is below HILLCLIMB_MIN_STEP of its range or HILLCLIMB_STALL tries in a row
     missed. A failure found restarts the climb from the seed on the next obstacle."""
+
+    lag = 0   # each step needs the result of the last one
 
     def __init__(self, space: SearchSpace, report: Any, budget: int, seed_value: int):
         self.space, self.admission = space, _Admission(space, report, budget)
@@ -264,6 +270,8 @@ class _Targets:
 
 class Evolve:
     """See the module docstring. Proposals come from one seeded Hypothesis run per generation."""
+
+    lag = 1   # generation g+2 is drawn knowing the results up to generation g
 
     def __init__(self, space: SearchSpace, report: Any, budget: int, seed_value: int):
         self.space, self.report, self.seed_value = space, report, seed_value
