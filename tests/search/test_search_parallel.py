@@ -14,10 +14,16 @@ from pathlib import Path
 
 import pytest
 
+from straight_planner import Straight
 from test_search import SEED_YAML
+from test_search_loop import OPEN_YAML, _fingerprint
 # Before pytester's in-process runs snapshot sys.modules: a worker pool pickles functions of
 # concurrent.futures by reference, which fails if a later run re-imports that module.
 import pytest_navscenario.dispatch.local  # noqa: E402,F401
+from pytest_navscenario.dispatch.local import ProcessExecutor, SerialExecutor  # noqa: E402
+from pytest_navscenario.scenario.loader import loads_scenario  # noqa: E402
+from pytest_navscenario.search.engine import run_search  # noqa: E402
+from pytest_navscenario.search.parallel import executor_evaluator  # noqa: E402
 
 STRAIGHT = (Path(__file__).parent / "straight_planner.py").read_text()
 SLOW = STRAIGHT + '''
@@ -118,3 +124,46 @@ def test_a_negative_worker_count_is_a_usage_error(project: pytest.Pytester):
                                "--navsearch", "crate", "-n", "-1")
     assert result.ret == pytest.ExitCode.USAGE_ERROR
     assert "-n -1: the number of worker processes must be 0 or more" in result.stderr.str()
+
+
+# -- the evaluator in this process ----------------------------------------------------------------
+class LoggingExecutor(SerialExecutor):
+    """Runs each job here, when its result is asked for, and logs what was submitted when."""
+
+    def __init__(self):
+        self.log: list[str] = []
+
+    def submit(self, jobs):
+        self.log.extend(type(job).__name__ for job in jobs)
+        return super().submit(jobs)
+
+
+def test_failures_start_shrinking_while_the_search_goes_on_and_nothing_changes():
+    lane = loads_scenario(OPEN_YAML, "lane.yaml", name="lane")
+    serial = run_search(lane, Straight, budget=40, seed_value=2, shrink_budget=6)
+    executor = LoggingExecutor()
+    via_jobs = run_search(lane, Straight, budget=40, seed_value=2, shrink_budget=6,
+                          evaluator=executor_evaluator(executor))
+    assert _fingerprint(via_jobs) == _fingerprint(serial)
+    assert [f.note for f in via_jobs.failures] == [f.note for f in serial.failures]
+    assert len(serial.failures) >= 2 and serial.shrink_sims > 0
+    log = executor.log
+    assert log.count("ShrinkJob") == len(serial.failures) and log.count("CandidateJob") == 40
+    assert log.index("ShrinkJob") < len(log) - 1 - log[::-1].index("CandidateJob")   # before the search ended
+
+
+def test_a_search_stopped_early_on_workers_leaves_no_job_behind():
+    lane = loads_scenario(OPEN_YAML, "lane.yaml", name="lane")
+    seen: list[int] = []
+    pool = ProcessExecutor(2)
+    try:
+        report = run_search(lane, Straight, budget=300, seed_value=2, shrink_budget=40,
+                            evaluator=executor_evaluator(pool), progress=lambda r: seen.append(len(r.failures)),
+                            stop=lambda: bool(seen) and seen[-1] >= 2)
+        assert pool._open == {}        # in-flight generations and shrink jobs given up, not left running
+        assert report.interrupted and 0 < report.sims_used < 300 and len(report.failures) >= 2
+        assert all(f.note == "not shrunk: the search was interrupted" for f in report.failures)
+        again = run_search(lane, Straight, budget=8, seed_value=2, shrink_budget=0, evaluator=executor_evaluator(pool))
+        assert again.sims_used == 8   # the same workers serve the next search
+    finally:
+        pool.close()
