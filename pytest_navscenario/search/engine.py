@@ -262,17 +262,17 @@ def is_near_failure(space: SearchSpace, offsets: Sequence[float], failures: Sequ
 def _search_loop(strategy: Any, sim: _Simulator, budget: int, on_result: Callable[[Candidate], None]) -> None:
     """Ask generations, evaluate them, tell the results back in order, until the budget is spent.
 
-    With the strategy's ``lag`` L, up to L + 1 generations are in flight: the next one is asked
-    for (and handed to the evaluator) before the results of the last L are told. Serial or on
+    With the strategy's ``lag`` L (read before each ask: it may change), up to L + 1 generations
+    are in flight: the next one is asked for (and handed to the evaluator) before the results of
+    the last L are told. Serial or on
     workers, the strategy sees the same results at the same point, so the search is the same."""
     from .strategies import GaveUp
 
     report = sim.report
-    lag = max(0, int(getattr(strategy, "lag", 0)))
     in_flight: deque[Iterator[Candidate]] = deque()
     planned, asking = report.sims_used, True
     while True:
-        while asking and len(in_flight) <= lag and planned < budget:
+        while asking and len(in_flight) <= max(0, int(getattr(strategy, "lag", 0))) and planned < budget:
             sim.check_stop()
             try:
                 proposals = strategy.ask(budget - planned)[: budget - planned]

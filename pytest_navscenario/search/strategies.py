@@ -271,8 +271,6 @@ class _Targets:
 class Evolve:
     """See the module docstring. Proposals come from one seeded Hypothesis run per generation."""
 
-    lag = 1   # generation g+2 is drawn knowing the results up to generation g
-
     def __init__(self, space: SearchSpace, report: Any, budget: int, seed_value: int):
         self.space, self.report, self.seed_value = space, report, seed_value
         self.admission = _Admission(space, report, budget)
@@ -287,6 +285,13 @@ class Evolve:
         self.targets: _Targets | None = None
         self.aims: dict[tuple, tuple[str, int]] = {}   # proposal -> the target arm it aimed at
         self.aim: tuple[str, int] | None = None         # the arm of the proposal being drawn
+        self.told = 0                                   # generations told so far
+
+    @property
+    def lag(self) -> int:
+        """0 until the first generation (the seed's episode, whose path the aimed operators
+        use) is told, then 1: generation g+2 is drawn knowing the results up to generation g."""
+        return 1 if self.told else 0
 
     def weights(self) -> list[float]:
         usable = {"explore": True, "mutate": bool(self.cells.elites),
@@ -518,6 +523,7 @@ class Evolve:
         return self._insert(parent, rnd, squeeze=True)
 
     def tell(self, results: Sequence[Any]) -> None:
+        self.told += 1
         for cand in results:
             before = self.cells.elites.get(cand.signature)
             self.cells.add(cand)

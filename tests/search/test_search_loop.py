@@ -328,9 +328,9 @@ def test_results_do_not_depend_on_how_many_are_evaluated_at_once(lane, strategy)
 
 @pytest.mark.parametrize("strategy, lag", [(Evolve, 1), (HillClimb, 0)])
 def test_the_next_generation_is_handed_over_before_this_one_is_told(lane, strategy, lag):
-    """Evolve learns one generation late, so workers evaluate the next generation while it draws;
-    a hill-climb needs every result before its next step. The same in serial and parallel runs:
-    the lag is the strategy's, not the evaluator's."""
+    """Evolve learns one generation late once it has seen the seed's episode, so workers evaluate
+    the next generation while it draws; a hill-climb needs every result before its next step. The
+    same in serial and parallel runs: the lag is the strategy's, not the evaluator's."""
     events = []
 
     def eager(ctx, proposals):   # evaluates when handed over, as worker processes start at once
@@ -340,17 +340,18 @@ def test_the_next_generation_is_handed_over_before_this_one_is_told(lane, strate
     space = SearchSpace(lane, {"insert": 0, "remove": 0})
     report = _report(space, budget=40)
     strat = strategy(space, report, 40, 3)
-    assert strat.lag == lag
     tell = strat.tell
     strat.tell = lambda results: (events.append("tell"), tell(results))
     _search_loop(strat, _Simulator(EvalContext(space, Straight), report, None, eager), 40, lambda c: None)
-    assert report.sims_used == 40
+    assert report.sims_used == 40 and strat.lag == lag
     generations = events.count("evaluate")
     assert events.count("tell") == generations
-    for k in range(generations):   # generation k+lag+1 is handed over after generation k is told
-        nth_tell = [i for i, e in enumerate(events) if e == "tell"][k]
-        handed_before = events[:nth_tell].count("evaluate")
-        assert handed_before == min(generations, k + 1 + lag), events
+    tells = [i for i, e in enumerate(events) if e == "tell"]
+    # the first generation (the seed's) is told before the second is drawn; after that,
+    # generation k+lag+1 is handed over before generation k is told
+    assert events[:2] == ["evaluate", "tell"]
+    for k in range(1, generations):
+        assert events[:tells[k]].count("evaluate") == min(generations, k + 1 + lag), events
 
 
 def _frozen_digest(out_dir: Path) -> str:
