@@ -4,7 +4,7 @@ Run from the repository root (not a timed test; the machine may be shared, so us
 
     nice python benchmarks/bench_search.py --subject dwa
     nice python benchmarks/bench_search.py --subject examples.gap_follower:FollowTheGap
-    nice python benchmarks/bench_search.py --subject dwa --part speed     # budget 1000, one core
+    nice python benchmarks/bench_search.py --subject dwa --part speed --repeats 3   # budget 1000, one core
 
 For each shipped seed x search seed (default 5) x strategy (evolve, random, hillclimb) one
 search at budget 100 without shrinking. Per seed and strategy: distinct failures (total over
@@ -114,17 +114,38 @@ def part_power(subject: str, budget: int, search_seeds: int, jobs: int, strategi
         return list(pool.map(one_search, tasks))
 
 
-def part_speed(subject: str, budget: int) -> dict:
-    from pytest_navscenario.search.engine import run_search
+def part_speed(subject: str, budget: int, repeats: int = 1, shrink_budget: str | None = None,
+               stuck_after: float | None = -1.0) -> dict:
+    """One search of ``budget`` on boxes1 (evolve, search seed 0, shrinking on, one process),
+    ``repeats`` times: CPU seconds (median), simulations searching and shrinking, and how far
+    shrinking got (non-zero offsets of each failure as found -> as frozen)."""
+    from pytest_navscenario.search.engine import DEFAULT_SHRINK_BUDGET, DEFAULT_STUCK_AFTER, run_search
     from pytest_navscenario.subjects.loading import load_subject
 
-    t0, c0 = time.perf_counter(), time.process_time()
-    r = run_search(_load("boxes1"), load_subject(subject), budget=budget, seed_value=0)
-    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-    print(f"speed: budget {budget} on boxes1 vs {subject} (evolve, shrinking on, one process): {wall:.1f} s "
-          f"wall, {cpu:.1f} s CPU; {r.sims_used} search + {r.shrink_sims} shrink simulations, "
-          f"{len(r.failures)} distinct failures")
-    return {"budget": budget, "wall": wall, "cpu": cpu, "search_sims": r.sims_used, "shrink_sims": r.shrink_sims}
+    shrink = DEFAULT_SHRINK_BUDGET if shrink_budget is None else shrink_budget
+    stuck = DEFAULT_STUCK_AFTER if stuck_after is not None and stuck_after < 0 else (stuck_after or None)
+    runs = []
+    for _ in range(repeats):
+        t0, c0 = time.perf_counter(), time.process_time()
+        r = run_search(_load("boxes1"), load_subject(subject), budget=budget, seed_value=0,
+                       shrink_budget=shrink, stuck_after=stuck)
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+        search = [c for c in r.candidates if c.phase == "search"]
+        shrunk = [(sum(1 for v in f.found.offsets if v), sum(1 for v in f.shrunk.offsets if v), f.shrink_sims)
+                  for f in r.failures]
+        runs.append({"wall": wall, "cpu": cpu, "search_sims": r.sims_used, "shrink_sims": r.shrink_sims,
+                     "shrink_total": r.shrink_total, "failures": len(r.failures),
+                     "failing_sims": sum(c.failed for c in search), "shrunk": shrunk,
+                     "simulated_s": sum(c.metrics.get("duration", 0.0) or 0.0 for c in r.candidates)})
+        print(f"speed: budget {budget} on boxes1 vs {subject} (evolve, shrink budget {shrink}, stuck after "
+              f"{stuck}, one process): {wall:.1f} s wall, {cpu:.1f} s CPU; {r.sims_used} search + "
+              f"{r.shrink_sims} shrink simulations (shrink budget {r.shrink_total}), {len(r.failures)} distinct "
+              f"failures, {runs[-1]['simulated_s']:.0f} s simulated; non-zero offsets found -> frozen "
+              f"(shrink sims): {shrunk}", flush=True)
+    cpu = statistics.median(r["cpu"] for r in runs)
+    print(f"speed: median CPU {cpu:.1f} s over {repeats} run(s) (min {min(r['cpu'] for r in runs):.1f}, "
+          f"max {max(r['cpu'] for r in runs):.1f})")
+    return {"budget": budget, "shrink_budget": shrink, "stuck_after": stuck, "median_cpu": cpu, "runs": runs}
 
 
 def main() -> None:
@@ -133,6 +154,10 @@ def main() -> None:
     ap.add_argument("--part", choices=("power", "speed"), default="power")
     ap.add_argument("--budget", type=int, default=100)
     ap.add_argument("--speed-budget", type=int, default=1000)
+    ap.add_argument("--repeats", type=int, default=1, help="speed: runs of the search (median CPU)")
+    ap.add_argument("--shrink-budget", default=None, help="speed: the shrink budget (default: the engine's)")
+    ap.add_argument("--stuck-after", type=float, default=-1.0,
+                    help="speed: the stuck window in s (default: the engine's; 0 = off)")
     ap.add_argument("--search-seeds", type=int, default=5)
     ap.add_argument("--strategies", default=",".join(STRATEGIES))
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
@@ -141,7 +166,7 @@ def main() -> None:
     print(f"load average before: {os.getloadavg()}")
     out: dict = {"subject": a.subject, "command": " ".join(sys.argv)}
     if a.part == "speed":
-        out["speed"] = part_speed(a.subject, a.speed_budget)
+        out["speed"] = part_speed(a.subject, a.speed_budget, a.repeats, a.shrink_budget, a.stuck_after)
     else:
         rows = part_power(a.subject, a.budget, a.search_seeds, a.jobs, a.strategies.split(","))
         out["power"] = rows

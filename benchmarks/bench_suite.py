@@ -1,13 +1,16 @@
-"""Suite speed: ``pytest`` on 500 generated scenario files, serial vs ``-n 2`` (pytest-xdist).
+"""Suite speed: ``pytest`` on 500 generated scenario files, serial vs ``-n 2`` vs xdist's workers.
 
     env -u PYTHONDONTWRITEBYTECODE python benchmarks/bench_suite.py [--count 500] [--repeats 3]
 
 The scenarios are the five shipped seeds with their obstacles moved by up to +-0.3 m (fixed RNG,
 so every run benchmarks the same files), 100 per seed in five family folders, run against the
 default built-in planner. Prints per mode the median wall time of the whole ``pytest`` process,
-the serial / -n 2 speed-up, and the plugin overhead per item: pytest's own session time minus
+the serial / -n 2 speed-up (``-n 2`` on scenario files only: the plugin's two worker processes;
+"xdist": ``-n 2 --dist load``, two pytest-xdist workers), and the plugin overhead per item: pytest's own session time minus
 the sum of the episodes' ``run_scenario`` times (``wall_time`` in the results file), divided by
-the item count, measured on the serial run (in -n 2 the episodes overlap). Plots of failing items
+the item count, measured on the serial run (in -n 2 the episodes overlap); "marginal" is the
+difference between the full suite and a copy of its first fifth (the same share of each family),
+so start-up and imports cancel. Plots of failing items
 (a separate feature, ~0.1-1 s each) are off; artifacts too. Also checks that serial and -n 2
 produce the same records (wall times aside).
 """
@@ -61,6 +64,21 @@ def generate(folder: Path, count: int, rng_seed: int = 1) -> int:
     return written
 
 
+def subset(folder: Path, to: Path, per_family: int) -> Path:
+    """The first ``per_family`` files of each family folder, copied: the small suite that the
+    marginal per-item cost is measured against (every family in the same share as the full one)."""
+    import shutil
+
+    to.mkdir()
+    for name in ("pytest.ini", "conftest.py"):
+        shutil.copy(folder / name, to / name)
+    for family in sorted(p for p in folder.iterdir() if p.is_dir()):
+        (to / family.name).mkdir()
+        for path in sorted(family.glob("*.yaml"))[:per_family]:
+            shutil.copy(path, to / family.name / path.name)
+    return to
+
+
 # Written into the generated suite's rootdir: measures, in a serial run, the CPU time of the session
 # (collection + running + reporting) and of the items' call phases (run_scenario + the item's own
 # few lines), so the per-item overhead is a CPU-time difference, robust against other load.
@@ -68,11 +86,38 @@ PROBE = """
 import json, os, time
 import pytest
 
-_T = {"calls": 0.0, "n": 0}
+_T = {"calls": 0.0, "n": 0, "setups": 0.0, "feasibility": 0.0}
+
+
+def pytest_configure(config):
+    # Time the feasibility check apart: its shortest path is the metrics' own (cached, reused by
+    # the call phase), computed at setup so that an impassable scenario is an error (issue 15).
+    try:
+        from pytest_navscenario.verdict import feasibility
+    except ImportError:
+        return
+    check = feasibility.impassable_reason
+
+    def timed(scenario):
+        t0 = time.process_time()
+        try:
+            return check(scenario)
+        finally:
+            _T["feasibility"] += time.process_time() - t0
+    feasibility.impassable_reason = timed
 
 
 def pytest_sessionstart(session):
     _T["start"] = time.process_time()
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_setup(item):
+    t0 = time.process_time()
+    try:
+        return (yield)
+    finally:
+        _T["setups"] += time.process_time() - t0
 
 
 @pytest.hookimpl(wrapper=True)
@@ -95,6 +140,25 @@ def pytest_unconfigure(config):
 """
 
 
+def _adopt_orphans() -> None:
+    """Make this process the reaper of every descendant (Linux PR_SET_CHILD_SUBREAPER), so the CPU
+    time of worker processes that outlive pytest by a moment (a forkserver and the episode workers
+    it forked) is counted in RUSAGE_CHILDREN once they are reaped."""
+    try:
+        import ctypes
+        ctypes.CDLL(None, use_errno=True).prctl(36, 1, 0, 0, 0)   # PR_SET_CHILD_SUBREAPER
+    except (OSError, AttributeError):
+        pass
+
+
+def _reap_all() -> None:
+    while True:
+        try:
+            os.waitpid(-1, 0)
+        except ChildProcessError:
+            return
+
+
 def _children_cpu() -> float:
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
     return usage.ru_utime + usage.ru_stime
@@ -114,7 +178,9 @@ def run_pytest(target: Path, extra: list[str], results: Path | None,
     cpu0, t0 = _children_cpu(), time.perf_counter()
     proc = subprocess.run(cmd, cwd=target if target.is_dir() else target.parent, env=env,
                           capture_output=True, text=True)
-    wall, cpu = time.perf_counter() - t0, _children_cpu() - cpu0
+    wall = time.perf_counter() - t0
+    _reap_all()   # orphaned workers (the plugin's forkserver) are ours to reap: their CPU counts too
+    cpu = _children_cpu() - cpu0
     tail = proc.stdout.strip().splitlines()[-1] if proc.stdout.strip() else proc.stderr
     match = re.search(r" in ([0-9.]+)s", tail)
     if proc.returncode not in (0, 1) or not match:
@@ -147,25 +213,30 @@ def floor(count: int, repeats: int) -> int:
     per-item cost on empty Python test functions (same installed plugins)."""
     med = statistics.median
     with tempfile.TemporaryDirectory(prefix="navfloor-") as tmp:
-        scen, py = Path(tmp) / "scenarios", Path(tmp) / "python"
-        for folder in (scen, py):
+        scen, py, py1 = Path(tmp) / "scenarios", Path(tmp) / "python", Path(tmp) / "python-1-per-file"
+        for folder in (scen, py, py1):
             folder.mkdir()
             (folder / "pytest.ini").write_text("[pytest]\n")
             (folder / "conftest.py").write_text(PROBE)
         for i in range(count):
             (scen / f"s{i:04d}.yaml").write_text(
-                "version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 0.1, y: 0}, timeout: 0.2}\n"
+                "version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 0.32, y: 0}, timeout: 0.5}\n"
                 f"obstacles: [{{type: box, x: 3, y: {i % 7}, length: 1, width: 1}}]\n")
         for i in range(0, count, 100):
             (py / f"test_m{i}.py").write_text("".join(f"def test_{j}(): pass\n" for j in range(min(100, count - i))))
+        for i in range(count):       # pytest's own cost for one item per file, as scenario files are
+            (py1 / f"test_f{i:04d}.py").write_text("def test_it(): pass\n")
         rows = {}
         for label, folder, extra in [("scenario files, 2-tick episodes", scen, ["--nav-results=r.jsonl"]),
-                                     ("empty Python tests", py, [])]:
+                                     ("empty Python tests", py, []),
+                                     ("empty Python tests, one per file", py1, [])]:
             probes = [_probe_run(folder, extra) for _ in range(repeats)]
             rows[label] = med((p["session"] - p["calls"]) / p["n"] for p in probes)
             print(f"{label}: {1000 * rows[label]:.2f} ms CPU per item outside the call phase "
                   f"(median of {repeats}, {probes[0]['n']} items, fixed session costs included)")
-        print(f"plugin + loader share: {1000 * (rows['scenario files, 2-tick episodes'] - rows['empty Python tests']):.2f} ms per item")
+        scen_row = rows["scenario files, 2-tick episodes"]
+        print(f"plugin + loader share: {1000 * (scen_row - rows['empty Python tests']):.2f} ms per item "
+              f"({1000 * (scen_row - rows['empty Python tests, one per file']):.2f} ms against one test per file)")
     return 0
 
 
@@ -177,6 +248,7 @@ def main() -> int:
                     help="only the overhead floor: COUNT scenario files whose episodes last 2 ticks vs "
                          "COUNT empty Python tests, CPU time outside the call phase per item")
     args = ap.parse_args()
+    _adopt_orphans()
     if args.floor:
         return floor(args.count, args.repeats)
     med = statistics.median
@@ -189,15 +261,17 @@ def main() -> int:
         print(f"{n} scenario files in {len(SEEDS)} families; {args.repeats} runs per mode; "
               f"{os.cpu_count()} CPUs; load average before: {os.getloadavg()[0]:.2f}; "
               f"parallel capacity of two CPU-bound processes now: {parallel_capacity():.2f}x")
-        walls: dict[str, list[float]] = {"serial": [], "-n 2": []}
-        cpus: dict[str, list[float]] = {"serial": [], "-n 2": []}
-        rest: dict[str, list[tuple[int, float]]] = {"all": [], "one family": []}
+        walls: dict[str, list[float]] = {"serial": [], "-n 2": [], "xdist": []}
+        cpus: dict[str, list[float]] = {"serial": [], "-n 2": [], "xdist": []}
+        rest: dict[str, list[tuple[int, float]]] = {"all": [], "small": []}
         records: list[list[dict]] = []
+        small_suite = subset(folder, Path(tmp) / "small", max(1, n // len(SEEDS) // 5))
         for r in range(args.repeats):
             for label, target, extra in [("serial", folder, []), ("-n 2", folder, ["-n", "2"]),
-                                         ("one family", folder / SEEDS[0], [])]:
+                                         ("xdist", folder, ["-n", "2", "--dist", "load"]),
+                                         ("small", small_suite, [])]:
                 results = Path(tmp) / f"r{r}-{len(records)}.jsonl"
-                probe = Path(tmp) / "probe.json" if label != "-n 2" else None
+                probe = Path(tmp) / "probe.json" if label in ("serial", "small") else None
                 wall, session, tail, cpu = run_pytest(target, extra, results, probe)
                 if probe is not None:
                     probes.append(dict(json.loads(probe.read_text()), label=label))
@@ -209,19 +283,23 @@ def main() -> int:
                     walls[label].append(wall)
                     cpus[label].append(cpu)
                     records.append([{k: v for k, v in rec.items() if k != "wall_time"} for rec in recs])
-                if label != "-n 2":
-                    rest["all" if label == "serial" else "one family"].append((len(recs), session - episodes))
+                if label in ("serial", "small"):
+                    rest["all" if label == "serial" else "small"].append((len(recs), session - episodes))
         collect = [run_pytest(folder, ["--collect-only"], None)[1] for _ in range(args.repeats)]
         same = all(recs == records[0] for recs in records)
-        print(f"records identical across all serial and -n 2 runs: {same}")
-        print(f"median wall: serial {med(walls['serial']):.2f} s, -n 2 {med(walls['-n 2']):.2f} s, "
-              f"speed-up {med(walls['serial']) / med(walls['-n 2']):.2f}x")
-        (n_all, _), (n_one, _) = rest["all"][0], rest["one family"][0]
+        print(f"records identical across all serial, -n 2 and xdist runs: {same}")
+        for label in ("-n 2", "xdist"):
+            print(f"median wall: serial {med(walls['serial']):.2f} s, {label} {med(walls[label]):.2f} s, "
+                  f"speed-up {med(walls['serial']) / med(walls[label]):.2f}x")
+        (n_all, _), (n_one, _) = rest["all"][0], rest["small"][0]
         extra_all = med(x for _, x in rest["all"])
-        extra_one = med(x for _, x in rest["one family"])
+        extra_one = med(x for _, x in rest["small"])
         print(f"parallel capacity after: {parallel_capacity():.2f}x (2.00 = two idle cores)")
-        print(f"median CPU time: serial {med(cpus['serial']):.2f} s, -n 2 {med(cpus['-n 2']):.2f} s; "
-              f"load average after: {os.getloadavg()[0]:.2f} (wall times inflate with load)")
+        for label in ("-n 2", "xdist"):
+            print(f"median CPU time: serial {med(cpus['serial']):.2f} s, {label} {med(cpus[label]):.2f} s "
+                  f"(+{100 * (med(cpus[label]) / med(cpus['serial']) - 1):.0f} %; 95 % of the capacity allows "
+                  f"~+5 %)")
+        print(f"load average after: {os.getloadavg()[0]:.2f} (wall times inflate with load)")
         print(f"session time not spent in run_scenario: {extra_all:.2f} s for {n_all} items, "
               f"{extra_one:.2f} s for {n_one} items")
         print(f"  = {1000 * extra_all / n_all:.2f} ms per item on average (fixed costs included); "
@@ -234,6 +312,14 @@ def main() -> int:
               f"{outside['full']:.2f} s for {full[0]['n']} items = {1000 * outside['full'] / full[0]['n']:.2f} ms "
               f"per item; marginal {1000 * (outside['full'] - outside['small']) / (full[0]['n'] - small[0]['n']):.2f}"
               f" ms per item (vs {small[0]['n']} items; call phases {med(p['calls'] for p in full):.2f} s CPU)")
+        per = {k: {q: med(p[q] for p in ps) for q in ("setups", "feasibility")}
+               for k, ps in (("full", full), ("small", small))}
+        span = full[0]["n"] - small[0]["n"]
+        feas = 1000 * (per["full"]["feasibility"] - per["small"]["feasibility"]) / span
+        print(f"  of which setup phases {1000 * (per['full']['setups'] - per['small']['setups']) / span:.2f} ms "
+              f"per item (marginal), and in them the feasibility check {feas:.2f} ms: the shortest path the "
+              f"metrics need, computed at setup since issue 15 and reused by the call phase; without it "
+              f"{1000 * (outside['full'] - outside['small']) / span - feas:.2f} ms per item")
         print(f"collection alone (--collect-only, {n} files): {med(collect):.2f} s session, "
               f"{1000 * med(collect) / n:.2f} ms per file")
     return 0

@@ -122,7 +122,7 @@ def _option_block(option: Option, inis: dict[str, Ini]) -> list[str]:
     metavar = option.attrs.get("metavar")
     title = f"{flags}={metavar}" if metavar else flags
     ini = inis.get(option.dest)
-    help_text = _INI_SUFFIX.sub("", option.attrs.get("help") or "")
+    help_text = _INI_SUFFIX.sub("", (option.attrs.get("help") or "").replace("%%", "%"))   # argparse's escape
     facts = [f"ini: `{ini.name}`" if ini else "no ini twin"]
     if ini is not None:
         facts.append(f"default: `{_ini_default(ini)}`")

@@ -60,7 +60,10 @@ def install(sigterm: bool = True) -> Callable[[], None] | None:
 
 def from_the_user(exc: BaseException) -> bool:
     """True if ``exc`` must stop the run: a marked interrupt, or any KeyboardInterrupt while
-    interrupts are not marked (then a real Ctrl-C cannot be told apart)."""
+    interrupts are not marked (then a real Ctrl-C cannot be told apart). A process that ignores
+    SIGINT (a local worker: its parent handles Ctrl-C) never gets a Ctrl-C as an exception, so
+    there a KeyboardInterrupt is the planner's own."""
     if isinstance(exc, UserInterrupt):
         return True
-    return isinstance(exc, KeyboardInterrupt) and signal.getsignal(signal.SIGINT) is not _on_sigint
+    handler = signal.getsignal(signal.SIGINT)
+    return isinstance(exc, KeyboardInterrupt) and handler is not _on_sigint and handler is not signal.SIG_IGN

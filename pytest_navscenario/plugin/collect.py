@@ -64,11 +64,18 @@ def collect_file(file_path: Path, parent: pytest.Collector) -> "ScenarioFile | N
     return ScenarioFile.from_parent(parent, path=file_path)
 
 
+_NAMED_KEY = pytest.StashKey[frozenset]()
+
+
 def _named_on_command_line(config: pytest.Config, path: Path) -> bool:
     """True if ``path`` is a file given on the command line (``pytest s/x.yaml``, or ``::name``)."""
-    base = Path(config.invocation_params.dir)
-    return any(Path(os.path.abspath(base / arg.split("::")[0])) == Path(os.path.abspath(path))
-               for arg in config.args)
+    named = config.stash.get(_NAMED_KEY, None)
+    if named is None:        # called for every file pytest visits: the arguments' paths once
+        base = config.invocation_params.dir
+        named = frozenset(os.path.normcase(os.path.abspath(os.path.join(base, arg.split("::")[0])))
+                          for arg in config.args)
+        config.stash[_NAMED_KEY] = named
+    return os.path.normcase(os.path.abspath(path)) in named
 
 
 def output_folders(config: pytest.Config) -> list[Path]:
@@ -137,6 +144,9 @@ def _regressions_folder(config: pytest.Config) -> Path:
 
 def rel_path(config: pytest.Config, path: Path) -> str:
     """``path`` relative to the rootdir with posix separators (absolute if outside it)."""
+    text, root = str(path), str(config.rootpath)
+    if text.startswith(root) and text[len(root):len(root) + 1] == os.sep and ".." not in text:
+        return text[len(root) + 1:].replace(os.sep, "/")    # the common case, without pathlib
     try:
         return path.relative_to(config.rootpath).as_posix()
     except ValueError:

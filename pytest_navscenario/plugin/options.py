@@ -52,6 +52,12 @@ OPTIONS = (
      "(`ray start --head` prints the address). Items still report one per scenario in the usual "
      "order, with the same results as a serial run. Every node must have pytest-navscenario and "
      "the subject; this is checked before any episode. Default: none."),
+    ("--nav-workers", "nav_workers",
+     "run the scenario items' episodes on N local worker processes started by this pytest "
+     "process ('auto': one per core; 0 or 1: in this process, the default). Collection and "
+     "reports stay in this process, so it costs less than pytest-xdist's N pytest workers; "
+     "-n N on a run of scenario files only (no Python test files) does the same. Items report "
+     "one per scenario in the usual order with the results of a serial run."),
 )
 
 
@@ -83,7 +89,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     # a metavar shows the accepted values ({a,b}) or a unit (N, SECONDS, PATH, DIR, SPEC, NAME)
     metavars = {"nav_subject": "SPEC", "nav_seed": "N", "nav_results": "PATH", "nav_artifacts": "DIR",
                 "nav_summary": "{yes,no}", "nav_tick_limit": "SECONDS", "nav_repeat": "N",
-                "nav_reset_timeout": "SECONDS", "nav_ray": "ADDRESS"}
+                "nav_reset_timeout": "SECONDS", "nav_ray": "ADDRESS", "nav_workers": "N"}
     for opt, ini, text in OPTIONS:
         group.addoption(opt, dest=ini, default=None, metavar=metavars[ini], help=text + f" [ini: {ini}]")
     parser.addini("nav_subject", helps["nav_subject"], default="")
@@ -97,6 +103,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addini("nav_reset_timeout", helps["nav_reset_timeout"], type=ini_type("float"),
                   default=DEFAULT_RESET_TIMEOUT)
     parser.addini("nav_ray", helps["nav_ray"], default="")
+    parser.addini("nav_workers", helps["nav_workers"], default="")
     parser.addini("nav_scenario_glob",
                   "file name patterns of scenario files (space separated); files matching them are "
                   "collected when they are a YAML mapping with 'version' and 'mission' keys "

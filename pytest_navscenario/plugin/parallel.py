@@ -16,10 +16,19 @@ starting N pytest workers (Ray spreads the episodes; xdist workers would only wa
 evaluating its generations on N local worker processes (``dispatch.ProcessExecutor``), instead of
 N xdist workers each running whole searches: one search then uses every core, the results are
 those of a serial run, and Ctrl-C keeps what each search found (this process writes the files).
+
+``--nav-workers N`` (and ``-n N`` on a run whose paths hold scenario files and no Python test
+files) runs the scenario items' episodes on N local worker processes, exactly as ``--nav-ray``
+runs them on Ray: this process collects once and reports, the workers only simulate. xdist's
+workers would each start pytest, import everything and collect and validate every file again,
+and send three reports per item back (issue 14 measured ~30 % more CPU than a serial run).
+``--dist``/``--tx`` given explicitly keep pytest-xdist.
 """
 from __future__ import annotations
 
+import fnmatch
 import os
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -28,6 +37,8 @@ from .state import STATE_KEY
 
 NUM_CPUS_KEY = pytest.StashKey[int]()
 SEARCH_WORKERS_KEY = pytest.StashKey[int]()
+SUBMIT_CHUNK = 16   # scenario items checked and submitted at a time at the start of the run loop
+SUITE_WORKERS_KEY = pytest.StashKey[tuple[int, str]]()   # (workers, which option asked for them)
 
 
 def _numprocesses(config: pytest.Config) -> Any:
@@ -53,18 +64,31 @@ def take_over_xdist(config: pytest.Config, what: str) -> int | None:
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_configure(config: pytest.Config) -> None:
-    """Before xdist starts workers: decide what ``-n`` means next to ``--nav-ray``."""
+    """Before xdist starts workers: decide what ``-n`` and ``--nav-workers`` mean here."""
     if hasattr(config, "workerinput"):
         return
     from .options import read_ray_address
 
     address = read_ray_address(config)
-    if address is None and _wants_search(config) and _numprocesses(config) is not None:
-        n = take_over_xdist(config, "--navsearch")
-        config.stash[SEARCH_WORKERS_KEY] = n if n is not None else 0
+    if address is not None:
+        _no_workers_with_ray(config)
+        if _numprocesses(config) is not None:
+            _ray_cpus_from_n(config, address)
         return
-    if address is None or _numprocesses(config) is None:
+    if not _wants_search(config):
+        _choose_suite_workers(config)
         return
+    workers = read_workers(config)
+    if workers is not None and _numprocesses(config) is not None:
+        raise pytest.UsageError("give either -n N (pytest-xdist) or --nav-workers N, not both")
+    if _numprocesses(config) is not None:
+        workers = take_over_xdist(config, "--navsearch")
+    if workers is not None:
+        config.stash[SEARCH_WORKERS_KEY] = workers
+
+
+def _ray_cpus_from_n(config: pytest.Config, address: str) -> None:
+    """-n N next to --nav-ray=auto: the local instance's CPUs (a cluster decides for itself)."""
     if address != "auto":
         raise pytest.UsageError(f"--nav-ray={address} runs the episodes on the cluster, which decides how "
                                 f"many run at once; drop -n")
@@ -76,6 +100,79 @@ def pytest_configure(config: pytest.Config) -> None:
     config.stash[NUM_CPUS_KEY] = n
 
 
+def read_workers(config: pytest.Config) -> int | None:
+    """--nav-workers / ini nav_workers: a worker count (``auto``: one per core), None if unset."""
+    from .options import option_value
+
+    raw, where, _ = option_value(config, "nav_workers", "a whole number >= 0 or auto")
+    value = raw.strip().lower()
+    if value in ("", "none"):
+        return None
+    if value == "auto":
+        from ..dispatch.local import available_cores
+        return available_cores()
+    try:
+        n = int(value)
+    except ValueError:
+        n = -1
+    if n < 0:
+        raise pytest.UsageError(f"{where}: expected a whole number of worker processes >= 0 or 'auto' "
+                                f"(one per core), got {raw!r} (e.g. --nav-workers=2; 0: in this process)")
+    return n
+
+
+def _no_workers_with_ray(config: pytest.Config) -> None:
+    if read_workers(config) is not None:
+        raise pytest.UsageError("--nav-workers runs episodes on local worker processes and --nav-ray on Ray; "
+                                "give one of them (with --nav-ray=auto, -n N sets the local instance's CPUs)")
+
+
+def _xdist_asked_for(config: pytest.Config) -> bool:
+    """True if the command line chose xdist's distribution itself (--dist, -d, --tx)."""
+    args = [str(a) for a in config.invocation_params.args]
+    return any(a == "-d" or a.startswith(("--dist", "--tx")) for a in args)
+
+
+def _choose_suite_workers(config: pytest.Config) -> None:
+    """--nav-workers N, or -n N on a scenario-only run: the scenario items' episodes on N local
+    worker processes (see the module docstring); xdist is switched off for it."""
+    workers = read_workers(config)
+    if workers is not None:
+        if _numprocesses(config) is not None:
+            raise pytest.UsageError("give either -n N (pytest-xdist) or --nav-workers N, not both")
+        config.stash[SUITE_WORKERS_KEY] = (workers, f"--nav-workers {workers}")
+        return
+    n = _numprocesses(config)
+    if n is None or _xdist_asked_for(config) or config.option.collectonly or not _scenario_only(config):
+        return
+    n = take_over_xdist(config, "-n")
+    assert n is not None
+    config.stash[SUITE_WORKERS_KEY] = (n, f"-n {n} on scenario files only")
+
+
+def _scenario_only(config: pytest.Config) -> bool:
+    """True when every path of the run is, or holds, scenario files and no Python file pytest
+    would collect (python_files, or any .py with --doctest-modules): only then can the plugin run
+    every item itself. A node id (path::name) counts by its path; a missing path is pytest's to
+    report, so it answers False."""
+    patterns = ["*.py"] if getattr(config.option, "doctestmodules", False) else list(config.getini("python_files"))
+    skip = list(config.getini("norecursedirs"))
+    base = Path(config.invocation_params.dir)
+    for arg in config.args:
+        path = base / str(arg).split("::", 1)[0]
+        if path.is_file():
+            if path.suffix == ".py":
+                return False
+            continue
+        if not path.is_dir():
+            return False
+        for folder, dirs, files in os.walk(path):
+            dirs[:] = [d for d in dirs if not any(fnmatch.fnmatch(d, p) for p in skip)]
+            if any(f != "conftest.py" and any(fnmatch.fnmatch(f, p) for p in patterns) for f in files):
+                return False
+    return True
+
+
 def _wants_search(config: pytest.Config) -> bool:
     try:
         return bool(config.getoption("navsearch") or config.getini("navsearch"))
@@ -85,13 +182,16 @@ def _wants_search(config: pytest.Config) -> bool:
 
 def pytest_sessionstart(session: pytest.Session) -> None:
     """Controller with --nav-ray: start or join Ray and check every node (after the core plugin
-    has loaded and checked the subject). With --navsearch -n N: the local worker processes.
+    has loaded and checked the subject). With --navsearch -n N or --nav-workers N (or -n N on
+    scenario files only): the local worker processes.
     Nothing is started for --collect-only."""
     config = session.config
     state = config.stash.get(STATE_KEY, None)
     if state is None or state.is_worker or config.option.collectonly:
         return
-    workers = config.stash.get(SEARCH_WORKERS_KEY, 0)
+    workers, why = config.stash.get(SUITE_WORKERS_KEY, (0, ""))
+    if SEARCH_WORKERS_KEY in config.stash:
+        workers, why = config.stash[SEARCH_WORKERS_KEY], "with --navsearch"
     if state.settings.ray is None and workers > 1:
         from ..dispatch.local import ProcessExecutor
 
@@ -100,7 +200,7 @@ def pytest_sessionstart(session: pytest.Session) -> None:
             try:
                 pool.check_picklable(state.subject.factory)
             except ValueError as exc:
-                raise pytest.UsageError(f"navscenario: -n {workers} with --navsearch: {exc}") from None
+                raise pytest.UsageError(f"navscenario: {workers} worker processes ({why}): {exc}") from None
         state.executor = pool
         config.add_cleanup(lambda: pool.close(cancel=True))   # also if a later check stops the run
         pool.warm()   # the workers start while pytest collects and the search sets up
@@ -128,9 +228,13 @@ def pytest_report_header(config: pytest.Config) -> list[str]:
     state = config.stash.get(STATE_KEY, None)
     if state is None or state.executor is None:
         return []
-    if state.settings.ray is None:
+    if state.settings.ray is None and SEARCH_WORKERS_KEY in config.stash:
         return [f"navsearch: each search evaluates its candidates on {state.executor.description} "
                 f"(-n {state.executor.workers}); searches run one after the other"]
+    if state.settings.ray is None:
+        _, why = config.stash[SUITE_WORKERS_KEY]
+        return [f"navscenario: episodes run on {state.executor.description} ({why}); this process "
+                f"collects and reports"]
     return [f"navscenario: episodes run as Ray tasks on {state.executor.description} (--nav-ray)"] + \
         [f"navscenario: WARNING {note}" for note in state.executor_notes]
 
@@ -183,10 +287,13 @@ def pytest_runtestloop(session: pytest.Session) -> Any:
     executor = state.executor if state is not None else None
     if executor is not None and not session.config.option.collectonly:
         # scenario items (collect.ScenarioItem, known by its method: no import, no cycle)
-        items = [i for i in session.items if hasattr(i, "episode_job") and not _skipped(i)]
         keep = keep_trajectory(session.config)
-        for item, pending in zip(items, executor.submit([i.episode_job(keep) for i in items])):
-            item.nav_pending = pending
+        # in chunks, so the first episodes run while this process checks the later items
+        items = [i for i in session.items if hasattr(i, "episode_job")]
+        for start in range(0, len(items), SUBMIT_CHUNK):
+            chunk = [i for i in items[start:start + SUBMIT_CHUNK] if not _skipped(i)]
+            for item, pending in zip(chunk, executor.submit([i.episode_job(keep) for i in chunk])):
+                item.nav_pending = pending
     return (yield)
 
 

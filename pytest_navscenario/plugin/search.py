@@ -5,10 +5,10 @@ items. ``-n N`` does not start xdist workers here: this process runs the searche
 other, each evaluating its generations on N local worker processes (plugin/parallel.py), so one
 search uses every core with the results of a serial run; ``--nav-ray`` evaluates them as Ray
 tasks. The search result goes on the call report as ``report.navsearch`` (plain data), from
-which this process writes the frozen failures, the search log and the JUnit file (also after
-Ctrl-C: what was found is kept). Progress is shown live through the terminal reporter with
-capture suspended (as live logging does): rewritten in place on a terminal, a plain line every
-tenth of the budget (and on each new failure) in a CI log.
+which this process writes the frozen failures, the search log, the JUnit file and the suite
+folder (also after Ctrl-C: what was found is kept). Progress is shown live through the terminal
+reporter with capture suspended (as live logging does): rewritten in place on a terminal, a
+plain line every tenth of the budget (and on each new failure) in a CI log.
 """
 from __future__ import annotations
 
@@ -23,9 +23,9 @@ import pytest
 from .options import ini_type, ini_value
 
 DEFAULT_BUDGET = 100
-DEFAULT_SHRINK_BUDGET = 40
+DEFAULT_SHRINK_BUDGET = "25%"   # = search.engine.DEFAULT_SHRINK_BUDGET
 DEFAULT_OUT = "scenarios/regressions"
-DEFAULT_STUCK_AFTER = 20.0
+DEFAULT_STUCK_AFTER = 15.0   # = search.engine.DEFAULT_STUCK_AFTER
 STRATEGY_NAMES = ("evolve", "random", "hillclimb")   # = search.engine.STRATEGIES (not imported: plugin load stays light)
 OLD_OUT_INI = "nav_regressions_dir"     # the old name of the ini option navsearch_out, still read
 
@@ -45,9 +45,12 @@ OPTIONS = (
      "failing), random (uniform sampling over the same space, a baseline) or hillclimb (the "
      "Surrealist baseline: adaptive-step hill-climb on one obstacle at a time, minimising "
      "clearance)."),
-    ("--navsearch-shrink-budget", "navsearch_shrink_budget", "N",
-     f"simulations allowed to shrink each distinct failure toward the seed, on top of the "
-     f"budget (default {DEFAULT_SHRINK_BUDGET}; 0 = keep failures as found)."),
+    ("--navsearch-shrink-budget", "navsearch_shrink_budget", "SHARE",
+     f"simulations for shrinking the distinct failures toward the seed, on top of the budget: "
+     f"a share of the budget (default {DEFAULT_SHRINK_BUDGET}), shared out before shrinking "
+     f"starts, most severe and earliest failure first (failures it does not reach are kept as "
+     f"found); 0 = keep every failure as found; a whole number N = at most N simulations for "
+     f"each failure (the old form)."),
     ("--navsearch-stuck-after", "navsearch_stuck_after", "SECONDS",
      f"end a search episode early, as a timeout, when the robot has covered no new ground for "
      f"this long (default {DEFAULT_STUCK_AFTER:g}; 0 = run every episode to its timeout)."),
@@ -56,17 +59,23 @@ OPTIONS = (
      f"(default {DEFAULT_OUT}; the ini option's old name {OLD_OUT_INI} is still read)."),
     ("--navsearch-junit", "navsearch_junit", "PATH",
      "also write the generated suite (every simulated candidate) as a JUnit XML file."),
+    ("--navsearch-suite", "navsearch_suite", "DIR",
+     "also keep the generated suite as scenario files: every candidate simulated in the search "
+     "phase (failing or not; not the shrink phase) as DIR/<seed>/<seed>-sim<N>-<hash>.yaml, "
+     "family = seed, replacing that seed's earlier suite there; written also when the run is cut "
+     "short. Re-run it against any planner: pytest DIR --nav-subject=..."),
 )
 
 
-_INT_OPTIONS = ("navsearch_budget", "navsearch_seed", "navsearch_shrink_budget")   # ini type int
+_INT_OPTIONS = ("navsearch_budget", "navsearch_seed")   # ini type int
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("navsearch", "navigation failure search (pytest-navscenario)")
     for opt, dest, metavar, text in OPTIONS:
         kwargs: dict[str, Any] = {"action": "append"} if dest == "navsearch" else {}
-        group.addoption(opt, dest=dest, default=None, metavar=metavar, help=f"{text} [ini: {dest}]", **kwargs)
+        group.addoption(opt, dest=dest, default=None, metavar=metavar,   # argparse %-formats help: 25% -> 25%%
+                        help=f"{text} [ini: {dest}]".replace("%", "%%"), **kwargs)
         kind = ("args" if dest == "navsearch" else ini_type("int") if dest in _INT_OPTIONS
                 else ini_type("float") if dest == "navsearch_stuck_after" else "string")
         parser.addini(dest, text, type=kind,
@@ -95,10 +104,11 @@ class SearchSettings:
     budget: int
     seed: int
     strategy: str
-    shrink_budget: int
+    shrink_budget: str
     out: Path
     junit: Path | None
     stuck_after: float | None = DEFAULT_STUCK_AFTER
+    suite: Path | None = None
 
 
 @dataclass
@@ -170,7 +180,7 @@ def read_search_settings(config: pytest.Config) -> SearchSettings:
     strategy = (str(raw).strip() or "evolve").lower()
     if strategy not in STRATEGIES:
         raise pytest.UsageError(f"{where}: unknown strategy {raw!r}; use one of {', '.join(STRATEGIES)}")
-    shrink = _int(config, "navsearch_shrink_budget", DEFAULT_SHRINK_BUDGET, 0, "the shrink budget")
+    shrink = _shrink_budget(config)
     raw, where, base = _out_raw(config)
     raw = str(raw).strip() or DEFAULT_OUT
     out = Path(os.path.expanduser(raw))
@@ -185,7 +195,46 @@ def read_search_settings(config: pytest.Config) -> SearchSettings:
         junit = junit if junit.is_absolute() else base / junit
         if junit.is_dir():
             raise pytest.UsageError(f"{where}: {raw!r} is a folder; give a file name such as navsearch.xml")
-    return SearchSettings(names, budget, seed, strategy, shrink, out, junit, _stuck_after(config))
+    return SearchSettings(names, budget, seed, strategy, shrink, out, junit, _stuck_after(config),
+                          _suite_dir(config, out))
+
+
+def _suite_dir(config: pytest.Config, out: Path) -> Path | None:
+    """--navsearch-suite DIR: a folder (made if missing), not the frozen failures' folder."""
+    raw, where, base = _raw(config, "navsearch_suite")
+    raw = str(raw or "").strip()
+    if not raw:
+        return None
+    suite = Path(os.path.expanduser(raw))
+    suite = suite if suite.is_absolute() else base / suite
+    if suite.exists() and not suite.is_dir():
+        raise pytest.UsageError(f"{where}: {raw!r} exists and is not a folder; give a folder for the "
+                                f"generated suite, e.g. suites/dwa")
+    if suite.resolve() == out.resolve():
+        raise pytest.UsageError(f"{where}: {raw!r} is also the folder of the frozen failures "
+                                f"(--navsearch-out); give the suite a folder of its own, e.g. suites/dwa, "
+                                f"so that re-running it does not run the frozen failures too")
+    return suite
+
+
+def _shrink_budget(config: pytest.Config) -> str:
+    """--navsearch-shrink-budget / navsearch_shrink_budget, checked: "25%", "0" or "40"."""
+    from ..search.engine import ShrinkBudget
+
+    cli = config.getoption("navsearch_shrink_budget")
+    if cli is not None:
+        raw, where = cli, "--navsearch-shrink-budget"
+    else:
+        raw = ini_value(config, "navsearch_shrink_budget",
+                        'a share of the budget such as "25%", or a whole number such as "40" (quoted in TOML)')
+        where = "ini option navsearch_shrink_budget"
+    if raw in ("", None):
+        return DEFAULT_SHRINK_BUDGET
+    try:
+        ShrinkBudget.parse(raw)
+    except ValueError as exc:
+        raise pytest.UsageError(f"{where}: {exc}") from None
+    return str(raw).strip()
 
 
 def _stuck_after(config: pytest.Config) -> float | None:
@@ -397,6 +446,7 @@ def report_to_payload(report: Any) -> dict[str, Any]:
         "subject_version": report.subject_version, "strategy": report.strategy,
         "seed_value": report.seed_value, "budget": report.budget, "shrink_budget": report.shrink_budget,
         "params": report.params, "sims_used": report.sims_used, "shrink_sims": report.shrink_sims,
+        "shrink_total": report.shrink_total,
         "discarded": dict(report.discarded), "skipped": report.skipped, "interrupted": report.interrupted,
         "stop_reason": report.stop_reason, "wall_time": report.wall_time,
         "episode_seed": report.episode_seed, "first_failure": report.first_failure,
@@ -426,6 +476,7 @@ def payload_to_report(data: dict[str, Any], space: Any) -> Any:
     report = SearchReport(**fields)
     report.skipped = data.get("skipped", 0)
     report.first_failure = data.get("first_failure", 0)
+    report.shrink_total = data.get("shrink_total", 0)
     report.candidates = cands
     report.failures = [Failure(cands[f["found"]], cands[f["shrunk"]], f["shrink_sims"], f["note"])
                        for f in data["failures"]]
@@ -457,14 +508,26 @@ def pytest_runtest_logreport(report: pytest.TestReport) -> None:
 
     job = next(j for j in state.jobs.values() if j.seed.name == payload["seed_name"])
     search = payload_to_report(payload, job.space)
-    entry: dict[str, Any] = {"report": search, "job": job, "files": [], "log": None, "error": ""}
+    entry: dict[str, Any] = {"report": search, "job": job, "files": [], "log": None, "error": "", "suite": None}
     try:
         entry["files"] = freeze_failures(search, job.space, state.settings.out, root=config.rootpath)
         entry["log"] = write_search_log(search, job.space, state.settings.out)
     except Exception as exc:  # never lose the summary: say what could not be written
         entry["error"] = f"could not write the frozen failures under {state.settings.out}: {type(exc).__name__}: {exc}"
+    if state.settings.suite is not None:
+        _write_suite(entry, state.settings.suite, config)
     state.done.append(entry)
     state.junit_items.append((search, job.space))
+
+
+def _write_suite(entry: dict[str, Any], folder: Path, config: pytest.Config) -> None:
+    from ..search.suite import write_suite
+
+    try:
+        entry["suite"] = write_suite(entry["report"], entry["job"].space, folder, root=config.rootpath)
+    except Exception as exc:  # never lose the summary: say what could not be written
+        entry["error"] += ("; " if entry["error"] else "") + (
+            f"could not write the generated suite under {folder}: {type(exc).__name__}: {exc}")
 
 
 def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
@@ -511,7 +574,13 @@ def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
              + f", {len(r.failures)} distinct failure(s) ({by}), best clearance "
              + (f"{best:.3f} m" if math.isfinite(best) else "n/a")
              + (f", first at sim {r.first_failure}" if r.first_failure else "")
-             + f", {r.sims_used} sims searching + {r.shrink_sims} shrinking, {r.wall_time:.1f} s"]
+             + f", {r.sims_used} sims searching + {r.shrink_sims} shrinking"
+             + (f" (shrink budget {r.shrink_total})" if r.shrink_total else "") + f", {r.wall_time:.1f} s"]
+    unshrunk = sum(1 for f in r.failures if f.note.startswith("not shrunk: the shrink budget"))
+    if unshrunk:
+        lines.append(f"  {unshrunk} of {len(r.failures)} failure(s) frozen as found: the shrink budget "
+                     f"({r.shrink_total} simulations) went to the most severe and earliest ones (raise "
+                     f"--navsearch-shrink-budget, e.g. 50%, to shrink more)")
     if r.skipped:
         lines.append(f"  {r.skipped} candidate(s) repeating a simulated one or next to a known failure were "
                      f"redrawn without simulating them")
@@ -527,6 +596,12 @@ def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
                      + (f"{c:.3f} m" if math.isfinite(c) else "n/a") + ("" if f.new else " (already frozen)"))
     if entry["log"] is not None:
         lines.append(f"  log  {_rel(config, entry['log'])}")
+    suite = entry.get("suite")
+    if suite is not None:
+        lines.append(f"  suite {_rel(config, suite.folder)}/: {len(suite.files)} scenario file(s), "
+                     f"{suite.failing} failing for {r.subject}"
+                     + (f", {suite.replaced} of an earlier suite removed" if suite.replaced else "")
+                     + f" (re-run: pytest {_rel(config, suite.folder.parent)} --nav-subject=...)")
     if entry["error"]:
         lines.append(f"  ERROR {entry['error']}")
     return lines

@@ -68,6 +68,7 @@ SCENARIO_LIMITS: Mapping[str, float] = MappingProxyType({
     "max_name_length": 200,
 })
 
+_MAX_ABS = float(SCENARIO_LIMITS["max_abs_value"])
 _LIST_LIMITS = {"obstacles": (int(SCENARIO_LIMITS["max_obstacles"]), "obstacles")}  # refused while parsing
 _REQUIRED = object()
 _NUMBER_WORD = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)[eE][-+]?\d+")  # 1e-3: a string in YAML 1.1
@@ -196,13 +197,18 @@ class _Section:
 
     def number(self, key: str, default: Any = _REQUIRED, *, low: float | None = None,
                low_open: bool = False, high: float | None = None, example: str | None = None) -> float:
-        node = self.get(key)
+        item = self.node.items.get(key)    # get() and line_of() in one look-up: the loader's commonest call
+        node = None if item is None else item[1]
         if node is None or (isinstance(node, YScalar) and node.value is None and default is None):
+            if item is not None:
+                self.ctx.lines[_join(self.path, key)] = item[0] if item[0] is not None else node.line
             if default is _REQUIRED:
                 raise self.missing(key, example or f"{key}: <number>")
             return default
-        return _number(self.ctx, node, _join(self.path, key), self.line_of(key), low=low,
-                       low_open=low_open, high=high)
+        field = _join(self.path, key)
+        line = item[0] if item[0] is not None else node.line
+        self.ctx.lines[field] = line
+        return _number(self.ctx, node, field, line, low=low, low_open=low_open, high=high)
 
     def integer(self, key: str, default: Any, *, low: int, high: int) -> int:
         node = self.get(key)
@@ -283,6 +289,9 @@ def _number(ctx: _Ctx, node: YNode, field: str, line: int | None, *, low: float 
     """A finite float from a YAML number (ints allowed, bools refused), within bounds."""
     line = node.line if node.line is not None else line
     value = node.value if isinstance(node, YScalar) else None
+    if type(value) is float and -_MAX_ABS <= value <= _MAX_ABS:   # the common case, checked as below
+        if (low is None or (value > low if low_open else value >= low)) and (high is None or value <= high):
+            return value
     if isinstance(value, str) and isinstance(node, YScalar) and node.plain and _NUMBER_WORD.fullmatch(value):
         value = float(value)
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
@@ -436,7 +445,9 @@ def _obstacles(ctx: _Ctx, top: _Section) -> tuple[Obstacle, ...]:
                            type_item[0] or line, _did_you_mean(kind if kind is not None else "", OBSTACLE_TYPES))
         keys = TYPE_KEYS[kind]
         for key, (key_line, _) in item.items.items():
-            other = next((t for t, t_keys in TYPE_KEYS.items() if key not in keys and key in t_keys), None)
+            if key in keys:
+                continue
+            other = next((t for t, t_keys in TYPE_KEYS.items() if key in t_keys), None)
             if other is not None:
                 raise ctx.fail(f"'{key}' does not apply to type: {kind} (it is a {other} key)", f"{path}.{key}",
                                key_line or line, f"remove '{key}', or set type: {other}")

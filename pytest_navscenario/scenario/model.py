@@ -284,6 +284,50 @@ _ADDED_DEFAULTS: dict[str, Any] = {"noise_per_metre": 0.0, "dropout_at_max": Non
                                    "localisation": Localisation(), "latency": Latency()}
 
 
+_CONTENT_FIELDS: dict[type, tuple[tuple[str, bool], ...]] = {}   # dataclass -> (field, added later?)
+
+
+def _content_fields(cls: type) -> tuple[tuple[str, bool], ...] | None:
+    """The hashed fields of a dataclass type (None for other types), worked out once per type."""
+    try:
+        return _CONTENT_FIELDS[cls]
+    except KeyError:
+        pass
+    import dataclasses
+    fields = None
+    if dataclasses.is_dataclass(cls):
+        fields = tuple((f.name, f.name in _ADDED_DEFAULTS) for f in dataclasses.fields(cls)
+                       if f.name not in _NOT_CONTENT)
+    _CONTENT_FIELDS[cls] = fields
+    return fields
+
+
+def _plain(value: Any) -> Any:
+    """content_hash's JSON body of a value: dataclasses as dicts of their content fields, numbers
+    as the repr of their float (exact; 1 and 1.0 hash alike)."""
+    cls = type(value)
+    if cls is float or cls is int:
+        return repr(float(value))
+    if cls is str or value is None or cls is bool:
+        return value
+    fields = _content_fields(cls)
+    if fields is not None:
+        out = {}
+        for name, added in fields:
+            item = getattr(value, name)
+            if added and item == _ADDED_DEFAULTS[name]:
+                continue
+            out[name] = _plain(item)
+        return out
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return repr(float(value))
+    return value
+
+
 def content_hash(scenario: Scenario) -> str:
     """A stable 16-hex-digit hash of what the robot experiences (robot, mission, obstacles,
     simulation, reference), ignoring names, marks, provenance and search settings.
@@ -291,24 +335,10 @@ def content_hash(scenario: Scenario) -> str:
     Used to pair scenarios across result files and to name frozen failures, so the same
     layout found twice gets the same name.
     """
-    import dataclasses
     import hashlib
     import json
 
-    def plain(value: Any) -> Any:
-        if dataclasses.is_dataclass(value):
-            return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)
-                    if f.name not in _NOT_CONTENT
-                    and not (f.name in _ADDED_DEFAULTS and getattr(value, f.name) == _ADDED_DEFAULTS[f.name])}
-        if isinstance(value, (list, tuple)):
-            return [plain(v) for v in value]
-        if isinstance(value, Mapping):
-            return {str(k): plain(v) for k, v in value.items()}
-        if isinstance(value, (int, float)) and not isinstance(value, bool):
-            return repr(float(value))  # exact; 1 and 1.0 hash alike
-        return value
-
-    body = plain(scenario)
+    body = _plain(scenario)
     # obstacle names are labels, not content
     for obs in body.get("obstacles", []):
         obs.pop("name", None)

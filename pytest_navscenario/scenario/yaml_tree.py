@@ -18,6 +18,7 @@ Every problem raises ``ScenarioError`` with the file and line; nothing else esca
 from __future__ import annotations
 
 import math
+import re
 from typing import Any, Mapping
 
 import yaml
@@ -155,7 +156,6 @@ class _Composer:
         self.list_limits = list_limits
         self.max_depth, self.max_nodes = max_depth, max_nodes
         self.anchors: dict[str, YNode] = {}
-        self.cache: dict[Any, tuple[Any, bool]] = {}
         # stack entries: [node, anchor, pending key (value, line) or None, list limit or None]
         self.stack: list[list[Any]] = []
 
@@ -169,6 +169,7 @@ class _Composer:
         scalar_event, alias_event = yaml.ScalarEvent, yaml.AliasEvent
         map_start, seq_start = yaml.MappingStartEvent, yaml.SequenceStartEvent
         map_end, seq_end = yaml.MappingEndEvent, yaml.SequenceEndEvent
+        stack, max_nodes = self.stack, self.max_nodes
         while True:
             event = get_event()
             kind = type(event)
@@ -176,6 +177,34 @@ class _Composer:
                 break
             line = event.start_mark.line + 1 if event.start_mark is not None else None
             if kind is scalar_event:
+                if event.anchor is None and stack and type(stack[-1][0]) is YMap:
+                    # most events: a plain key or value in a mapping (attach(), inlined)
+                    top = stack[-1]
+                    node = self.scalar(event, line)
+                    pending = top[2]
+                    if pending is None:
+                        top[2] = (node.value, line)
+                        parent = top[0]
+                        parent.size += 1
+                        if parent.size > max_nodes:
+                            raise self.too_many(line)
+                        continue
+                    if pending[0] is not _MERGE:
+                        parent = top[0]
+                        items = parent.items
+                        try:
+                            fresh = pending[0] not in items
+                        except TypeError:      # an unhashable key: attach() says so
+                            fresh = False
+                        if fresh:
+                            parent.size += 1
+                            if parent.size > max_nodes:
+                                raise self.too_many(line)
+                            top[2] = None
+                            items[pending[0]] = (pending[1], node)
+                            continue
+                    self.attach(node, None, line)
+                    continue
                 self.attach(self.scalar(event, line), event.anchor, line)
             elif kind is map_start or kind is seq_start:
                 is_map = kind is map_start
@@ -211,16 +240,21 @@ class _Composer:
     def scalar(self, event: Any, line: int) -> YScalar:
         tag = event.tag
         if tag is None or tag == "!":  # implicit: resolve as safe_load does (cached: keys repeat a lot)
-            key = (event.value, event.implicit, not event.style)
-            cached = self.cache.get(key)
+            value, style = event.value, event.style
+            if tag is None and not style and len(value) < 40:   # long digit strings: the resolver's errors
+                match = _DECIMAL(value)
+                if match is not None:
+                    return YScalar(float(value) if match.group(1) is not None else int(value), line, False)
+            key = (value, event.implicit, not style)
+            cached = _SCALARS.get(key)
             if cached is None:
-                tag = self.loader.resolve(ScalarNode, event.value, event.implicit)
+                tag = self.loader.resolve(ScalarNode, value, event.implicit)
                 if tag == _MERGE_TAG:
                     cached = (_MERGE, False)
                 else:
-                    cached = (self.construct(tag, event, line), not event.style and tag == _STR_TAG)
-                if len(self.cache) < 10_000:
-                    self.cache[key] = cached
+                    cached = (self.construct(tag, event, line), not style and tag == _STR_TAG)
+                if len(value) <= 200 and len(_SCALARS) < 10_000 and type(cached[0]) in _IMMUTABLE:
+                    _SCALARS[key] = cached    # short texts only: the cache lives as long as the process
             return YScalar(cached[0], line, cached[1])
         return YScalar(self.construct(tag, event, line), line, False)
 
@@ -239,6 +273,11 @@ class _Composer:
                              line, "write a plain number or string") from None
         return value
 
+    def too_many(self, line: int | None) -> ScenarioError:
+        return self.error(f"the YAML expands to more than {self.max_nodes} values (an alias counts "
+                          f"as often as it is used: a YAML alias bomb?)", line,
+                          "scenario files need far fewer values; do not build aliases of aliases")
+
     def attach(self, node: YNode, anchor: str | None, line: int) -> None:
         if anchor is not None:
             self.anchors[anchor] = node
@@ -249,9 +288,7 @@ class _Composer:
         parent = top[0]
         parent.size += node.size
         if parent.size > self.max_nodes:
-            raise self.error(f"the YAML expands to more than {self.max_nodes} values (an alias counts "
-                             f"as often as it is used: a YAML alias bomb?)", line,
-                             "scenario files need far fewer values; do not build aliases of aliases")
+            raise self.too_many(line)
         if isinstance(parent, YSeq):
             parent.items.append(node)
             if top[3] is not None and len(parent.items) > top[3][2]:
@@ -292,6 +329,17 @@ class _Composer:
                 if key not in node.items:
                     node.items[key] = item
         node.merges = []
+
+
+# Resolved plain scalars shared by every file (keys and words repeat across a suite): only values
+# that cannot be changed in place, so a cached value is never shared mutably between scenarios.
+_SCALARS: dict[Any, tuple[Any, bool]] = {}
+_IMMUTABLE = frozenset({str, int, float, bool, type(None), bytes})
+# Plain decimals written the ordinary way: YAML 1.1 resolves these to float / int, and
+# SafeConstructor gives exactly float(text) / int(text); anything else (1_000, 0x1f, 017, 1:30,
+# .inf, 1e3, ...) goes through the resolver. About half the values of a scenario are such numbers.
+# The match: group 1 set for a float.
+_DECIMAL = re.compile(r"[-+]?(?:([0-9]+\.[0-9]*)|0|[1-9][0-9]*)\Z").match
 
 
 class _MergeKey:

@@ -5,7 +5,8 @@ Out: a ``SearchReport`` (every candidate simulated, the distinct failures, each 
 seed) and frozen scenario files with provenance, which are ordinary regression scenarios.
 
 Read first: ``space.py`` (what may change, by how much, and which candidates are valid), then
-``engine.py`` (the strategies and shrinking, driven by Hypothesis) and ``freeze.py`` (writing).
+``engine.py`` (the strategies and shrinking, driven by Hypothesis), ``freeze.py`` (writing) and
+``suite.py`` (the generated suite as scenario files).
 
 Names are imported lazily so that importing this package stays cheap.
 """
@@ -15,9 +16,9 @@ from ..core.lazy import lazy_exports
 
 _EXPORTS = {name: "engine" for name in (
     "run_search", "shrink_failure", "Candidate", "Failure", "SearchReport", "STRATEGIES",
-    "is_duplicate", "is_near_failure")}
+    "is_duplicate", "is_near_failure", "ShrinkBudget", "shrink_plan", "shrink_order", "shrink_all")}
 _EXPORTS.update(SearchSpace="space", scenarios_around="space", invalid_reason="space",
-                freeze_failures="freeze", write_search_log="freeze")
+                freeze_failures="freeze", write_search_log="freeze", write_suite="suite")
 __all__ = sorted(_EXPORTS)
 
 __getattr__ = lazy_exports(__name__, _EXPORTS)

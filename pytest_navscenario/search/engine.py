@@ -3,7 +3,9 @@
 ``run_search(seed, subject_factory, budget=..., seed_value=...)`` simulates exactly ``budget``
 valid candidates (invalid ones -- obstacles on the start/goal footprint, no path at all --
 are discarded before simulation and counted separately), keeps the *distinct* failures and
-shrinks each toward the seed with its own simulation cap.
+shrinks them toward the seed within a shrink budget of their own: a share of the search's
+budget (default 25 %), handed out before any shrinking starts, most important failures first
+(``shrink_plan``), so each failure's shrinking is an independent job with a fixed cap.
 
 The loop is ask/tell: a strategy (strategies.py) proposes a generation of candidates, they are
 evaluated -- by ``evaluate_candidate``, a pure function of the candidate, in any order, in any
@@ -33,9 +35,12 @@ from .space import FLAG_ON, SearchSpace, invalid_reason, offsets_strategy
 
 STRATEGIES = ("evolve", "random", "hillclimb")
 DISTINCT_DISTANCE = 0.1    # kept for is_near_failure (fraction of each parameter's range)
-DEFAULT_SHRINK_BUDGET = 40
-DEFAULT_STUCK_AFTER = 20.0  # s without new ground covered: the episode ends as a stuck timeout (the
-                            # longest stall a robot recovered from in the examples: 14.5 s)
+DEFAULT_SHRINK_BUDGET = "25%"   # of the search budget, for the whole shrink phase
+MIN_SHRINK_SIMS = 10       # a failure given a share of the shrink budget gets at least this many
+SEVERITY = ("collision", "subject-error", "safety-stop", "timeout")   # shrunk first .. last
+DEFAULT_STUCK_AFTER = 15.0  # s without new ground covered: the episode ends as a stuck timeout (the
+                            # longest stall a robot recovered from over the shipped seeds and the
+                            # example suites x 3 planners: 14.5 s; benchmarks/check_stuck.py)
 MAX_INVALID_FACTOR = 50    # give up after budget * this many discarded candidates in a row
 
 
@@ -102,10 +107,11 @@ class SearchReport:
     strategy: str
     seed_value: int
     budget: int
-    shrink_budget: int
+    shrink_budget: "int | str"    # as given: "25%" (share of the budget) or N (per failure, the old form)
     params: list[str]
     sims_used: int = 0
     shrink_sims: int = 0
+    shrink_total: int = 0         # simulations the shrink phase was allowed (shrink_plan's total)
     discarded: dict[str, int] = field(default_factory=dict)   # reason -> count
     skipped: int = 0              # repeats of a simulated candidate, redrawn without simulating
     candidates: list[Candidate] = field(default_factory=list)  # search + shrink sims, in order
@@ -120,20 +126,37 @@ class SearchReport:
     def discarded_total(self) -> int:
         return sum(self.discarded.values())
 
+    def _scan(self) -> tuple:
+        """(best, lowest clearance, lowest robustness) of the search phase, updated with the
+        candidates added since the last call: the live progress line asks after every simulation,
+        and a rescan would make a search quadratic in its budget."""
+        cache = self.__dict__.get("_bests")
+        if cache is None or cache[0] > len(self.candidates):
+            cache = (0, None, math.nan, math.nan)
+        n, best, clear, rob = cache
+        for c in self.candidates[n:]:
+            if c.phase != "search":
+                continue
+            if best is None or c.fitness < best.fitness:
+                best = c
+            if math.isfinite(c.clearance) and not c.clearance >= clear:
+                clear = c.clearance
+            if math.isfinite(c.robustness) and not c.robustness >= rob:
+                rob = c.robustness
+        self.__dict__["_bests"] = (len(self.candidates), best, clear, rob)
+        return best, clear, rob
+
     @property
     def best(self) -> Candidate | None:
-        search = [c for c in self.candidates if c.phase == "search"]
-        return min(search, key=lambda c: c.fitness) if search else None
+        return self._scan()[0]
 
     @property
     def best_clearance(self) -> float:
-        vals = [c.clearance for c in self.candidates if c.phase == "search" and math.isfinite(c.clearance)]
-        return min(vals) if vals else math.nan
+        return self._scan()[1]
 
     @property
     def best_robustness(self) -> float:
-        vals = [c.robustness for c in self.candidates if c.phase == "search" and math.isfinite(c.robustness)]
-        return min(vals) if vals else math.nan
+        return self._scan()[2]
 
     def failures_by_outcome(self) -> dict[str, int]:
         out: dict[str, int] = {}
@@ -249,12 +272,18 @@ class _Simulator:
             raise _Stop()
 
 
-def is_duplicate(space: SearchSpace, cand: Candidate, kept: Sequence[Candidate]) -> bool:
-    """Same cause signature as a kept failure (fitness.py): the same way of failing."""
+def is_duplicate(space: SearchSpace, cand: Candidate, kept: "Sequence[Candidate] | set[tuple]") -> bool:
+    """Same cause signature as a kept failure (fitness.py): the same way of failing. Pass the set
+    of kept signatures (run_search does) for a constant-time test; a sequence of candidates is
+    scanned."""
+    if isinstance(kept, (set, frozenset)):
+        return cand.signature in kept
     return any(k.signature == cand.signature for k in kept)
 
 
 def is_near_failure(space: SearchSpace, offsets: Sequence[float], failures: Sequence[Failure]) -> bool:
+    """Within DISTINCT_DISTANCE of a failure's offsets on every parameter (kept for the public
+    API; the search itself no longer calls it: distinct failures are told apart by signature)."""
     return any(space.normalised_distance(f.found.offsets, offsets) < DISTINCT_DISTANCE for f in failures)
 
 
@@ -296,6 +325,103 @@ def _search_loop(strategy: Any, sim: _Simulator, budget: int, on_result: Callabl
 
 
 # -- shrinking --------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class ShrinkBudget:
+    """How many simulations the shrink phase may use: ``share`` of the search's budget for all
+    failures together (``"25%"``), or, the old form, ``per_failure`` simulations for each (``40``)."""
+    share: float | None = None
+    per_failure: int | None = None
+
+    @classmethod
+    def parse(cls, value: "ShrinkBudget | int | str") -> "ShrinkBudget":
+        """``"25%"``, ``"0"``/``0`` (no shrinking) or a whole number N (per failure, the old form);
+        ValueError saying what is accepted otherwise."""
+        if isinstance(value, ShrinkBudget):
+            return value
+        text = str(value).strip()
+        try:
+            if text.endswith("%"):
+                share = float(text[:-1])
+                if not math.isfinite(share) or not 0 <= share <= 1000:
+                    raise ValueError
+                return cls(share=share / 100.0)
+            n = int(text)
+            if n < 0:
+                raise ValueError
+            return cls(share=0.0) if n == 0 else cls(per_failure=n)
+        except ValueError:
+            raise ValueError(f"shrink budget {value!r}: give a share of the search budget such as 25% "
+                             f"(0% to 1000%), or 0 to keep failures as found, or a whole number N for at "
+                             f"most N simulations per failure (the old form)") from None
+
+    def total(self, budget: int, failures: int) -> int:
+        """Simulations the whole shrink phase may use for ``failures`` failures."""
+        if self.per_failure is not None:
+            return self.per_failure * failures
+        return int(round((self.share or 0.0) * budget))
+
+    def describe(self, budget: int) -> str:
+        if self.per_failure is not None:
+            return f"{self.per_failure} simulations per failure"
+        return f"{self.share:.0%} of the budget of {budget}"
+
+
+def shrink_order(failures: Sequence[Failure]) -> list[int]:
+    """Indexes of ``failures``, the one that matters most first: the most severe outcome
+    (SEVERITY), then the one that failed earliest along the route (lowest robustness), then the
+    one found first."""
+    def key(i: int) -> tuple:
+        c = failures[i].found
+        sev = SEVERITY.index(c.outcome) if c.outcome in SEVERITY else len(SEVERITY)
+        rob = c.robustness if math.isfinite(c.robustness) else math.inf
+        return (sev, rob, c.sim, i)
+    return sorted(range(len(failures)), key=key)
+
+
+def shrink_plan(failures: Sequence[Failure], total: int, budget: ShrinkBudget | None = None) -> list[int]:
+    """Each failure's cap (aligned with ``failures``), fixed before any shrinking starts so that
+    the failures can shrink as independent jobs, in any order or process, with the same result.
+
+    ``total`` is shared out in ``shrink_order``: as many failures as can get MIN_SHRINK_SIMS each
+    get an equal part (the first ones one more while the remainder lasts); the rest get 0 and are
+    kept as found. A failure with nothing to shrink (the seed itself) gets 0. The old
+    per-failure form gives each failure its fixed cap."""
+    caps = [0] * len(failures)
+    todo = [i for i in shrink_order(failures) if any(failures[i].found.offsets)]
+    if budget is not None and budget.per_failure is not None:
+        for i in todo:
+            caps[i] = budget.per_failure
+        return caps
+    if total <= 0 or not todo:
+        return caps
+    k = min(len(todo), max(1, total // MIN_SHRINK_SIMS))
+    each, extra = divmod(total, k)
+    for rank, i in enumerate(todo[:k]):
+        caps[i] = each + (1 if rank < extra else 0)
+    return caps
+
+
+def shrink_all(space: SearchSpace, sim: "_Simulator", caps: Sequence[int], progress=None) -> None:
+    """Shrink each failure of ``sim.report`` with its cap (``shrink_plan``), in ``shrink_order``,
+    serially; the result is the same as shrinking them side by side (parallel.py)."""
+    report = sim.report
+    for i in shrink_order(report.failures):
+        if caps[i] <= 0:
+            continue
+        sim.check_stop()
+        report.failures[i] = shrink_failure(space, sim, report.failures[i].found, caps[i])
+        if progress is not None:
+            progress(report)
+
+
+def _note_unshrunk(report: "SearchReport", caps: Sequence[int], budget: ShrinkBudget) -> None:
+    """Say why a failure was kept as found when the shrink budget did not reach it."""
+    for f, cap in zip(report.failures, caps):
+        if cap == 0 and any(f.found.offsets) and not f.note and report.shrink_total > 0:
+            f.note = (f"not shrunk: the shrink budget ({report.shrink_total} simulations, "
+                      f"{budget.describe(report.budget)}) went to failures that matter more")
+
+
 def shrink_failure(space: SearchSpace, sim: _Simulator, found: Candidate, cap: int) -> Failure:
     """Reduce ``found`` toward the seed with at most ``cap`` simulations: first drop inserted
     obstacles and restore removed ones, one at a time, then Hypothesis's shrinker on the offset
@@ -412,7 +538,7 @@ def _check_inputs(seed: Scenario, strategy: str, budget: int, space: SearchSpace
 
 
 def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: int, seed_value: int = 0,
-               strategy: str = "evolve", shrink_budget: int = DEFAULT_SHRINK_BUDGET,
+               strategy: str = "evolve", shrink_budget: ShrinkBudget | int | str = DEFAULT_SHRINK_BUDGET,
                progress: Callable[[SearchReport], None] | None = None,
                stop: Callable[[], bool] | None = None, space: SearchSpace | None = None,
                subject: str = "", episode_seed: int | None = None,
@@ -420,53 +546,57 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
     """Search for failures of ``subject_factory()`` planners around ``seed``.
 
     Exactly ``budget`` simulations of valid candidates (fewer only if interrupted or if the
-    bounds leave almost no valid candidate, said in ``stop_reason``), then each distinct
-    failure is shrunk with at most ``shrink_budget`` more simulations. ``progress(report)`` is
+    bounds leave almost no valid candidate, said in ``stop_reason``), then the distinct failures
+    are shrunk within ``shrink_budget`` more simulations: a share of the budget (``"25%"``, the
+    default; ``0``: no shrinking) shared out most important failure first (``shrink_plan``), or
+    the old form, a whole number N of simulations per failure. ``progress(report)`` is
     called after each simulation; ``stop()`` returning True ends the search early (as does
     Ctrl-C): the report then keeps every failure found so far, unshrunk, with ``interrupted``.
     ``stuck_after`` (s, None = off) ends an episode early as a timeout when the robot covers no
     new ground. ``evaluator(ctx, proposals)`` evaluates a generation (default: serially). An
-    evaluator may also have ``start_shrink(ctx, found, cap)`` (begin shrinking a distinct failure
-    the moment it is found, while the search goes on), ``shrink_failures(sim, cap, progress)``
-    (finish shrinking them all and record the results in a serial run's order) and ``discard()``
-    (give up what is still in flight when the search ends early), as the worker-process one in
-    search/parallel.py does; the result does not depend on the evaluator. Deterministic given
-    ``seed_value`` (and a deterministic subject).
+    evaluator may also have ``shrink_failures(sim, caps, progress)`` (shrink the failures, each
+    with its cap, e.g. all at once on worker processes, and record the results in a serial run's
+    order), ``start_shrink(ctx, found, cap)`` (begin shrinking a failure the moment it is found,
+    while the search goes on: only when its cap is known then, the per-failure form) and
+    ``discard()`` (give up what is still in flight when the search ends early), as the
+    worker-process one in search/parallel.py does; the result does not depend on the evaluator.
+    Deterministic given ``seed_value`` (and a deterministic subject).
     """
     from .strategies import GaveUp, make_strategy
 
     space = space if space is not None else SearchSpace(seed)
     _check_inputs(seed, strategy, budget, space)
+    shrink = ShrinkBudget.parse(shrink_budget)
     report = SearchReport(seed_name=seed.name, seed_source=seed.source, subject=subject or "?",
                           subject_version=None, strategy=strategy, seed_value=seed_value, budget=budget,
-                          shrink_budget=shrink_budget, params=[p.name for p in space.params],
+                          shrink_budget=str(shrink_budget), params=[p.name for p in space.params],
                           episode_seed=episode_seed)
     sim = _Simulator(EvalContext(space, subject_factory, episode_seed, stuck_after), report, stop, evaluator)
-    kept: list[Candidate] = []
+    signatures: set[tuple] = set()
 
     start_shrink = getattr(evaluator, "start_shrink", None)   # parallel.py: shrink while searching
+    early_cap = shrink.per_failure or 0   # a cap known before the search ends (shrink_plan gives it)
 
     def on_result(cand: Candidate) -> None:
-        if cand.failed and not is_duplicate(space, cand, kept):
-            kept.append(cand)
+        if cand.failed and cand.signature not in signatures:   # distinct: a new cause signature
+            signatures.add(cand.signature)
             report.failures.append(Failure(found=cand, shrunk=cand))
-            if start_shrink is not None and shrink_budget > 0:
-                start_shrink(sim.ctx, cand, shrink_budget)
+            if start_shrink is not None and early_cap > 0 and any(cand.offsets):
+                start_shrink(sim.ctx, cand, early_cap)
         if progress is not None:
             progress(report)
 
     t0 = time.perf_counter()
     try:
         _search_loop(make_strategy(strategy, space, report, budget, seed_value), sim, budget, on_result)
-        shrink_all = getattr(evaluator, "shrink_failures", None)   # parallel.py: all at once
-        if shrink_all is not None:
-            shrink_all(sim, shrink_budget, progress)
+        report.shrink_total = shrink.total(budget, len(report.failures))
+        caps = shrink_plan(report.failures, report.shrink_total, shrink)
+        _note_unshrunk(report, caps, shrink)
+        shrink_failures = getattr(evaluator, "shrink_failures", None)   # parallel.py: all at once
+        if shrink_failures is not None:
+            shrink_failures(sim, caps, progress)
         else:
-            for i, f in enumerate(report.failures):
-                sim.check_stop()
-                report.failures[i] = shrink_failure(space, sim, f.found, shrink_budget)
-                if progress is not None:
-                    progress(report)
+            shrink_all(space, sim, caps, progress)
     except (_Stop, GaveUp):
         pass  # stop() said so, or the strategy gave up (stop_reason says why)
     except KeyboardInterrupt:

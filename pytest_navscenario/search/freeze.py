@@ -22,7 +22,7 @@ from typing import Any, Iterable
 
 from ..core.files import atomic_write_text
 from ..scenario.model import Scenario, content_hash
-from .engine import Failure, SearchReport
+from .engine import Candidate, Failure, SearchReport
 from .space import SearchSpace
 
 DEFAULT_OUT = "scenarios/regressions"
@@ -55,15 +55,12 @@ def _portable(path: str | None, root: str | Path | None) -> str | None:
         return path
 
 
-def frozen_scenario(report: SearchReport, failure: Failure, space: SearchSpace, *, date: str | None = None,
-                    subject: str | None = None, root: str | Path | None = None) -> Scenario:
-    """The shrunk failure as a standalone scenario with its provenance (no ``search:`` block)."""
-    cand = failure.shrunk
-    scenario = cand.scenario if cand.scenario is not None else space.apply(cand.offsets)
+def candidate_provenance(report: SearchReport, cand: Candidate, space: SearchSpace, *,
+                         subject: str | None = None, root: str | Path | None = None) -> dict[str, Any]:
+    """Where a simulated candidate came from and what it did (the ``provenance`` of a frozen
+    failure or of a generated suite case): deterministic, no date or timing."""
     seed = space.seed
-    h = content_hash(scenario)
-    name = f"{seed.name}-{h}"
-    provenance: dict[str, Any] = {
+    return {
         "seed": seed.name,
         "seed_file": _portable(seed.source, root),
         "subject": subject or report.subject,
@@ -73,22 +70,55 @@ def frozen_scenario(report: SearchReport, failure: Failure, space: SearchSpace, 
         "culprit": cand.culprit,
         "metrics": {k: _clean(cand.metrics.get(k)) for k in PROVENANCE_METRICS if k in cand.metrics},
         "offsets": space.as_mapping(cand.offsets),
-        "found_offsets": space.as_mapping(failure.found.offsets),
         "search_seed": report.seed_value,
         "strategy": report.strategy,
         "budget": report.budget,
         "nav_seed": report.episode_seed or 0,
+    }
+
+
+def candidate_scenario(cand: Candidate, space: SearchSpace) -> Scenario:
+    """The layout ``cand`` simulated."""
+    return cand.scenario if cand.scenario is not None else space.apply(cand.offsets)
+
+
+def standalone_scenario(scenario: Scenario, seed: Scenario, *, name: str, description: str,
+                        provenance: dict[str, Any]) -> Scenario:
+    """A candidate's layout as an ordinary scenario of the seed's family (no ``search:`` block,
+    no marks), with ``provenance``."""
+    return replace(scenario, name=name, family=seed.name, description=description,
+                   marks=(), search=None, provenance=provenance, reference=seed.reference)
+
+
+def save_standalone(scenario: Scenario, seed: Scenario, path: Path) -> None:
+    """Write ``scenario`` to ``path`` atomically, its mesh files copied beside it."""
+    from ..scenario.dump import save_scenario
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    save_scenario(_with_mesh_copies(scenario, seed, path.parent), path)
+
+
+def frozen_scenario(report: SearchReport, failure: Failure, space: SearchSpace, *, date: str | None = None,
+                    subject: str | None = None, root: str | Path | None = None) -> Scenario:
+    """The shrunk failure as a standalone scenario with its provenance (no ``search:`` block)."""
+    cand = failure.shrunk
+    seed = space.seed
+    scenario = candidate_scenario(cand, space)
+    provenance = candidate_provenance(report, cand, space, subject=subject, root=root)
+    provenance.update({
+        "found_offsets": space.as_mapping(failure.found.offsets),
         "found_at_simulation": failure.found.sim,
         "shrink_simulations": failure.shrink_sims,
         "date": date or _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat(),
-    }
+    })
     if failure.note:
         provenance["note"] = failure.note
-    return replace(scenario, name=name, family=seed.name,
-                   description=(f"{cand.outcome} of {provenance['subject']} found by navsearch around "
-                                f"{seed.name} (search seed {report.seed_value}); culprit {cand.culprit or '-'}"
-                                + _where(cand)),
-                   marks=(), search=None, provenance=provenance, reference=seed.reference)
+    return standalone_scenario(
+        scenario, seed, name=f"{seed.name}-{content_hash(scenario)}",
+        description=(f"{cand.outcome} of {provenance['subject']} found by navsearch around "
+                     f"{seed.name} (search seed {report.seed_value}); culprit {cand.culprit or '-'}"
+                     + _where(cand)),
+        provenance=provenance)
 
 
 def _where(cand: Any) -> str:
@@ -103,8 +133,6 @@ def _where(cand: Any) -> str:
 def freeze_failures(report: SearchReport, space: SearchSpace, out_dir: str | Path, *,
                     subject: str | None = None, root: str | Path | None = None) -> list[FrozenFile]:
     """Write each failure of ``report`` under ``out_dir/<seed name>/`` (existing ones kept)."""
-    from ..scenario.dump import save_scenario
-
     folder = Path(out_dir) / space.seed.name
     written: list[FrozenFile] = []
     seen: set[Path] = set()
@@ -120,8 +148,7 @@ def freeze_failures(report: SearchReport, space: SearchSpace, out_dir: str | Pat
         causes.add(cause)
         new = not path.exists()
         if new:
-            folder.mkdir(parents=True, exist_ok=True)
-            save_scenario(_with_mesh_copies(scenario, space.seed, folder), path)
+            save_standalone(scenario, space.seed, path)
         written.append(FrozenFile(path, new, failure.shrunk.outcome, failure.shrunk.clearance))
     return written
 
@@ -154,7 +181,8 @@ def _with_mesh_copies(scenario: Scenario, seed: Scenario, folder: Path) -> Scena
 
 def log_records(report: SearchReport, space: SearchSpace) -> list[dict[str, Any]]:
     head = {"seed": report.seed_name, "subject": report.subject, "strategy": report.strategy,
-            "search_seed": report.seed_value, "budget": report.budget}
+            "search_seed": report.seed_value, "budget": report.budget, "search_sims": report.sims_used,
+            "shrink_sims": report.shrink_sims, "shrink_budget": report.shrink_total}
     return [{**head, **c.to_dict(space)} for c in report.candidates]
 
 

@@ -18,7 +18,8 @@ import uuid
 from dataclasses import dataclass
 from typing import Any, Iterator, Sequence
 
-from .engine import Candidate, EvalContext, Failure, SearchReport, _Simulator, evaluate_candidate, shrink_failure
+from .engine import (Candidate, EvalContext, Failure, SearchReport, _Simulator, evaluate_candidate, shrink_failure,
+                     shrink_order)
 
 _CONTEXTS: dict[str, EvalContext] = {}   # worker side: the first copy of each context received
 _MAX_CONTEXTS = 4
@@ -117,22 +118,31 @@ class executor_evaluator:   # noqa: N801  (used like a function: evaluator=execu
         token = self._token_for(ctx)
         self._shrinks.append((found, cap, self._submit([ShrinkJob(ctx, _stripped(found), cap, token)])[0]))
 
-    def shrink_failures(self, sim: _Simulator, cap: int, progress: Any) -> None:
-        """Shrink every distinct failure (those not started yet now, one job each); record the
-        shrink simulations failure by failure, in the order a serial run records them. Ctrl-C
-        keeps the failures not yet shrunk as found (run_search notes them)."""
+    def shrink_failures(self, sim: _Simulator, caps: Sequence[int], progress: Any) -> None:
+        """Shrink every failure with a cap (engine.shrink_plan), one job each, reusing the job
+        ``start_shrink`` began during the search when its cap is the planned one; record the
+        shrink simulations failure by failure, in the order a serial run records them
+        (engine.shrink_order). Ctrl-C keeps the failures not yet shrunk as found (run_search
+        notes them)."""
         report = sim.report
-        if cap <= 0 or not report.failures:
+        order = [i for i in shrink_order(report.failures) if caps[i] > 0]
+        if not order:
             return
         sim.check_stop()
-        started = {id(found): p for found, c, p in self._shrinks if c == cap} if sim.ctx is self._ctx else {}
-        for f in report.failures:
-            if id(f.found) not in started:
-                self.start_shrink(sim.ctx, f.found, cap)
-                started[id(f.found)] = self._shrinks[-1][2]
-        for i, f in enumerate(report.failures):
-            found = f.found
-            index, note, used, cands = self._take(started[id(found)])
+        started = {(id(f), c): p for f, c, p in self._shrinks} if sim.ctx is self._ctx else {}
+        pending = {}
+        for i in order:
+            found = report.failures[i].found
+            pending[i] = started.pop((id(found), caps[i]), None)
+            if pending[i] is None:
+                self.start_shrink(sim.ctx, found, caps[i])
+                pending[i] = self._shrinks[-1][2]
+        for p in started.values():   # begun with a cap the plan did not keep
+            self._open.pop(id(p), None)
+            p.cancel()
+        for i in order:
+            found = report.failures[i].found
+            index, note, used, cands = self._take(pending[i])
             for cand in cands:
                 sim.record(cand, "shrink")
             report.failures[i] = Failure(found=found, shrunk=cands[index] if index >= 0 else found,

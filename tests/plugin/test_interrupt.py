@@ -34,14 +34,17 @@ obstacles: [{{type: box, name: crate, x: {x}, y: 1, length: 0.5, width: 0.5}}]
 """
 
 
-@pytest.mark.parametrize("workers", [[], ["-p", "xdist.plugin", "-n", "2"]], ids=["serial", "xdist"])
+@pytest.mark.parametrize("workers", [[], ["-p", "xdist.plugin", "-n", "2", "--dist", "load"],
+                                     ["-p", "xdist.plugin", "-n", "2"]], ids=["serial", "xdist", "nav-workers"])
 def test_sigterm_mid_run_keeps_a_valid_results_file(tmp_path: Path, workers: list[str]):
     (tmp_path / "slow.py").write_text(SLOW_PLANNER)
     suite = tmp_path / "suite"
     suite.mkdir()
     for i in range(40):
         (suite / f"s{i:02d}.yaml").write_text(SCENARIO.format(x=1.5 + i * 0.01))
-    env = dict(os.environ, PYTEST_DISABLE_PLUGIN_AUTOLOAD="1", PYTHONPATH=str(tmp_path))
+    # tmp_path for the planner, then the caller's path (the checkout under test, when it is not installed)
+    path = os.pathsep.join(p for p in (str(tmp_path), os.environ.get("PYTHONPATH", "")) if p)
+    env = dict(os.environ, PYTEST_DISABLE_PLUGIN_AUTOLOAD="1", PYTHONPATH=path)
     proc = subprocess.Popen(
         [sys.executable, "-m", "pytest", "-p", "pytest_navscenario.plugin", "-p", "no:cacheprovider",
          *workers, "suite", "--nav-subject=slow:Slow", "--nav-results=out/r.jsonl", "--nav-plots=none",

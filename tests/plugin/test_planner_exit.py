@@ -55,7 +55,8 @@ def _pytest(root: Path, *args: str) -> list[str]:
             "--nav-plots=none", "--nav-subject=quitter:Quitter", "--nav-results=r.jsonl", *args]
 
 
-@pytest.mark.parametrize("workers", [[], ["-p", "xdist.plugin", "-n", "2"]], ids=["serial", "xdist"])
+@pytest.mark.parametrize("workers", [[], ["-p", "xdist.plugin", "-n", "2", "--dist", "load"],
+                                     ["-p", "xdist.plugin", "-n", "2"]], ids=["serial", "xdist", "nav-workers"])
 def test_planner_exit_is_a_subject_error_and_the_run_goes_on(tmp_path: Path, workers: list[str]):
     (tmp_path / "quitter.py").write_text(PLANNER)
     (tmp_path / "s").mkdir()

@@ -211,6 +211,9 @@ def test_xdist_gives_the_serial_results(run, pytester: pytest.Pytester, monkeypa
     monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(pytester.path), os.environ.get("PYTHONPATH", "")]))
     result = pytester.runpytest_subprocess(*PLUGIN, "-p", "xdist.plugin", *ARGS, *dist)
     result.assert_outcomes(passed=1, failed=4, errors=1)
+    out = result.stdout.str()     # the invalid file: the same error item and message as serial
+    assert "ERROR collecting scenarios/broken.yaml" in out
+    assert "broken.yaml:3: obstacles[0].length: must be > 0, got -1.0 (fix:" in out
     assert strip_times(read_results(pytester.path / "r.jsonl")) == strip_times(read_results(root / "r.jsonl"))
     assert len(list((pytester.path / "nav-artifacts").iterdir())) == 4
 

@@ -288,8 +288,10 @@ def test_stuck_robot_ends_early_as_a_timeout_that_says_so(lane):
     assert waited.outcome.value == "timeout" and "stuck" in waited.message
 
 
-@pytest.mark.parametrize("name", ["boxes1", "boxes2", "corridor", "cylinders", "L-corridor"])
+@pytest.mark.parametrize("name", sorted(p.stem for p in (ROOT / "scenarios").glob("*.yaml")))
 def test_default_stuck_stop_changes_no_outcome_on_the_shipped_seeds(name):
+    """All shipped seeds; the example suites are checked by benchmarks/check_stuck.py (231
+    episodes with three planners: the longest stall any of them recovered from is 14.5 s)."""
     from pytest_navscenario.scenario.loader import load_scenario
     from pytest_navscenario.search.engine import DEFAULT_STUCK_AFTER
 

@@ -138,3 +138,53 @@ def test_stuck_after_option_is_checked(project):
     result.stderr.fnmatch_lines(["*--navsearch-stuck-after: the stuck time must be >= 0 seconds*"])
     result = run(project, "--navsearch", "crate", "--navsearch-strategy", "climb")
     result.stderr.fnmatch_lines(["*unknown strategy 'climb'; use one of evolve, random, hillclimb*"])
+
+
+def test_shrink_budget_is_a_share_and_the_summary_and_log_say_how_sims_were_spent(project):
+    result = run(project, "--navsearch", "crate", "--budget", "8", "--navsearch-seed", "3",
+                 "--navsearch-shrink-budget", "150%")
+    assert result.ret == 0, result.stdout.str()
+    line = next(x for x in result.stdout.lines if x.startswith("crate vs "))
+    search, shrink, total = map(int, re.search(r"(\d+) sims searching \+ (\d+) shrinking \(shrink budget "
+                                               r"(\d+)\)", line).groups())
+    assert (search, total) == (8, 12) and 0 < shrink <= 12, line
+    log = [json.loads(x) for x in (project.path / "scenarios" / "regressions" / "crate" /
+                                   "search-log.jsonl").read_text().splitlines()]
+    assert {(r["search_sims"], r["shrink_sims"], r["shrink_budget"]) for r in log} == {(8, shrink, 12)}
+    assert sum(r["phase"] == "shrink" for r in log) == shrink
+
+
+def test_the_summary_says_when_failures_were_frozen_unshrunk(project):
+    result = run(project, "--navsearch", "crate", "--budget", "8", "--navsearch-seed", "3",
+                 "--navsearch-shrink-budget", "150%", "--navsearch-strategy", "random")
+    assert result.ret == 0, result.stdout.str()
+    line = next(x for x in result.stdout.lines if x.startswith("crate vs "))
+    failures = int(re.search(r"(\d+) distinct failure", line).group(1))
+    assert failures > 1, line     # 12 simulations: one failure shrunk with 12, the rest as found
+    result.stdout.fnmatch_lines([f"  {failures - 1} of {failures} failure(s) frozen as found: the shrink budget "
+                                 f"(12 simulations) went to the most severe and earliest ones*"])
+
+
+@pytest.mark.parametrize("where, value", [("cli", "lots"), ("cli", "-2"), ("ini", "ten percent")])
+def test_a_bad_shrink_budget_is_a_usage_error_that_says_what_works(project, where, value):
+    if where == "ini":
+        project.makeini(f"[pytest]\nnav_scenario_paths = scenarios\nnavsearch_shrink_budget = {value}\n")
+        result = run(project, "--navsearch", "crate")
+        option = "ini option navsearch_shrink_budget"
+    else:
+        result = run(project, "--navsearch", "crate", f"--navsearch-shrink-budget={value}")
+        option = "--navsearch-shrink-budget"
+    assert result.ret == pytest.ExitCode.USAGE_ERROR
+    err = result.stderr.str()
+    assert f"{option}: shrink budget '{value}'" in err and "25%" in err and "per failure" in err, err
+
+
+def test_the_old_per_failure_shrink_budget_still_works(project):
+    project.makeini("[pytest]\nnav_scenario_paths = scenarios\nnavsearch_shrink_budget = 3\n")
+    result = run(project, "--navsearch", "crate", "--budget", "8", "--navsearch-seed", "3")
+    assert result.ret == 0, result.stdout.str()
+    line = next(x for x in result.stdout.lines if x.startswith("crate vs "))
+    failures = int(re.search(r"(\d+) distinct failure", line).group(1))
+    search, shrink, total = map(int, re.search(r"(\d+) sims searching \+ (\d+) shrinking \(shrink budget "
+                                               r"(\d+)\)", line).groups())
+    assert failures > 0 and total == 3 * failures and shrink <= total, line
