@@ -537,6 +537,16 @@ def _check_inputs(seed: Scenario, strategy: str, budget: int, space: SearchSpace
                             path=seed.source or seed.name)
 
 
+def _early_shrink(shrink: ShrinkBudget, budget: int) -> tuple[int, int]:
+    """(cap, how many failures) an evaluator may start shrinking while the search goes on: every
+    cap shrink_plan gives is at least this one (per failure: exactly it), and at most this many
+    failures get one, so work begun early is rarely thrown away (a failure the plan gives no cap)."""
+    if shrink.per_failure is not None:
+        return shrink.per_failure, budget
+    total = shrink.total(budget, 0)
+    return min(MIN_SHRINK_SIMS, total), max(1, total // MIN_SHRINK_SIMS)
+
+
 def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: int, seed_value: int = 0,
                strategy: str = "evolve", shrink_budget: ShrinkBudget | int | str = DEFAULT_SHRINK_BUDGET,
                progress: Callable[[SearchReport], None] | None = None,
@@ -557,7 +567,7 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
     evaluator may also have ``shrink_failures(sim, caps, progress)`` (shrink the failures, each
     with its cap, e.g. all at once on worker processes, and record the results in a serial run's
     order), ``start_shrink(ctx, found, cap)`` (begin shrinking a failure the moment it is found,
-    while the search goes on: only when its cap is known then, the per-failure form) and
+    while the search goes on, with a cap no larger than the plan's, ``_early_shrink``) and
     ``discard()`` (give up what is still in flight when the search ends early), as the
     worker-process one in search/parallel.py does; the result does not depend on the evaluator.
     Deterministic given ``seed_value`` (and a deterministic subject).
@@ -575,13 +585,14 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
     signatures: set[tuple] = set()
 
     start_shrink = getattr(evaluator, "start_shrink", None)   # parallel.py: shrink while searching
-    early_cap = shrink.per_failure or 0   # a cap known before the search ends (shrink_plan gives it)
+    early_cap, early_count = _early_shrink(shrink, budget)
 
     def on_result(cand: Candidate) -> None:
         if cand.failed and cand.signature not in signatures:   # distinct: a new cause signature
             signatures.add(cand.signature)
             report.failures.append(Failure(found=cand, shrunk=cand))
-            if start_shrink is not None and early_cap > 0 and any(cand.offsets):
+            if start_shrink is not None and early_cap > 0 and any(cand.offsets) \
+                    and len(report.failures) <= early_count:
                 start_shrink(sim.ctx, cand, early_cap)
         if progress is not None:
             progress(report)

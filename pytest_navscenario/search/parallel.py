@@ -14,6 +14,7 @@ serial runs.
 """
 from __future__ import annotations
 
+import dataclasses
 import uuid
 from dataclasses import dataclass
 from typing import Any, Iterator, Sequence
@@ -61,6 +62,7 @@ class ShrinkJob:
     found: Candidate
     cap: int
     token: str
+    known: tuple[Candidate, ...] = ()   # simulations a shorter shrink of this failure already ran
 
     def run(self) -> tuple[int, str, int, list[Candidate]]:
         """(index of the shrunk candidate among the shrink candidates, -1: as found; note;
@@ -68,7 +70,8 @@ class ShrinkJob:
         ctx = _context(self.token, self.ctx)
         scratch = SearchReport(seed_name="", seed_source=None, subject="", subject_version=None,
                                strategy="", seed_value=0, budget=0, shrink_budget=self.cap, params=[])
-        failure = shrink_failure(ctx.space, _Simulator(ctx, scratch, None), self.found, self.cap)
+        sim = _Replay(ctx, scratch, self.known) if self.known else _Simulator(ctx, scratch, None)
+        failure = shrink_failure(ctx.space, sim, self.found, self.cap)
         cands = scratch.candidates
         index = next((i for i, c in enumerate(cands) if c is failure.shrunk), -1)
         for cand in cands:
@@ -80,6 +83,25 @@ class ShrinkJob:
         for cand in outcome[3]:
             cand.scenario = self.ctx.space.apply(cand.offsets)
         return outcome
+
+
+class _Replay(_Simulator):
+    """Answers a shrink's simulations from those a shorter shrink of the same failure ran (with
+    the same answers the shrinker asks the same questions in the same order, so a longer shrink
+    begins with exactly those) and simulates the rest: a cap raised after the search costs only
+    the simulations beyond the first cap."""
+
+    def __init__(self, ctx: EvalContext, report: SearchReport, known: Sequence[Candidate]):
+        super().__init__(ctx, report, None)
+        self.known: dict[tuple[float, ...], Candidate] = {}
+        for cand in known:
+            self.known.setdefault(tuple(cand.offsets), cand)
+
+    def simulate(self, offsets: Sequence[float], phase: str, origin: str) -> Candidate:
+        cand = self.known.pop(tuple(offsets), None)
+        if cand is None:
+            return super().simulate(offsets, phase, origin)
+        return self.record(dataclasses.replace(cand, metrics=dict(cand.metrics)), phase)
 
 
 class executor_evaluator:   # noqa: N801  (used like a function: evaluator=executor_evaluator(ex))
@@ -112,37 +134,48 @@ class executor_evaluator:   # noqa: N801  (used like a function: evaluator=execu
         pending = self._submit([CandidateJob(ctx, tuple(offsets), origin, token) for offsets, origin in proposals])
         return (self._take(p) for p in pending)
 
-    def start_shrink(self, ctx: EvalContext, found: Candidate, cap: int) -> None:
-        """Submit the shrinking of a failure just found (its simulations are recorded later, by
-        ``shrink_failures``, after the search's own, as in a serial run)."""
+    def start_shrink(self, ctx: EvalContext, found: Candidate, cap: int, known: Sequence[Candidate] = ()) -> None:
+        """Submit the shrinking of a failure (during the search: just found; its simulations are
+        recorded later, by ``shrink_failures``, after the search's own, as in a serial run)."""
         token = self._token_for(ctx)
-        self._shrinks.append((found, cap, self._submit([ShrinkJob(ctx, _stripped(found), cap, token)])[0]))
+        job = ShrinkJob(ctx, _stripped(found), cap, token, tuple(_stripped(c) for c in known))
+        self._shrinks.append((found, cap, self._submit([job])[0]))
 
     def shrink_failures(self, sim: _Simulator, caps: Sequence[int], progress: Any) -> None:
-        """Shrink every failure with a cap (engine.shrink_plan), one job each, reusing the job
-        ``start_shrink`` began during the search when its cap is the planned one; record the
-        shrink simulations failure by failure, in the order a serial run records them
-        (engine.shrink_order). Ctrl-C keeps the failures not yet shrunk as found (run_search
-        notes them)."""
+        """Shrink every failure with a cap (engine.shrink_plan), one job each; a job begun during
+        the search with a smaller cap is continued (its simulations replayed, not run again) and
+        one whose failure gets no cap is given up. Record the shrink simulations failure by
+        failure, in the order a serial run records them (engine.shrink_order). Ctrl-C keeps the
+        failures not yet shrunk as found (run_search notes them)."""
         report = sim.report
         order = [i for i in shrink_order(report.failures) if caps[i] > 0]
-        if not order:
-            return
-        sim.check_stop()
-        started = {(id(f), c): p for f, c, p in self._shrinks} if sim.ctx is self._ctx else {}
-        pending = {}
-        for i in order:
+        started = {id(f): (c, p) for f, c, p in self._shrinks} if sim.ctx is self._ctx else {}
+        self._shrinks = []
+        outcome: dict[int, Any] = {}
+        for i in order:   # jobs with the planned cap, and fresh ones, first
             found = report.failures[i].found
-            pending[i] = started.pop((id(found), caps[i]), None)
-            if pending[i] is None:
+            cap, p = started.get(id(found), (0, None))
+            if p is not None and cap == caps[i]:
+                outcome[i] = started.pop(id(found))[1]
+            elif p is None or cap > caps[i]:
                 self.start_shrink(sim.ctx, found, caps[i])
-                pending[i] = self._shrinks[-1][2]
-        for p in started.values():   # begun with a cap the plan did not keep
+                outcome[i] = self._shrinks[-1][2]
+        for i in order:   # begun with a smaller cap: continue where it stopped, unless it had finished
+            if i not in outcome:
+                cap, p = started.pop(id(report.failures[i].found))
+                early = self._take(p)
+                if early[2] < cap:   # the shrinker finished below its cap: a larger one changes nothing
+                    outcome[i] = early
+                else:
+                    self.start_shrink(sim.ctx, report.failures[i].found, caps[i], early[3])
+                    outcome[i] = self._shrinks[-1][2]
+        for _, p in started.values():   # failures the plan gives no simulation
             self._open.pop(id(p), None)
             p.cancel()
         for i in order:
+            sim.check_stop()
             found = report.failures[i].found
-            index, note, used, cands = self._take(pending[i])
+            index, note, used, cands = outcome[i] if isinstance(outcome[i], tuple) else self._take(outcome[i])
             for cand in cands:
                 sim.record(cand, "shrink")
             report.failures[i] = Failure(found=found, shrunk=cands[index] if index >= 0 else found,
