@@ -2,7 +2,7 @@
 of the machine at the same moment.
 
     env -u PYTHONDONTWRITEBYTECODE python benchmarks/bench_parallel.py search [--budget 200]
-        [--subject dwa] [--seed-name boxes1] [--repeats 3] [--ray] [--shrink-budget N]
+        [--subject dwa] [--seed-name boxes1] [--repeats 3] [--ray] [--shrink-budget 25%]
         [--exec-budget 16] [--exec-tick 0.05] [--exec-repeats 1]
     env -u PYTHONDONTWRITEBYTECODE python benchmarks/bench_parallel.py busy [--budget 200] [--workers 2]
     env -u PYTHONDONTWRITEBYTECODE python benchmarks/bench_parallel.py overhead [--jobs 200]
@@ -80,7 +80,7 @@ def _children_cpu() -> float:
 
 
 def run_search(folder: Path, subject: str, budget: int, seed_name: str, extra: list[str], out: str,
-               shrink: int | None = None) -> tuple[float, float, str]:
+               shrink: str | int | None = None) -> tuple[float, float, str]:
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
     env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")])
     cmd = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", f"--nav-subject={subject}",
@@ -113,7 +113,7 @@ def files_of(folder: Path) -> dict[str, object]:
     return out
 
 
-def compare(folder: Path, subject: str, budget: int, shrink: int | None, repeats: int, ray: bool,
+def compare(folder: Path, subject: str, budget: int, shrink: str | int | None, repeats: int, ray: bool,
             seed_name: str) -> dict[str, object]:
     """Serial vs -n 2 (vs Ray) for one search, ``repeats`` rounds, capacity measured before each."""
     med = statistics.median
@@ -333,13 +333,13 @@ def main() -> int:
     s.add_argument("--seed-name", default="boxes1")
     s.add_argument("--repeats", type=int, default=3)
     s.add_argument("--ray", action="store_true")
-    s.add_argument("--shrink-budget", type=int, default=None, help="default: the plugin's")
+    s.add_argument("--shrink-budget", default=None, help="default: the plugin's (a share such as 25%%, or N per failure)")
     s.add_argument("--exec-budget", type=int, default=16, help="budget of the exec: planner's search (0: skip)")
     s.add_argument("--exec-tick", type=float, default=0.05, help="s the exec: planner takes per tick")
     s.add_argument("--exec-repeats", type=int, default=1)
     b = sub.add_parser("busy")
     b.add_argument("--budget", type=int, default=200)
-    b.add_argument("--shrink-budget", type=int, default=40)
+    b.add_argument("--shrink-budget", default="25%", help="a share (25%%, the default) or N per failure")
     b.add_argument("--subject", default="dwa")
     b.add_argument("--seed-name", default="boxes1")
     b.add_argument("--workers", type=int, default=2)
