@@ -304,7 +304,8 @@ def _search_loop(strategy: Any, sim: _Simulator, budget: int, on_result: Callabl
         while asking and len(in_flight) <= max(0, int(getattr(strategy, "lag", 0))) and planned < budget:
             sim.check_stop()
             try:
-                proposals = strategy.ask(budget - planned)[: budget - planned]
+                with _interrupts_deferred():
+                    proposals = strategy.ask(budget - planned)[: budget - planned]
             except GaveUp:   # the strategy set stop_reason; what is in flight still counts
                 proposals = []
             if not proposals:
@@ -322,6 +323,38 @@ def _search_loop(strategy: Any, sim: _Simulator, budget: int, on_result: Callabl
             if report.sims_used < budget:
                 sim.check_stop()
         strategy.tell(results)
+
+
+@contextlib.contextmanager
+def _interrupts_deferred() -> Iterator[None]:
+    """Hold Ctrl-C and SIGTERM until the block ends (a strategy drawing with Hypothesis, ~30 ms):
+    an interrupt that lands inside Hypothesis's engine before it is set up comes out as an
+    AssertionError from Hypothesis, failing the search instead of cutting it short (seen under
+    --nav-ray). Main thread only (where Python runs signal handlers); elsewhere a no-op."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    got: list[int] = []
+    saved = {}
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        try:
+            saved[sig] = signal.signal(sig, lambda s, _frame: got.append(s))
+        except (ValueError, OSError):
+            pass
+    try:
+        yield
+    finally:
+        for sig, handler in saved.items():
+            signal.signal(sig, handler)
+        if got:   # deliver the first one now, to the handler that was in place
+            handler = saved.get(got[0])
+            if callable(handler):
+                handler(got[0], None)
+            elif handler == signal.SIG_DFL:
+                signal.raise_signal(got[0])
 
 
 # -- shrinking --------------------------------------------------------------------------------

@@ -413,3 +413,25 @@ def test_candidate_is_plain_data_for_worker_processes(lane):
     cand = evaluate_candidate(EvalContext(space, Straight), space.zero(), "seed")
     again = pickle.loads(pickle.dumps(cand))
     assert isinstance(again, Candidate) and again.signature == cand.signature and again.path == cand.path
+
+
+def test_an_interrupt_while_a_strategy_draws_is_held_until_it_has_drawn():
+    """Ctrl-C landing inside Hypothesis's engine came out as an AssertionError from Hypothesis
+    (the search failed instead of being cut short): the loop holds it until the drawing is done."""
+    import signal
+    import time
+
+    from pytest_navscenario.search.engine import _interrupts_deferred
+
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
+    drawn = []
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with _interrupts_deferred():
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(0.05)
+                drawn.append(True)     # reached: the interrupt waited
+    finally:
+        signal.signal(signal.SIGINT, old)
+    assert drawn == [True]
+    assert signal.getsignal(signal.SIGINT) is old
