@@ -162,15 +162,23 @@ def restore(job: Any, outcome: Any) -> Any:
 
 class Pending:
     """The handle of one submitted job. ``result()`` waits for it and returns the result (an
-    EpisodeResult for an EpisodeJob) or raises the exception the job raised."""
+    EpisodeResult for an EpisodeJob) or raises the exception the job raised; ``cancel()`` gives
+    it up (not started: it never runs; running: its result is dropped)."""
 
-    def __init__(self, job: Any, wait: Callable[[], Any]):
+    def __init__(self, job: Any, wait: Callable[[], Any], cancel: Callable[[], None] | None = None):
         self.job = job
         self._wait = wait
+        self._cancel = cancel
         self._outcome: Any = None
 
     def result(self) -> Any:
         if self._outcome is None:
             self._outcome = self._wait()
-            self._wait = None  # type: ignore[assignment]  # drop the future / object ref
+            self._wait = self._cancel = None  # type: ignore[assignment]  # drop the future / object ref
         return restore(self.job, self._outcome)
+
+    def cancel(self) -> None:
+        """Give the job up, unless its result was already taken (then nothing happens)."""
+        if self._outcome is None and self._cancel is not None:
+            self._cancel()
+        self._wait = self._cancel = None  # type: ignore[assignment]

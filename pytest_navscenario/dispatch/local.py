@@ -157,7 +157,7 @@ class ProcessExecutor:
             key = next(self._keys)
             slot = _Slot(key, job, pool.submit(_pool_run, key, job), self._generation)
             self._open[key] = slot
-            pendings.append(Pending(job, lambda slot=slot: self._wait(slot)))
+            pendings.append(Pending(job, lambda slot=slot: self._wait(slot), lambda slot=slot: self._cancel(slot)))
         return pendings
 
     def map(self, jobs: Sequence[Any]) -> list[Any]:
@@ -179,6 +179,11 @@ class ProcessExecutor:
                 continue
             self._open.pop(slot.key, None)
             return outcome
+
+    def _cancel(self, slot: _Slot) -> None:
+        """Drop ``slot``: a job not started never runs, a running one finishes unread."""
+        slot.future.cancel()
+        self._open.pop(slot.key, None)
 
     def _recover(self) -> None:
         """The pool broke (a worker died): run every unfinished job again on a new pool; the jobs

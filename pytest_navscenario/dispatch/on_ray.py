@@ -209,7 +209,7 @@ class RayExecutor:
         for job in jobs:
             key, self._next = self._next, self._next + 1
             self._open[key] = self._run.remote(job)
-            pendings.append(Pending(job, lambda key=key: self._wait(key)))
+            pendings.append(Pending(job, lambda key=key: self._wait(key), lambda key=key: self._cancel(key)))
         return pendings
 
     def map(self, jobs: Sequence[Any]) -> list[Any]:
@@ -225,6 +225,11 @@ class RayExecutor:
                                    "", "Ray", None)
         del self._open[key]
         return outcome
+
+    def _cancel(self, key: int) -> None:
+        """Drop one task's result. The task itself is left to finish: Ray cancels a running task
+        by raising KeyboardInterrupt in it, which could leave a reused exec: planner mid-answer."""
+        self._open.pop(key, None)
 
     def close(self, cancel: bool = False) -> None:
         """Cancel unfinished tasks (with ``cancel``) and disconnect; a local instance this

@@ -10,8 +10,12 @@ budget (default 25 %), handed out before any shrinking starts, most important fa
 The loop is ask/tell: a strategy (strategies.py) proposes a generation of candidates, they are
 evaluated -- by ``evaluate_candidate``, a pure function of the candidate, in any order, in any
 number of chunks or processes -- and the results are told back in proposal order. A
-generation's size belongs to the strategy, never to the evaluator, so the same search seed
-gives the same candidates, failures and frozen files however many are evaluated at once.
+generation's size and the strategy's ``lag`` (how many generations later it learns a
+generation's results; 1: generation g+2 is drawn knowing generations up to g) belong to the
+strategy, never to the evaluator, so the same search seed gives the same candidates, failures
+and frozen files however many are evaluated at once. The lag keeps work in flight: while the
+strategy draws the next generation and while the slowest episode of one generation ends, worker
+processes already evaluate the next one.
 
 Distinct failures: two failures are the same when they have the same cause signature
 (fitness.py: outcome, culprit, where the culprit lies along the route, how far the robot got),
@@ -22,6 +26,7 @@ from __future__ import annotations
 import contextlib
 import math
 import time
+from collections import deque
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable, Iterator, Sequence
 
@@ -228,10 +233,15 @@ class _Simulator:
         self.evaluator = evaluator or serial_evaluator
         self.counts = {"search": 0, "shrink": 0}
 
+    def start(self, proposals: Sequence[tuple[tuple[float, ...], str]], phase: str) -> Iterator[Candidate]:
+        """Hand ``proposals`` to the evaluator now (one on worker processes starts them at once);
+        the iterator records and yields each candidate in proposal order as it is consumed."""
+        results = iter(self.evaluator(self.ctx, list(proposals)))
+        return (self.record(cand, phase) for cand in results)
+
     def run(self, proposals: Sequence[tuple[tuple[float, ...], str]], phase: str) -> Iterator[Candidate]:
         """Evaluate ``proposals`` and yield each recorded candidate in proposal order."""
-        for cand in self.evaluator(self.ctx, list(proposals)):
-            yield self.record(cand, phase)
+        yield from self.start(proposals, phase)
 
     def record(self, cand: Candidate, phase: str) -> Candidate:
         """Number ``cand`` in its phase and add it to the report."""
@@ -279,21 +289,72 @@ def is_near_failure(space: SearchSpace, offsets: Sequence[float], failures: Sequ
 
 # -- the ask/tell loop ----------------------------------------------------------------------------
 def _search_loop(strategy: Any, sim: _Simulator, budget: int, on_result: Callable[[Candidate], None]) -> None:
-    """Ask a generation, evaluate it, tell the results back, until the budget is spent."""
+    """Ask generations, evaluate them, tell the results back in order, until the budget is spent.
+
+    With the strategy's ``lag`` L (read before each ask: it may change), up to L + 1 generations
+    are in flight: the next one is asked for (and handed to the evaluator) before the results of
+    the last L are told. Serial or on
+    workers, the strategy sees the same results at the same point, so the search is the same."""
+    from .strategies import GaveUp
+
     report = sim.report
-    while report.sims_used < budget:
-        sim.check_stop()
-        proposals = strategy.ask(budget - report.sims_used)
-        if not proposals:
-            report.stop_reason = report.stop_reason or "the strategy had no new candidate to propose"
+    in_flight: deque[Iterator[Candidate]] = deque()
+    planned, asking = report.sims_used, True
+    while True:
+        while asking and len(in_flight) <= max(0, int(getattr(strategy, "lag", 0))) and planned < budget:
+            sim.check_stop()
+            try:
+                with _interrupts_deferred():
+                    proposals = strategy.ask(budget - planned)[: budget - planned]
+            except GaveUp:   # the strategy set stop_reason; what is in flight still counts
+                proposals = []
+            if not proposals:
+                report.stop_reason = report.stop_reason or "the strategy had no new candidate to propose"
+                asking = False
+                break
+            planned += len(proposals)
+            in_flight.append(sim.start(proposals, "search"))
+        if not in_flight:
             break
         results = []
-        for cand in sim.run(proposals[: budget - report.sims_used], "search"):
+        for cand in in_flight.popleft():
             results.append(cand)
             on_result(cand)
             if report.sims_used < budget:
                 sim.check_stop()
         strategy.tell(results)
+
+
+@contextlib.contextmanager
+def _interrupts_deferred() -> Iterator[None]:
+    """Hold Ctrl-C and SIGTERM until the block ends (a strategy drawing with Hypothesis, ~30 ms):
+    an interrupt that lands inside Hypothesis's engine before it is set up comes out as an
+    AssertionError from Hypothesis, failing the search instead of cutting it short (seen under
+    --nav-ray). Main thread only (where Python runs signal handlers); elsewhere a no-op."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    got: list[int] = []
+    saved = {}
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        try:
+            saved[sig] = signal.signal(sig, lambda s, _frame: got.append(s))
+        except (ValueError, OSError):
+            pass
+    try:
+        yield
+    finally:
+        for sig, handler in saved.items():
+            signal.signal(sig, handler)
+        if got:   # deliver the first one now, to the handler that was in place
+            handler = saved.get(got[0])
+            if callable(handler):
+                handler(got[0], None)
+            elif handler == signal.SIG_DFL:
+                signal.raise_signal(got[0])
 
 
 # -- shrinking --------------------------------------------------------------------------------
@@ -509,6 +570,16 @@ def _check_inputs(seed: Scenario, strategy: str, budget: int, space: SearchSpace
                             path=seed.source or seed.name)
 
 
+def _early_shrink(shrink: ShrinkBudget, budget: int) -> tuple[int, int]:
+    """(cap, how many failures) an evaluator may start shrinking while the search goes on: every
+    cap shrink_plan gives is at least this one (per failure: exactly it), and at most this many
+    failures get one, so work begun early is rarely thrown away (a failure the plan gives no cap)."""
+    if shrink.per_failure is not None:
+        return shrink.per_failure, budget
+    total = shrink.total(budget, 0)
+    return min(MIN_SHRINK_SIMS, total), max(1, total // MIN_SHRINK_SIMS)
+
+
 def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: int, seed_value: int = 0,
                strategy: str = "evolve", shrink_budget: ShrinkBudget | int | str = DEFAULT_SHRINK_BUDGET,
                progress: Callable[[SearchReport], None] | None = None,
@@ -525,10 +596,14 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
     called after each simulation; ``stop()`` returning True ends the search early (as does
     Ctrl-C): the report then keeps every failure found so far, unshrunk, with ``interrupted``.
     ``stuck_after`` (s, None = off) ends an episode early as a timeout when the robot covers no
-    new ground. ``evaluator(ctx, proposals)`` evaluates a generation (default: serially; one
-    with a ``shrink_failures(sim, caps, progress)`` method also shrinks the failures, each with
-    its cap, e.g. all at once on worker processes, search/parallel.py); the
-    result does not depend on it. Deterministic given ``seed_value`` (and a deterministic subject).
+    new ground. ``evaluator(ctx, proposals)`` evaluates a generation (default: serially). An
+    evaluator may also have ``shrink_failures(sim, caps, progress)`` (shrink the failures, each
+    with its cap, e.g. all at once on worker processes, and record the results in a serial run's
+    order), ``start_shrink(ctx, found, cap)`` (begin shrinking a failure the moment it is found,
+    while the search goes on, with a cap no larger than the plan's, ``_early_shrink``) and
+    ``discard()`` (give up what is still in flight when the search ends early), as the
+    worker-process one in search/parallel.py does; the result does not depend on the evaluator.
+    Deterministic given ``seed_value`` (and a deterministic subject).
     """
     from .strategies import GaveUp, make_strategy
 
@@ -542,10 +617,16 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
     sim = _Simulator(EvalContext(space, subject_factory, episode_seed, stuck_after), report, stop, evaluator)
     signatures: set[tuple] = set()
 
+    start_shrink = getattr(evaluator, "start_shrink", None)   # parallel.py: shrink while searching
+    early_cap, early_count = _early_shrink(shrink, budget)
+
     def on_result(cand: Candidate) -> None:
         if cand.failed and cand.signature not in signatures:   # distinct: a new cause signature
             signatures.add(cand.signature)
             report.failures.append(Failure(found=cand, shrunk=cand))
+            if start_shrink is not None and early_cap > 0 and any(cand.offsets) \
+                    and len(report.failures) <= early_count:
+                start_shrink(sim.ctx, cand, early_cap)
         if progress is not None:
             progress(report)
 
@@ -565,6 +646,10 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
     except KeyboardInterrupt:
         report.interrupted = True
         report.stop_reason = "interrupted (Ctrl-C)"
+    finally:
+        discard = getattr(evaluator, "discard", None)   # jobs still in flight if it ended early
+        if discard is not None:
+            discard()
     if report.interrupted:
         for f in report.failures:
             if f.shrink_sims == 0 and not f.note and any(f.found.offsets):

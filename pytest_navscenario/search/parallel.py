@@ -1,15 +1,20 @@
 """A search's generations evaluated on an executor (``dispatch/``: local worker processes or Ray).
 
 ``executor_evaluator(executor)`` is an evaluator for ``run_search(..., evaluator=...)``: each
-generation the strategy proposes becomes one ``CandidateJob`` per candidate, all submitted at
-once, and the candidates come back in proposal order. A candidate is a pure function of the
-evaluation context and its offsets (``engine.evaluate_candidate``), and the strategy only sees
-the generation once it is complete, so the search takes the same path, finds the same failures
-and writes the same files as a serial run with the same search seed; only the measured wall
-times differ, as they do between two serial runs.
+generation the strategy proposes becomes one ``CandidateJob`` per candidate, all submitted the
+moment the generation is proposed (the search loop proposes the next generation before it reads
+the results of this one, engine._search_loop), and the candidates come back in proposal order.
+Each distinct failure becomes one ``ShrinkJob`` the moment it is found, so its shrinking runs
+beside the rest of the search instead of after it. A candidate is a pure function of the
+evaluation context and its offsets (``engine.evaluate_candidate``), a shrink a pure function of
+the failure and its cap, and the strategy sees results at the same point as in a serial run, so
+the search takes the same path, finds the same failures and writes the same files as a serial
+run with the same search seed; only the measured wall times differ, as they do between two
+serial runs.
 """
 from __future__ import annotations
 
+import dataclasses
 import uuid
 from dataclasses import dataclass
 from typing import Any, Iterator, Sequence
@@ -57,6 +62,7 @@ class ShrinkJob:
     found: Candidate
     cap: int
     token: str
+    known: tuple[Candidate, ...] = ()   # simulations a shorter shrink of this failure already ran
 
     def run(self) -> tuple[int, str, int, list[Candidate]]:
         """(index of the shrunk candidate among the shrink candidates, -1: as found; note;
@@ -64,7 +70,8 @@ class ShrinkJob:
         ctx = _context(self.token, self.ctx)
         scratch = SearchReport(seed_name="", seed_source=None, subject="", subject_version=None,
                                strategy="", seed_value=0, budget=0, shrink_budget=self.cap, params=[])
-        failure = shrink_failure(ctx.space, _Simulator(ctx, scratch, None), self.found, self.cap)
+        sim = _Replay(ctx, scratch, self.known) if self.known else _Simulator(ctx, scratch, None)
+        failure = shrink_failure(ctx.space, sim, self.found, self.cap)
         cands = scratch.candidates
         index = next((i for i, c in enumerate(cands) if c is failure.shrunk), -1)
         for cand in cands:
@@ -78,6 +85,25 @@ class ShrinkJob:
         return outcome
 
 
+class _Replay(_Simulator):
+    """Answers a shrink's simulations from those a shorter shrink of the same failure ran (with
+    the same answers the shrinker asks the same questions in the same order, so a longer shrink
+    begins with exactly those) and simulates the rest: a cap raised after the search costs only
+    the simulations beyond the first cap."""
+
+    def __init__(self, ctx: EvalContext, report: SearchReport, known: Sequence[Candidate]):
+        super().__init__(ctx, report, None)
+        self.known: dict[tuple[float, ...], Candidate] = {}
+        for cand in known:
+            self.known.setdefault(tuple(cand.offsets), cand)
+
+    def simulate(self, offsets: Sequence[float], phase: str, origin: str) -> Candidate:
+        cand = self.known.pop(tuple(offsets), None)
+        if cand is None:
+            return super().simulate(offsets, phase, origin)
+        return self.record(dataclasses.replace(cand, metrics=dict(cand.metrics)), phase)
+
+
 class executor_evaluator:   # noqa: N801  (used like a function: evaluator=executor_evaluator(ex))
     """An evaluator that runs each generation on ``executor`` (see the module docstring)."""
 
@@ -85,38 +111,85 @@ class executor_evaluator:   # noqa: N801  (used like a function: evaluator=execu
         self.executor = executor
         self._ctx: EvalContext | None = None
         self._token = ""
+        self._open: dict[int, Any] = {}              # id -> Pending: submitted, result not yet taken
+        self._shrinks: list[tuple[Candidate, int, Any]] = []   # (failure as found, cap, its pending shrink)
+
+    def _token_for(self, ctx: EvalContext) -> str:
+        if ctx is not self._ctx:
+            self._ctx, self._token, self._shrinks = ctx, uuid.uuid4().hex, []
+        return self._token
+
+    def _submit(self, jobs: list[Any]) -> list[Any]:
+        pending = self.executor.submit(jobs)
+        self._open.update((id(p), p) for p in pending)
+        return pending
+
+    def _take(self, pending: Any) -> Any:
+        self._open.pop(id(pending), None)
+        return pending.result()
 
     def __call__(self, ctx: EvalContext, proposals: Sequence[tuple[tuple[float, ...], str]]) -> Iterator[Candidate]:
-        if ctx is not self._ctx:
-            self._ctx, self._token = ctx, uuid.uuid4().hex
-        pending = self.executor.submit([CandidateJob(ctx, tuple(offsets), origin, self._token)
-                                        for offsets, origin in proposals])
-        for p in pending:
-            yield p.result()
+        """Submit the generation now; the iterator waits for each candidate in proposal order."""
+        token = self._token_for(ctx)
+        pending = self._submit([CandidateJob(ctx, tuple(offsets), origin, token) for offsets, origin in proposals])
+        return (self._take(p) for p in pending)
+
+    def start_shrink(self, ctx: EvalContext, found: Candidate, cap: int, known: Sequence[Candidate] = ()) -> None:
+        """Submit the shrinking of a failure (during the search: just found; its simulations are
+        recorded later, by ``shrink_failures``, after the search's own, as in a serial run)."""
+        token = self._token_for(ctx)
+        job = ShrinkJob(ctx, _stripped(found), cap, token, tuple(_stripped(c) for c in known))
+        self._shrinks.append((found, cap, self._submit([job])[0]))
 
     def shrink_failures(self, sim: _Simulator, caps: Sequence[int], progress: Any) -> None:
-        """Shrink every failure with a cap (engine.shrink_plan) at once, one job each; record the
-        shrink simulations failure by failure, in the order a serial run records them
-        (engine.shrink_order). Ctrl-C keeps the failures not yet shrunk as found (run_search
-        notes them)."""
+        """Shrink every failure with a cap (engine.shrink_plan), one job each; a job begun during
+        the search with a smaller cap is continued (its simulations replayed, not run again) and
+        one whose failure gets no cap is given up. Record the shrink simulations failure by
+        failure, in the order a serial run records them (engine.shrink_order). Ctrl-C keeps the
+        failures not yet shrunk as found (run_search notes them)."""
         report = sim.report
         order = [i for i in shrink_order(report.failures) if caps[i] > 0]
-        if not order:
-            return
-        sim.check_stop()
-        if sim.ctx is not self._ctx:
-            self._ctx, self._token = sim.ctx, uuid.uuid4().hex
-        found = {i: report.failures[i].found for i in order}
-        pending = self.executor.submit([ShrinkJob(sim.ctx, _stripped(found[i]), caps[i], self._token)
-                                        for i in order])
-        for i, p in zip(order, pending):
-            index, note, used, cands = p.result()
+        started = {id(f): (c, p) for f, c, p in self._shrinks} if sim.ctx is self._ctx else {}
+        self._shrinks = []
+        outcome: dict[int, Any] = {}
+        for i in order:   # jobs with the planned cap, and fresh ones, first
+            found = report.failures[i].found
+            cap, p = started.get(id(found), (0, None))
+            if p is not None and cap == caps[i]:
+                outcome[i] = started.pop(id(found))[1]
+            elif p is None or cap > caps[i]:
+                self.start_shrink(sim.ctx, found, caps[i])
+                outcome[i] = self._shrinks[-1][2]
+        for i in order:   # begun with a smaller cap: continue where it stopped, unless it had finished
+            if i not in outcome:
+                cap, p = started.pop(id(report.failures[i].found))
+                early = self._take(p)
+                if early[2] < cap:   # the shrinker finished below its cap: a larger one changes nothing
+                    outcome[i] = early
+                else:
+                    self.start_shrink(sim.ctx, report.failures[i].found, caps[i], early[3])
+                    outcome[i] = self._shrinks[-1][2]
+        for _, p in started.values():   # failures the plan gives no simulation
+            self._open.pop(id(p), None)
+            p.cancel()
+        for i in order:
+            sim.check_stop()
+            found = report.failures[i].found
+            index, note, used, cands = outcome[i] if isinstance(outcome[i], tuple) else self._take(outcome[i])
             for cand in cands:
                 sim.record(cand, "shrink")
-            report.failures[i] = Failure(found=found[i], shrunk=cands[index] if index >= 0 else found[i],
+            report.failures[i] = Failure(found=found, shrunk=cands[index] if index >= 0 else found,
                                          shrink_sims=used, note=note)
             if progress is not None:
                 progress(report)
+        self._shrinks = []
+
+    def discard(self) -> None:
+        """Give up every job whose result was not taken (the search ended early)."""
+        for p in self._open.values():
+            p.cancel()
+        self._open.clear()
+        self._shrinks = []
 
 
 def _stripped(cand: Candidate) -> Candidate:

@@ -20,8 +20,10 @@
   Hypothesis draws each proposal (operator, parent, random stream) in one seeded Hypothesis run
   per generation.
 
-A generation's size is the strategy's own constant, so what is proposed never depends on how
-many candidates are evaluated at once.
+A generation's size is the strategy's own constant, and so is its ``lag``: how many generations
+later it is told a generation's results (engine._search_loop asks for the next generation before
+telling the last ``lag`` ones, so workers evaluate while the strategy draws). So what is proposed
+never depends on how many candidates are evaluated at once.
 """
 from __future__ import annotations
 
@@ -96,6 +98,8 @@ def uniform(space: SearchSpace, rnd: random.Random) -> tuple[float, ...]:
 class RandomStrategy:
     """Uniform sampling; one Random stream, so results never depend on the evaluation."""
 
+    lag = 1   # learns nothing from results: any lag is free
+
     def __init__(self, space: SearchSpace, report: Any, budget: int, seed_value: int):
         self.space, self.admission = space, _Admission(space, report, budget)
         self.rnd = random.Random(seed_value)
@@ -119,6 +123,8 @@ class HillClimb:
     coordinate's step by 1.5, a miss halves it; the climb moves to the next obstacle when every
     step of this one is below HILLCLIMB_MIN_STEP of its range or HILLCLIMB_STALL tries in a row
     missed. A failure found restarts the climb from the seed on the next obstacle."""
+
+    lag = 0   # each step needs the result of the last one
 
     def __init__(self, space: SearchSpace, report: Any, budget: int, seed_value: int):
         self.space, self.admission = space, _Admission(space, report, budget)
@@ -288,6 +294,13 @@ class Evolve:
         self.aims: dict[tuple, tuple[Any, tuple[str, int]]] = {}   # proposal -> (bandit, arm) it aimed at
         self.aim: tuple[str, int] | None = None         # the arm of the proposal being drawn
         self.aim_bandit: _Targets | None = None          # and the bandit it belongs to
+        self.told = 0                                   # generations told so far
+
+    @property
+    def lag(self) -> int:
+        """0 until the first generation (the seed's episode, whose path the aimed operators
+        use) is told, then 1: generation g+2 is drawn knowing the results up to generation g."""
+        return 1 if self.told else 0
 
     def weights(self) -> list[float]:
         usable = {"explore": True, "mutate": bool(self.cells.elites),
@@ -639,6 +652,7 @@ class Evolve:
         return space.clip(trial)
 
     def tell(self, results: Sequence[Any]) -> None:
+        self.told += 1
         for cand in results:
             before = self.cells.elites.get(cand.signature)
             self.cells.add(cand)

@@ -144,6 +144,30 @@ def test_close_with_cancel_stops_running_workers_at_once(tmp_path: Path, monkeyp
     assert not _alive(pid)
 
 
+def test_a_cancelled_job_that_has_not_started_never_runs(tmp_path: Path, monkeypatch):
+    (tmp_path / "killable_skip.py").write_text(KILLABLE_PLANNER.format(log_dir=str(tmp_path)))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    names = ["victim"] + [f"s{i}" for i in range(5)]
+    jobs = [EpisodeJob(loads_scenario(scenario_text(name, 1.0 + i / 10)), "killable_skip:Planner")
+            for i, name in enumerate(names)]
+    pool = ProcessExecutor(1)
+    try:
+        pending = pool.submit(jobs)      # the one worker sleeps in the victim's reset
+        for p in pending[2:]:
+            p.cancel()                   # a search that stopped gives up what it no longer needs
+        assert len(pool._open) == 2      # the cancelled ones are no longer the pool's
+        marker = tmp_path / "victim.pid"
+        deadline = time.monotonic() + 60
+        while not marker.exists() and time.monotonic() < deadline:
+            time.sleep(0.02)
+        pending[1].cancel()
+        assert pool._open and len(pool._open) == 1          # the victim, running: left to the pool
+    finally:
+        pool.close(cancel=True)
+    ran = [line.split()[1] for line in (tmp_path / "resets.log").read_text().splitlines()]
+    assert ran == ["victim"], ran     # the cancelled jobs never started
+
+
 def _alive(pid: int) -> bool:
     try:
         os.kill(pid, 0)

@@ -419,6 +419,34 @@ def test_results_do_not_depend_on_how_many_are_evaluated_at_once(lane, strategy)
         assert _fingerprint(batched) == _fingerprint(serial), size
 
 
+@pytest.mark.parametrize("strategy, lag", [(Evolve, 1), (HillClimb, 0)])
+def test_the_next_generation_is_handed_over_before_this_one_is_told(lane, strategy, lag):
+    """Evolve learns one generation late once it has seen the seed's episode, so workers evaluate
+    the next generation while it draws; a hill-climb needs every result before its next step. The
+    same in serial and parallel runs: the lag is the strategy's, not the evaluator's."""
+    events = []
+
+    def eager(ctx, proposals):   # evaluates when handed over, as worker processes start at once
+        events.append("evaluate")
+        return [evaluate_candidate(ctx, o, origin) for o, origin in proposals]
+
+    space = SearchSpace(lane, {"insert": 0, "remove": 0})
+    report = _report(space, budget=40)
+    strat = strategy(space, report, 40, 3)
+    tell = strat.tell
+    strat.tell = lambda results: (events.append("tell"), tell(results))
+    _search_loop(strat, _Simulator(EvalContext(space, Straight), report, None, eager), 40, lambda c: None)
+    assert report.sims_used == 40 and strat.lag == lag
+    generations = events.count("evaluate")
+    assert events.count("tell") == generations
+    tells = [i for i, e in enumerate(events) if e == "tell"]
+    # the first generation (the seed's) is told before the second is drawn; after that,
+    # generation k+lag+1 is handed over before generation k is told
+    assert events[:2] == ["evaluate", "tell"]
+    for k in range(1, generations):
+        assert events[:tells[k]].count("evaluate") == min(generations, k + 1 + lag), events
+
+
 def _frozen_digest(out_dir: Path) -> str:
     h = hashlib.sha256()
     for path in sorted(out_dir.rglob("*.yaml")):
@@ -476,3 +504,25 @@ def test_candidate_is_plain_data_for_worker_processes(lane):
     cand = evaluate_candidate(EvalContext(space, Straight), space.zero(), "seed")
     again = pickle.loads(pickle.dumps(cand))
     assert isinstance(again, Candidate) and again.signature == cand.signature and again.path == cand.path
+
+
+def test_an_interrupt_while_a_strategy_draws_is_held_until_it_has_drawn():
+    """Ctrl-C landing inside Hypothesis's engine came out as an AssertionError from Hypothesis
+    (the search failed instead of being cut short): the loop holds it until the drawing is done."""
+    import signal
+    import time
+
+    from pytest_navscenario.search.engine import _interrupts_deferred
+
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
+    drawn = []
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with _interrupts_deferred():
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(0.05)
+                drawn.append(True)     # reached: the interrupt waited
+    finally:
+        signal.signal(signal.SIGINT, old)
+    assert drawn == [True]
+    assert signal.getsignal(signal.SIGINT) is old

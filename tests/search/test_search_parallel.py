@@ -14,10 +14,16 @@ from pathlib import Path
 
 import pytest
 
+from straight_planner import Straight
 from test_search import SEED_YAML
+from test_search_loop import OPEN_YAML, _fingerprint
 # Before pytester's in-process runs snapshot sys.modules: a worker pool pickles functions of
 # concurrent.futures by reference, which fails if a later run re-imports that module.
 import pytest_navscenario.dispatch.local  # noqa: E402,F401
+from pytest_navscenario.dispatch.local import ProcessExecutor, SerialExecutor  # noqa: E402
+from pytest_navscenario.scenario.loader import loads_scenario  # noqa: E402
+from pytest_navscenario.search.engine import run_search  # noqa: E402
+from pytest_navscenario.search.parallel import executor_evaluator  # noqa: E402
 
 STRAIGHT = (Path(__file__).parent / "straight_planner.py").read_text()
 SLOW = STRAIGHT + '''
@@ -118,3 +124,76 @@ def test_a_negative_worker_count_is_a_usage_error(project: pytest.Pytester):
                                "--navsearch", "crate", "-n", "-1")
     assert result.ret == pytest.ExitCode.USAGE_ERROR
     assert "-n -1: the number of worker processes must be 0 or more" in result.stderr.str()
+
+
+# -- the evaluator in this process ----------------------------------------------------------------
+class LoggingExecutor(SerialExecutor):
+    """Runs each job here, when its result is asked for, and logs what was submitted when."""
+
+    def __init__(self):
+        self.log: list[str] = []
+
+    def submit(self, jobs):
+        self.log.extend(type(job).__name__ + ("+known" if getattr(job, "known", ()) else "") for job in jobs)
+        return super().submit(jobs)
+
+
+def test_failures_start_shrinking_while_the_search_goes_on_and_nothing_changes():
+    lane = loads_scenario(OPEN_YAML, "lane.yaml", name="lane")
+    serial = run_search(lane, Straight, budget=40, seed_value=2, shrink_budget=6)
+    executor = LoggingExecutor()
+    via_jobs = run_search(lane, Straight, budget=40, seed_value=2, shrink_budget=6,
+                          evaluator=executor_evaluator(executor))
+    assert _fingerprint(via_jobs) == _fingerprint(serial)
+    assert [f.note for f in via_jobs.failures] == [f.note for f in serial.failures]
+    assert len(serial.failures) >= 2 and serial.shrink_sims > 0
+    log = executor.log
+    assert log.count("ShrinkJob") == len(serial.failures) and log.count("CandidateJob") == 40
+    assert log.index("ShrinkJob") < len(log) - 1 - log[::-1].index("CandidateJob")   # before the search ended
+
+
+@pytest.mark.parametrize("seed_yaml", ["crate", "lane"])
+def test_a_shrink_begun_during_the_search_with_a_smaller_cap_is_continued_not_rerun(seed_yaml):
+    """The shrink budget as a share is shared out after the search; a failure's shrinking starts
+    when it is found with the smallest cap the plan can give, and afterwards is continued with its
+    planned cap (replaying what it simulated), kept (the same cap) or given up (no cap): the
+    same log and files as a serial run. crate: 3 failures share 40 simulations (14, 13, 13);
+    lane: 6 failures, the 4 that matter most get 10 each."""
+    seed = loads_scenario(SEED_YAML.replace("name: crate\n", ""), "crate.yaml", name="crate") \
+        if seed_yaml == "crate" else loads_scenario(OPEN_YAML, "lane.yaml", name="lane")
+    serial = run_search(seed, Straight, budget=40, seed_value=0, shrink_budget="100%")
+    executor = LoggingExecutor()
+    via_jobs = run_search(seed, Straight, budget=40, seed_value=0, shrink_budget="100%",
+                          evaluator=executor_evaluator(executor))
+    assert _fingerprint(via_jobs) == _fingerprint(serial)
+    assert [(f.note, f.shrink_sims) for f in via_jobs.failures] == [(f.note, f.shrink_sims) for f in serial.failures]
+    used = sorted(f.shrink_sims for f in serial.failures)
+    log = executor.log
+    end = len(log) - log[::-1].index("CandidateJob")          # the search's last candidate, + 1
+    during, after = log[:end], log[end:]
+    if seed_yaml == "crate":
+        assert used == [10, 13, 14], used
+        assert during.count("ShrinkJob") == 3                 # each begun with the early cap of 10
+        assert after == ["ShrinkJob+known"] * 3               # and continued with 14, 13, 13
+    else:
+        assert used == [0, 0, 10, 10, 10, 10], used
+        assert during.count("ShrinkJob") == 4                 # the first 4 found: at most 40 // 10 get a cap
+        assert after == ["ShrinkJob"]                         # one found later outranks one of them
+    assert via_jobs.shrink_sims == serial.shrink_sims
+
+
+def test_a_search_stopped_early_on_workers_leaves_no_job_behind():
+    lane = loads_scenario(OPEN_YAML, "lane.yaml", name="lane")
+    seen: list[int] = []
+    pool = ProcessExecutor(2)
+    try:
+        report = run_search(lane, Straight, budget=300, seed_value=2, shrink_budget=40,
+                            evaluator=executor_evaluator(pool), progress=lambda r: seen.append(len(r.failures)),
+                            stop=lambda: bool(seen) and seen[-1] >= 2)
+        assert pool._open == {}        # in-flight generations and shrink jobs given up, not left running
+        assert report.interrupted and 0 < report.sims_used < 300 and len(report.failures) >= 2
+        assert all(f.note == "not shrunk: the search was interrupted" for f in report.failures)
+        again = run_search(lane, Straight, budget=8, seed_value=2, shrink_budget=0, evaluator=executor_evaluator(pool))
+        assert again.sims_used == 8   # the same workers serve the next search
+    finally:
+        pool.close()
