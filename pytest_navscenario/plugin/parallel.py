@@ -38,7 +38,6 @@ from .state import STATE_KEY
 NUM_CPUS_KEY = pytest.StashKey[int]()
 SEARCH_WORKERS_KEY = pytest.StashKey[int]()
 SUBMIT_CHUNK = 16   # scenario items checked and submitted at a time at the start of the run loop
-EARLY_KEY = pytest.StashKey[tuple[list, str]]()   # (items submitted while collecting, keep)
 SUITE_WORKERS_KEY = pytest.StashKey[tuple[int, str]]()   # (workers, which option asked for them)
 
 
@@ -205,8 +204,6 @@ def pytest_sessionstart(session: pytest.Session) -> None:
         state.executor = pool
         config.add_cleanup(lambda: pool.close(cancel=True))   # also if a later check stops the run
         pool.warm()   # the workers start while pytest collects and the search sets up
-        if SEARCH_WORKERS_KEY not in config.stash:
-            start_early(config)
         return
     if state.settings.ray is None:
         return
@@ -225,8 +222,6 @@ def pytest_sessionstart(session: pytest.Session) -> None:
         executor.close(cancel=True)
         state.executor = None
         raise pytest.UsageError(f"navscenario: --nav-ray={address}: {exc}") from None
-    if not _wants_search(config):
-        start_early(config)
 
 
 def pytest_report_header(config: pytest.Config) -> list[str]:
@@ -285,59 +280,16 @@ def _skipped(item: Any) -> bool:
         return False
 
 
-def _nothing_deselects(config: pytest.Config) -> bool:
-    """True unless an option of pytest's own may drop collected items (-k, -m, --lf, --deselect,
-    --sw): only then do episodes start while pytest still collects (a plugin that deselects in
-    its own hook only costs the episodes started for the items it drops)."""
-    o = config.option
-    return not (getattr(o, "keyword", "") or getattr(o, "markexpr", "") or getattr(o, "lf", False)
-                or getattr(o, "deselect", None) or getattr(o, "stepwise", False))
-
-
-def start_early(config: pytest.Config) -> None:
-    """Called once the executor runs a suite: let pytest_itemcollected submit each scenario item's
-    episode as soon as its file is collected, so the workers need not wait for collection to end."""
-    if _nothing_deselects(config) and not config.option.collectonly:
-        config.stash[EARLY_KEY] = ([], keep_trajectory(config))
-
-
-@pytest.hookimpl(trylast=True)
-def pytest_itemcollected(item: pytest.Item) -> None:
-    early = item.config.stash.get(EARLY_KEY, None)
-    if early is None or not hasattr(item, "episode_job") or _skipped(item):
-        return
-    submitted, keep = early
-    state = item.config.stash[STATE_KEY]
-    item.nav_pending = state.executor.submit([item.episode_job(keep)])[0]
-    submitted.append(item)
-
-
-def _drop_unselected(session: pytest.Session) -> None:
-    """Cancel the episodes started during collection for items that will not run (deselected by
-    a plugin, or skipped by a mark added after collection)."""
-    early = session.config.stash.get(EARLY_KEY, None)
-    if early is None:
-        return
-    del session.config.stash[EARLY_KEY]
-    selected = set(session.items)
-    for item in early[0]:
-        if item.nav_pending is not None and (item not in selected or _skipped(item)):
-            item.nav_pending.cancel()
-            item.nav_pending = None
-
-
 @pytest.hookimpl(wrapper=True)
 def pytest_runtestloop(session: pytest.Session) -> Any:
-    """Submit every scenario item's episode not submitted during collection, in item order,
-    before the first item runs."""
+    """Submit every scenario item's episode, in item order, before the first item runs."""
     state = session.config.stash.get(STATE_KEY, None)
     executor = state.executor if state is not None else None
     if executor is not None and not session.config.option.collectonly:
-        _drop_unselected(session)
         # scenario items (collect.ScenarioItem, known by its method: no import, no cycle)
         keep = keep_trajectory(session.config)
         # in chunks, so the first episodes run while this process checks the later items
-        items = [i for i in session.items if hasattr(i, "episode_job") and i.nav_pending is None]
+        items = [i for i in session.items if hasattr(i, "episode_job")]
         for start in range(0, len(items), SUBMIT_CHUNK):
             chunk = [i for i in items[start:start + SUBMIT_CHUNK] if not _skipped(i)]
             for item, pending in zip(chunk, executor.submit([i.episode_job(keep) for i in chunk])):
