@@ -77,3 +77,23 @@ def test_bad_worker_options_are_usage_errors_before_any_episode(pytester: pytest
     assert result.ret == pytest.ExitCode.USAGE_ERROR
     assert message in result.stderr.str()
     assert not (pytester.path / "r.jsonl").exists()
+
+
+def test_items_dropped_after_collection_report_nothing(pytester: pytest.Pytester):
+    """An item a plugin deselects after collection, or skips with a mark added then, is not
+    reported, recorded or waited for when the episodes run on workers."""
+    write_suite(pytester.path / "suite")
+    (pytester.path / "suite" / "conftest.py").write_text(
+        "import pytest\n\n"
+        "def pytest_collection_modifyitems(config, items):\n"
+        "    dropped = [i for i in items if i.name == 'b']\n"
+        "    items[:] = [i for i in items if i.name != 'b']\n"
+        "    config.hook.pytest_deselected(items=dropped)\n"
+        "    for i in items:\n"
+        "        if i.name == 'c':\n"
+        "            i.add_marker(pytest.mark.skip(reason='added after collection'))\n")
+    result = pytester.runpytest(*COMMON, "-n", "2", "--nav-results=r.jsonl")
+    result.assert_outcomes(passed=4, skipped=1, deselected=1)
+    assert HEADER in result.stdout.str()
+    names = sorted(r["nodeid"].split("::")[1] for r in records(pytester.path / "r.jsonl"))
+    assert names == ["a", "d", "e", "victim"]
