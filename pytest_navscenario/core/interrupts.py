@@ -58,6 +58,17 @@ def install(sigterm: bool = True) -> Callable[[], None] | None:
     return restore
 
 
+_WORKER = False   # set in a process that only runs episodes for another one (a Ray worker)
+
+
+def running_for_another_process() -> None:
+    """Mark this process as a worker whose Ctrl-C belongs to the process that submitted the
+    episodes (Ray workers: Ray turns a task's KeyboardInterrupt into a cancelled task). There a
+    KeyboardInterrupt inside the planner is the planner's own, as in a serial run."""
+    global _WORKER
+    _WORKER = True
+
+
 def from_the_user(exc: BaseException) -> bool:
     """True if ``exc`` must stop the run: a marked interrupt, or any KeyboardInterrupt while
     interrupts are not marked (then a real Ctrl-C cannot be told apart). A process that ignores
@@ -65,5 +76,7 @@ def from_the_user(exc: BaseException) -> bool:
     there a KeyboardInterrupt is the planner's own."""
     if isinstance(exc, UserInterrupt):
         return True
+    if _WORKER:
+        return False
     handler = signal.getsignal(signal.SIGINT)
     return isinstance(exc, KeyboardInterrupt) and handler is not _on_sigint and handler is not signal.SIG_IGN

@@ -153,6 +153,14 @@ def run_job(job: Any) -> Any:
         return EpisodeError.capture(exc)
 
 
+def run_job_on_worker(job: Any) -> Any:
+    """``run_job`` in a worker process of Ray's: the planner's own KeyboardInterrupt or
+    SystemExit is its episode's subject error there too (core/interrupts.py)."""
+    from ..core.interrupts import running_for_another_process
+    running_for_another_process()
+    return run_job(job)
+
+
 def restore(job: Any, outcome: Any) -> Any:
     """Caller side: raise the job's exception, or let the job complete its result."""
     if isinstance(outcome, EpisodeError):

@@ -1,7 +1,7 @@
 """Episodes as Ray tasks: on a local Ray instance (``auto``) or on a running cluster (``HOST:PORT``).
 
 Optional: needs ``pip install "pytest-navscenario[ray]"``; ``ray`` is imported only here, when an
-executor is made. Each job is one task (``run_job``, one CPU); Ray runs a task again when the
+executor is made. Each job is one task (``run_job_on_worker``, one CPU); Ray runs a task again when the
 worker process or node running it dies (``MAX_RETRIES``), and since an episode is a pure function
 of its job, the retry gives the same bits and each job still has exactly one result.
 
@@ -20,7 +20,7 @@ import socket
 import sys
 from typing import Any, Iterator, Sequence
 
-from .jobs import EpisodeError, EpisodeJob, Pending, run_job
+from .jobs import EpisodeError, EpisodeJob, Pending, run_job_on_worker
 from ..verdict.result import EpisodeResult
 
 MIN_RAY = (2, 9)
@@ -158,7 +158,7 @@ class RayExecutor:
                 raise RaySetupError(f"--nav-ray={address}: cannot join the Ray cluster there: "
                                     f"{type(exc).__name__}: {exc}") from None
             self._owned = True
-        self._run = ray.remote(num_cpus=1, max_retries=MAX_RETRIES)(run_job)
+        self._run = ray.remote(num_cpus=1, max_retries=MAX_RETRIES)(run_job_on_worker)
         self.nodes = [n for n in ray.nodes() if n.get("Alive") and n.get("Resources", {}).get("CPU", 0) > 0]
         self.workers = int(sum(n["Resources"]["CPU"] for n in self.nodes))
         where = "a local Ray instance" if address == "auto" else f"the Ray cluster at {address}"

@@ -180,3 +180,23 @@ def test_interrupting_a_suite_on_ray_keeps_the_finished_items(pytester: pytest.P
     assert 3 <= len(records) < 16, out[-3000:]
     assert len({r["nodeid"] for r in records}) == len(records)
     assert all(r["outcome"] == "success" for r in records)
+
+
+def test_a_planner_that_quits_is_a_subject_error_on_ray_too(pytester: pytest.Pytester, planners: Path, monkeypatch):
+    """A planner's own KeyboardInterrupt or sys.exit() on a Ray worker ends only its episode, as a
+    subject error, exactly as in a serial run (Ray would otherwise take it for a cancelled task)."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "plugin"))
+    from test_planner_exit import NAMES, PLANNER, SCENARIO
+    (planners / "quitter.py").write_text(PLANNER)
+    monkeypatch.syspath_prepend(str(planners))
+    (pytester.path / "s").mkdir()
+    for name in NAMES:
+        (pytester.path / "s" / f"{name}.yaml").write_text(f"name: {name}\n" + SCENARIO)
+    common = ["s", "-p", "no:cacheprovider", "--nav-subject=quitter:Quitter", "--nav-plots=none"]
+    serial = pytester.runpytest(*common, "--nav-results=s.jsonl")
+    on_ray = pytester.runpytest(*common, "--nav-ray=auto", "--nav-results=r.jsonl")
+    serial.assert_outcomes(passed=1, failed=4)
+    on_ray.assert_outcomes(passed=1, failed=4)
+    outcomes = {r["nodeid"].split("::")[1]: r["outcome"] for r in records(pytester.path / "r.jsonl")}
+    assert outcomes == {r["nodeid"].split("::")[1]: r["outcome"] for r in records(pytester.path / "s.jsonl")}
+    assert sorted(n for n, o in outcomes.items() if o == "subject-error") == sorted(n for n in NAMES if n != "fine")
