@@ -170,16 +170,16 @@ def _out_raw(config: pytest.Config) -> tuple[Any, str, Path]:
 
 
 def read_search_settings(config: pytest.Config) -> SearchSettings:
-    from ..search.engine import STRATEGIES
-
+    """Every search option, checked (in every session, so a bad ini value is reported at once;
+    the search package is imported only for a value that needs it)."""
     raw, _, _ = _raw(config, "navsearch")
     names = list(dict.fromkeys(n.strip() for n in (raw or []) if n and n.strip()))
     budget = _int(config, "navsearch_budget", DEFAULT_BUDGET, 1, "the budget (simulations per search)")
     seed = _int(config, "navsearch_seed", 0, 0, "the search seed")
     raw, where, _ = _raw(config, "navsearch_strategy")
     strategy = (str(raw).strip() or "evolve").lower()
-    if strategy not in STRATEGIES:
-        raise pytest.UsageError(f"{where}: unknown strategy {raw!r}; use one of {', '.join(STRATEGIES)}")
+    if strategy not in STRATEGY_NAMES:
+        raise pytest.UsageError(f"{where}: unknown strategy {raw!r}; use one of {', '.join(STRATEGY_NAMES)}")
     shrink = _shrink_budget(config)
     raw, where, base = _out_raw(config)
     raw = str(raw).strip() or DEFAULT_OUT
@@ -219,8 +219,6 @@ def _suite_dir(config: pytest.Config, out: Path) -> Path | None:
 
 def _shrink_budget(config: pytest.Config) -> str:
     """--navsearch-shrink-budget / navsearch_shrink_budget, checked: "25%", "0" or "40"."""
-    from ..search.engine import ShrinkBudget
-
     cli = config.getoption("navsearch_shrink_budget")
     if cli is not None:
         raw, where = cli, "--navsearch-shrink-budget"
@@ -230,6 +228,7 @@ def _shrink_budget(config: pytest.Config) -> str:
         where = "ini option navsearch_shrink_budget"
     if raw in ("", None):
         return DEFAULT_SHRINK_BUDGET
+    from ..search.engine import ShrinkBudget
     try:
         ShrinkBudget.parse(raw)
     except ValueError as exc:

@@ -72,3 +72,22 @@ def test_plugin_load_imports_nothing_heavy():
             "print(sorted(m for m in ('numpy', 'mujoco', 'matplotlib', 'shapely', 'jinja2') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
+
+
+def test_the_search_plugins_copies_of_engine_constants_agree():
+    """plugin/search.py keeps its own copies so that a run without --navsearch never imports the
+    search (its help text and checks need them); they must say what the engine does."""
+    from pytest_navscenario.plugin import search as plugin_search
+    from pytest_navscenario.search import engine
+    assert plugin_search.STRATEGY_NAMES == engine.STRATEGIES
+    assert plugin_search.DEFAULT_SHRINK_BUDGET == engine.DEFAULT_SHRINK_BUDGET
+    assert plugin_search.DEFAULT_STUCK_AFTER == engine.DEFAULT_STUCK_AFTER
+
+
+def test_a_suite_run_without_navsearch_does_not_import_the_search(tmp_path):
+    (tmp_path / "s.yaml").write_text("version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 1, y: 0}, timeout: 5}\n")
+    code = ("import sys, pytest\n"
+            "rc = pytest.main([%r, '-q', '-p', 'no:cacheprovider', '--nav-plots=none', '--nav-artifacts=none'])\n"
+            "print('RC', int(rc), 'pytest_navscenario.search.engine' in sys.modules)" % str(tmp_path))
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path).stdout
+    assert "RC 0 False" in out, out[-2000:]
