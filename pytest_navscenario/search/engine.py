@@ -272,12 +272,9 @@ class _Simulator:
             raise _Stop()
 
 
-def is_duplicate(space: SearchSpace, cand: Candidate, kept: "Sequence[Candidate] | set[tuple]") -> bool:
-    """Same cause signature as a kept failure (fitness.py): the same way of failing. Pass the set
-    of kept signatures (run_search does) for a constant-time test; a sequence of candidates is
-    scanned."""
-    if isinstance(kept, (set, frozenset)):
-        return cand.signature in kept
+def is_duplicate(space: SearchSpace, cand: Candidate, kept: Sequence[Candidate]) -> bool:
+    """Same cause signature as a kept failure (fitness.py): the same way of failing (public API;
+    run_search itself keeps a set of the signatures seen)."""
     return any(k.signature == cand.signature for k in kept)
 
 

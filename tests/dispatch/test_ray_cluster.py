@@ -109,7 +109,7 @@ def test_nodes_that_cannot_load_the_subject_are_named_before_any_episode(pyteste
 
 def test_a_search_on_two_nodes_writes_what_a_serial_run_writes(pytester: pytest.Pytester, cluster, monkeypatch):
     from test_search import SEED_YAML
-    from test_search_parallel import files, log_without_times, without_timestamps
+    from test_search_parallel import assert_same_search_output
     address, folder = cluster
     monkeypatch.syspath_prepend(str(folder))       # the serial run loads the subject here
     (pytester.path / "scenarios").mkdir()
@@ -120,10 +120,4 @@ def test_a_search_on_two_nodes_writes_what_a_serial_run_writes(pytester: pytest.
     serial = pytester.runpytest(*args, "--navsearch-out", "serial")
     on_ray = pytester.runpytest(*args, f"--nav-ray={address}", "--navsearch-out", "ray")
     assert serial.ret == on_ray.ret == 0, on_ray.stdout.str()
-    a, b = files(pytester.path / "serial"), files(pytester.path / "ray")
-    assert sorted(a) == sorted(b) and len(a) >= 2
-    for name in a:
-        if name.endswith("search-log.jsonl"):
-            assert log_without_times(a[name]) == log_without_times(b[name])
-        else:
-            assert without_timestamps(a[name]) == without_timestamps(b[name]), name
+    assert_same_search_output(pytester.path / "serial", pytester.path / "ray")

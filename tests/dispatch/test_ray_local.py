@@ -109,7 +109,7 @@ def test_an_unreachable_cluster_is_a_usage_error_before_any_episode(pytester: py
 
 
 def test_a_search_on_ray_writes_what_a_serial_run_writes(pytester: pytest.Pytester, planners: Path, monkeypatch):
-    from test_search_parallel import files, log_without_times, without_timestamps
+    from test_search_parallel import assert_same_search_output
     monkeypatch.syspath_prepend(str(planners))
     search_project(pytester)
     args = ["-p", "no:cacheprovider", "--nav-subject=straight_planner:Straight", "--navsearch", "crate",
@@ -117,13 +117,7 @@ def test_a_search_on_ray_writes_what_a_serial_run_writes(pytester: pytest.Pytest
     serial = pytester.runpytest(*args, "--navsearch-out", "serial")
     on_ray = pytester.runpytest(*args, "--nav-ray=auto", "--navsearch-out", "ray")
     assert serial.ret == on_ray.ret == 0, on_ray.stdout.str()
-    a, b = files(pytester.path / "serial"), files(pytester.path / "ray")
-    assert sorted(a) == sorted(b) and len(a) >= 2
-    for name in a:
-        if name.endswith("search-log.jsonl"):
-            assert log_without_times(a[name]) == log_without_times(b[name])
-        else:
-            assert without_timestamps(a[name]) == without_timestamps(b[name]), name
+    assert_same_search_output(pytester.path / "serial", pytester.path / "ray")
 
 
 def test_interrupting_a_search_on_ray_keeps_what_it_found(pytester: pytest.Pytester, planners: Path):

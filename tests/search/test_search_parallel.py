@@ -66,6 +66,18 @@ def log_without_times(data: bytes) -> list[dict]:
     return rows
 
 
+def assert_same_search_output(first: Path, second: Path) -> None:
+    """Two runs' search output folders hold the same files: the log equal but for measured wall
+    times, every frozen failure byte for byte but for its provenance time; at least one failure."""
+    a, b = files(first), files(second)
+    assert sorted(a) == sorted(b) and len(a) >= 2          # the log and at least one frozen failure
+    for name in a:
+        if name.endswith("search-log.jsonl"):
+            assert log_without_times(a[name]) == log_without_times(b[name])
+        else:
+            assert without_timestamps(a[name]) == without_timestamps(b[name]), name   # byte for byte
+
+
 def test_one_search_on_two_processes_writes_what_a_serial_run_writes(project: pytest.Pytester):
     args = ["-p", "no:cacheprovider", "--nav-subject=straight_planner:Straight", "--navsearch", "crate",
             "--budget", "40", "--navsearch-seed", "5"]
@@ -73,13 +85,7 @@ def test_one_search_on_two_processes_writes_what_a_serial_run_writes(project: py
     parallel = project.runpytest(*args, "-n", "2", "--navsearch-out", "parallel")
     assert serial.ret == parallel.ret == 0, parallel.stdout.str()
     assert "each search evaluates its candidates on 2 local worker process(es)" in parallel.stdout.str()
-    a, b = files(project.path / "serial"), files(project.path / "parallel")
-    assert sorted(a) == sorted(b) and len(a) >= 2          # the log and at least one frozen failure
-    for name in a:
-        if name.endswith("search-log.jsonl"):
-            assert log_without_times(a[name]) == log_without_times(b[name])
-        else:
-            assert without_timestamps(a[name]) == without_timestamps(b[name]), name   # byte for byte
+    assert_same_search_output(project.path / "serial", project.path / "parallel")
     line = re.compile(r"crate vs .*: 40/40 sims.*")
     assert line.search(serial.stdout.str()) and line.search(parallel.stdout.str())
 

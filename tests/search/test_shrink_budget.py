@@ -13,26 +13,7 @@ from pytest_navscenario.search.engine import (
     shrink_order, shrink_plan)
 from pytest_navscenario.search.space import SearchSpace
 from straight_planner import Straight
-
-LANE = """\
-version: 1
-name: lane
-mission:
-  start: {x: 0.0, y: 0.0, yaw: 90.0}
-  goal: {x: 0.0, y: 6.0, yaw: 90.0}
-  timeout: 15.0
-obstacles:
-  - {type: box, name: crate, x: 1.5, y: 3.0, length: 0.6, width: 0.6}
-search:
-  obstacle_dx: [-1.5, 0.5]
-  obstacle_dy: 0.5
-  obstacle_size: 0
-  obstacle_yaw: 0
-  insert: 1
-  insert_size: [0.4, 0.6]
-  insert_margin: 1.5
-  remove: 1
-"""
+from test_search_loop import OPEN_YAML as LANE   # the open lane with one crate, insertion and removal
 
 
 @pytest.fixture(scope="module")
