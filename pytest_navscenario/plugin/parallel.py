@@ -78,9 +78,7 @@ def pytest_configure(config: pytest.Config) -> None:
     if not _wants_search(config):
         _choose_suite_workers(config)
         return
-    workers = read_workers(config)
-    if workers is not None and _numprocesses(config) is not None:
-        raise pytest.UsageError("give either -n N (pytest-xdist) or --nav-workers N, not both")
+    workers = _nav_workers_alone(config)
     if _numprocesses(config) is not None:
         workers = take_over_xdist(config, "--navsearch")
     if workers is not None:
@@ -121,6 +119,14 @@ def read_workers(config: pytest.Config) -> int | None:
     return n
 
 
+def _nav_workers_alone(config: pytest.Config) -> int | None:
+    """--nav-workers N (None if not given); a usage error next to -n N."""
+    workers = read_workers(config)
+    if workers is not None and _numprocesses(config) is not None:
+        raise pytest.UsageError("give either -n N (pytest-xdist) or --nav-workers N, not both")
+    return workers
+
+
 def _no_workers_with_ray(config: pytest.Config) -> None:
     if read_workers(config) is not None:
         raise pytest.UsageError("--nav-workers runs episodes on local worker processes and --nav-ray on Ray; "
@@ -136,10 +142,8 @@ def _xdist_asked_for(config: pytest.Config) -> bool:
 def _choose_suite_workers(config: pytest.Config) -> None:
     """--nav-workers N, or -n N on a scenario-only run: the scenario items' episodes on N local
     worker processes (see the module docstring); xdist is switched off for it."""
-    workers = read_workers(config)
+    workers = _nav_workers_alone(config)
     if workers is not None:
-        if _numprocesses(config) is not None:
-            raise pytest.UsageError("give either -n N (pytest-xdist) or --nav-workers N, not both")
         config.stash[SUITE_WORKERS_KEY] = (workers, f"--nav-workers {workers}")
         return
     n = _numprocesses(config)
