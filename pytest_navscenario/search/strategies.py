@@ -31,11 +31,11 @@ import math
 import random
 from typing import Any, Sequence
 
-from .space import FLAG_ON, SearchSpace, invalid_reason
+from .space import FLAG_ON, INSERT_PREFIX, SearchSpace, invalid_reason
 
 GENERATION = 8                 # candidates per generation (evolve, random)
 MUTATION_SCALES = (0.05, 0.15, 0.3)   # Gaussian step sd as a fraction of the parameter's range
-OPERATORS = ("explore", "mutate", "place", "insert", "squeeze", "retime", "barrier")
+OPERATORS = ("explore", "mutate", "place", "insert", "squeeze", "retime", "barrier", "shift")
 MIN_SHARE = 0.08               # every usable operator keeps at least this share
 EXPLORE_SHARE = 0.2            # uniform exploration keeps at least this share: never far below random
 PICK_PENALTY = 0.03            # robustness added per earlier pick of an archive cell (novelty)
@@ -52,6 +52,7 @@ SQUEEZE_BAND = (1.0, 1.3)      # squeeze: obstacle centre at this many (robot ha
 RETIME_STARTS = 21             # retime: start offsets tried across their range (and RETIME_SPEEDS speeds)
 RETIME_SPEEDS = 5
 RETIME_LAG = (-1.0, 0.5)       # s: the obstacle is aimed at where the robot was this much later
+SHIFT_RADIUS = 2.0             # m: shift carries the inserted boxes this near the culprit along with it
 
 
 class GaveUp(Exception):
@@ -295,6 +296,7 @@ class Evolve:
         self.aim: tuple[str, int] | None = None         # the arm of the proposal being drawn
         self.aim_bandit: _Targets | None = None          # and the bandit it belongs to
         self.told = 0                                   # generations told so far
+        self.shifted: dict[tuple, int] = {}             # signature -> times its failure was shifted
 
     @property
     def lag(self) -> int:
@@ -307,7 +309,8 @@ class Evolve:
                   "place": bool(self.cells.elites and self.movable), "insert": bool(self.cells.elites and self.slots),
                   "squeeze": bool(self.cells.elites and (self.movable or self.slots)),
                   "retime": bool(self.cells.elites and self.moving),
-                  "barrier": bool(self.cells.elites and len(self.slots) >= 2)}
+                  "barrier": bool(self.cells.elites and len(self.slots) >= 2),
+                  "shift": bool(self._shiftable())}
         rates = {op: (self.stats[op][1] + 1.0) / (self.stats[op][0] + 2.0) for op in OPERATORS if usable[op]}
         total = sum(rates.values())
         return [max(EXPLORE_SHARE if op == "explore" else MIN_SHARE, rates[op] / total) if op in rates else 0.0
@@ -370,6 +373,9 @@ class Evolve:
         self.aim = None
         if op == "explore" or not self.cells.elites:
             return uniform(self.space, rnd), None
+        if op == "shift" and self._shiftable():
+            parent = self._shift_parent(rnd)
+            return self._shift(parent, rnd), parent
         parent = self.cells.pick(rnd)
         if op == "place" and parent.path:
             return self._place(parent, rnd), parent
@@ -574,6 +580,69 @@ class Evolve:
             return self._place(parent, rnd, squeeze=True)
         return self._insert(parent, rnd, squeeze=True)
 
+    def _shiftable(self) -> list[Any]:
+        """The archive's failures whose culprit is an inserted box (the parents ``shift`` uses)."""
+        if not self.slots:
+            return []
+        return [self.cells.elites[k] for k in sorted(self.cells.elites, key=repr)
+                if self.cells.elites[k].failed and self.cells.elites[k].culprit.startswith(INSERT_PREFIX)]
+
+    def _shift_parent(self, rnd: random.Random) -> Any:
+        """One of ``_shiftable``, the ones shifted least often first (weight 1 / (1 + shifts))."""
+        pool = self._shiftable()
+        weights = [1.0 / (1.0 + self.shifted.get(c.signature, 0)) for c in pool]
+        ticket = rnd.random() * sum(weights)
+        for cand, w in zip(pool, weights):
+            if ticket < w:
+                break
+            ticket -= w
+        self.shifted[cand.signature] = self.shifted.get(cand.signature, 0) + 1
+        return cand
+
+    def _shift(self, parent: Any, rnd: random.Random) -> tuple[float, ...]:
+        """Carry a failure's trap to another quarter of the route: the inserted box it failed at
+        (and every other inserted box within SHIFT_RADIUS of it, e.g. a barrier's other half) is
+        moved along the seed's route to a quarter where inserted boxes have failed least, keeping
+        its place and turn relative to the route's direction (a trap that worked once, met again
+        somewhere else along the route: a new place, a new way of failing)."""
+        space, route = self.space, self._route()
+        offsets = list(parent.offsets)
+        scenario = space.apply(parent.offsets)
+        culprit = scenario.obstacle(parent.culprit)
+        f = route.fraction(culprit.x, culprit.y)
+        here = _quarter(f)
+        failed = [sum(1 for sig in self.failure_signatures if sig[1] == "inserted" and sig[2] == q)
+                  for q in range(QUARTERS)]
+        others = [q for q in range(QUARTERS) if q != here]
+        weights = [1.0 / (1.0 + failed[q]) ** 2 for q in others]
+        ticket, there = rnd.random() * sum(weights), others[-1]
+        for q, w in zip(others, weights):
+            if ticket < w:
+                there = q
+                break
+            ticket -= w
+        g = f + (there - here) / QUARTERS + rnd.uniform(-0.3, 0.3) / QUARTERS
+        if _quarter(g) != there:
+            g = (there + rnd.uniform(0.1, 0.9)) / QUARTERS
+        self.aim, self.aim_bandit = ("inserted", there), self._arms()
+        (ax, ay), a = _route_point(route, f), _route_heading(route, f)
+        (bx, by), b = _route_point(route, g), _route_heading(route, g)
+        turn = b - a
+        c, s = math.cos(turn), math.sin(turn)
+        x0, y0, x1, y1 = space.region
+        for k, group in enumerate(self.slots):
+            at = {space.params[i].attr: i for i in group}
+            if offsets[at["on"]] < FLAG_ON:
+                continue
+            box = scenario.obstacle(f"{INSERT_PREFIX}{k + 1}")
+            if math.hypot(box.x - culprit.x, box.y - culprit.y) > SHIFT_RADIUS:
+                continue
+            rx, ry = box.x - ax, box.y - ay
+            offsets[at["x"]] = bx + c * rx - s * ry - (x0 + x1) / 2
+            offsets[at["y"]] = by + s * rx + c * ry - (y0 + y1) / 2
+            offsets[at["yaw"]] = (box.yaw + math.degrees(turn) + 90.0) % 180.0 - 90.0
+        return space.clip(offsets)
+
     def _timing_arms(self) -> _Targets:
         """The retime arms: each moving obstacle in each route quarter its track can come near
         (its positions over the episode, shifted within its dx/dy bounds)."""
@@ -701,6 +770,12 @@ def _route_point(route: Any, fraction: float) -> tuple[float, float]:
 
     s = min(1.0, max(0.0, fraction)) * route.length
     return (float(np.interp(s, route.cum, route.points[:, 0])), float(np.interp(s, route.cum, route.points[:, 1])))
+
+
+def _route_heading(route: Any, fraction: float) -> float:
+    """The direction (radians) of the seed's route at arc-length ``fraction``."""
+    a, b = _route_point(route, fraction - 0.02), _route_point(route, fraction + 0.02)
+    return math.atan2(b[1] - a[1], b[0] - a[0])
 
 
 def _route_samples(route: Any, n: int = 40) -> list[tuple[float, float, float]]:
