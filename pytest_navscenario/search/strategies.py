@@ -35,8 +35,8 @@ from .space import FLAG_ON, INSERT_PREFIX, SearchSpace, invalid_reason
 
 GENERATION = 8                 # candidates per generation (evolve, random)
 MUTATION_SCALES = (0.05, 0.15, 0.3)   # Gaussian step sd as a fraction of the parameter's range
-OPERATORS = ("explore", "mutate", "place", "insert", "squeeze", "retime", "barrier", "shift")
-MIN_SHARE = 0.08               # every usable operator keeps at least this share
+OPERATORS = ("explore", "mutate", "place", "insert", "squeeze", "retime", "barrier", "shift", "crowd")
+MIN_SHARE = 0.04               # every usable operator keeps at least this share
 EXPLORE_SHARE = 0.2            # uniform exploration keeps at least this share: never far below random
 PICK_PENALTY = 0.03            # robustness added per earlier pick of an archive cell (novelty)
 NEAR_COPY = 0.5                # m: a failure's child whose culprit moved less (same quarter) is skipped
@@ -52,6 +52,7 @@ SQUEEZE_BAND = (1.0, 1.3)      # squeeze: obstacle centre at this many (robot ha
 RETIME_STARTS = 21             # retime: start offsets tried across their range (and RETIME_SPEEDS speeds)
 RETIME_SPEEDS = 5
 RETIME_LAG = (-1.0, 0.5)       # s: the obstacle is aimed at where the robot was this much later
+CROWD_GAP = 0.4                # m: crowd leaves at most this much between a box and the start/goal footprint
 SHIFT_RADIUS = 2.0             # m: shift carries the inserted boxes this near the culprit along with it
 
 
@@ -310,7 +311,7 @@ class Evolve:
                   "squeeze": bool(self.cells.elites and (self.movable or self.slots)),
                   "retime": bool(self.cells.elites and self.moving),
                   "barrier": bool(self.cells.elites and len(self.slots) >= 2),
-                  "shift": bool(self._shiftable())}
+                  "shift": bool(self._shiftable()), "crowd": bool(self.cells.elites and self.slots)}
         rates = {op: (self.stats[op][1] + 1.0) / (self.stats[op][0] + 2.0) for op in OPERATORS if usable[op]}
         total = sum(rates.values())
         return [max(EXPLORE_SHARE if op == "explore" else MIN_SHARE, rates[op] / total) if op in rates else 0.0
@@ -387,6 +388,8 @@ class Evolve:
             return self._retime(parent, rnd), parent
         if op == "barrier" and parent.path:
             return self._barrier(parent, rnd), parent
+        if op == "crowd" and self.slots:
+            return self._crowd(parent, rnd), parent
         return self._mutate(parent, rnd), parent
 
     def _repeats(self, parent: Any, offsets: Sequence[float]) -> bool:
@@ -580,6 +583,39 @@ class Evolve:
             return self._place(parent, rnd, squeeze=True)
         return self._insert(parent, rnd, squeeze=True)
 
+    def _crowd(self, parent: Any, rnd: random.Random) -> tuple[float, ...]:
+        """Crowd an end of the route: an inserted box aligned with the robot, at a random bearing
+        just beside the footprint at the start or the goal pose (at most CROWD_GAP from it), the
+        end where inserted boxes have failed least. Where the robot must turn or stop in its
+        final pose, or set off from its first, a box within reach is what a route-following
+        operator never puts there (the robot's path ends at the goal), and a planner that needs
+        room at the goal, or accelerates before it looks, fails there. On a failing parent's
+        layout the robot would most likely fail as before: then on the seed's."""
+        space = self.space
+        offsets = list(space.zero() if parent.failed else parent.offsets)
+        mission = space.apply(parent.offsets).mission
+        ends = (0, QUARTERS - 1)
+        weights = [1.0 / (1.0 + sum(1 for sig in self.failure_signatures
+                                    if sig[1] == "inserted" and sig[2] == q)) ** 2 for q in ends]
+        end = ends[0] if rnd.random() * sum(weights) < weights[0] else ends[1]
+        self.aim, self.aim_bandit = ("inserted", end), self._arms()
+        pose = mission.start if end == ends[0] else mission.goal
+        lo, hi = space.limits.insert_size
+        size = rnd.uniform(lo, hi)
+        bearing = rnd.uniform(-math.pi, math.pi)   # from the robot's heading
+        gap = rnd.uniform(0.02, CROWD_GAP)
+        heading = math.radians(pose.yaw)
+        d = _distance_for_gap(space.seed.robot.footprint, pose.x, pose.y, heading, bearing, size, gap)
+        x0, y0, x1, y1 = space.region
+        free = [g for g in self.slots if offsets[g[0]] < FLAG_ON]
+        group = rnd.choice(free or self.slots)
+        values = {"on": 1.0, "size": size - lo, "yaw": (pose.yaw + 90.0) % 180.0 - 90.0,
+                  "x": pose.x + d * math.cos(heading + bearing) - (x0 + x1) / 2,
+                  "y": pose.y + d * math.sin(heading + bearing) - (y0 + y1) / 2}
+        for i in group:
+            offsets[i] = values.get(space.params[i].attr, offsets[i])
+        return space.clip(offsets)
+
     def _shiftable(self) -> list[Any]:
         """The archive's failures whose culprit is an inserted box (the parents ``shift`` uses)."""
         if not self.slots:
@@ -770,6 +806,22 @@ def _route_point(route: Any, fraction: float) -> tuple[float, float]:
 
     s = min(1.0, max(0.0, fraction)) * route.length
     return (float(np.interp(s, route.cum, route.points[:, 0])), float(np.interp(s, route.cum, route.points[:, 1])))
+
+
+def _distance_for_gap(footprint: Any, x: float, y: float, heading: float, bearing: float, size: float,
+                      gap: float) -> float:
+    """How far from (x, y), at ``bearing`` from ``heading`` (rad), to centre a square box of side
+    ``size`` turned with the robot so that it is ``gap`` from the robot's footprint there."""
+    from ..scenario.geometry import footprint_polygon, rectangle
+
+    robot = footprint_polygon(footprint, x, y, heading)
+    c, s = abs(math.cos(bearing)), abs(math.sin(bearing))
+    reach = (footprint.radius if footprint.shape == "circle" else footprint.length / 2 * c + footprint.width / 2 * s)
+    d = reach + size / 2 * (c + s) + gap      # a separating line ``gap`` from the footprint: at least gap
+    for _ in range(4):                        # the true distance is monotone in d: a few corrections
+        box = rectangle(x + d * math.cos(heading + bearing), y + d * math.sin(heading + bearing), size, size, heading)
+        d += gap - robot.distance(box)
+    return d
 
 
 def _route_heading(route: Any, fraction: float) -> float:

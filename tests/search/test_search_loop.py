@@ -305,6 +305,87 @@ def test_barrier_mutation_walls_off_the_path_with_two_boxes_the_robot_cannot_pas
             assert cand.failed and cand.culprit.startswith(INSERT_PREFIX), (k, cand.outcome, cand.culprit)
 
 
+def _inserted(scenario):
+    return sorted((o for o in scenario.obstacles if o.name.startswith(INSERT_PREFIX)), key=lambda o: o.name)
+
+
+def test_shift_mutation_carries_a_failing_trap_to_a_quarter_where_inserted_boxes_have_not_failed(lane):
+    """A box on the line in the lane's first quarter stops the straight driver. Shift moves that
+    box, and the second box beside it (a barrier's other half), along the route to another
+    quarter, the same distance beside the line; the quarters where inserted boxes already failed
+    are chosen least; and the carried trap fails again there: a new place, a new signature."""
+    import random
+    from pytest_navscenario.search.strategies import SHIFT_RADIUS
+
+    space = SearchSpace(lane, {"insert": 2})
+    x0, y0, x1, y1 = space.region
+    cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
+    trap = _values(space, **{"inserted[0]__on": 1.0, "inserted[0]__x": 0.1 - cx, "inserted[0]__y": 1.2 - cy,
+                             "inserted[1]__on": 1.0, "inserted[1]__x": -0.6 - cx, "inserted[1]__y": 1.2 - cy})
+    ctx = EvalContext(space, Straight, stuck_after=None)
+    parent = evaluate_candidate(ctx, trap, "insert")
+    assert parent.failed and parent.signature[1:3] == ("inserted", 0), parent.signature
+    evo = Evolve(space, _report(space), 10, 0)
+    evo.tell([parent])
+    evo.failure_signatures.add(("timeout", "inserted", 1, 1))   # quarter 1 has failed already
+    assert evo._shiftable() == [parent]
+    quarters, new = [], set()
+    for k in range(24):
+        child = evo._shift(parent, random.Random(k))
+        boxes = _inserted(space.apply(child))
+        assert [round(b.x, 3) for b in boxes] == [0.1, -0.6], (k, boxes)   # beside the line as before
+        assert abs(boxes[0].y - boxes[1].y) < 1e-6 and boxes[0].y != 1.2
+        quarter = _lane_quarter(boxes[0].y)
+        assert evo.aim == ("inserted", quarter) != ("inserted", 0)
+        quarters.append(quarter)
+        if k < 6:
+            cand = evaluate_candidate(ctx, child, "shift")
+            assert cand.failed and cand.signature[1:3] == ("inserted", quarter), (k, cand.signature)
+            new.add(cand.signature)
+    assert quarters.count(1) < min(quarters.count(2), quarters.count(3))
+    assert len(new - {parent.signature}) >= 2
+    far = _values(space, **{"inserted[0]__on": 1.0, "inserted[0]__x": 0.1 - cx, "inserted[0]__y": 1.2 - cy,
+                            "inserted[1]__on": 1.0, "inserted[1]__x": 1.4 - cx, "inserted[1]__y": 1.2 + SHIFT_RADIUS + 0.5 - cy})
+    parent_far = evaluate_candidate(ctx, far, "insert")
+    boxes = _inserted(space.apply(evo._shift(parent_far, random.Random(0))))
+    assert (boxes[1].x, boxes[1].y) == (1.4, round(1.2 + SHIFT_RADIUS + 0.5, 4))   # not part of the trap: stays
+
+
+def test_crowd_mutation_puts_a_box_just_beside_the_start_or_goal_footprint(lane):
+    """Crowd puts an inserted box within CROWD_GAP of the robot's footprint at the start or the
+    goal pose, never on it; once boxes have failed at the start, it crowds the goal most; and a
+    box crowding the start ahead of the straight driver stops it."""
+    import random
+
+    from pytest_navscenario.scenario.geometry import footprint_polygon, obstacle_polygon
+    from pytest_navscenario.search.strategies import CROWD_GAP
+
+    space = SearchSpace(lane, {"insert": 1})
+    evo = Evolve(space, _report(space), 10, 0)
+    parent = _parent(lane, space)
+    fp = lane.robot.footprint
+    poses = {"start": lane.mission.start, "goal": lane.mission.goal}
+    ends = []
+    for k in range(40):
+        if k == 20:   # from now on the start has failed twice: the goal is crowded most
+            evo.failure_signatures |= {("safety-stop", "inserted", 0, 0), ("timeout", "inserted", 0, 0)}
+        (box,) = _inserted(space.apply(evo._crowd(parent, random.Random(k))))
+        gaps = {end: footprint_polygon(fp, p.x, p.y, math.radians(p.yaw)).distance(obstacle_polygon(box))
+                for end, p in poses.items()}
+        end = min(gaps, key=gaps.get)
+        assert 0.0 < gaps[end] <= CROWD_GAP + 1e-6, (k, box, gaps)
+        assert evo.aim == ("inserted", 0 if end == "start" else 3)
+        ends.append(end)
+    assert 5 <= ends[:20].count("start") <= 15 and ends[20:].count("goal") >= 16, ends
+    ctx = EvalContext(space, Straight, stuck_after=None)
+    fresh = Evolve(space, _report(space), 10, 0)
+    ahead = [k for k in range(200) if (b := _inserted(space.apply(fresh._crowd(parent, random.Random(k))))[0])
+             and 0.4 < b.y < 1.5 and abs(b.x) < 0.4]
+    assert ahead
+    cand = evaluate_candidate(ctx, fresh._crowd(parent, random.Random(ahead[0])), "crowd")
+    assert cand.failed and cand.signature[1:] == ("inserted", 0, 0), cand.signature
+
+
 def test_target_bandit_moves_on_from_a_place_that_has_failed():
     import random
     from pytest_navscenario.search.strategies import _Targets
