@@ -13,6 +13,10 @@
   squeeze one just beside the path (narrowing the passage to little more than the footprint),
   wall the path off with two inserted boxes (barrier), or retime a moving obstacle so that it
   reaches the robot's path when the robot was there (time-to-impact in time as well as space).
+  Two more move toward cells of the signature space that are not filled yet: shift carries a
+  failure's inserted box (its trap) along the route to a quarter where inserted boxes have failed
+  least, crowd puts a box just beside the footprint at the start or goal pose (the least-failed
+  end), where no path-following operator reaches.
   The first generation is the seed alone, so the second can aim at its episode.
   Operator shares follow which operator has been finding new failing signatures; where the
   aimed operators put an obstacle (which obstacle, which quarter of the route) is a second
@@ -603,7 +607,7 @@ class Evolve:
         lo, hi = space.limits.insert_size
         size = rnd.uniform(lo, hi)
         bearing = rnd.uniform(-math.pi, math.pi)   # from the robot's heading
-        gap = rnd.uniform(0.02, CROWD_GAP)
+        gap = 0.02 + (CROWD_GAP - 0.02) * rnd.random() ** 2   # closer is likelier: half of them within 0.11 m
         heading = math.radians(pose.yaw)
         d = _distance_for_gap(space.seed.robot.footprint, pose.x, pose.y, heading, bearing, size, gap)
         x0, y0, x1, y1 = space.region
