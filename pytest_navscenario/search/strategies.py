@@ -17,7 +17,8 @@
   failure's inserted box (its trap) along the route to a quarter where inserted boxes have failed
   least, crowd puts a box just beside the footprint at the start or goal pose (the least-failed
   end), where no path-following operator reaches.
-  The first generation is the seed alone, so the second can aim at its episode.
+  The first generation aims at the seed's route (before any episode is known) and ends with
+  the seed itself, so the second can aim at the path the robot took.
   Operator shares follow which operator has been finding new failing signatures; where the
   aimed operators put an obstacle (which obstacle, which quarter of the route) is a second
   bandit rewarded for new failing signatures and divided down by re-created ones.
@@ -322,7 +323,7 @@ class Evolve:
 
     @property
     def lag(self) -> int:
-        """0 until the first generation (the seed's episode, whose path the aimed operators
+        """0 until the first generation (with the seed's episode, whose path the aimed operators
         use) is told, then 1: generation g+2 is drawn knowing the results up to generation g."""
         return 1 if self.told else 0
 

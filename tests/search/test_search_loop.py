@@ -403,6 +403,26 @@ def test_first_generation_aims_at_the_seeds_route_and_ends_with_the_seed(lane):
         assert abs(box.x) <= 1.3 * (0.25 + box.length / 2) + 1e-6 and -0.5 <= box.y <= 6.5, (k, box)
 
 
+def test_half_the_draws_explore_uniformly_until_the_first_failure(lane):
+    """Until a failure is known, at least EXPLORE_FIRST of the operator weight is uniform
+    exploration; once one is, exploration keeps its usual floor and the aimed operators the rest."""
+    from pytest_navscenario.search.strategies import EXPLORE_FIRST, EXPLORE_SHARE, OPERATORS
+
+    space = SearchSpace(lane, {"insert": 2})
+    ctx = EvalContext(space, Straight, stuck_after=None)
+    evo = Evolve(space, _report(space), 40, 0)
+    evo.tell([evaluate_candidate(ctx, space.zero(), "seed")])
+    explore = OPERATORS.index("explore")
+    w = evo.weights()
+    assert w[explore] / sum(w) == pytest.approx(EXPLORE_FIRST)
+    x0, y0, x1, y1 = space.region
+    trap = _values(space, **{"inserted[0]__on": 1.0, "inserted[0]__x": -(x0 + x1) / 2, "inserted[0]__y": 1.2 - (y0 + y1) / 2})
+    evo.tell([evaluate_candidate(ctx, trap, "insert")])
+    assert evo.failure_signatures
+    w = evo.weights()
+    assert EXPLORE_SHARE / 2 < w[explore] / sum(w) < EXPLORE_FIRST / 2
+
+
 def test_target_bandit_moves_on_from_a_place_that_has_failed():
     import random
     from pytest_navscenario.search.strategies import _Targets
