@@ -17,8 +17,8 @@
   failure's inserted box (its trap) along the route to a quarter where inserted boxes have failed
   least, crowd puts a box just beside the footprint at the start or goal pose (the least-failed
   end), where no path-following operator reaches.
-  The first generation aims at the seed's route (before any episode is known) and ends with
-  the seed itself, so the second can aim at the path the robot took.
+  The first generation is the seed itself and candidates aimed at the seed's route (before any
+  episode is known); the second can aim at the path the robot took.
   Operator shares follow which operator has been finding new failing signatures; where the
   aimed operators put an obstacle (which obstacle, which quarter of the route) is a second
   bandit rewarded for new failing signatures and divided down by re-created ones.
@@ -349,13 +349,13 @@ class Evolve:
         self.generation += 1
         out: list[tuple[tuple[float, ...], str]] = []
         want = min(room, GENERATION)
-        seed = self.generation == 1 and self.admission.admit(self.space.zero())
-        want -= seed   # generation 1 ends with the seed: the next one can aim at the path it took
+        if self.generation == 1 and self.admission.admit(self.space.zero()):
+            out.append((self.space.zero(), "seed"))   # first: a seed that fails already is found at once
         attempt = 0
         while len(out) < want:   # ends: the admission gives up (GaveUp) after too many misses
             out.extend(self._hypothesis_batch(want - len(out), attempt))
             attempt += 1
-        return out[:want] + ([(self.space.zero(), "seed")] if seed else [])
+        return out[:want]
 
     def _hypothesis_batch(self, n: int, attempt: int) -> list[tuple[tuple[float, ...], str]]:
         """Up to ``n`` valid proposals drawn in one seeded Hypothesis run."""

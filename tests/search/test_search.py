@@ -103,12 +103,11 @@ def test_finds_a_failure_within_a_few_simulations_and_budget_is_exact(found):
     search = [c for c in found.candidates if c.phase == "search"]
     assert found.sims_used == len(search) == 8
     assert [c.sim for c in search] == list(range(1, 9))
-    seed_runs = [c for c in search if c.origin == "seed"]   # the last of generation 1 (8 candidates)
-    assert [c.sim for c in seed_runs] == [8] and seed_runs[0].outcome == "success"
+    assert search[0].origin == "seed" and search[0].outcome == "success"
     assert found.failures, "the crate is 0.65 m from the line; a shift of -0.65 m breaks Straight"
     assert all(f.found.outcome in ("collision", "safety-stop") and f.found.culprit == "crate"
                for f in found.failures)
-    assert found.best_clearance < seed_runs[0].clearance
+    assert found.best_clearance < search[0].clearance
     assert found.shrink_sims == sum(f.shrink_sims for f in found.failures) > 0
     assert found.subject == "straight" and found.subject_version == "1.0"
 

@@ -386,15 +386,15 @@ def test_crowd_mutation_puts_a_box_just_beside_the_start_or_goal_footprint(lane)
     assert cand.failed and cand.signature[1:] == ("inserted", 0, 0), cand.signature
 
 
-def test_first_generation_aims_at_the_seeds_route_and_ends_with_the_seed(lane):
-    """Before any episode is known, generation 1 aims at the seed's route (its shortest path, as
-    if driven at top speed): an inserted box lands on or beside the lane's line; the seed itself
-    is the generation's last candidate, so generation 2 can aim at the path the robot took."""
+def test_first_generation_is_the_seed_and_candidates_aimed_at_its_route(lane):
+    """Before any episode is known, generation 1 is the seed itself and candidates aimed at the
+    seed's route (its shortest path, as if driven at top speed): an inserted box lands on or
+    beside the lane's line; generation 2 is drawn once they are told."""
     space = SearchSpace(lane, {"insert": 1})
     evo = Evolve(space, _report(space), 40, 0)
     first = evo.ask(40)
-    assert len(first) == 8 and first[-1] == (space.zero(), "seed")
-    assert evo.lag == 0 and {origin for _, origin in first[:-1]} - {"explore"}
+    assert len(first) == 8 and first[0] == (space.zero(), "seed")
+    assert evo.lag == 0 and {origin for _, origin in first[1:]} - {"explore"}
     import random
     for k in range(12):   # every insert drawn from generation 1's parent sits on the route's band
         offsets, parent = evo.propose("insert", random.Random(k))
