@@ -74,7 +74,7 @@ class EpisodeResult:
     collision: Collision | None = None
     safety_stop: SafetyStop | None = None
     subject_failure: SubjectFailure | None = None
-    wall_time: float = 0.0                      # s, the whole run_scenario call
+    wall_time: float = 0.0                      # s, the whole run_scenario call (+ a feasibility check before it)
     timings: dict[str, float] = field(default_factory=dict)  # s: physics, rays, planner, harness
 
     @property
