@@ -70,6 +70,56 @@ def _shift_or(out: np.ndarray, src: np.ndarray, di: int, dj: int) -> None:
     out[oi, oj] |= src[si, sj]
 
 
+def _wavefront(field: np.ndarray, open_: np.ndarray, seed: np.ndarray, near: np.ndarray, limit: int,
+               ahead: int) -> tuple[int | None, np.ndarray]:
+    """Breadth-first steps (8-connected) from ``seed`` through the ``open_`` cells into ``field``,
+    until the steps run out (``limit``) or ``ahead`` steps after the wave first reaches a
+    ``near`` cell. Returns (that last step, None if no near cell was reached; the field with a
+    border of -1, flattened).
+
+    The grid gets a border of one closed cell and is flattened, so that the frontier's 3 x 3
+    dilation is four OR-s of contiguous 1-D slices (along the rows by +-1, then across them by
+    +-(width + 2)): a border cell is never open, so nothing wraps from one row into the next."""
+    h, w = field.shape
+    stride = w + 2
+
+    def padded(a: np.ndarray, fill) -> np.ndarray:
+        out = np.full((h + 2, stride), fill, dtype=a.dtype)
+        out[1:-1, 1:-1] = a
+        return out.reshape(-1)
+
+    open_p, front, grow = padded(open_, False), padded(seed, False), np.zeros((h + 2) * stride, dtype=bool)
+    field_p = padded(field, -1)
+    rows = np.zeros_like(grow)
+    ni, nj = near.any(axis=1).nonzero()[0], near.any(axis=0).nonzero()[0]
+    box = (slice(ni[0] + 1, ni[-1] + 2), slice(nj[0] + 1, nj[-1] + 2)) if len(ni) else None
+    near_box = near[ni[0]:ni[-1] + 1, nj[0]:nj[-1] + 1] if box is not None else None
+    grow_2d = grow.reshape(h + 2, stride)
+    reached_near = bool((seed & near).any())
+    step, extra = 0, None
+    alive = bool(seed.any())
+    while alive and step < limit:
+        step += 1
+        r = rows[1:-1]
+        np.bitwise_or(front[:-2], front[2:], out=r)
+        r |= front[1:-1]
+        g = grow[stride:-stride]
+        np.bitwise_or(rows[:-2 * stride], rows[2 * stride:], out=g)
+        g |= rows[stride:-stride]
+        grow &= open_p
+        field_p[grow] = step
+        open_p ^= grow                                     # grow is within open_p: open_p &= ~grow
+        if extra is None and (reached_near or (box is not None and (grow_2d[box] & near_box).any())):
+            extra = step + ahead
+        if extra is not None and step >= extra:
+            break
+        alive = bool(grow.any())
+        front, grow = grow, front                          # both keep an empty border
+        grow_2d = grow.reshape(h + 2, stride)
+    field[...] = field_p.reshape(h + 2, stride)[1:-1, 1:-1]
+    return extra, field_p
+
+
 class LidarGrid:
     """Occupied cells seen by the lidar over one episode, in a fixed world-frame grid that
     covers ``points`` (start, waypoints, goal) plus ``border`` metres."""
@@ -85,6 +135,10 @@ class LidarGrid:
         self._rot = np.zeros((2, 3))
         self.set_inflation(inflation)
         self.field: np.ndarray | None = None    # steps to the target, -1 = not reached
+        self._flat = np.empty(0, dtype=np.int32)  # the field with a border of -1, flattened
+        self._walk: list[int] | None = None       # the same as a list, made when first walked
+        r = int(0.6 / res) + 1                  # carrot's window around the robot, cells
+        self._near_cost = np.hypot(*_open_grid(-r, r + 1, -r, r + 1)) * 0.5
         self.box = (0, 0)                        # (row, column) of field[0, 0] in the grid
 
     def set_inflation(self, inflation: float) -> None:
@@ -128,31 +182,10 @@ class LidarGrid:
             seed = (ii - ti) ** 2 + (jj - tj) ** 2 <= k * k
         field = np.full(free.shape, -1, dtype=np.int32)
         field[seed] = 0
-        open_ = free & ~seed                 # free and not reached yet
-        frontier = seed
         near = ((ii - ri) ** 2 + (jj - rj) ** 2 <= (int(0.6 / res) + 1) ** 2)
-        reached_near = bool((seed & near).any())
-        step, grow, rows = 0, np.empty_like(seed), np.empty_like(seed)
-        limit = 4 * (free.shape[0] + free.shape[1])
-        extra = None
-        while frontier.any() and step < limit:
-            step += 1
-            # the 8-neighbourhood of the frontier (and the frontier itself, already reached)
-            np.copyto(rows, frontier)
-            _shift_or(rows, frontier, 0, 1)
-            _shift_or(rows, frontier, 0, -1)
-            np.copyto(grow, rows)
-            _shift_or(grow, rows, 1, 0)
-            _shift_or(grow, rows, -1, 0)
-            grow &= open_
-            field[grow] = step
-            open_ &= ~grow
-            frontier = grow.copy()
-            if extra is None and (reached_near or (grow & near).any()):
-                extra = step + int(1.5 / res)       # a little more, for the route ahead
-            if extra is not None and step >= extra:
-                break
-        self.field, self.box = field, (i0, j0)
+        extra, self._flat = _wavefront(field, free & ~seed, seed, near, 4 * (free.shape[0] + free.shape[1]),
+                                       int(1.5 / res))
+        self.field, self.box, self._walk = field, (i0, j0), None
         return extra is not None
 
     def carrot(self, robot: tuple[float, float], lookahead: float) -> tuple[float, float] | None:
@@ -167,11 +200,13 @@ class LidarGrid:
         r = int(0.6 / res) + 1
         a0, a1 = max(ri - r, 0), min(ri + r + 1, f.shape[0])
         b0, b1 = max(rj - r, 0), min(rj + r + 1, f.shape[1])
-        if a0 < a1 and b0 < b1 and (f[a0:a1, b0:b1] >= 0).any():
-            sub = f[a0:a1, b0:b1].astype(float)
-            ii, jj = _open_grid(a0, a1, b0, b1)
-            sub += np.hypot(ii - ri, jj - rj) * 0.5      # prefer close cells at the same distance
-            sub[f[a0:a1, b0:b1] < 0] = np.inf
+        win = f[a0:a1, b0:b1]
+        unreached = win < 0
+        if a0 < a1 and b0 < b1 and not unreached.all():
+            sub = win.astype(float)
+            # prefer close cells at the same distance: half the distance in cells (a table)
+            sub += self._near_cost[a0 - ri + r:a1 - ri + r, b0 - rj + r:b1 - rj + r]
+            sub[unreached] = np.inf
             flat = int(np.argmin(sub))
             ci, cj = a0 + flat // sub.shape[1], b0 + flat % sub.shape[1]
         else:
@@ -181,17 +216,24 @@ class LidarGrid:
                 return None
             ci, cj = (int(v) for v in reached[np.argmin(((reached - (ri, rj)) ** 2).sum(axis=1))])
             return (self.origin[0] + (cj + self.box[1]) * res, self.origin[1] + (ci + self.box[0]) * res)
-        h, w = f.shape
-        at = f.item                                      # a Python int per cell: cheaper than f[i, j]
+        # downhill on the field with its border of -1, as a flat list (made once per plan, used
+        # by the ~20 carrots until the next one): no bounds checks, a Python int per cell read
+        # (much cheaper than f[i, j]); the first lower neighbour in _STEPS order
+        if self._walk is None:
+            self._walk = self._flat.tolist()
+        at = self._walk
+        stride = f.shape[1] + 2
+        k = (ci + 1) * stride + cj + 1
+        deltas = [di * stride + dj for di, dj in _STEPS]
         for _ in range(max(int(lookahead / res), 1)):
-            here = at(ci, cj)
+            here = at[k]
             if here <= 0:
                 break
-            for di, dj in _STEPS:
-                ni, nj = ci + di, cj + dj
-                if 0 <= ni < h and 0 <= nj < w and 0 <= at(ni, nj) < here:
-                    ci, cj = ni, nj
+            for d in deltas:
+                if 0 <= at[k + d] < here:
+                    k += d
                     break
             else:
                 break
+        ci, cj = k // stride - 1, k % stride - 1
         return (self.origin[0] + (cj + self.box[1]) * res, self.origin[1] + (ci + self.box[0]) * res)
