@@ -91,31 +91,31 @@ def _wavefront(field: np.ndarray, open_: np.ndarray, seed: np.ndarray, near: np.
     open_p, front, grow = padded(open_, False), padded(seed, False), np.zeros((h + 2) * stride, dtype=bool)
     field_p = padded(field, -1)
     rows = np.zeros_like(grow)
-    ni, nj = near.any(axis=1).nonzero()[0], near.any(axis=0).nonzero()[0]
-    box = (slice(ni[0] + 1, ni[-1] + 2), slice(nj[0] + 1, nj[-1] + 2)) if len(ni) else None
-    near_box = near[ni[0]:ni[-1] + 1, nj[0]:nj[-1] + 1] if box is not None else None
-    grow_2d = grow.reshape(h + 2, stride)
+    # the slices of every step, made once (front and grow swap buffers each step)
+    r, rows_up, rows_mid, rows_down = rows[1:-1], rows[:-2 * stride], rows[stride:-stride], rows[2 * stride:]
+    front_v, grow_v = ((a[:-2], a[1:-1], a[2:], a[stride:-stride]) for a in (front, grow))
+    # the near cells as flat indices of the bordered grid
+    near_i, near_j = np.nonzero(near)
+    near_at = (near_i + 1) * stride + near_j + 1
     reached_near = bool((seed & near).any())
     step, extra = 0, None
     alive = bool(seed.any())
     while alive and step < limit:
         step += 1
-        r = rows[1:-1]
-        np.bitwise_or(front[:-2], front[2:], out=r)
-        r |= front[1:-1]
-        g = grow[stride:-stride]
-        np.bitwise_or(rows[:-2 * stride], rows[2 * stride:], out=g)
-        g |= rows[stride:-stride]
+        np.bitwise_or(front_v[0], front_v[2], out=r)
+        r |= front_v[1]
+        g = grow_v[3]
+        np.bitwise_or(rows_up, rows_down, out=g)
+        g |= rows_mid
         grow &= open_p
         field_p[grow] = step
         open_p ^= grow                                     # grow is within open_p: open_p &= ~grow
-        if extra is None and (reached_near or (box is not None and (grow_2d[box] & near_box).any())):
+        if extra is None and (reached_near or grow[near_at].any()):
             extra = step + ahead
         if extra is not None and step >= extra:
             break
         alive = bool(grow.any())
-        front, grow = grow, front                          # both keep an empty border
-        grow_2d = grow.reshape(h + 2, stride)
+        front, grow, front_v, grow_v = grow, front, grow_v, front_v    # both keep an empty border
     field[...] = field_p.reshape(h + 2, stride)[1:-1, 1:-1]
     return extra, field_p
 
