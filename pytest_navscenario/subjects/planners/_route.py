@@ -5,14 +5,17 @@ runs into a wall it cannot see around: a dead end, the outer wall of a bend. Lik
 planner of a navigation stack, :class:`LidarGrid` remembers every lidar return of the episode
 in a world-frame grid (no map is given: unknown cells count as free), and :meth:`LidarGrid.plan`
 computes, on request, the number of grid steps from every reachable cell to the target with the
-obstacles inflated by the robot's half width plus a margin (breadth-first wavefront, 8-connected,
-numpy only). :meth:`LidarGrid.carrot` then follows that field downhill from the robot to a point
-``lookahead`` metres along the route, which the local planner aims at instead of the target.
+obstacles inflated by the robot's half width plus a margin (breadth-first wavefront, 8-connected).
+:meth:`LidarGrid.carrot` then follows that field downhill from the robot to a point ``lookahead``
+metres along the route, which the local planner aims at instead of the target.
 
-Cost: marking the returns is a few array operations per tick; a plan is 1-15 ms (one numpy pass
-per grid step of route length), so the caller plans only when it is stuck. Both dilations are
-separable (a row-wise pass, then a column-wise one: the same cells as shifting by every offset
-of the disk or the 3 x 3 neighbourhood, in far fewer array passes).
+Cost: marking the returns is a few array operations per tick; a plan is about 0.6 ms for a
+12 000-cell window (``_wavefront``: a step of the wave is a few big-integer operations on the
+window's cells as bits), so the caller plans only when it is stuck; a carrot is about 15 us (a
+walk over the field as a flat list). The obstacles' inflation is separable (a row-wise pass,
+then a column-wise one: the same cells as shifting by every offset of the disk, in far fewer
+array passes). ``tests/subjects/test_route_grid.py`` checks the wavefront against a plain
+breadth-first search.
 """
 from __future__ import annotations
 
@@ -70,6 +73,17 @@ def _shift_or(out: np.ndarray, src: np.ndarray, di: int, dj: int) -> None:
     out[oi, oj] |= src[si, sj]
 
 
+def _as_int(mask: np.ndarray) -> int:
+    """A flat boolean mask as the bits of one Python int (bit k = cell k)."""
+    return int.from_bytes(np.packbits(mask, bitorder="little").tobytes(), "little")
+
+
+def _as_mask(bits: int, n: int) -> np.ndarray:
+    """The first ``n`` bits of ``bits`` as a flat boolean mask (the inverse of ``_as_int``)."""
+    raw = np.frombuffer(bits.to_bytes((n + 7) // 8, "little"), dtype=np.uint8)
+    return np.unpackbits(raw, count=n, bitorder="little").view(bool)
+
+
 def _wavefront(field: np.ndarray, open_: np.ndarray, seed: np.ndarray, near: np.ndarray, limit: int,
                ahead: int) -> tuple[int | None, np.ndarray]:
     """Breadth-first steps (8-connected) from ``seed`` through the ``open_`` cells into ``field``,
@@ -77,45 +91,53 @@ def _wavefront(field: np.ndarray, open_: np.ndarray, seed: np.ndarray, near: np.
     ``near`` cell. Returns (that last step, None if no near cell was reached; the field with a
     border of -1, flattened).
 
-    The grid gets a border of one closed cell and is flattened, so that the frontier's 3 x 3
-    dilation is four OR-s of contiguous 1-D slices (along the rows by +-1, then across them by
-    +-(width + 2)): a border cell is never open, so nothing wraps from one row into the next."""
+    The grid gets a border of one closed cell and is flattened into the bits of a Python int
+    (bit k = cell k), so that a step is a handful of big-integer operations of a few hundred
+    machine words each, far cheaper than as many numpy calls: the frontier's 3 x 3 dilation is
+    shifts by +-1 (along the rows) and +-(width + 2) (across them); a border cell is never open,
+    so nothing wraps from one row into the next. Each step's new cells are OR-ed into the bit
+    planes of the step number, which become the field once, at the end."""
     h, w = field.shape
     stride = w + 2
+    n = (h + 2) * stride
 
     def padded(a: np.ndarray, fill) -> np.ndarray:
         out = np.full((h + 2, stride), fill, dtype=a.dtype)
         out[1:-1, 1:-1] = a
         return out.reshape(-1)
 
-    open_p, front, grow = padded(open_, False), padded(seed, False), np.zeros((h + 2) * stride, dtype=bool)
-    field_p = padded(field, -1)
-    rows = np.zeros_like(grow)
-    # the slices of every step, made once (front and grow swap buffers each step)
-    r, rows_up, rows_mid, rows_down = rows[1:-1], rows[:-2 * stride], rows[stride:-stride], rows[2 * stride:]
-    front_v, grow_v = ((a[:-2], a[1:-1], a[2:], a[stride:-stride]) for a in (front, grow))
-    # the near cells as flat indices of the bordered grid
-    near_i, near_j = np.nonzero(near)
-    near_at = (near_i + 1) * stride + near_j + 1
-    reached_near = bool((seed & near).any())
+    open_start = _as_int(padded(open_, False))
+    free, front, near_bits = open_start, _as_int(padded(seed, False)), _as_int(padded(near, False))
+    planes: list[int] = []              # planes[b]: the cells whose step has bit b set
+    reached_near = bool(front & near_bits)
     step, extra = 0, None
-    alive = bool(seed.any())
+    alive = front != 0
     while alive and step < limit:
         step += 1
-        np.bitwise_or(front_v[0], front_v[2], out=r)
-        r |= front_v[1]
-        g = grow_v[3]
-        np.bitwise_or(rows_up, rows_down, out=g)
-        g |= rows_mid
-        grow &= open_p
-        field_p[grow] = step
-        open_p ^= grow                                     # grow is within open_p: open_p &= ~grow
-        if extra is None and (reached_near or grow[near_at].any()):
+        rows = front | (front << 1) | (front >> 1)
+        grow = (rows | (rows << stride) | (rows >> stride)) & free
+        free ^= grow                                          # grow is within free: free &= ~grow
+        s, b = step, 0
+        while s:
+            if s & 1:
+                if b >= len(planes):
+                    planes.extend([0] * (b + 1 - len(planes)))
+                planes[b] |= grow
+            s >>= 1
+            b += 1
+        if extra is None and (reached_near or grow & near_bits):
             extra = step + ahead
         if extra is not None and step >= extra:
             break
-        alive = bool(grow.any())
-        front, grow, front_v, grow_v = grow, front, grow_v, front_v    # both keep an empty border
+        alive = grow != 0
+        front = grow
+    field_p = padded(field, -1)
+    grown = _as_mask(open_start ^ free, n)
+    if grown.any():
+        steps = np.zeros(n, dtype=np.int32)
+        for b, plane in enumerate(planes):
+            steps[_as_mask(plane, n)] += 1 << b
+        field_p[grown] = steps[grown]
     field[...] = field_p.reshape(h + 2, stride)[1:-1, 1:-1]
     return extra, field_p
 
