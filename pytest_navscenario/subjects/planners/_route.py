@@ -12,7 +12,7 @@ metres along the route, which the local planner aims at instead of the target.
 Cost: marking the returns is a few array operations per tick; a plan is about 0.6 ms for a
 12 000-cell window (``_wavefront``: a step of the wave is a few big-integer operations on the
 window's cells as bits), so the caller plans only when it is stuck; a carrot is about 15 us (a
-walk over the field as a flat list). The obstacles' inflation is separable (a row-wise pass,
+walk over the flat field through a memoryview). The obstacles' inflation is separable (a row-wise pass,
 then a column-wise one: the same cells as shifting by every offset of the disk, in far fewer
 array passes). ``tests/subjects/test_route_grid.py`` checks the wavefront against a plain
 breadth-first search.
@@ -158,7 +158,6 @@ class LidarGrid:
         self.set_inflation(inflation)
         self.field: np.ndarray | None = None    # steps to the target, -1 = not reached
         self._flat = np.empty(0, dtype=np.int32)  # the field with a border of -1, flattened
-        self._walk: list[int] | None = None       # the same as a list, made when first walked
         r = int(0.6 / res) + 1                  # carrot's window around the robot, cells
         self._near_cost = np.hypot(*_open_grid(-r, r + 1, -r, r + 1)) * 0.5
         self.box = (0, 0)                        # (row, column) of field[0, 0] in the grid
@@ -207,7 +206,7 @@ class LidarGrid:
         near = ((ii - ri) ** 2 + (jj - rj) ** 2 <= (int(0.6 / res) + 1) ** 2)
         extra, self._flat = _wavefront(field, free & ~seed, seed, near, 4 * (free.shape[0] + free.shape[1]),
                                        int(1.5 / res))
-        self.field, self.box, self._walk = field, (i0, j0), None
+        self.field, self.box = field, (i0, j0)
         return extra is not None
 
     def carrot(self, robot: tuple[float, float], lookahead: float) -> tuple[float, float] | None:
@@ -238,12 +237,10 @@ class LidarGrid:
                 return None
             ci, cj = (int(v) for v in reached[np.argmin(((reached - (ri, rj)) ** 2).sum(axis=1))])
             return (self.origin[0] + (cj + self.box[1]) * res, self.origin[1] + (ci + self.box[0]) * res)
-        # downhill on the field with its border of -1, as a flat list (made once per plan, used
-        # by the ~20 carrots until the next one): no bounds checks, a Python int per cell read
-        # (much cheaper than f[i, j]); the first lower neighbour in _STEPS order
-        if self._walk is None:
-            self._walk = self._flat.tolist()
-        at = self._walk
+        # downhill on the field with its border of -1 (no bounds checks), read through a
+        # memoryview: a Python int per cell read, much cheaper than f[i, j], and no copy; the
+        # first lower neighbour in _STEPS order
+        at = memoryview(self._flat)
         stride = f.shape[1] + 2
         k = (ci + 1) * stride + cj + 1
         deltas = [di * stride + dj for di, dj in _STEPS]
