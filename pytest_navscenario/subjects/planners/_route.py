@@ -179,7 +179,8 @@ class LidarGrid:
         rot[0, 2] = (x - self.origin[0]) * k + 0.5
         rot[1, 2] = (y - self.origin[1]) * k + 0.5
         q = (rot[:, :2] @ points + rot[:, 2:]).astype(np.intp)        # (column, row) per point
-        ok = (q[0] >= 0) & (q[1] >= 0) & (q[0] < self.shape[1]) & (q[1] < self.shape[0])
+        u = q.view(np.uintp)                     # a negative index is huge unsigned: one test a side
+        ok = (u[0] < self.shape[1]) & (u[1] < self.shape[0])
         self.occupied[q[1, ok], q[0, ok]] = True
 
     def plan(self, robot: tuple[float, float], target: tuple[float, float], reach: float,
