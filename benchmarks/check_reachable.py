@@ -29,11 +29,17 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
 
+def speed_bound(scenario) -> float:
+    """The fastest the drive lets the robot's centre move, m/s (forward and lateral at their limits)."""
+    lim = scenario.robot.limits
+    lateral = lim.max_lateral_speed if scenario.robot.drive == "omni" else 0.0
+    return math.hypot(lim.max_speed, lateral)
+
+
 def first_unreachable(scenario, traj, speed_margin: float, time_margin: float) -> float | None:
     """The first control tick's time at which the rule would end the episode, or None."""
-    m, lim = scenario.mission, scenario.robot.limits
-    lateral = lim.max_lateral_speed if scenario.robot.drive == "omni" else 0.0
-    v_bound = math.hypot(lim.max_speed, lateral) * (1.0 + speed_margin)
+    m = scenario.mission
+    v_bound = speed_bound(scenario) * (1.0 + speed_margin)
     waypoints = [(w.x, w.y) for w in m.waypoints]
     passed = np.asarray(traj.waypoint_times, dtype=float)
     rows = np.minimum(np.searchsorted(traj.t, traj.tick_t - 1e-9), len(traj.pose) - 1)
@@ -71,9 +77,8 @@ def main() -> int:
             continue
         res = run_scenario(c.scenario, a.subject, stuck_after=DEFAULT_STUCK_AFTER)
         traj = res.trajectory
-        lim = c.scenario.robot.limits
         speed = np.hypot(traj.velocity[:, 0], traj.velocity[:, 1]).max() if len(traj.velocity) else 0.0
-        fastest = max(fastest, speed / math.hypot(lim.max_speed, lim.max_lateral_speed))
+        fastest = max(fastest, speed / speed_bound(c.scenario))
         end = float(traj.t[-1]) if len(traj.t) else 0.0
         failing, failing_s = failing + 1, failing_s + end
         at = first_unreachable(c.scenario, traj, a.speed_margin, a.time_margin)
