@@ -12,6 +12,7 @@ from __future__ import annotations
 import os
 import pickle
 import socket
+import time
 import traceback
 from dataclasses import dataclass
 from typing import Any, Callable
@@ -38,23 +39,58 @@ class EpisodeJob:
     keep_trajectory: str = "all"
     cwd: str | None = None
     reset_timeout: float | None = None    # s an exec: planner may take to answer reset (None: its default)
+    check_feasible: bool = False          # first verdict.feasibility: an impassable scenario is not run
 
     def __post_init__(self) -> None:
         if self.keep_trajectory not in KEEP_CHOICES:
             raise ValueError(f"keep_trajectory must be one of {KEEP_CHOICES}, got {self.keep_trajectory!r}")
 
-    def run(self) -> EpisodeResult:
-        """Worker side: the episode, compacted for the way back."""
+    def run(self) -> EpisodeResult | Impassable:
+        """Worker side: the episode, compacted for the way back; with ``check_feasible``, an
+        ``Impassable`` instead for a scenario no planner can pass (nothing simulated)."""
         from ..harness.runner import run_scenario
 
+        checked = 0.0
+        if self.check_feasible:
+            reason, checked = check_feasibility(self.scenario)
+            if reason is not None:
+                return Impassable(reason)
         result = run_scenario(self.scenario, _subject_for(self), seed=self.seed, tick_limit=self.tick_limit,
                               reset_timeout=self.reset_timeout)
-        return compact(result, self.keep_trajectory)
+        return compact(add_check_time(result, checked), self.keep_trajectory)
 
-    def restore(self, result: EpisodeResult) -> EpisodeResult:
+    def restore(self, result: EpisodeResult | Impassable) -> EpisodeResult | Impassable:
         """Caller side: put the scenario back."""
+        if isinstance(result, Impassable):
+            return result
         result.scenario = self.scenario
         return result
+
+
+@dataclass(frozen=True)
+class Impassable:
+    """What a job with ``check_feasible`` returns for a scenario no planner can pass (or that
+    passes without one): ``verdict.feasibility.impassable_reason``'s words."""
+    reason: str
+
+
+def check_feasibility(scenario: Scenario) -> tuple[str | None, float]:
+    """(``impassable_reason(scenario)``, the seconds it took). Its shortest path is the one the
+    episode's metrics need (cached per process): the time belongs to the episode's evaluation."""
+    from ..verdict import feasibility
+
+    t0 = time.perf_counter()
+    reason = feasibility.impassable_reason(scenario)
+    return reason, time.perf_counter() - t0
+
+
+def add_check_time(result: EpisodeResult, seconds: float) -> EpisodeResult:
+    """Count the feasibility check's time (its shortest path, reused by the metrics) in the
+    episode's ``wall_time`` and ``timings["metrics"]``, wherever the check ran."""
+    if seconds:
+        result.wall_time += seconds
+        result.timings["metrics"] = result.timings.get("metrics", 0.0) + seconds
+    return result
 
 
 @dataclass
@@ -179,11 +215,15 @@ class Pending:
         self._cancel = cancel
         self._outcome: Any = None
 
-    def result(self) -> Any:
+    def outcome(self) -> Any:
+        """Wait for the job and return what came back as it is (an EpisodeError is not raised)."""
         if self._outcome is None:
             self._outcome = self._wait()
             self._wait = self._cancel = None  # type: ignore[assignment]  # drop the future / object ref
-        return restore(self.job, self._outcome)
+        return self._outcome
+
+    def result(self) -> Any:
+        return restore(self.job, self.outcome())
 
     def cancel(self) -> None:
         """Give the job up, unless its result was already taken (then nothing happens)."""

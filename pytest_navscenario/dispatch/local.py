@@ -34,6 +34,7 @@ from ..verdict.result import EpisodeResult
 # Imported once by the forkserver, so that every worker starts with the simulation loaded.
 PRELOAD = ["pytest_navscenario.harness.runner", "pytest_navscenario.sim.episode",
            "pytest_navscenario.verdict.metrics", "pytest_navscenario.verdict.oracle",
+           "pytest_navscenario.verdict.feasibility",
            "pytest_navscenario.subjects.planners.dwa"]
 MAX_ATTEMPTS = 3           # a job whose worker died this many times is reported as an error
 

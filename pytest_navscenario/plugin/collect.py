@@ -257,7 +257,8 @@ class ScenarioItem(pytest.Item):
         self.repeat = repeat          # --nav-repeat index: 0 .. N-1
         self.family_from_folder = False  # the family is the folder's (no family: in the YAML)
         self.nav_result: Any = None   # the EpisodeResult, until the call report has taken it
-        self.nav_pending: Any = None  # with --nav-ray: the submitted episode (dispatch.Pending)
+        self.nav_pending: Any = None  # with an executor: the submitted episode (dispatch.Pending)
+        self.nav_checked = 0.0        # s the feasibility check took at setup (counted in the episode's)
 
     @property
     def rel_path(self) -> str:
@@ -265,16 +266,25 @@ class ScenarioItem(pytest.Item):
 
     def setup(self) -> None:
         """A scenario no planner can pass (or that passes without one) is an error of this item,
-        not a failure of the planner (issue 15): verdict/feasibility.py, ~free (paths are cached)."""
-        from ..verdict.feasibility import impassable_reason
-        reason = impassable_reason(self.scenario)
+        not a failure of the planner (issue 15): verdict/feasibility.py. Its shortest path is the
+        one the metrics need (cached), so its time is counted in the episode's. With an executor
+        the job asked the worker (``check_feasible``): this waits for what came back."""
+        pending = self.nav_pending
+        if pending is not None:
+            from ..dispatch.jobs import Impassable
+            outcome = pending.outcome()
+            reason = outcome.reason if isinstance(outcome, Impassable) else None
+        else:
+            from ..dispatch.jobs import check_feasibility
+            reason, self.nav_checked = check_feasibility(self.scenario)
         if reason is not None:
             self.nav_pending = None
             from ..core.errors import ImpassableScenarioError
             raise ImpassableScenarioError(f"{self.rel_path}: {reason}")
 
     def episode_job(self, keep_trajectory: str) -> Any:
-        """This item's episode as a dispatch job (what runtest runs in place without --nav-ray)."""
+        """This item's episode as a dispatch job (what runtest runs in place without an
+        executor), its feasibility checked by whoever runs it."""
         import os
 
         from ..dispatch.jobs import EpisodeJob
@@ -283,20 +293,22 @@ class ScenarioItem(pytest.Item):
         return EpisodeJob(self.scenario, state.subject.runner_arg,
                           seed=repeat_seed(state.settings.seed, self.repeat),
                           tick_limit=state.settings.tick_limit, keep_trajectory=keep_trajectory,
-                          cwd=os.getcwd(), reset_timeout=state.settings.reset_timeout)
+                          cwd=os.getcwd(), reset_timeout=state.settings.reset_timeout, check_feasible=True)
 
     def runtest(self) -> None:
         pending, self.nav_pending = self.nav_pending, None
-        if pending is not None:   # submitted at the start of the run loop (--nav-ray)
+        if pending is not None:   # submitted at the start of the run loop (an executor)
             result = pending.result()
         else:
+            from ..dispatch.jobs import add_check_time
             from ..harness.runner import run_scenario
 
             state = get_state(self.config)
-            result = run_scenario(self.scenario, state.subject.runner_arg,
-                                  seed=repeat_seed(state.settings.seed, self.repeat),
-                                  tick_limit=state.settings.tick_limit,
-                                  reset_timeout=state.settings.reset_timeout)
+            result = add_check_time(run_scenario(self.scenario, state.subject.runner_arg,
+                                                 seed=repeat_seed(state.settings.seed, self.repeat),
+                                                 tick_limit=state.settings.tick_limit,
+                                                 reset_timeout=state.settings.reset_timeout), self.nav_checked)
+            self.nav_checked = 0.0
         self.nav_result = result
         m = result.metrics
         self.user_properties.extend([

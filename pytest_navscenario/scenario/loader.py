@@ -938,7 +938,8 @@ def load_scenario(path: str | os.PathLike, *, family: str | None = None) -> Scen
     limit = int(SCENARIO_LIMITS["max_file_bytes"])
     try:
         with open(p, "rb") as fh:
-            data = fh.read(limit + 1)
+            size = os.fstat(fh.fileno()).st_size   # read(limit + 1) alone would allocate 5 MB per file
+            data = fh.read(size + 1 if 0 < size <= limit else limit + 1)
     except FileNotFoundError:
         raise ScenarioError("no such scenario file", path=src, hint="check the path and the file name") from None
     except IsADirectoryError:

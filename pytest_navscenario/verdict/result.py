@@ -3,7 +3,7 @@ the outcome the oracle assigned and the metrics computed from them. Plain data, 
 from __future__ import annotations
 
 import enum
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 
@@ -52,7 +52,12 @@ class Metrics:
     reference_max_deviation: float = float("nan")
 
     def as_dict(self) -> dict[str, Any]:
-        return asdict(self)
+        """The fields by name (all plain floats and strings: no deep copy needed, ~7x faster than
+        ``dataclasses.asdict``, once per episode record)."""
+        return {name: getattr(self, name) for name in _METRIC_NAMES}
+
+
+_METRIC_NAMES = tuple(f.name for f in fields(Metrics))
 
 
 @dataclass
@@ -69,7 +74,7 @@ class EpisodeResult:
     collision: Collision | None = None
     safety_stop: SafetyStop | None = None
     subject_failure: SubjectFailure | None = None
-    wall_time: float = 0.0                      # s, the whole run_scenario call
+    wall_time: float = 0.0                      # s, the whole run_scenario call (+ a feasibility check before it)
     timings: dict[str, float] = field(default_factory=dict)  # s: physics, rays, planner, harness
 
     @property

@@ -4,6 +4,8 @@ never a planner failure that ran to its timeout; a goal equal to the start does 
 Real pytest runs with the built-in planner; real MuJoCo for the ordinary scenario beside them."""
 from __future__ import annotations
 
+import json
+
 import pytest
 
 import pytest_navscenario.plugin.payload  # noqa: F401  (numpy: in-process runs cannot import it afresh)
@@ -49,3 +51,25 @@ def test_an_impassable_scenario_marked_xfail_is_an_expected_failure(pytester: py
     pytester.makefile(".yaml", walled_in=FILES["walled_in"] + "marks: [{xfail: {reason: a closed room}}]\n")
     result = pytester.runpytest(*PLUGIN, "-rx")
     result.assert_outcomes(xfailed=1)
+
+
+def test_impassable_scenarios_on_local_workers_are_the_same_setup_errors(pytester: pytest.Pytester, monkeypatch):
+    """--nav-workers 2: the workers check feasibility before simulating (issue 14: this process
+    shares the cores with them) and the items report exactly what a serial run reports."""
+    monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
+    for name, text in FILES.items():
+        pytester.makefile(".yaml", **{name: text})
+    runs = {}
+    for label, extra in (("serial", []), ("workers", ["--nav-workers=2"])):
+        result = pytester.runpytest_subprocess(*PLUGIN, "--nav-subject=potential-field", "-p", "no:cacheprovider",
+                                               f"--nav-results={label}.jsonl", *extra)
+        result.assert_outcomes(passed=1, errors=3)
+        runs[label] = [line for line in result.outlines
+                       if line.startswith(("ERROR at setup", "E   ", "_")) or "no planner can pass" in line
+                       or "already satisfies" in line]
+    assert "episodes run on 2 local worker process" in result.stdout.str()
+    assert runs["workers"] == runs["serial"] and len(runs["serial"]) >= 6
+    recs = {label: [{k: v for k, v in json.loads(line).items() if k != "wall_time"}
+                    for line in (pytester.path / f"{label}.jsonl").read_text().splitlines()]
+            for label in runs}
+    assert recs["workers"] == recs["serial"] and [r["scenario"] for r in recs["serial"]] == ["ordinary"]
