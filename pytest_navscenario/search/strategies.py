@@ -17,8 +17,7 @@
   failure's inserted box (its trap) along the route to a quarter where inserted boxes have failed
   least, crowd puts a box just beside the footprint at the start or goal pose (the least-failed
   end), where no path-following operator reaches.
-  The first generation is the seed itself and candidates aimed at the seed's route (before any
-  episode is known); the second can aim at the path the robot took.
+  The first generation is the seed alone, so the second can aim at its episode.
   Operator shares follow which operator has been finding new failing signatures; where the
   aimed operators put an obstacle (which obstacle, which quarter of the route) is a second
   bandit rewarded for new failing signatures and divided down by re-created ones.
@@ -34,7 +33,6 @@ from __future__ import annotations
 
 import math
 import random
-from dataclasses import dataclass
 from typing import Any, Sequence
 
 from .space import FLAG_ON, INSERT_PREFIX, SearchSpace, invalid_reason
@@ -44,8 +42,6 @@ MUTATION_SCALES = (0.05, 0.15, 0.3)   # Gaussian step sd as a fraction of the pa
 OPERATORS = ("explore", "mutate", "place", "insert", "squeeze", "retime", "barrier", "shift", "crowd")
 MIN_SHARE = 0.04               # every usable operator keeps at least this share
 EXPLORE_SHARE = 0.2            # uniform exploration keeps at least this share: never far below random
-EXPLORE_FIRST = 0.5            # and this much until the first failure (where failing is common, uniform
-                               #   layouts fail soonest; where it is rare, the aimed operators do)
 PICK_PENALTY = 0.03            # robustness added per earlier pick of an archive cell (novelty)
 NEAR_COPY = 0.5                # m: a failure's child whose culprit moved less (same quarter) is skipped
 FAILURE_FLOOR = -0.3           # failure cells compete for parenthood as if this robust
@@ -284,19 +280,6 @@ class _Targets:
             self.credit[arm] += 0.2
 
 
-@dataclass(frozen=True)
-class _Nominal:
-    """What the aimed operators read from a parent, for the seed's route before any episode."""
-    offsets: tuple[float, ...]
-    path: tuple[tuple[float, float], ...]
-    metrics: dict
-    closest: tuple = ()
-    failed: bool = False
-    culprit: str = ""
-    robustness: float = math.inf
-    signature: tuple = ("nominal",)
-
-
 class Evolve:
     """See the module docstring. Proposals come from one seeded Hypothesis run per generation."""
 
@@ -319,38 +302,31 @@ class Evolve:
         self.aim_bandit: _Targets | None = None          # and the bandit it belongs to
         self.told = 0                                   # generations told so far
         self.shifted: dict[tuple, int] = {}             # signature -> times its failure was shifted
-        self.nominal: _Nominal | None = None            # generation 1's parent (_nominal)
 
     @property
     def lag(self) -> int:
-        """0 until the first generation (with the seed's episode, whose path the aimed operators
+        """0 until the first generation (the seed's episode, whose path the aimed operators
         use) is told, then 1: generation g+2 is drawn knowing the results up to generation g."""
         return 1 if self.told else 0
 
     def weights(self) -> list[float]:
-        have = bool(self.cells.elites) or self.generation == 1   # generation 1: the seed's route
-        usable = {"explore": True, "mutate": have,
-                  "place": bool(have and self.movable), "insert": bool(have and self.slots),
-                  "squeeze": bool(have and (self.movable or self.slots)),
-                  "retime": bool(have and self.moving),
-                  "barrier": bool(have and len(self.slots) >= 2),
-                  "shift": bool(self._shiftable()), "crowd": bool(have and self.slots)}
+        usable = {"explore": True, "mutate": bool(self.cells.elites),
+                  "place": bool(self.cells.elites and self.movable), "insert": bool(self.cells.elites and self.slots),
+                  "squeeze": bool(self.cells.elites and (self.movable or self.slots)),
+                  "retime": bool(self.cells.elites and self.moving),
+                  "barrier": bool(self.cells.elites and len(self.slots) >= 2),
+                  "shift": bool(self._shiftable()), "crowd": bool(self.cells.elites and self.slots)}
         rates = {op: (self.stats[op][1] + 1.0) / (self.stats[op][0] + 2.0) for op in OPERATORS if usable[op]}
         total = sum(rates.values())
-        out = [max(EXPLORE_SHARE if op == "explore" else MIN_SHARE, rates[op] / total) if op in rates else 0.0
-               for op in OPERATORS]
-        if not self.failure_signatures:   # until the first failure, at least EXPLORE_FIRST of the draws
-            i = OPERATORS.index("explore")
-            rest = sum(out) - out[i]
-            out[i] = max(out[i], EXPLORE_FIRST / (1.0 - EXPLORE_FIRST) * rest)
-        return out
+        return [max(EXPLORE_SHARE if op == "explore" else MIN_SHARE, rates[op] / total) if op in rates else 0.0
+                for op in OPERATORS]
 
     def ask(self, room: int) -> list[tuple[tuple[float, ...], str]]:
         self.generation += 1
         out: list[tuple[tuple[float, ...], str]] = []
-        want = min(room, GENERATION)
         if self.generation == 1 and self.admission.admit(self.space.zero()):
-            out.append((self.space.zero(), "seed"))   # first: a seed that fails already is found at once
+            return [(self.space.zero(), "seed")]   # alone: the next generation can aim at its path
+        want = min(room, GENERATION)
         attempt = 0
         while len(out) < want:   # ends: the admission gives up (GaveUp) after too many misses
             out.extend(self._hypothesis_batch(want - len(out), attempt))
@@ -400,17 +376,12 @@ class Evolve:
     def propose(self, op: str, rnd: random.Random) -> tuple[tuple[float, ...], Any]:
         """(offsets, parent) of one proposal of operator ``op`` (parent None for exploration)."""
         self.aim = None
-        if op == "explore" or not (self.cells.elites or self.generation == 1):
+        if op == "explore" or not self.cells.elites:
             return uniform(self.space, rnd), None
-        if not self.cells.elites:   # generation 1: aimed at the seed's route, as if driven at top speed
-            return self.propose_from(op, self._nominal(), rnd)
         if op == "shift" and self._shiftable():
             parent = self._shift_parent(rnd)
             return self._shift(parent, rnd), parent
-        return self.propose_from(op, self.cells.pick(rnd), rnd)
-
-    def propose_from(self, op: str, parent: Any, rnd: random.Random) -> tuple[tuple[float, ...], Any]:
-        """(offsets, parent) of one proposal of operator ``op`` from ``parent``."""
+        parent = self.cells.pick(rnd)
         if op == "place" and parent.path:
             return self._place(parent, rnd), parent
         if op == "insert" and parent.path:
@@ -424,15 +395,6 @@ class Evolve:
         if op == "crowd" and self.slots:
             return self._crowd(parent, rnd), parent
         return self._mutate(parent, rnd), parent
-
-    def _nominal(self) -> "_Nominal":
-        """The seed as if driven along its route at top speed: the parent of generation 1,
-        drawn before the seed's own episode is known."""
-        if self.nominal is None:
-            route, seed = self._route(), self.space.seed
-            path = tuple(p[:2] for p in _route_samples(route))
-            self.nominal = _Nominal(self.space.zero(), path, {"duration": route.length / seed.robot.limits.max_speed})
-        return self.nominal
 
     def _repeats(self, parent: Any, offsets: Sequence[float]) -> bool:
         """A child of a failure that changes no parameter by 20 % of its range or more and

@@ -386,43 +386,6 @@ def test_crowd_mutation_puts_a_box_just_beside_the_start_or_goal_footprint(lane)
     assert cand.failed and cand.signature[1:] == ("inserted", 0, 0), cand.signature
 
 
-def test_first_generation_is_the_seed_and_candidates_aimed_at_its_route(lane):
-    """Before any episode is known, generation 1 is the seed itself and candidates aimed at the
-    seed's route (its shortest path, as if driven at top speed): an inserted box lands on or
-    beside the lane's line; generation 2 is drawn once they are told."""
-    space = SearchSpace(lane, {"insert": 1})
-    evo = Evolve(space, _report(space), 40, 0)
-    first = evo.ask(40)
-    assert len(first) == 8 and first[0] == (space.zero(), "seed")
-    assert evo.lag == 0 and {origin for _, origin in first[1:]} - {"explore"}
-    import random
-    for k in range(12):   # every insert drawn from generation 1's parent sits on the route's band
-        offsets, parent = evo.propose("insert", random.Random(k))
-        assert parent.path and not parent.failed
-        (box,) = _inserted(space.apply(offsets))
-        assert abs(box.x) <= 1.3 * (0.25 + box.length / 2) + 1e-6 and -0.5 <= box.y <= 6.5, (k, box)
-
-
-def test_half_the_draws_explore_uniformly_until_the_first_failure(lane):
-    """Until a failure is known, at least EXPLORE_FIRST of the operator weight is uniform
-    exploration; once one is, exploration keeps its usual floor and the aimed operators the rest."""
-    from pytest_navscenario.search.strategies import EXPLORE_FIRST, EXPLORE_SHARE, OPERATORS
-
-    space = SearchSpace(lane, {"insert": 2})
-    ctx = EvalContext(space, Straight, stuck_after=None)
-    evo = Evolve(space, _report(space), 40, 0)
-    evo.tell([evaluate_candidate(ctx, space.zero(), "seed")])
-    explore = OPERATORS.index("explore")
-    w = evo.weights()
-    assert w[explore] / sum(w) == pytest.approx(EXPLORE_FIRST)
-    x0, y0, x1, y1 = space.region
-    trap = _values(space, **{"inserted[0]__on": 1.0, "inserted[0]__x": -(x0 + x1) / 2, "inserted[0]__y": 1.2 - (y0 + y1) / 2})
-    evo.tell([evaluate_candidate(ctx, trap, "insert")])
-    assert evo.failure_signatures
-    w = evo.weights()
-    assert EXPLORE_SHARE / 2 < w[explore] / sum(w) < EXPLORE_FIRST / 2
-
-
 def test_target_bandit_moves_on_from_a_place_that_has_failed():
     import random
     from pytest_navscenario.search.strategies import _Targets
