@@ -40,6 +40,7 @@ from .space import FLAG_ON, INSERT_PREFIX, SearchSpace, invalid_reason
 GENERATION = 8                 # candidates per generation (evolve, random)
 MUTATION_SCALES = (0.05, 0.15, 0.3)   # Gaussian step sd as a fraction of the parameter's range
 OPERATORS = ("explore", "mutate", "place", "insert", "squeeze", "retime", "barrier", "shift", "crowd")
+PATH_OPERATORS = frozenset({"place", "insert", "squeeze", "retime", "barrier"})   # aim at the parent's path
 MIN_SHARE = 0.04               # every usable operator keeps at least this share
 EXPLORE_SHARE = 0.2            # uniform exploration keeps at least this share: never far below random
 PICK_PENALTY = 0.03            # robustness added per earlier pick of an archive cell (novelty)
@@ -262,12 +263,7 @@ class _Targets:
 
     def pick(self, rnd: random.Random, allowed: Sequence[tuple[str, int]], known: set[tuple]) -> tuple[str, int]:
         weights = [self.weight(a, known) for a in allowed]
-        ticket = rnd.random() * sum(weights)
-        for arm, w in zip(allowed, weights):
-            if ticket < w:
-                return arm
-            ticket -= w
-        return allowed[-1]
+        return _weighted_pick(allowed, weights, rnd.random() * sum(weights))
 
     def tell(self, arm: tuple[str, int], cand: Any, new_failure: bool) -> None:
         self.tries[arm] += 1
@@ -349,13 +345,8 @@ class Evolve:
             bits = data.draw(st.lists(st.booleans(), min_size=STREAM_BITS, max_size=STREAM_BITS), label="stream")
             stream = sum(1 << i for i, b in enumerate(bits) if b)
             rnd = random.Random(f"{self.seed_value}:{self.generation}:{attempt}:{len(out)}:{stream}")
-            ticket = rnd.random() * total   # not a Hypothesis integer: those favour small values
-            op = OPERATORS[-1]
-            for name, w in zip(OPERATORS, weights):
-                if ticket < w:
-                    op = name
-                    break
-                ticket -= w
+            # not a Hypothesis integer: those favour small values
+            op = _weighted_pick(OPERATORS, weights, rnd.random() * total)
             offsets, parent = self.propose(op, rnd)
             if parent is not None and self._repeats(parent, offsets):
                 self.report.skipped += 1   # would most likely fail the same way again
@@ -382,16 +373,8 @@ class Evolve:
             parent = self._shift_parent(rnd)
             return self._shift(parent, rnd), parent
         parent = self.cells.pick(rnd)
-        if op == "place" and parent.path:
-            return self._place(parent, rnd), parent
-        if op == "insert" and parent.path:
-            return self._insert(parent, rnd), parent
-        if op == "squeeze" and parent.path:
-            return self._squeeze(parent, rnd), parent
-        if op == "retime" and parent.path:
-            return self._retime(parent, rnd), parent
-        if op == "barrier" and parent.path:
-            return self._barrier(parent, rnd), parent
+        if op in PATH_OPERATORS and parent.path:   # Evolve._place, ._insert, ...
+            return getattr(self, f"_{op}")(parent, rnd), parent
         if op == "crowd" and self.slots:
             return self._crowd(parent, rnd), parent
         return self._mutate(parent, rnd), parent
@@ -599,9 +582,8 @@ class Evolve:
         offsets = list(space.zero() if parent.failed else parent.offsets)
         mission = space.apply(parent.offsets).mission
         ends = (0, QUARTERS - 1)
-        weights = [1.0 / (1.0 + sum(1 for sig in self.failure_signatures
-                                    if sig[1] == "inserted" and sig[2] == q)) ** 2 for q in ends]
-        end = ends[0] if rnd.random() * sum(weights) < weights[0] else ends[1]
+        weights = [1.0 / (1.0 + self._inserted_failures(q)) ** 2 for q in ends]
+        end = _weighted_pick(ends, weights, rnd.random() * sum(weights))
         self.aim, self.aim_bandit = ("inserted", end), self._arms()
         pose = mission.start if end == ends[0] else mission.goal
         lo, hi = space.limits.insert_size
@@ -620,6 +602,10 @@ class Evolve:
             offsets[i] = values.get(space.params[i].attr, offsets[i])
         return space.clip(offsets)
 
+    def _inserted_failures(self, quarter: int) -> int:
+        """Known failing signatures of an inserted box in that quarter of the route."""
+        return sum(1 for sig in self.failure_signatures if _in_cell(sig, ("inserted", quarter)))
+
     def _shiftable(self) -> list[Any]:
         """The archive's failures whose culprit is an inserted box (the parents ``shift`` uses)."""
         if not self.slots:
@@ -631,11 +617,7 @@ class Evolve:
         """One of ``_shiftable``, the ones shifted least often first (weight 1 / (1 + shifts))."""
         pool = self._shiftable()
         weights = [1.0 / (1.0 + self.shifted.get(c.signature, 0)) for c in pool]
-        ticket = rnd.random() * sum(weights)
-        for cand, w in zip(pool, weights):
-            if ticket < w:
-                break
-            ticket -= w
+        cand = _weighted_pick(pool, weights, rnd.random() * sum(weights))
         self.shifted[cand.signature] = self.shifted.get(cand.signature, 0) + 1
         return cand
 
@@ -651,16 +633,9 @@ class Evolve:
         culprit = scenario.obstacle(parent.culprit)
         f = route.fraction(culprit.x, culprit.y)
         here = _quarter(f)
-        failed = [sum(1 for sig in self.failure_signatures if sig[1] == "inserted" and sig[2] == q)
-                  for q in range(QUARTERS)]
         others = [q for q in range(QUARTERS) if q != here]
-        weights = [1.0 / (1.0 + failed[q]) ** 2 for q in others]
-        ticket, there = rnd.random() * sum(weights), others[-1]
-        for q, w in zip(others, weights):
-            if ticket < w:
-                there = q
-                break
-            ticket -= w
+        weights = [1.0 / (1.0 + self._inserted_failures(q)) ** 2 for q in others]
+        there = _weighted_pick(others, weights, rnd.random() * sum(weights))
         g = f + (there - here) / QUARTERS + rnd.uniform(-0.3, 0.3) / QUARTERS
         if _quarter(g) != there:
             g = (there + rnd.uniform(0.1, 0.9)) / QUARTERS
@@ -776,6 +751,16 @@ class Evolve:
             aim = self.aims.pop(_key(cand.offsets), None)
             if aim is not None:
                 aim[0].tell(aim[1], cand, new_failure)
+
+
+def _weighted_pick(items: Sequence[Any], weights: Sequence[float], ticket: float) -> Any:
+    """The item whose stretch of the running total of ``weights`` holds ``ticket`` (a uniform
+    draw times their sum); the last item if rounding leaves the ticket past the end."""
+    for item, w in zip(items, weights):
+        if ticket < w:
+            return item
+        ticket -= w
+    return items[-1]
 
 
 def _in_cell(sig: tuple, arm: tuple[str, int]) -> bool:

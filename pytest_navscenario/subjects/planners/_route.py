@@ -158,7 +158,7 @@ class LidarGrid:
         self.set_inflation(inflation)
         self.field: np.ndarray | None = None    # steps to the target, -1 = not reached
         self._flat = np.empty(0, dtype=np.int32)  # the field with a border of -1, flattened
-        r = int(0.6 / res) + 1                  # carrot's window around the robot, cells
+        self._near = r = int(0.6 / res) + 1     # cells: the robot's surroundings (plan) and carrot's window
         self._near_cost = np.hypot(*_open_grid(-r, r + 1, -r, r + 1)) * 0.5
         self.box = (0, 0)                        # (row, column) of field[0, 0] in the grid
 
@@ -204,7 +204,7 @@ class LidarGrid:
             seed = (ii - ti) ** 2 + (jj - tj) ** 2 <= k * k
         field = np.full(free.shape, -1, dtype=np.int32)
         field[seed] = 0
-        near = ((ii - ri) ** 2 + (jj - rj) ** 2 <= (int(0.6 / res) + 1) ** 2)
+        near = ((ii - ri) ** 2 + (jj - rj) ** 2 <= self._near ** 2)
         extra, self._flat = _wavefront(field, free & ~seed, seed, near, 4 * (free.shape[0] + free.shape[1]),
                                        int(1.5 / res))
         self.field, self.box = field, (i0, j0)
@@ -219,7 +219,7 @@ class LidarGrid:
         res = self.res
         ri, rj = self.cell(*robot)
         ri, rj = ri - self.box[0], rj - self.box[1]
-        r = int(0.6 / res) + 1
+        r = self._near
         a0, a1 = max(ri - r, 0), min(ri + r + 1, f.shape[0])
         b0, b1 = max(rj - r, 0), min(rj + r + 1, f.shape[1])
         win = f[a0:a1, b0:b1]
