@@ -12,7 +12,6 @@ from __future__ import annotations
 import os
 import pickle
 import socket
-import time
 import traceback
 from dataclasses import dataclass
 from typing import Any, Callable
@@ -48,7 +47,7 @@ class EpisodeJob:
     def run(self) -> EpisodeResult | Impassable:
         """Worker side: the episode, compacted for the way back; with ``check_feasible``, an
         ``Impassable`` instead for a scenario no planner can pass (nothing simulated)."""
-        from ..harness.runner import run_scenario
+        from ..harness.runner import add_check_time, check_feasibility, run_scenario
 
         checked = 0.0
         if self.check_feasible:
@@ -72,25 +71,6 @@ class Impassable:
     """What a job with ``check_feasible`` returns for a scenario no planner can pass (or that
     passes without one): ``verdict.feasibility.impassable_reason``'s words."""
     reason: str
-
-
-def check_feasibility(scenario: Scenario) -> tuple[str | None, float]:
-    """(``impassable_reason(scenario)``, the seconds it took). Its shortest path is the one the
-    episode's metrics need (cached per process): the time belongs to the episode's evaluation."""
-    from ..verdict import feasibility
-
-    t0 = time.perf_counter()
-    reason = feasibility.impassable_reason(scenario)
-    return reason, time.perf_counter() - t0
-
-
-def add_check_time(result: EpisodeResult, seconds: float) -> EpisodeResult:
-    """Count the feasibility check's time (its shortest path, reused by the metrics) in the
-    episode's ``wall_time`` and ``timings["metrics"]``, wherever the check ran."""
-    if seconds:
-        result.wall_time += seconds
-        result.timings["metrics"] = result.timings.get("metrics", 0.0) + seconds
-    return result
 
 
 @dataclass

@@ -19,6 +19,25 @@ from ..verdict.result import EpisodeResult
 from ..scenario.model import Scenario
 
 
+def check_feasibility(scenario: Scenario) -> tuple[str | None, float]:
+    """(``impassable_reason(scenario)``, the seconds it took). Its shortest path is the one the
+    episode's metrics need (cached per process): the time belongs to the episode's evaluation."""
+    from ..verdict import feasibility
+
+    t0 = time.perf_counter()
+    reason = feasibility.impassable_reason(scenario)
+    return reason, time.perf_counter() - t0
+
+
+def add_check_time(result: EpisodeResult, seconds: float) -> EpisodeResult:
+    """Count the feasibility check's time (its shortest path, reused by the metrics) in the
+    episode's ``wall_time`` and ``timings["metrics"]``, wherever the check ran."""
+    if seconds:
+        result.wall_time += seconds
+        result.timings["metrics"] = result.timings.get("metrics", 0.0) + seconds
+    return result
+
+
 def effective_seed(scenario_seed: int, base_seed: int | None) -> int:
     """The episode's noise seed: the scenario's own seed when ``base_seed`` is None or 0 (so
     pytest's default run, the search and nav_run all see the same bits), else a deterministic mix."""

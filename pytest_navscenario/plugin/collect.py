@@ -275,7 +275,7 @@ class ScenarioItem(pytest.Item):
             outcome = pending.outcome()
             reason = outcome.reason if isinstance(outcome, Impassable) else None
         else:
-            from ..dispatch.jobs import check_feasibility
+            from ..harness.runner import check_feasibility
             reason, self.nav_checked = check_feasibility(self.scenario)
         if reason is not None:
             self.nav_pending = None
@@ -300,8 +300,7 @@ class ScenarioItem(pytest.Item):
         if pending is not None:   # submitted at the start of the run loop (an executor)
             result = pending.result()
         else:
-            from ..dispatch.jobs import add_check_time
-            from ..harness.runner import run_scenario
+            from ..harness.runner import add_check_time, run_scenario
 
             state = get_state(self.config)
             result = add_check_time(run_scenario(self.scenario, state.subject.runner_arg,
