@@ -607,3 +607,26 @@ def test_an_interrupt_while_a_strategy_draws_is_held_until_it_has_drawn():
         signal.signal(signal.SIGINT, old)
     assert drawn == [True]
     assert signal.getsignal(signal.SIGINT) is old
+
+
+def test_safety_margin_reads_polygon_obstacles_as_their_outline():
+    """A success among polygon obstacles is read (finite robustness, not a harness error), and
+    a square polygon gives the safety margin the same square as a box gives: the search aims at
+    polygon and mesh seeds as at box seeds."""
+    from pytest_navscenario.search.fitness import Route, read_episode
+
+    near = OPEN_YAML.replace("x: 1.5, y: 3.0", "x: 0.62, y: 3.0")   # the crate just beside the lane
+    as_box = loads_scenario(near, "box.yaml", name="box")
+    as_polygon = loads_scenario(near.replace(
+        "{type: box, name: crate, x: 0.62, y: 3.0, length: 0.6, width: 0.6}",
+        "{type: polygon, name: crate, x: 0.62, y: 3.0, height: 0.5, "
+        "points: [[-0.3, -0.3], [0.3, -0.3], [0.3, 0.3], [-0.3, 0.3]]}"), "poly.yaml", name="poly")
+    readings = []
+    for sc in (as_box, as_polygon):
+        res = run_scenario(sc, Straight())
+        assert res.outcome.value == "success", res.message
+        readings.append(read_episode(res, Route(sc))[0])
+    box, poly = readings
+    assert math.isfinite(poly.robustness)
+    assert 0.0 < box.margins["safety"] < 1.0      # near enough to count, far enough not to stop
+    assert poly.margins["safety"] == pytest.approx(box.margins["safety"], abs=1e-6)
