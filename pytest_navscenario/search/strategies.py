@@ -17,7 +17,12 @@
   failure's inserted box (its trap) along the route to a quarter where inserted boxes have failed
   least, crowd puts a box just beside the footprint at the start or goal pose (the least-failed
   end), where no path-following operator reaches.
-  The first generation is the seed alone, so the second can aim at its episode.
+  The first generation is uniform layouts, the likeliest to fail first, then the seed; the
+  second can aim at the seed's episode. Until a failure is known, each generation is the
+  likeliest to fail of HUNT_DRAWS times as many proposals, those simulated first: likeliest by
+  what is cheap to know before an episode, the room the narrowest passage leaves the footprint
+  less how deep the obstacles cut into the robot's expected way (a uniform draw that fails at
+  once where failures are common, a tight one where they are rare).
   Operator shares follow which operator has been finding new failing signatures; where the
   aimed operators put an obstacle (which obstacle, which quarter of the route) is a second
   bandit rewarded for new failing signatures and divided down by re-created ones.
@@ -59,6 +64,8 @@ RETIME_SPEEDS = 5
 RETIME_LAG = (-1.0, 0.5)       # s: the obstacle is aimed at where the robot was this much later
 CROWD_GAP = 0.4                # m: crowd leaves at most this much between a box and the start/goal footprint
 SHIFT_RADIUS = 2.0             # m: shift carries the inserted boxes this near the culprit along with it
+HUNT_DRAWS = 8                 # no failure known yet: proposals drawn per one simulated (the likeliest kept)
+ROOM_LEVELS = (0.05, 0.1, 0.15, 0.2, 0.3, 0.45, 0.6)   # m: footprint growth tried by paths.passage_room
 
 
 class GaveUp(Exception):
@@ -298,10 +305,11 @@ class Evolve:
         self.aim_bandit: _Targets | None = None          # and the bandit it belongs to
         self.told = 0                                   # generations told so far
         self.shifted: dict[tuple, int] = {}             # signature -> times its failure was shifted
+        self.seed_episode: Any = None                   # the seed's own episode (generation 1)
 
     @property
     def lag(self) -> int:
-        """0 until the first generation (the seed's episode, whose path the aimed operators
+        """0 until the first generation (with the seed's episode, whose path the aimed operators
         use) is told, then 1: generation g+2 is drawn knowing the results up to generation g."""
         return 1 if self.told else 0
 
@@ -318,16 +326,70 @@ class Evolve:
                 for op in OPERATORS]
 
     def ask(self, room: int) -> list[tuple[tuple[float, ...], str]]:
+        """The next generation. The first: uniform layouts, the likeliest to fail first, then the
+        seed (last: a budget of one is the seed alone). Until a failure is known, HUNT_DRAWS
+        proposals are drawn per candidate and the likeliest to fail are simulated, those first."""
         self.generation += 1
         out: list[tuple[tuple[float, ...], str]] = []
-        if self.generation == 1 and self.admission.admit(self.space.zero()):
-            return [(self.space.zero(), "seed")]   # alone: the next generation can aim at its path
         want = min(room, GENERATION)
+        seed = self.generation == 1 and self.admission.admit(self.space.zero())
+        want -= 1 if seed else 0
+        draw = want * HUNT_DRAWS if not self.failure_signatures else want
         attempt = 0
-        while len(out) < want:   # ends: the admission gives up (GaveUp) after too many misses
-            out.extend(self._hypothesis_batch(want - len(out), attempt))
+        while len(out) < draw:   # ends: the admission gives up (GaveUp) after too many misses
+            out.extend(self._hypothesis_batch(draw - len(out), attempt))
             attempt += 1
-        return out[:want]
+        if draw > want:   # no failure known yet: the likeliest to fail, those first
+            out = self._likeliest_first(out[:draw])
+            for offsets, _ in out[want:]:   # drawn, never simulated: as if never drawn
+                self.admission.seen.discard(_key(offsets))
+                self.aims.pop(_key(offsets), None)
+        return out[:want] + ([(self.space.zero(), "seed")] if seed else [])
+
+    def _likeliest_first(self, proposals: list[tuple[tuple[float, ...], str]]
+                         ) -> list[tuple[tuple[float, ...], str]]:
+        """``proposals`` ordered by what is cheap to know before an episode about how likely
+        each is to fail: the least room to spare first, room being how much the footprint could
+        grow and still find a way (``paths.passage_room``) less how deep the layout's obstacles
+        cut into the robot's expected way (``_intrusion``); ties keep the drawing order."""
+        from ..verdict.paths import passage_room
+
+        scored = []
+        for k, (offsets, _) in enumerate(proposals):
+            scenario = self.space.apply(offsets)
+            scored.append((passage_room(scenario, ROOM_LEVELS) - self._intrusion(scenario), k))
+        return [proposals[k] for _, k in sorted(scored)]
+
+    def _intrusion(self, scenario: Any) -> float:
+        """How deep (m) the layout's obstacles cut into the footprint's half width around the
+        robot's expected way: the seed's recorded path, or before its episode the seed's route
+        driven at top speed; moving obstacles where they are at the moment the robot is there.
+        0: the way is clear; more: the robot is pushed that far off its way."""
+        import numpy as np
+        import shapely
+
+        from ..scenario.geometry import obstacle_polygon
+        from ..scenario.motion import Track
+
+        seed, episode = self.space.seed, self.seed_episode
+        if episode is not None and episode.path:
+            pts = np.asarray(episode.path, dtype=float).reshape(-1, 2)
+            duration = float(episode.metrics.get("duration") or 0.0) or seed.mission.timeout
+        else:
+            route = self._route()
+            pts = np.array([p[:2] for p in _route_samples(route)], dtype=float)
+            duration = route.length / max(seed.robot.limits.max_speed, 1e-6)
+        times = np.linspace(0.0, duration, len(pts))
+        fp = scenario.robot.footprint
+        half = fp.radius if fp.shape == "circle" else fp.width / 2
+        nearest = math.inf
+        for obs in scenario.obstacles:
+            at = pts
+            if getattr(obs, "motion", None) is not None:   # the way seen from where it is then
+                track = Track(obs)
+                at = pts - (track.positions(times) - track.positions(np.zeros(1)))
+            nearest = min(nearest, float(shapely.distance(obstacle_polygon(obs), shapely.points(at)).min()))
+        return max(0.0, half - nearest)
 
     def _hypothesis_batch(self, n: int, attempt: int) -> list[tuple[tuple[float, ...], str]]:
         """Up to ``n`` valid proposals drawn in one seeded Hypothesis run."""
@@ -336,7 +398,7 @@ class Evolve:
         from hypothesis import strategies as st
 
         out: list[tuple[tuple[float, ...], str]] = []
-        weights = self.weights()
+        weights = self.weights() if self.told else [1.0 if op == "explore" else 0.0 for op in OPERATORS]
         total = sum(weights)
 
         def body(data):
@@ -738,6 +800,8 @@ class Evolve:
     def tell(self, results: Sequence[Any]) -> None:
         self.told += 1
         for cand in results:
+            if cand.origin == "seed":
+                self.seed_episode = cand
             before = self.cells.elites.get(cand.signature)
             self.cells.add(cand)
             new_failure = cand.failed and cand.signature not in self.failure_signatures

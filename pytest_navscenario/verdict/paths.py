@@ -369,6 +369,27 @@ def path_exists(scenario: Scenario) -> bool:
     return shortest_path(scenario) is not None
 
 
+def passage_room(scenario: Scenario, margins: Sequence[float]) -> float:
+    """How much room the narrowest passage of the way leaves: the largest of ``margins`` (m) by
+    which the footprint could grow all round and still get from the start through the waypoints
+    to the goal among the static obstacles; 0.0 if none. An obstacle the grown footprint would
+    overlap at a mission point itself is left out (crowding the start or goal is not a passage).
+    Uncached; the largest margin is tried first, so an open layout costs one path search (about
+    1 ms for ten obstacles)."""
+    m = scenario.mission
+    stops = np.array([(m.start.x, m.start.y), *((w.x, w.y) for w in m.waypoints), (m.goal.x, m.goal.y)],
+                     dtype=float)
+    obstacles, r = static_obstacles(scenario), inflation_radius(scenario.robot.footprint)
+    for margin in sorted(margins, reverse=True):
+        keep = obstacles
+        if obstacles:
+            at_stop = _inside(stops, _grow(obstacles, r + margin)).any(axis=0)
+            keep = tuple(o for o, out in zip(obstacles, at_stop) if not out)
+        if _plan(stops, keep, r + margin) is not None:
+            return float(margin)
+    return 0.0
+
+
 def clear_caches() -> None:
     """Forget cached paths, gaps and shapes (for benchmarks measuring the uncached cost)."""
     _PATH_CACHE.clear()
