@@ -326,25 +326,28 @@ class Evolve:
                 for op in OPERATORS]
 
     def ask(self, room: int) -> list[tuple[tuple[float, ...], str]]:
-        """The next generation. The first: uniform layouts, the likeliest to fail first, then the
-        seed (last: a budget of one is the seed alone). Until a failure is known, HUNT_DRAWS
-        proposals are drawn per candidate and the likeliest to fail are simulated, those first."""
+        """The next generation. The first: GENERATION - 1 uniform layouts, the likeliest to fail
+        first, then the seed (a budget below GENERATION gets the likeliest layouts only). Until a
+        failure is known, HUNT_DRAWS proposals are drawn per candidate and the likeliest to fail
+        are simulated, those first. What is drawn does not depend on ``room``: a search of a
+        smaller budget begins like one of a larger budget."""
         self.generation += 1
+        size = GENERATION - 1 if self.generation == 1 else GENERATION   # + the seed in the first
+        hunting = not self.failure_signatures
+        draw = size * HUNT_DRAWS if hunting else min(room, size)
         out: list[tuple[tuple[float, ...], str]] = []
-        want = min(room, GENERATION)
-        seed = self.generation == 1 and self.admission.admit(self.space.zero())
-        want -= 1 if seed else 0
-        draw = want * HUNT_DRAWS if not self.failure_signatures else want
         attempt = 0
         while len(out) < draw:   # ends: the admission gives up (GaveUp) after too many misses
             out.extend(self._hypothesis_batch(draw - len(out), attempt))
             attempt += 1
-        if draw > want:   # no failure known yet: the likeliest to fail, those first
-            out = self._likeliest_first(out[:draw])
-            for offsets, _ in out[want:]:   # drawn, never simulated: as if never drawn
-                self.admission.seen.discard(_key(offsets))
-                self.aims.pop(_key(offsets), None)
-        return out[:want] + ([(self.space.zero(), "seed")] if seed else [])
+        out = self._likeliest_first(out[:draw]) if hunting else out
+        for offsets, _ in out[min(room, size):]:   # drawn, never simulated: as if never drawn
+            self.admission.seen.discard(_key(offsets))
+            self.aims.pop(_key(offsets), None)
+        out = out[:min(room, size)]
+        if self.generation == 1 and room > size and self.admission.admit(self.space.zero()):
+            out.append((self.space.zero(), "seed"))
+        return out
 
     def _likeliest_first(self, proposals: list[tuple[tuple[float, ...], str]]
                          ) -> list[tuple[tuple[float, ...], str]]:

@@ -75,6 +75,33 @@ def test_robot_drives_lengthwise_through_gaps_wider_than_itself(gap, straight):
     assert clearance(sp, s) >= 0.25 - 1e-9
 
 
+LEVELS = (0.05, 0.1, 0.15, 0.2, 0.3, 0.45, 0.6)
+
+
+def pen(gap):
+    """Walls round the start (0, 0), the one way out a gap ``gap`` wide in the north wall (y = 5)."""
+    half = (6.0 - gap) / 2
+    return [BoxObstacle("west", -3.1, 1.5, 0.2, 7.4), BoxObstacle("east", 3.1, 1.5, 0.2, 7.4),
+            BoxObstacle("south", 0, -2.1, 6.4, 0.2),
+            BoxObstacle("nw", -3 + half / 2, 5.1, half, 0.2), BoxObstacle("ne", 3 - half / 2, 5.1, half, 0.2)]
+
+
+@pytest.mark.parametrize("gap, room", [(0.45, 0.0), (0.6, 0.05), (0.75, 0.1), (0.95, 0.2), (3.0, 0.6)])
+def test_passage_room_is_what_the_narrowest_passage_leaves_the_robot(gap, room):
+    """The only way out of a pen is a gap ``gap`` wide (the robot is 0.5 wide): the footprint
+    could grow by (gap - 0.5) / 2 all round and still pass; the largest level within that is
+    the room (none: 0.0)."""
+    assert paths.passage_room(scenario(*pen(gap)), LEVELS) == room
+
+
+def test_passage_room_leaves_out_a_box_crowding_the_start():
+    """A box just beside the start is no passage (the robot turns away from it); a gap further
+    on still is."""
+    beside = BoxObstacle("beside", 0.6, 0, 0.3, 0.3)            # 0.2 m from the footprint's side
+    assert paths.passage_room(scenario(beside), LEVELS) == 0.6
+    assert paths.passage_room(scenario(beside, *pen(0.6)), LEVELS) == 0.05
+
+
 def test_a_closed_wall_leaves_no_path():
     ring = [BoxObstacle("n", 0, 12, 6, 0.2), BoxObstacle("s", 0, 8, 6, 0.2),
             BoxObstacle("e", 3, 10, 0.2, 4.2), BoxObstacle("w", -3, 10, 0.2, 4.2)]
