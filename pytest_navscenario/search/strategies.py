@@ -812,7 +812,9 @@ class Evolve:
                 self.failure_signatures.add(cand.signature)
             improved = (not cand.failed and math.isfinite(cand.robustness)
                         and (before is None or cand.robustness < before.robustness))
-            if cand.origin in self.stats:   # credit: new ways of failing, and moves toward failing
+            # credit: new ways of failing, and moves toward failing; not for the first generation,
+            # chosen for looking likely to fail, not drawn as its operator draws
+            if cand.origin in self.stats and self.told > 1:
                 self.stats[cand.origin][0] += 1
                 self.stats[cand.origin][1] += (3.0 if new_failure else 0.0) + (0.2 if improved else 0.0)
             aim = self.aims.pop(_key(cand.offsets), None)
