@@ -171,8 +171,8 @@ def run_pytest(target: Path, extra: list[str], results: Path | None,
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
     if probe is not None:
         env["NAVBENCH_PROBE"] = str(probe)
-    cmd = [sys.executable, "-m", "pytest", str(target), "-q", "-p", "no:cacheprovider",
-           "--nav-artifacts=none", "--nav-summary=no", "--nav-plots=none", *extra]
+    nav = [] if "no:navscenario" in extra else ["--nav-artifacts=none", "--nav-summary=no", "--nav-plots=none"]
+    cmd = [sys.executable, "-m", "pytest", str(target), "-q", "-p", "no:cacheprovider", *nav, *extra]
     if results is not None:
         cmd.append(f"--nav-results={results}")
     cpu0, t0 = _children_cpu(), time.perf_counter()
@@ -210,34 +210,53 @@ def _probe_run(folder: Path, extra: list[str]) -> dict:
 
 def floor(count: int, repeats: int) -> int:
     """Per-item CPU outside the call phase when episodes cost (almost) nothing, against pytest's own
-    per-item cost on empty Python test functions (same installed plugins)."""
+    per-item cost on empty Python test functions (same installed plugins), and the same marginally:
+    COUNT items against COUNT / 5, so start-up and imports cancel."""
     med = statistics.median
+    small = max(1, count // 5)
     with tempfile.TemporaryDirectory(prefix="navfloor-") as tmp:
-        scen, py, py1 = Path(tmp) / "scenarios", Path(tmp) / "python", Path(tmp) / "python-1-per-file"
-        for folder in (scen, py, py1):
-            folder.mkdir()
-            (folder / "pytest.ini").write_text("[pytest]\n")
-            (folder / "conftest.py").write_text(PROBE)
-        for i in range(count):
-            (scen / f"s{i:04d}.yaml").write_text(
-                "version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 0.32, y: 0}, timeout: 0.5}\n"
-                f"obstacles: [{{type: box, x: 3, y: {i % 7}, length: 1, width: 1}}]\n")
-        for i in range(0, count, 100):
-            (py / f"test_m{i}.py").write_text("".join(f"def test_{j}(): pass\n" for j in range(min(100, count - i))))
-        for i in range(count):       # pytest's own cost for one item per file, as scenario files are
-            (py1 / f"test_f{i:04d}.py").write_text("def test_it(): pass\n")
-        rows = {}
-        for label, folder, extra in [("scenario files, 2-tick episodes", scen, ["--nav-results=r.jsonl"]),
-                                     ("empty Python tests", py, []),
-                                     ("empty Python tests, one per file", py1, [])]:
-            probes = [_probe_run(folder, extra) for _ in range(repeats)]
-            rows[label] = med((p["session"] - p["calls"]) / p["n"] for p in probes)
-            print(f"{label}: {1000 * rows[label]:.2f} ms CPU per item outside the call phase "
-                  f"(median of {repeats}, {probes[0]['n']} items, fixed session costs included)")
+        rows, marginal = {}, {}
+        for label, kind, extra in [("scenario files, 2-tick episodes", "scen", ["--nav-results=r.jsonl"]),
+                                   ("empty Python tests", "py", []),
+                                   ("empty Python tests, one per file", "py1", []),
+                                   ("the same without any plugin but pytest's own", "py1", _BARE)]:
+            folders = [_floor_folder(Path(tmp) / f"{kind}-{n}-{len(rows)}", kind, n) for n in (count, small)]
+            probes = [[_probe_run(folder, extra) for _ in range(repeats)] for folder in folders]
+            outside = [med(p["session"] - p["calls"] for p in runs) for runs in probes]
+            rows[label] = outside[0] / probes[0][0]["n"]
+            marginal[label] = (outside[0] - outside[1]) / (probes[0][0]["n"] - probes[1][0]["n"])
+            print(f"{label}: {1000 * rows[label]:.2f} ms CPU per item outside the call phase (median of "
+                  f"{repeats}, {probes[0][0]['n']} items, fixed session costs included); marginal "
+                  f"{1000 * marginal[label]:.2f} ms (against {probes[1][0]['n']} items)")
         scen_row = rows["scenario files, 2-tick episodes"]
         print(f"plugin + loader share: {1000 * (scen_row - rows['empty Python tests']):.2f} ms per item "
-              f"({1000 * (scen_row - rows['empty Python tests, one per file']):.2f} ms against one test per file)")
+              f"({1000 * (scen_row - rows['empty Python tests, one per file']):.2f} ms against one test per file; "
+              f"marginal {1000 * (marginal['scenario files, 2-tick episodes'] - marginal['empty Python tests, one per file']):.2f} ms)")
     return 0
+
+
+# pytest with none of the installed plugins (xdist, Hypothesis's, this one, ...): its own cost per item
+_BARE = ["-p", "no:navscenario", "-p", "no:hypothesispytest", "-p", "no:xdist", "-p", "no:xdist.looponfail",
+         "-p", "no:benchmark", "-p", "no:platformdirs"]
+
+
+def _floor_folder(folder: Path, kind: str, n: int) -> Path:
+    """``n`` items of one kind in their own rootdir: scenario files with 2-tick episodes ("scen"),
+    empty test functions 100 to a file ("py") or one to a file ("py1"), as scenario files are."""
+    folder.mkdir()
+    (folder / "pytest.ini").write_text("[pytest]\n")
+    (folder / "conftest.py").write_text(PROBE)
+    for i in range(n):
+        if kind == "scen":
+            (folder / f"s{i:04d}.yaml").write_text(
+                "version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 0.32, y: 0}, timeout: 0.5}\n"
+                f"obstacles: [{{type: box, x: 3, y: {i % 7}, length: 1, width: 1}}]\n")
+        elif kind == "py1":
+            (folder / f"test_f{i:04d}.py").write_text("def test_it(): pass\n")
+    if kind == "py":
+        for i in range(0, n, 100):
+            (folder / f"test_m{i}.py").write_text("".join(f"def test_{j}(): pass\n" for j in range(min(100, n - i))))
+    return folder
 
 
 def main() -> int:
