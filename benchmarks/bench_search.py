@@ -12,7 +12,7 @@ strategy: distinct failures (total over the search seeds; distinct = different c
 as frozen files are told apart) and, in brackets, the count under the signature before issue 13's
 second round (a seed obstacle's quarter where the candidate had it), searches that found none,
 median simulations to the first failure (a search with none counts as budget + 1), lowest
-clearance, median CPU time per search, and beside them the rate at which uniformly random
+clearance, median CPU and wall time per search (wall inflates with the machine's load and --jobs), and beside them the rate at which uniformly random
 layouts fail for this planner and seed (random's failing simulations over its simulations). The
 totals come twice: over every seed, and over the seeds where random fails on fewer than 30 % of
 its layouts, where a ratio to random means something. Rows are saved as JSON (--out; --reuse
@@ -109,6 +109,7 @@ def _cell(rows, seed, strategy):
             "firsts": [r["first_failure"] for r in sel],
             "clear": min(r["best_clearance"] for r in sel),
             "cpu": statistics.median(r["cpu"] for r in sel),
+            "wall": statistics.median(r["wall"] for r in sel),
             "fail_rate": sum(r["failing_sims"] for r in sel) / max(1, sum(r["sims"] for r in sel))}
 
 
@@ -119,7 +120,7 @@ def table(rows, subject: str, budget: int, n_seeds: int, seeds=None) -> str:
     strategies = [s for s in STRATEGIES if any(r["strategy"] == s for r in rows)]
     lines = [f"subject {subject}, budget {budget}, {n_seeds} search seeds per shipped seed, no shrinking",
              f"{'seed':<19} {'strategy':<10} {'distinct':>8} {'(old)':>6} {'none':>5} {'1st fail':>8} "
-             f"{'min clr':>8} {'cpu s':>6} {'random fail rate':>17}"]
+             f"{'min clr':>8} {'cpu s':>6} {'wall s':>6} {'random fail rate':>17}"]
     hard = []
     for seed in seeds:
         rnd = _cell(rows, seed, "random")
@@ -131,7 +132,7 @@ def table(rows, subject: str, budget: int, n_seeds: int, seeds=None) -> str:
                 continue
             rate = f"{rnd['fail_rate']:.1%}" if rnd else "-"
             lines.append(f"{seed:<19} {strat:<10} {c['distinct']:>8} {c['old']:>6} {c['none']:>5} "
-                         f"{c['first']:>8g} {c['clear']:>8.3f} {c['cpu']:>6.1f} {rate:>17}")
+                         f"{c['first']:>8g} {c['clear']:>8.3f} {c['cpu']:>6.1f} {c['wall']:>6.1f} {rate:>17}")
     for label, group in (("all seeds", seeds),
                          (f"seeds where random fails < {HARD:.0%} ({', '.join(hard) or 'none'})", hard)):
         lines.append(f"totals, {label}:")

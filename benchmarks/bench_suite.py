@@ -111,6 +111,11 @@ def pytest_sessionstart(session):
     _T["start"] = time.process_time()
 
 
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtestloop(session):
+    _T["loop"] = time.time()      # wall clock: collection is over, the first episode starts now
+
+
 @pytest.hookimpl(wrapper=True)
 def pytest_runtest_setup(item):
     t0 = time.process_time()
@@ -128,6 +133,7 @@ def pytest_runtest_call(item):
     finally:
         _T["calls"] += time.process_time() - t0
         _T["n"] += 1
+        _T["last"] = time.time()      # wall clock: the last episode's result is in
 
 
 @pytest.hookimpl(trylast=True)
@@ -165,20 +171,23 @@ def _children_cpu() -> float:
 
 
 def run_pytest(target: Path, extra: list[str], results: Path | None,
-               probe: Path | None = None) -> tuple[float, float, str, float]:
+               probe: Path | None = None, stamps: dict | None = None) -> tuple[float, float, str, float]:
     """(process wall time, pytest's own session time, pytest's last line, CPU time of pytest and
-    its xdist workers: less sensitive to other load on the machine than wall time)."""
+    its xdist workers: less sensitive to other load on the machine than wall time). ``stamps``
+    gets the wall clock at the launch and after the exit."""
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
     if probe is not None:
         env["NAVBENCH_PROBE"] = str(probe)
-    cmd = [sys.executable, "-m", "pytest", str(target), "-q", "-p", "no:cacheprovider",
-           "--nav-artifacts=none", "--nav-summary=no", "--nav-plots=none", *extra]
+    nav = [] if "no:navscenario" in extra else ["--nav-artifacts=none", "--nav-summary=no", "--nav-plots=none"]
+    cmd = [sys.executable, "-m", "pytest", str(target), "-q", "-p", "no:cacheprovider", *nav, *extra]
     if results is not None:
         cmd.append(f"--nav-results={results}")
-    cpu0, t0 = _children_cpu(), time.perf_counter()
+    cpu0, t0, launch = _children_cpu(), time.perf_counter(), time.time()
     proc = subprocess.run(cmd, cwd=target if target.is_dir() else target.parent, env=env,
                           capture_output=True, text=True)
     wall = time.perf_counter() - t0
+    if stamps is not None:
+        stamps.update(launch=launch, exit=time.time())
     _reap_all()   # orphaned workers (the plugin's forkserver) are ours to reap: their CPU counts too
     cpu = _children_cpu() - cpu0
     tail = proc.stdout.strip().splitlines()[-1] if proc.stdout.strip() else proc.stderr
@@ -210,34 +219,73 @@ def _probe_run(folder: Path, extra: list[str]) -> dict:
 
 def floor(count: int, repeats: int) -> int:
     """Per-item CPU outside the call phase when episodes cost (almost) nothing, against pytest's own
-    per-item cost on empty Python test functions (same installed plugins)."""
+    per-item cost on empty Python test functions (same installed plugins), and the same marginally:
+    COUNT items against COUNT / 5, so start-up and imports cancel."""
     med = statistics.median
+    small = max(1, count // 5)
     with tempfile.TemporaryDirectory(prefix="navfloor-") as tmp:
-        scen, py, py1 = Path(tmp) / "scenarios", Path(tmp) / "python", Path(tmp) / "python-1-per-file"
-        for folder in (scen, py, py1):
-            folder.mkdir()
-            (folder / "pytest.ini").write_text("[pytest]\n")
-            (folder / "conftest.py").write_text(PROBE)
-        for i in range(count):
-            (scen / f"s{i:04d}.yaml").write_text(
-                "version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 0.32, y: 0}, timeout: 0.5}\n"
-                f"obstacles: [{{type: box, x: 3, y: {i % 7}, length: 1, width: 1}}]\n")
-        for i in range(0, count, 100):
-            (py / f"test_m{i}.py").write_text("".join(f"def test_{j}(): pass\n" for j in range(min(100, count - i))))
-        for i in range(count):       # pytest's own cost for one item per file, as scenario files are
-            (py1 / f"test_f{i:04d}.py").write_text("def test_it(): pass\n")
-        rows = {}
-        for label, folder, extra in [("scenario files, 2-tick episodes", scen, ["--nav-results=r.jsonl"]),
-                                     ("empty Python tests", py, []),
-                                     ("empty Python tests, one per file", py1, [])]:
-            probes = [_probe_run(folder, extra) for _ in range(repeats)]
-            rows[label] = med((p["session"] - p["calls"]) / p["n"] for p in probes)
-            print(f"{label}: {1000 * rows[label]:.2f} ms CPU per item outside the call phase "
-                  f"(median of {repeats}, {probes[0]['n']} items, fixed session costs included)")
+        rows, marginal = {}, {}
+        for label, kind, extra in [("scenario files, 2-tick episodes", "scen", ["--nav-results=r.jsonl"]),
+                                   ("empty Python tests", "py", []),
+                                   ("empty Python tests, one per file", "py1", []),
+                                   ("the same without any plugin but pytest's own", "py1", _BARE)]:
+            folders = [_floor_folder(Path(tmp) / f"{kind}-{n}-{len(rows)}", kind, n) for n in (count, small)]
+            probes = [[_probe_run(folder, extra) for _ in range(repeats)] for folder in folders]
+            outside = [med(p["session"] - p["calls"] for p in runs) for runs in probes]
+            rows[label] = outside[0] / probes[0][0]["n"]
+            marginal[label] = (outside[0] - outside[1]) / (probes[0][0]["n"] - probes[1][0]["n"])
+            print(f"{label}: {1000 * rows[label]:.2f} ms CPU per item outside the call phase (median of "
+                  f"{repeats}, {probes[0][0]['n']} items, fixed session costs included); marginal "
+                  f"{1000 * marginal[label]:.2f} ms (against {probes[1][0]['n']} items)")
         scen_row = rows["scenario files, 2-tick episodes"]
         print(f"plugin + loader share: {1000 * (scen_row - rows['empty Python tests']):.2f} ms per item "
-              f"({1000 * (scen_row - rows['empty Python tests, one per file']):.2f} ms against one test per file)")
+              f"({1000 * (scen_row - rows['empty Python tests, one per file']):.2f} ms against one test per file; "
+              f"marginal {1000 * (marginal['scenario files, 2-tick episodes'] - marginal['empty Python tests, one per file']):.2f} ms)")
     return 0
+
+
+# pytest with none of the installed plugins (xdist, Hypothesis's, this one, ...): its own cost per item
+_BARE = ["-p", "no:navscenario", "-p", "no:hypothesispytest", "-p", "no:xdist", "-p", "no:xdist.looponfail",
+         "-p", "no:benchmark", "-p", "no:platformdirs"]
+
+
+def _floor_folder(folder: Path, kind: str, n: int) -> Path:
+    """``n`` items of one kind in their own rootdir: scenario files with 2-tick episodes ("scen"),
+    empty test functions 100 to a file ("py") or one to a file ("py1"), as scenario files are."""
+    folder.mkdir()
+    (folder / "pytest.ini").write_text("[pytest]\n")
+    (folder / "conftest.py").write_text(PROBE)
+    for i in range(n):
+        if kind == "scen":
+            (folder / f"s{i:04d}.yaml").write_text(
+                "version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 0.32, y: 0}, timeout: 0.5}\n"
+                f"obstacles: [{{type: box, x: 3, y: {i % 7}, length: 1, width: 1}}]\n")
+        elif kind == "py1":
+            (folder / f"test_f{i:04d}.py").write_text("def test_it(): pass\n")
+    if kind == "py":
+        for i in range(0, n, 100):
+            (folder / f"test_m{i}.py").write_text("".join(f"def test_{j}(): pass\n" for j in range(min(100, n - i))))
+    return folder
+
+
+def _sequential_parts(probes: list[dict], serial_wall: float, capacity: float) -> None:
+    """From launch to the run loop and from the last episode's result to the exit, per mode: the
+    parts no number of workers shortens, and the speed-up they allow even with no overhead at all
+    (an upper bound: under -n 2 the workers may still be starting when the loop begins)."""
+    med = statistics.median
+    parts = {}
+    for label in ("serial", "-n 2"):
+        runs = [p for p in probes if p["label"] == label and "loop" in p]
+        if not runs:
+            return
+        parts[label] = (med(p["loop"] - p["launch"] for p in runs), med(p["exit"] - p["last"] for p in runs))
+        print(f"{label}: launch to the run loop (collection done, episodes start) {parts[label][0]:.2f} s, the "
+              f"last episode's result to the exit {parts[label][1]:.2f} s (median wall)")
+    seq_serial, seq_par = sum(parts["serial"]), sum(parts["-n 2"])
+    ceiling = serial_wall / (seq_par + (serial_wall - seq_serial) / capacity)
+    print(f"ceiling with no per-item overhead at all: {serial_wall:.2f} / ({seq_par:.2f} + "
+          f"{serial_wall - seq_serial:.2f} / {capacity:.2f}) = {ceiling:.2f}x, {100 * ceiling / capacity:.0f} % "
+          f"of the capacity")
 
 
 def main() -> int:
@@ -258,9 +306,10 @@ def main() -> int:
         (folder / "pytest.ini").write_text("[pytest]\n")  # its own rootdir: only these files collected
         (folder / "conftest.py").write_text(PROBE)
         probes: list[dict] = []
+        capacity = parallel_capacity()
         print(f"{n} scenario files in {len(SEEDS)} families; {args.repeats} runs per mode; "
               f"{os.cpu_count()} CPUs; load average before: {os.getloadavg()[0]:.2f}; "
-              f"parallel capacity of two CPU-bound processes now: {parallel_capacity():.2f}x")
+              f"parallel capacity of two CPU-bound processes now: {capacity:.2f}x")
         walls: dict[str, list[float]] = {"serial": [], "-n 2": [], "xdist": []}
         cpus: dict[str, list[float]] = {"serial": [], "-n 2": [], "xdist": []}
         rest: dict[str, list[tuple[int, float]]] = {"all": [], "small": []}
@@ -271,10 +320,11 @@ def main() -> int:
                                          ("xdist", folder, ["-n", "2", "--dist", "load"]),
                                          ("small", small_suite, [])]:
                 results = Path(tmp) / f"r{r}-{len(records)}.jsonl"
-                probe = Path(tmp) / "probe.json" if label in ("serial", "small") else None
-                wall, session, tail, cpu = run_pytest(target, extra, results, probe)
+                probe = Path(tmp) / "probe.json" if label in ("serial", "small", "-n 2") else None
+                stamps: dict = {}
+                wall, session, tail, cpu = run_pytest(target, extra, results, probe, stamps)
                 if probe is not None:
-                    probes.append(dict(json.loads(probe.read_text()), label=label))
+                    probes.append(dict(json.loads(probe.read_text()), label=label, **stamps))
                 recs = [json.loads(line) for line in results.read_text().splitlines()]
                 episodes = sum(rec["wall_time"] for rec in recs)
                 print(f"  run {r + 1} {label:10s}: {wall:6.2f} s wall, {cpu:6.2f} s CPU, session {session:6.2f} s, "
@@ -294,7 +344,9 @@ def main() -> int:
         (n_all, _), (n_one, _) = rest["all"][0], rest["small"][0]
         extra_all = med(x for _, x in rest["all"])
         extra_one = med(x for _, x in rest["small"])
-        print(f"parallel capacity after: {parallel_capacity():.2f}x (2.00 = two idle cores)")
+        capacity = max(capacity, parallel_capacity())
+        print(f"parallel capacity after: {capacity:.2f}x (2.00 = two idle cores; the larger of before "
+              f"and after is used below)")
         for label in ("-n 2", "xdist"):
             print(f"median CPU time: serial {med(cpus['serial']):.2f} s, {label} {med(cpus[label]):.2f} s "
                   f"(+{100 * (med(cpus[label]) / med(cpus['serial']) - 1):.0f} %; 95 % of the capacity allows "
@@ -306,7 +358,7 @@ def main() -> int:
               f"marginal per-item overhead {1000 * (extra_all - extra_one) / (n_all - n_one):.2f} ms "
               f"(difference between the two suite sizes: start-up and imports cancel)")
         full = [p for p in probes if p["label"] == "serial"]
-        small = [p for p in probes if p["label"] != "serial"]
+        small = [p for p in probes if p["label"] == "small"]
         outside = {k: med(p["session"] - p["calls"] for p in ps) for k, ps in (("full", full), ("small", small))}
         print(f"CPU time outside the items' call phases (collection, reports, report.nav, results), serial: "
               f"{outside['full']:.2f} s for {full[0]['n']} items = {1000 * outside['full'] / full[0]['n']:.2f} ms "
@@ -322,6 +374,7 @@ def main() -> int:
               f"{1000 * (outside['full'] - outside['small']) / span - feas:.2f} ms per item")
         print(f"collection alone (--collect-only, {n} files): {med(collect):.2f} s session, "
               f"{1000 * med(collect) / n:.2f} ms per file")
+        _sequential_parts(probes, med(walls["serial"]), capacity)
     return 0
 
 
