@@ -268,7 +268,7 @@ def _floor_folder(folder: Path, kind: str, n: int) -> Path:
     return folder
 
 
-def _sequential_parts(probes: list[dict], serial_wall: float, capacity: float) -> None:
+def _sequential_parts(probes: list[dict], serial_wall: float, capacities: tuple[float, ...]) -> None:
     """From launch to the run loop and from the last episode's result to the exit, per mode: the
     parts no number of workers shortens, and the speed-up they allow even with no overhead at all
     (an upper bound: under -n 2 the workers may still be starting when the loop begins)."""
@@ -282,10 +282,11 @@ def _sequential_parts(probes: list[dict], serial_wall: float, capacity: float) -
         print(f"{label}: launch to the run loop (collection done, episodes start) {parts[label][0]:.2f} s, the "
               f"last episode's result to the exit {parts[label][1]:.2f} s (median wall)")
     seq_serial, seq_par = sum(parts["serial"]), sum(parts["-n 2"])
-    ceiling = serial_wall / (seq_par + (serial_wall - seq_serial) / capacity)
-    print(f"ceiling with no per-item overhead at all: {serial_wall:.2f} / ({seq_par:.2f} + "
-          f"{serial_wall - seq_serial:.2f} / {capacity:.2f}) = {ceiling:.2f}x, {100 * ceiling / capacity:.0f} % "
-          f"of the capacity")
+    for capacity in sorted(set(min(c, 2.0) for c in capacities) | {2.0}):  # the probe can read > 2
+        ceiling = serial_wall / (seq_par + (serial_wall - seq_serial) / capacity)
+        print(f"ceiling with no per-item overhead at all, capacity {capacity:.2f}x: {serial_wall:.2f} / "
+              f"({seq_par:.2f} + {serial_wall - seq_serial:.2f} / {capacity:.2f}) = {ceiling:.2f}x, "
+              f"{100 * ceiling / capacity:.0f} % of the capacity")
 
 
 def main() -> int:
@@ -344,9 +345,8 @@ def main() -> int:
         (n_all, _), (n_one, _) = rest["all"][0], rest["small"][0]
         extra_all = med(x for _, x in rest["all"])
         extra_one = med(x for _, x in rest["small"])
-        capacity = max(capacity, parallel_capacity())
-        print(f"parallel capacity after: {capacity:.2f}x (2.00 = two idle cores; the larger of before "
-              f"and after is used below)")
+        capacities = (capacity, parallel_capacity())
+        print(f"parallel capacity after: {capacities[1]:.2f}x (2.00 = two idle cores)")
         for label in ("-n 2", "xdist"):
             print(f"median CPU time: serial {med(cpus['serial']):.2f} s, {label} {med(cpus[label]):.2f} s "
                   f"(+{100 * (med(cpus[label]) / med(cpus['serial']) - 1):.0f} %; 95 % of the capacity allows "
@@ -374,7 +374,7 @@ def main() -> int:
               f"{1000 * (outside['full'] - outside['small']) / span - feas:.2f} ms per item")
         print(f"collection alone (--collect-only, {n} files): {med(collect):.2f} s session, "
               f"{1000 * med(collect) / n:.2f} ms per file")
-        _sequential_parts(probes, med(walls["serial"]), capacity)
+        _sequential_parts(probes, med(walls["serial"]), capacities)
     return 0
 
 
