@@ -25,6 +25,16 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
 
+def episode_digest(res) -> str:
+    """A hash of an episode's trajectory bits, outcome and message: equal digests, same episode."""
+    h = hashlib.sha256()
+    traj = res.trajectory
+    for key in ("t", "pose", "velocity", "tick_t", "command", "ranges"):
+        h.update(getattr(traj, key).tobytes())
+    h.update(repr((res.outcome.value, res.message)).encode())
+    return h.hexdigest()
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--seed", default="boxes1")
@@ -57,11 +67,7 @@ def main() -> int:
         traj = res.trajectory
         ticks += len(traj.tick_t)
         outcomes[res.outcome.value] += 1
-        h = hashlib.sha256()
-        for key in ("t", "pose", "velocity", "tick_t", "command", "ranges"):
-            h.update(getattr(traj, key).tobytes())
-        h.update(repr((res.outcome.value, res.message)).encode())
-        digests.append(h.hexdigest()[:16])
+        digests.append(episode_digest(res)[:16])
     print(f"{a.seed} vs {a.subject}, budget {a.budget}: {len(picked)} of {len(report.candidates)} episodes "
           f"re-simulated, {ticks} ticks, outcomes {dict(outcomes)}")
     print("CPU us per tick: " + ", ".join(f"{k} {v / max(ticks, 1) * 1e6:.1f}" for k, v in acc.items()))

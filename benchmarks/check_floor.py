@@ -21,13 +21,14 @@ cost if the planner were free: episodes with the replay planner plus the search'
 from __future__ import annotations
 
 import argparse
-import hashlib
 import os
 import statistics
 import sys
 import time
 
 import numpy as np
+
+from bench_search_ticks import episode_digest   # benchmarks/ is on the path when run as a script
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
@@ -44,15 +45,6 @@ class Replay:
 
     def act(self, obs):
         return self.commands[obs.tick]
-
-
-def _digest(res) -> str:
-    h = hashlib.sha256()
-    traj = res.trajectory
-    for key in ("t", "pose", "velocity", "tick_t", "command", "ranges"):
-        h.update(getattr(traj, key).tobytes())
-    h.update(res.outcome.value.encode())
-    return h.hexdigest()
 
 
 def _mujoco_alone(scenario, steps: int, ticks: int) -> tuple[float, float]:
@@ -114,7 +106,7 @@ def main() -> int:
         rep = run_scenario(cand.scenario, Replay(traj.command), stuck_after=DEFAULT_STUCK_AFTER)
         spent = time.process_time() - c0
         replay_cpu += spent
-        differ += _digest(rep) != _digest(res)
+        differ += episode_digest(rep) != episode_digest(res)
         n_steps, n_ticks = len(traj.t) - 1, len(traj.tick_t)
         steps, ticks = steps + n_steps, ticks + n_ticks
         if n_ticks:

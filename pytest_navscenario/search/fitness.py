@@ -209,8 +209,7 @@ def _safety_margin(res: Any, pose: Any) -> float | None:
     the smallest clearance of those predicted poses, less the layer's margin, over
     SAFETY_SCALE (0 = it would have stopped the robot)."""
     import numpy as np
-    from ..scenario.geometry import convex_parts, footprint_part_distance
-    from ..verdict.paths import box_box_distance, footprint_core, is_outlined, obstacle_shapes
+    from ..verdict.metrics import closest_approach
 
     sc = res.scenario
     safety = getattr(sc.robot, "safety", None)
@@ -222,19 +221,8 @@ def _safety_margin(res: Any, pose: Any) -> float | None:
     p, v = pose[::step], vel[::step]
     c, sn = np.cos(p[:, 2]), np.sin(p[:, 2])
     wx, wy = c * v[:, 0] - sn * v[:, 1], sn * v[:, 0] + c * v[:, 1]
-    simple = [o for o in sc.obstacles if not is_outlined(o)]
-    s = obstacle_shapes(simple)
-    parts = [part for o in sc.obstacles if is_outlined(o) for part in convex_parts(o)]   # polygons, meshes
-    hl, hw, rho = footprint_core(sc.robot.footprint)
     best = np.inf
     for h in (0.5 * safety.horizon, safety.horizon):
-        yaw = p[:, 2] + v[:, 2] * h
-        px, py = p[:, 0] + wx * h, p[:, 1] + wy * h
-        if simple:
-            d = box_box_distance(px[:, None], py[:, None], np.cos(yaw)[:, None], np.sin(yaw)[:, None], hl, hw,
-                                 s.x, s.y, s.cos, s.sin, s.hl, s.hw) - s.rho - rho
-            best = min(best, float(d.min()))
-        poses = np.stack([px, py, yaw], axis=1)
-        for verts in parts:
-            best = min(best, float(footprint_part_distance(hl, hw, rho, poses, verts).min()))
+        ahead = np.stack([p[:, 0] + wx * h, p[:, 1] + wy * h, p[:, 2] + v[:, 2] * h], axis=1)
+        best = min(best, closest_approach(sc.obstacles, sc.robot.footprint, ahead)[0])
     return _unit((best - safety.margin) / SAFETY_SCALE)

@@ -306,6 +306,7 @@ class Evolve:
         self.told = 0                                   # generations told so far
         self.shifted: dict[tuple, int] = {}             # signature -> times its failure was shifted
         self.seed_episode: Any = None                   # the seed's own episode (generation 1)
+        self._way: tuple | None = None                  # (from the episode?, points, times): _expected_way
 
     @property
     def lag(self) -> int:
@@ -373,18 +374,11 @@ class Evolve:
 
         from ..scenario.geometry import obstacle_polygon
         from ..scenario.motion import Track
+        from ..verdict.paths import footprint_core
 
-        seed, episode = self.space.seed, self.seed_episode
-        if episode is not None and episode.path:
-            pts = np.asarray(episode.path, dtype=float).reshape(-1, 2)
-            duration = float(episode.metrics.get("duration") or 0.0) or seed.mission.timeout
-        else:
-            route = self._route()
-            pts = np.array([p[:2] for p in _route_samples(route)], dtype=float)
-            duration = route.length / max(seed.robot.limits.max_speed, 1e-6)
-        times = np.linspace(0.0, duration, len(pts))
-        fp = scenario.robot.footprint
-        half = fp.radius if fp.shape == "circle" else fp.width / 2
+        pts, times = self._expected_way()
+        _, hw, rho = footprint_core(scenario.robot.footprint)
+        half = hw + rho
         nearest = math.inf
         for obs in scenario.obstacles:
             at = pts
@@ -393,6 +387,25 @@ class Evolve:
                 at = pts - (track.positions(times) - track.positions(np.zeros(1)))
             nearest = min(nearest, float(shapely.distance(obstacle_polygon(obs), shapely.points(at)).min()))
         return max(0.0, half - nearest)
+
+    def _expected_way(self) -> tuple[Any, Any]:
+        """(points, times) of the robot's expected way: the seed's recorded path over its
+        episode's duration once that episode is known, before it the seed's route driven at top
+        speed. Made once for each (the intrusion of every proposal is measured against it)."""
+        import numpy as np
+
+        seed, episode = self.space.seed, self.seed_episode
+        recorded = episode is not None and bool(episode.path)
+        if self._way is None or self._way[0] != recorded:
+            if recorded:
+                pts = np.asarray(episode.path, dtype=float).reshape(-1, 2)
+                duration = float(episode.metrics.get("duration") or 0.0) or seed.mission.timeout
+            else:
+                route = self._route()
+                pts = np.array([p[:2] for p in _route_samples(route)], dtype=float)
+                duration = route.length / max(seed.robot.limits.max_speed, 1e-6)
+            self._way = (recorded, pts, np.linspace(0.0, duration, len(pts)))
+        return self._way[1], self._way[2]
 
     def _hypothesis_batch(self, n: int, attempt: int) -> list[tuple[tuple[float, ...], str]]:
         """Up to ``n`` valid proposals drawn in one seeded Hypothesis run."""
@@ -434,9 +447,10 @@ class Evolve:
         self.aim = None
         if op == "explore" or not self.cells.elites:
             return uniform(self.space, rnd), None
-        if op == "shift" and self._shiftable():
+        if op == "shift":
             parent = self._shift_parent(rnd)
-            return self._shift(parent, rnd), parent
+            if parent is not None:
+                return self._shift(parent, rnd), parent
         parent = self.cells.pick(rnd)
         if op in PATH_OPERATORS and parent.path:   # Evolve._place, ._insert, ...
             return getattr(self, f"_{op}")(parent, rnd), parent
@@ -679,8 +693,11 @@ class Evolve:
                 if self.cells.elites[k].failed and self.cells.elites[k].culprit.startswith(INSERT_PREFIX)]
 
     def _shift_parent(self, rnd: random.Random) -> Any:
-        """One of ``_shiftable``, the ones shifted least often first (weight 1 / (1 + shifts))."""
+        """One of ``_shiftable``, the ones shifted least often first (weight 1 / (1 + shifts));
+        None (nothing drawn) if there is none."""
         pool = self._shiftable()
+        if not pool:
+            return None
         weights = [1.0 / (1.0 + self.shifted.get(c.signature, 0)) for c in pool]
         cand = _weighted_pick(pool, weights, rnd.random() * sum(weights))
         self.shifted[cand.signature] = self.shifted.get(cand.signature, 0) + 1

@@ -40,6 +40,7 @@ import math
 import os
 from collections import OrderedDict
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 
@@ -151,11 +152,11 @@ def min_clearance(scenario: Scenario, t: np.ndarray, pose: np.ndarray
     if not len(pose) or not scenario.obstacles:
         return math.inf, "", NAN, NAN, NAN
     footprint = scenario.robot.footprint
-    best = _closest(static_obstacles(scenario), footprint, pose)
+    best = closest_approach(static_obstacles(scenario), footprint, pose)
     for j, track in tracks(scenario.obstacles).items():
         rel = pose.copy()
         rel[:, :2] -= displacement(track, t)
-        hit = _closest((scenario.obstacles[j],), footprint, rel)
+        hit = closest_approach((scenario.obstacles[j],), footprint, rel)
         if hit is not None and (best is None or hit[0] < best[0] or (hit[0] == best[0] and hit[2] < best[2])):
             best = hit
     if best is None:
@@ -164,8 +165,10 @@ def min_clearance(scenario: Scenario, t: np.ndarray, pose: np.ndarray
     return dist, name, float(t[i]), float(pose[i, 0]), float(pose[i, 1])
 
 
-def _closest(obstacles: tuple, footprint, pose: np.ndarray) -> tuple[float, str, int] | None:
-    """(distance, obstacle name, pose index) of the closest approach to static ``obstacles``."""
+def closest_approach(obstacles: Sequence, footprint, pose: np.ndarray) -> tuple[float, str, int] | None:
+    """(distance, obstacle name, pose index) of the footprint's closest approach, over the poses
+    (x, y, yaw) ``pose``, to ``obstacles`` where they stand (boxes, cylinders, polygons, meshes;
+    0 where they overlap); None without obstacles or poses."""
     simple = tuple(o for o in obstacles if not is_outlined(o))
     best = _closest_simple(simple, footprint, pose) if len(simple) else None
     for obs in obstacles:
@@ -206,7 +209,7 @@ def _closest_outlined(obs, footprint, pose: np.ndarray, beat: float) -> tuple[fl
 
 
 def _closest_simple(obstacles: tuple, footprint, pose: np.ndarray) -> tuple[float, str, int] | None:
-    """``_closest`` among boxes and cylinders (rounded boxes, vectorised with pruning)."""
+    """``closest_approach`` among boxes and cylinders (rounded boxes, vectorised with pruning)."""
     shapes = obstacle_shapes(obstacles)
     n, k = len(pose), len(shapes)
     if not k or not n:
