@@ -20,6 +20,7 @@ from typing import Any, Literal, Mapping, Union
 
 from .keys import (REQUIRED, SCENARIO_LIMITS, Choice, Element, Elements, Flag, Integer, Listed, Number, Point, Points,
                    Rows, Rule, Scale, Sub, Text, section)
+from .terrain import Body, Lidar3D, PlanarBody, TerrainElement
 
 SCHEMA_VERSION = 1
 DRIVES = ("omni", "diff")
@@ -106,6 +107,7 @@ class BoxObstacle:
     height: float = 1.0
     motion: Motion | None = None    # None: static
     visible_to_lidar: bool = True   # False: glass, thin wires (it still collides)
+    z: float | None = None          # base height (m); None: standing on the ground (terrain)
     kind: Literal["box"] = field(default="box", init=False)
 
     @property
@@ -123,6 +125,7 @@ class CylinderObstacle:
     height: float = 1.0
     motion: Motion | None = None    # None: static
     visible_to_lidar: bool = True
+    z: float | None = None          # base height (m); None: standing on the ground (terrain)
     kind: Literal["cylinder"] = field(default="cylinder", init=False)
 
 
@@ -139,6 +142,7 @@ class PolygonObstacle:
     height: float = 1.0
     motion: Motion | None = None    # None: static
     visible_to_lidar: bool = True
+    z: float | None = None          # base height (m); None: standing on the ground (terrain)
     kind: Literal["polygon"] = field(default="polygon", init=False)
 
     @property
@@ -163,6 +167,7 @@ class MeshObstacle:
     height: float = 1.0
     motion: Motion | None = None
     visible_to_lidar: bool = True
+    z: float | None = None          # base height (m); None: standing on the ground (terrain)
     kind: Literal["mesh"] = field(default="mesh", init=False)
 
     @property
@@ -312,6 +317,7 @@ class Lidar:
     noise_per_metre: float = 0.0    # m of noise sigma added per metre of range (range-proportional)
     dropout_at_max: float | None = None  # dropout probability at range_max (linear from `dropout` at 0 m)
     spurious: float = 0.0           # probability a beam returns a spurious range short of the true one
+    mount_height: float = 0.2       # m above the robot's base (the floor for the planar body): the scan plane
 
     @property
     def fov_rad(self) -> float:
@@ -406,6 +412,8 @@ class Robot:
     safety: Safety = Safety()
     localisation: Localisation = Localisation()
     latency: Latency = Latency()
+    body: Body = PlanarBody()       # how the robot meets the ground (scenario/terrain.py)
+    lidar3d: Lidar3D | None = None  # a multi-ring lidar, off by default
 
 
 ROBOT = section(Robot, "robot", "the robot: its outline, drive, limits, sensor and faults", [
@@ -525,6 +533,7 @@ class Scenario:
     reference: Reference | None = None
     search: Mapping[str, Any] | None = None      # search-space overrides (search.py validates)
     provenance: Mapping[str, Any] | None = None  # written by freeze.py: where a frozen failure came from
+    terrain: tuple[TerrainElement, ...] = ()     # ground that is not the flat floor (scenario/terrain.py)
     # Where it was loaded from (not part of the content, not dumped): for errors and relative paths.
     source: str | None = field(default=None, compare=False, repr=False)
 
@@ -539,7 +548,10 @@ _NOT_CONTENT = {"name", "family", "description", "marks", "provenance", "source"
 # Fields added after scenarios were first hashed: at their default they are left out of the hash,
 # so a file written before them keeps its hash (results files pair scenarios by it).
 _ADDED_DEFAULTS: dict[str, Any] = {"noise_per_metre": 0.0, "dropout_at_max": None, "spurious": 0.0,
-                                   "localisation": Localisation(), "latency": Latency()}
+                                   "localisation": Localisation(), "latency": Latency(),
+                                   # terrain (scenario/terrain.py): field names unique to what they mean
+                                   "z": None, "mount_height": 0.2, "body": PlanarBody(), "lidar3d": None,
+                                   "terrain": ()}
 
 
 _CONTENT_FIELDS: dict[type, tuple[tuple[str, bool], ...]] = {}   # dataclass -> (field, added later?)
@@ -605,5 +617,8 @@ def content_hash(scenario: Scenario) -> str:
         obs.pop("file", None)           # a mesh is its outline and height (hashed), wherever its file is
         if obs.get("visible_to_lidar", True) is True:    # the default hashes as before it existed
             obs.pop("visible_to_lidar", None)
+    for element in body.get("terrain", []):   # terrain names are labels; a heightfield is its digest
+        element.pop("name", None)
+        element.pop("file", None)
     text = json.dumps(body, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]
