@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 from typing import Any
 
@@ -57,11 +58,21 @@ def _json_safe(value: Any) -> Any:
     return value
 
 
+def look_in_current_folder(spec: str) -> None:
+    """Load a subject's module now, looked up on sys.path, then in the current folder, as
+    ``python -m`` would find it (an installed module of the same name wins: core/user_code.py).
+    SubjectLoadError (exit 2) when it cannot be found; an ``exec:`` program is left to the run."""
+    from ..subjects.loading import load_subject
+    if not spec.strip().startswith("exec:"):
+        load_subject(spec, project=[os.getcwd()])
+
+
 def run_run(args: argparse.Namespace) -> int:
     from ..scenario.loader import load_scenario
     from ..harness.runner import run_scenario
 
     scenario = load_scenario(args.scenario)
+    look_in_current_folder(args.subject)
     result = run_scenario(scenario, args.subject, seed=args.seed, tick_limit=args.tick_limit)
     if args.json:
         record = {
@@ -109,6 +120,7 @@ def run_check_planner(args: argparse.Namespace) -> int:
     if args.ticks < 1:
         print("navscenario check-planner: error: --ticks must be at least 1", file=sys.stderr)
         return 2
+    look_in_current_folder(args.subject)
     check = check_planner(args.subject, scenario, ticks=args.ticks, seed=args.seed,
                           tick_limit=args.tick_limit if args.tick_limit > 0 else None)
     if args.json:
