@@ -13,7 +13,10 @@ import os
 import sys
 from typing import Any
 
+from ..sim.deadline import DEFAULT_TICK_LIMIT
 from ..subjects.loading import BUILTIN_SUBJECTS, DEFAULT_SUBJECT
+
+HUNG_TICK = 10.0   # = harness.conformance.HUNG_TICK (not imported: `run --help` stays light)
 
 _SUBJECT_HELP = (f"planner under test: a built-in name ({', '.join(sorted(BUILTIN_SUBJECTS))}), "
                  f"'package.module:Attribute' (a class or zero-argument factory) or "
@@ -26,8 +29,10 @@ def add_arguments_run(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, default=None, metavar="N",
                    help="base seed (integer >= 0) mixed with the scenario's simulation.seed "
                         "(default: the scenario's own)")
-    p.add_argument("--tick-limit", type=float, default=None, metavar="SECONDS",
-                   help="a planner tick slower than this is a subject error (default: no limit)")
+    p.add_argument("--tick-limit", type=float, default=DEFAULT_TICK_LIMIT, metavar="SECONDS",
+                   help=f"a planner tick slower than this is a subject error (default {DEFAULT_TICK_LIMIT:g}, "
+                        f"as pytest's --nav-tick-limit, so that run gives a pytest item's outcome; 0: no "
+                        f"limit, e.g. to step through act() in a debugger)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
 
 
@@ -73,7 +78,7 @@ def run_run(args: argparse.Namespace) -> int:
 
     scenario = load_scenario(args.scenario)
     look_in_current_folder(args.subject)
-    result = run_scenario(scenario, args.subject, seed=args.seed, tick_limit=args.tick_limit)
+    result = run_scenario(scenario, args.subject, seed=args.seed, tick_limit=args.tick_limit or None)
     if args.json:
         record = {
             "scenario": scenario.name, "file": args.scenario, "subject": result.subject,
@@ -105,8 +110,11 @@ def add_arguments_check_planner(p: argparse.ArgumentParser) -> None:
     p.add_argument("--ticks", type=int, default=20, metavar="N",
                    help="control ticks to run, at least 1 (default 20)")
     p.add_argument("--seed", type=int, default=0, metavar="N", help="lidar noise seed (default 0)")
-    p.add_argument("--tick-limit", type=float, default=10.0, metavar="SECONDS",
-                   help="stop and report an act() call that takes longer (default 10; 0: no limit)")
+    p.add_argument("--tick-limit", type=float, default=HUNG_TICK, metavar="SECONDS",
+                   help=f"stop and report an act() call that takes longer (default {HUNG_TICK:g}, longer "
+                        f"than the {DEFAULT_TICK_LIMIT:g} s pytest and navscenario run allow, so that a slow "
+                        f"tick is measured and reported, with a warning when it is over {DEFAULT_TICK_LIMIT:g} "
+                        f"s, rather than cut short; 0: no limit)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
 
 

@@ -9,10 +9,10 @@ if TYPE_CHECKING:
     from .compare import Comparison
 
 
-def rerun_spec(rec: dict[str, Any], subject: str | None, side: str = "") -> str:
+def rerun_spec(rec: dict[str, Any], subject: str | None, side: str = "", option: str | None = None) -> str:
     """The ``--nav-subject`` spec to re-run a record with: ``subject`` when given, else the spec
     the record carries (``subject_spec``), never the planner's display name. NavScenarioError
-    saying what to give when there is none."""
+    saying what to give (``option``, default --a-subject / --b-subject) when there is none."""
     from ..core.errors import NavScenarioError
 
     spec = subject or rec.get("subject_spec")
@@ -20,7 +20,7 @@ def rerun_spec(rec: dict[str, Any], subject: str | None, side: str = "") -> str:
         return spec
     why = ("it came from a conftest pytest_navscenario_make_subject hook" if "subject_spec" in rec
            else "the file was written before results recorded it")
-    option = f"--{side.lower()}-subject" if side else "--a-subject / --b-subject"
+    option = option or (f"--{side.lower()}-subject" if side else "--a-subject / --b-subject")
     raise NavScenarioError(f"cannot re-run {side + ' ' if side else ''}(subject {rec.get('subject') or '?'!r}): "
                            f"its results file records no --nav-subject spec ({why}); give it with "
                            f"{option} SPEC")
