@@ -63,8 +63,8 @@ def _in_folder(top: str, folder: str | os.PathLike) -> Any:
 def look_in_project(module_name: str, folders: Iterable[str | os.PathLike]) -> Path | None:
     """Make ``module_name`` importable from the first of ``folders`` that has it, when sys.path
     does not: that folder is appended to sys.path and returned. None when sys.path already has
-    the module (a project folder's module of the same name then gets a ShadowedModuleWarning)
-    or no folder has it. Imports nothing but the module's parent packages when they are on
+    the module (a project folder's module of the same name then gets a ShadowedModuleWarning,
+    unless it was imported before) or no folder has it. Imports nothing but the module's parent packages when they are on
     sys.path already (as ``importlib.util.find_spec`` does)."""
     top = module_name.split(".")[0]
     folders = [Path(f) for f in folders if f]
@@ -73,7 +73,8 @@ def look_in_project(module_name: str, folders: Iterable[str | os.PathLike]) -> P
     except (ImportError, ValueError):
         found = None
     if found is not None:
-        _warn_if_shadowed(module_name, found, folders)
+        if top not in sys.modules:   # already imported (by a conftest, say): nothing is chosen here
+            _warn_if_shadowed(module_name, found, folders)
         return None
     for folder in folders:
         if _in_folder(top, folder) is not None:
