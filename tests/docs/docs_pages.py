@@ -26,9 +26,11 @@ from __future__ import annotations
 import difflib
 import os
 import re
+import resource
 import shlex
 import subprocess
 import sys
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -38,7 +40,7 @@ MARKER = re.compile(r"^\s*<!--\s*(run|output|file|append|skip)\b\s*(?::\s*(.*?))
 FENCE = re.compile(r"^(\s*)(`{3,}|~{3,})\s*([\w+-]*)(.*)$")
 SHELL = {"sh", "bash", "shell", "console"}
 #: pytest's section rules: a title centred in '=' or '_', the rule's length following the title's
-RULE = re.compile(r"^([=_])\1{2,} (.*?) \1{2,}$")
+RULE = re.compile(r"^([=_])\1* (.+?) \1+$")     # a long title gets a fill of one
 
 #: (name, pattern, replacement): the values a run may print differently each time, shown as named
 #: placeholders on both sides of the comparison. docs/contributing.md lists them for page writers.
@@ -370,6 +372,13 @@ class Ran:
     command: Command
     status: int
     output: list[str]                # as shown: see shown()
+    wall: float = 0.0                # seconds
+    cpu: float = 0.0                 # seconds of CPU of the command and everything it started
+
+
+def _children_cpu() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
 
 
 def without_pip_install(text: str) -> str:
@@ -382,22 +391,23 @@ def without_pip_install(text: str) -> str:
 def run(command: Command, cwd: Path, home: Path, timeout: float = 600) -> tuple[Ran, Path]:
     """Run one command in ``cwd``; return what it did and the folder it ended in (``cd``)."""
     env = command_env()
-    if command.python:
-        proc = subprocess.run([sys.executable, "-"], input=command.text, cwd=cwd, env=env, text=True,
-                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=timeout)
-        return Ran(command, proc.returncode, shown(proc.stdout, home)), cwd
-    text = without_pip_install(command.text)
-    if not text:
-        return Ran(command, 0, []), cwd
-    where = home / ".docs-cwd"
-    script = f"{text}\n__status=$?\npwd > {shlex.quote(str(where))}\nexit $__status\n"
     # ``python``, ``pytest`` and ``navscenario`` as a user types them: this interpreter's first
-    bindir = str(Path(sys.executable).parent)
-    env["PATH"] = bindir + os.pathsep + env.get("PATH", "")
-    proc = subprocess.run(["bash", "-c", script], cwd=cwd, env=env, text=True,
+    env["PATH"] = str(Path(sys.executable).parent) + os.pathsep + env.get("PATH", "")
+    where = home / ".docs-cwd"
+    if command.python:
+        argv, stdin = [sys.executable, "-"], command.text
+    else:
+        text = without_pip_install(command.text)
+        if not text:
+            return Ran(command, 0, []), cwd
+        argv, stdin = ["bash", "-c", f"{text}\n__status=$?\npwd > {shlex.quote(str(where))}\nexit $__status\n"], None
+        where.unlink(missing_ok=True)
+    wall, cpu = time.perf_counter(), _children_cpu()
+    proc = subprocess.run(argv, input=stdin, cwd=cwd, env=env, text=True,
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=timeout)
-    new_cwd = Path(where.read_text().strip()) if where.exists() else cwd
-    return Ran(command, proc.returncode, shown(proc.stdout, home)), new_cwd
+    ran = Ran(command, proc.returncode, shown(proc.stdout, home), time.perf_counter() - wall, _children_cpu() - cpu)
+    new_cwd = Path(where.read_text().strip()) if not command.python and where.exists() else cwd
+    return ran, new_cwd
 
 
 @dataclass

@@ -6,14 +6,16 @@ output a page shows must be what the run printed, but for the masked values (doc
 (docs/contributing.md, "Executable pages")."""
 from __future__ import annotations
 
+import io
 import os
 import re
 import shutil
 from pathlib import Path
 
 import pytest
+from _pytest._io import TerminalWriter
 
-from docs_pages import (MarkupError, apply_rewrites, matches, read_blocks, read_steps, run_pages,
+from docs_pages import (MASKS, MarkupError, apply_rewrites, matches, read_blocks, read_steps, run_pages, shown,
                         unmarked_shell_blocks, updated)
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -34,6 +36,10 @@ def _finish(result, pages) -> None:
         print("rewrote the outputs at " + ", ".join(changed))
     for skipped in result.skipped:
         print(f"not run: {skipped}")
+    print(f"{len(result.ran)} commands: {sum(r.wall for r in result.ran):.1f} s wall, "
+          f"{sum(r.cpu for r in result.ran):.1f} s CPU; the slowest:")
+    for r in sorted(result.ran, key=lambda r: r.cpu, reverse=True)[:5]:
+        print(f"  {r.cpu:5.1f} s CPU {r.wall:5.1f} s wall  {r.command.block.where}  {r.command.text.splitlines()[0]}")
     assert not result.problems, f"{len(result.problems)} difference(s) between the pages and a run:\n\n" + \
         "\n\n".join(result.problems)
 
@@ -63,7 +69,8 @@ def _skipped_blocks():
             steps = read_steps(page)
         except MarkupError:
             continue                    # test_pages_markup_is_valid says what is wrong
-        params += [pytest.param(step.reason, id=step.block.where) for step in steps if step.kind == "skip"]
+        params += [pytest.param(f"{step.block.where}: not run by the docs test: {step.reason}", id=step.block.where)
+                   for step in steps if step.kind == "skip"]
     return params
 
 
@@ -103,6 +110,13 @@ def test_an_ellipsis_stands_for_any_lines_and_masks_hide_only_wall_times():
     assert matches(["best clearance 0.029 m, 50 sims, 1.2 s"], ["best clearance 0.029 m, 50 sims, 14.0 s"])
     assert not matches(["best clearance 0.029 m, 50 sims, 1.2 s"], ["best clearance 0.038 m, 50 sims, 1.2 s"])
     assert matches(["<object at 0x7f12ab34cd56>"], ["<object at 0x55aa00ff1234>"])
+    # a rule whose title held the temporary folder is centred again once the folder shows as ~
+    long = "= comparison with the baseline /tmp/pytest-of-me/pytest-7/test_tutorial0/my-project/a.jsonl ="
+    out = io.StringIO()
+    writer = TerminalWriter(out)
+    writer.fullwidth = 80
+    writer.sep("=", "comparison with the baseline ~/my-project/a.jsonl")
+    assert shown(long, Path("/tmp/pytest-of-me/pytest-7/test_tutorial0")) == [out.getvalue().rstrip("\n")]
 
 
 def test_update_keeps_the_pages_elisions_and_takes_the_lines_most_like_them():
@@ -138,3 +152,11 @@ def test_markup_errors_say_where_and_how_to_fix(tmp_path):
     page.write_text("```sh\npytest\n```\n<!-- skip: needs ray -->\n```sh\npytest --nav-ray\n```\n")
     assert unmarked_shell_blocks(page) == ["page.md:1"]
     assert [s.reason for s in read_steps(page)] == ["needs ray"]
+
+
+def test_every_mask_is_documented_for_page_writers():
+    """docs/contributing.md lists each placeholder a page's output may differ by."""
+    text = (ROOT / "docs" / "contributing.md").read_text(encoding="utf-8")
+    for name, _, replacement in MASKS:
+        placeholder = re.sub(r"\\\d", "", replacement).strip() or "rule line"   # the rule mask keeps the title
+        assert placeholder in text, f"mask {name!r} ({placeholder}) is not in docs/contributing.md"
