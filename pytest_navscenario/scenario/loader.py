@@ -475,54 +475,99 @@ def _mission(ctx: _Ctx, top: _Section) -> Mission:
 
 
 def _obstacles(ctx: _Ctx, top: _Section) -> tuple[Obstacle, ...]:
-    items = top.sequence("obstacles", OBSTACLES.max, OBSTACLES.what)
+    return _read_elements(ctx, top, OBSTACLES, _obstacle)
+
+
+def _read_elements(ctx: _Ctx, top: _Section, key: K.Elements, build: Any = None) -> tuple[Any, ...]:
+    """A typed list (obstacles, terrain): each item's ``type`` chooses its keys; names are unique
+    and generated where absent (box1, box2, cyl1 ... per type in file order, skipping names given);
+    ``build(ctx, sec, element, name)`` makes each item (default: by its declaration)."""
+    items = top.sequence(key.name, key.max, key.what)
+    if not items:
+        return key.default
+    types = key.type_names
+    type_keys = {e.type: ("type",) + e.section.names for e in key.types}
+    article = "an" if key.item[:1] in "aeiou" else "a"
     given: dict[str, int] = {}
     parsed: list[tuple[K.Element, _Section, str | None]] = []
     for i, item in enumerate(items):
-        path = f"obstacles[{i}]"
-        line = item.line or top.line_of("obstacles")
+        path = f"{key.name}[{i}]"
+        line = item.line or top.line_of(key.name)
         if not isinstance(item, YMap):
-            raise ctx.fail(f"expected an obstacle mapping, got {describe(item)}", path, line,
-                           "write '- {type: box, x: 1.0, y: 2.0, length: 1.0, width: 1.0}'")
+            raise ctx.fail(f"expected {article} {key.item} mapping, got {describe(item)}", path, line,
+                           f"write '- {key.example}'")
         type_item = item.items.get("type")
         if type_item is None:
             raise ctx.fail("missing required field 'type'", f"{path}.type", line,
-                           "add 'type: box' or 'type: cylinder'")
+                           f"add 'type: {types[0]}' or 'type: {types[1]}'")
         kind = type_item[1].value if isinstance(type_item[1], YScalar) else None
-        element = OBSTACLES.element(kind) if isinstance(kind, str) else None
+        element = key.element(kind) if isinstance(kind, str) else None
         if element is None:
-            raise ctx.fail(f"unknown obstacle type {describe(type_item[1])}", f"{path}.type",
-                           type_item[0] or line, _did_you_mean(kind if kind is not None else "", OBSTACLE_TYPES))
-        keys = TYPE_KEYS[kind]
-        for key, (key_line, _) in item.items.items():
-            if key in keys:
+            raise ctx.fail(f"unknown {key.item} type {describe(type_item[1])}", f"{path}.type",
+                           type_item[0] or line, _did_you_mean(kind if kind is not None else "", types))
+        keys = type_keys[kind]
+        for name, (key_line, _) in item.items.items():
+            if name in keys:
                 continue
-            other = next((t for t, t_keys in TYPE_KEYS.items() if key in t_keys), None)
+            other = next((t for t, t_keys in type_keys.items() if name in t_keys), None)
             if other is not None:
-                raise ctx.fail(f"'{key}' does not apply to type: {kind} (it is a {other} key)", f"{path}.{key}",
-                               key_line or line, f"remove '{key}', or set type: {other}")
+                raise ctx.fail(f"'{name}' does not apply to type: {kind} (it is a {other} key)", f"{path}.{name}",
+                               key_line or line, f"remove '{name}', or set type: {other}")
         sec = _Section(ctx, item, path, keys, line=line)
         name = _read_text(ctx, sec, element.section["name"])
         if name is not None:
             if name in given:
                 first = given[name]
-                raise ctx.fail(f"name {name!r} is already used by obstacles[{first}]", f"{path}.name",
-                               sec.line_of("name"), "obstacle names must be unique; rename one of them")
+                raise ctx.fail(f"name {name!r} is already used by {key.name}[{first}]", f"{path}.name",
+                               sec.line_of("name"), f"{key.item} names must be unique; rename one of them")
             given[name] = i
         parsed.append((element, sec, name))
     taken = set(given)
-    counters = dict.fromkeys(OBSTACLE_TYPES, 0)
-    result: list[Obstacle] = []
+    counters = dict.fromkeys(types, 0)
+    result = []
     for element, sec, name in parsed:
-        if name is None:  # generated: box1, box2, cyl1, person1 ... skipping names already given
+        if name is None:
             while True:
                 counters[element.type] += 1
                 name = f"{element.prefix}{counters[element.type]}"
                 if name not in taken:
                     break
             taken.add(name)
-        result.append(_obstacle(ctx, sec, element, name))
+        result.append(build(ctx, sec, element, name) if build is not None
+                      else element.section.cls(**_read(ctx, sec, element.section, {"name": name})))
     return tuple(result)
+
+
+def _read_variant(ctx: _Ctx, sec: _Section, key: K.Variant) -> Any:
+    """One mapping whose ``type`` chooses its keys (``robot.body``)."""
+    node = sec.get(key.name)
+    if node is None or (isinstance(node, YScalar) and node.value is None):
+        return key.default
+    field, line = _join(sec.path, key.name), sec.line_of(key.name)
+    types = key.type_names
+    if not isinstance(node, YMap):
+        raise ctx.fail(f"expected a mapping with a type, got {describe(node)}", field, line,
+                       f"write e.g. {key.name}: {{type: {types[1] if len(types) > 1 else types[0]}}}")
+    type_item = node.items.get("type")
+    if type_item is None:
+        raise ctx.fail("missing required field 'type'", f"{field}.type", line,
+                       "add 'type: ' and one of: " + ", ".join(types))
+    kind = type_item[1].value if isinstance(type_item[1], YScalar) else None
+    element = key.element(kind) if isinstance(kind, str) else None
+    if element is None:
+        raise ctx.fail(f"unknown {key.name} type {describe(type_item[1])}", f"{field}.type",
+                       type_item[0] or line, _did_you_mean(kind if kind is not None else "", types))
+    keys = ("type",) + element.section.names
+    for name, (key_line, _) in node.items.items():
+        other = next((e.type for e in key.types if name in e.section.names), None) if name not in keys else None
+        if other is not None:
+            raise ctx.fail(f"'{name}' does not apply to type: {kind} (it is a {other} key)", f"{field}.{name}",
+                           key_line or line, f"remove '{name}', or set type: {other}")
+    sub = _Section(ctx, node, field, keys, line=line)
+    return _build_section(ctx, sub, element.section)
+
+
+_READ["variant"] = _read_variant
 
 
 def _obstacle(ctx: _Ctx, sec: _Section, element: K.Element, name: str) -> Obstacle:
@@ -846,6 +891,7 @@ def _build(root: YNode | None, ctx: _Ctx, name: str | None, family: str | None) 
         robot=_robot(ctx, top),
         mission=_mission(ctx, top),
         obstacles=_obstacles(ctx, top),
+        terrain=_read_elements(ctx, top, SCENARIO["terrain"]),
         simulation=_simulation(ctx, top),
         reference=_reference(ctx, top),
         search=_mapping(ctx, top, "search"),
