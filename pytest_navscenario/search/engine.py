@@ -113,6 +113,9 @@ class SearchReport:
     shrink_sims: int = 0
     shrink_total: int = 0         # simulations the shrink phase was allowed (shrink_plan's total)
     discarded: dict[str, int] = field(default_factory=dict)   # reason -> count
+    # (simulations recorded by then, reason) of each discarded candidate: when the search spent
+    # its draws on invalid layouts (the search report's chart)
+    discard_log: list[tuple[int, str]] = field(default_factory=list)
     skipped: int = 0              # repeats of a simulated candidate, redrawn without simulating
     candidates: list[Candidate] = field(default_factory=list)  # search + shrink sims, in order
     failures: list[Failure] = field(default_factory=list)
