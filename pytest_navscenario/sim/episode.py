@@ -31,7 +31,7 @@ from .deadline import PlannerTimeout, TickDeadline
 from .lidar import Lidar
 from .faults import Faults
 from .moving import MovingObstacles, describe_collision
-from .trajectory import Collision, SafetyStop, SubjectFailure, Trajectory
+from .trajectory import Collision, SafetyStop, SubjectFailure, TerrainEvent, Trajectory
 from .world import (MUJOCO_WARNINGS, TWO_PI, compiled_world, divergence_message, on_mujoco_warning,
                     steps_per_tick)
 
@@ -52,9 +52,11 @@ class SimResult:
     safety_stop: SafetyStop | None = None
     subject_failure: SubjectFailure | None = None
     goal_reached: bool = False
-    end: str = ""              # "goal", "collision", "safety-stop", "subject-error", "timeout", "max-ticks", "stuck"
+    end: str = ""              # "goal", "collision", "safety-stop", "subject-error", "timeout", "max-ticks", "stuck",
+                               # and on terrain (sim/riding.py) "fell", "tipped", "stuck-terrain"
     ticks: int = 0             # planner ticks run
     timings: dict[str, float] = field(default_factory=dict)  # s: physics, rays, planner, safety, harness, total
+    terrain_event: TerrainEvent | None = None   # fell, tipped over, stuck on terrain (sim/riding.py)
 
 
 class EpisodeOver(Exception):
@@ -504,6 +506,11 @@ def simulate(scenario: Scenario, planner: Any, seed: int, max_ticks: int | None 
     after that many planner ticks (for quick protocol checks). ``tick_limit`` (s) makes a slower
     planner tick a subject failure. ``stuck_after`` (s) ends the episode early (``end ==
     "stuck"``, a timeout) when the robot has entered no new STUCK_CELL square for that long.
-    Raises SimulationDivergedError if the physics blows up.
+    Raises SimulationDivergedError if the physics blows up. A robot with a body that rides the
+    ground (or any terrain) runs as a ``riding.RidingEpisode``.
     """
+    if scenario.terrain or scenario.robot.body.kind != "planar":
+        from .riding import RidingEpisode
+        return RidingEpisode(scenario, planner, seed, max_ticks, tick_limit=tick_limit,
+                             stuck_after=stuck_after).run()
     return Episode(scenario, planner, seed, max_ticks, tick_limit=tick_limit, stuck_after=stuck_after).run()

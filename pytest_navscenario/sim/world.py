@@ -126,30 +126,31 @@ def _add_robot(spec: mujoco.MjSpec, scenario: Scenario) -> None:
         act.forcerange = [-limit, limit]
 
 
-def _add_obstacles(spec: mujoco.MjSpec, scenario: Scenario) -> None:
+def _add_obstacles(spec: mujoco.MjSpec, scenario: Scenario, bases: list[float] | None = None) -> None:
     """One geom per obstacle standing on z = 0 (a polygon or mesh: one convex prism geom per convex
     part, named ``<name>/<k>``): static ones on the world body, a moving one on its own mocap body
     (kinematic: the loop writes its position, MuJoCo moves its geoms and detects their contacts like
     any other; mocap_pos order = moving obstacles' order)."""
-    for obs, gname in zip(scenario.obstacles, _geom_names(scenario)):
+    for j, (obs, gname) in enumerate(zip(scenario.obstacles, _geom_names(scenario))):
         h = obs.height
+        z0 = 0.0 if bases is None else bases[j]
         yaw = getattr(obs, "yaw_rad", 0.0)
         quat = [math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0)]
         if getattr(obs, "motion", None) is not None:
-            parent = spec.worldbody.add_body(name=f"moving:{gname}", mocap=True, pos=[obs.x, obs.y, 0.0],
+            parent = spec.worldbody.add_body(name=f"moving:{gname}", mocap=True, pos=[obs.x, obs.y, z0],
                                              quat=quat)
             pos, quat, rgba = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.9, 0.5, 0.2, 1]
         else:
-            parent, pos, rgba = spec.worldbody, [obs.x, obs.y, 0.0], [0.6, 0.6, 0.6, 1]
+            parent, pos, rgba = spec.worldbody, [obs.x, obs.y, z0], [0.6, 0.6, 0.6, 1]
         unseen = not getattr(obs, "visible_to_lidar", True)
         if unseen:
             rgba = [0.6, 0.85, 0.95, 0.4]
         common = dict(contype=2, conaffinity=1, rgba=rgba, quat=quat, group=UNSEEN_GROUP if unseen else 0)
         if isinstance(obs, BoxObstacle):
-            parent.add_geom(name=gname, type=mujoco.mjtGeom.mjGEOM_BOX, pos=[pos[0], pos[1], h / 2.0],
+            parent.add_geom(name=gname, type=mujoco.mjtGeom.mjGEOM_BOX, pos=[pos[0], pos[1], pos[2] + h / 2.0],
                             size=[obs.length / 2.0, obs.width / 2.0, h / 2.0], **common)
         elif isinstance(obs, CylinderObstacle):
-            parent.add_geom(name=gname, type=mujoco.mjtGeom.mjGEOM_CYLINDER, pos=[pos[0], pos[1], h / 2.0],
+            parent.add_geom(name=gname, type=mujoco.mjtGeom.mjGEOM_CYLINDER, pos=[pos[0], pos[1], pos[2] + h / 2.0],
                             size=[obs.radius, h / 2.0, 0.0], **common)
         elif isinstance(obs, (PolygonObstacle, MeshObstacle)):
             parts = convex_parts_local(tuple(outline_points(obs)))
@@ -224,7 +225,12 @@ def build_spec(scenario: Scenario) -> mujoco.MjSpec:
 
 def model_xml(scenario: Scenario) -> str:
     """The scenario's MuJoCo model as MJCF text (to keep beside a frozen failure, or view it)."""
-    spec = build_spec(scenario)
+    if scenario.terrain or scenario.robot.body.kind != "planar":
+        from .bodies import body_model
+        from .body_world import build_body_spec
+        spec = build_body_spec(scenario, body_model(scenario))
+    else:
+        spec = build_spec(scenario)
     spec.compile()
     return spec.to_xml()
 
@@ -294,7 +300,8 @@ def _cache_key(scenario: Scenario) -> Any:
     obstacles = scenario.obstacles
     if any(getattr(o, "motion", None) is not None for o in obstacles):
         obstacles = tuple(o if o.motion is None else replace(o, motion=_MOVES) for o in obstacles)
-    return (robot.footprint, robot.limits, robot.safety, obstacles, scenario.simulation.timestep)
+    return (robot.footprint, robot.limits, robot.safety, obstacles, scenario.simulation.timestep,
+            robot.body, scenario.terrain)
 
 
 def compiled_world(scenario: Scenario) -> World:
@@ -303,6 +310,15 @@ def compiled_world(scenario: Scenario) -> World:
     world = _CACHE.get(key)
     if world is not None:
         _CACHE.move_to_end(key)
+        return world
+    if scenario.terrain or scenario.robot.body.kind != "planar":   # a robot that rides the ground
+        from .bodies import body_model
+        from .body_world import build_body_world
+
+        world = build_body_world(scenario, body_model(scenario))
+        _CACHE[key] = world
+        if len(_CACHE) > MODEL_CACHE_SIZE:
+            _CACHE.popitem(last=False)
         return world
     spec = build_spec(scenario)
     try:
