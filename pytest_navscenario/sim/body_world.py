@@ -21,6 +21,7 @@ from .bodies.base import ROBOT_GROUP
 from .safety import SafetyLayer
 from .terrain import add_terrain, terrain_of_geom
 from .trajectory import Collision
+from . import world as planar
 from .world import PARTS_GROUP, UNSEEN_GROUP, World, _add_obstacles, obstacle_geom_names
 
 GRAVITY = -9.81
@@ -131,3 +132,40 @@ def build_body_world(scenario: Scenario, body: Any) -> BodyWorld:
     return BodyWorld(model, robot_body, robot_geom, obstacle_of_geom, safety, groups, body=body,
                      terrain_of_geom=terrain_of_geom(model), chassis_sensor=int(model.sensor_adr[sensor]),
                      element_names=names)
+
+
+def rides_the_ground(scenario: Scenario) -> bool:
+    """True when the scenario's robot is not the planar body, or the scenario has terrain."""
+    return bool(scenario.terrain) or scenario.robot.body.kind != "planar"
+
+
+def compiled_body_world(scenario: Scenario) -> BodyWorld:
+    """The compiled BodyWorld of a scenario, from the planar worlds' LRU cache (its key holds the
+    body and the terrain)."""
+    from .bodies import body_model
+
+    key = planar._cache_key(scenario)
+    world = planar._CACHE.get(key)
+    if world is not None:
+        planar._CACHE.move_to_end(key)
+        return world
+    world = build_body_world(scenario, body_model(scenario))
+    planar._CACHE[key] = world
+    if len(planar._CACHE) > planar.MODEL_CACHE_SIZE:
+        planar._CACHE.popitem(last=False)
+    return world
+
+
+def any_world(scenario: Scenario) -> World:
+    """The compiled world of any scenario: planar (sim/world.py) or riding the ground."""
+    return compiled_body_world(scenario) if rides_the_ground(scenario) else planar.compiled_world(scenario)
+
+
+def model_xml(scenario: Scenario) -> str:
+    """Any scenario's MuJoCo model as MJCF text (to keep beside a frozen failure, or view it)."""
+    if not rides_the_ground(scenario):
+        return planar.model_xml(scenario)
+    from .bodies import body_model
+    spec = build_body_spec(scenario, body_model(scenario))
+    spec.compile()
+    return spec.to_xml()

@@ -225,12 +225,7 @@ def build_spec(scenario: Scenario) -> mujoco.MjSpec:
 
 def model_xml(scenario: Scenario) -> str:
     """The scenario's MuJoCo model as MJCF text (to keep beside a frozen failure, or view it)."""
-    if scenario.terrain or scenario.robot.body.kind != "planar":
-        from .bodies import body_model
-        from .body_world import build_body_spec
-        spec = build_body_spec(scenario, body_model(scenario))
-    else:
-        spec = build_spec(scenario)
+    spec = build_spec(scenario)
     spec.compile()
     return spec.to_xml()
 
@@ -305,20 +300,12 @@ def _cache_key(scenario: Scenario) -> Any:
 
 
 def compiled_world(scenario: Scenario) -> World:
-    """The compiled World for a scenario, from a small LRU cache."""
+    """The compiled World for a scenario of the planar body, from a small LRU cache (a body that
+    rides the ground: ``body_world.compiled_body_world``)."""
     key = _cache_key(scenario)
     world = _CACHE.get(key)
     if world is not None:
         _CACHE.move_to_end(key)
-        return world
-    if scenario.terrain or scenario.robot.body.kind != "planar":   # a robot that rides the ground
-        from .bodies import body_model
-        from .body_world import build_body_world
-
-        world = build_body_world(scenario, body_model(scenario))
-        _CACHE[key] = world
-        if len(_CACHE) > MODEL_CACHE_SIZE:
-            _CACHE.popitem(last=False)
         return world
     spec = build_spec(scenario)
     try:
