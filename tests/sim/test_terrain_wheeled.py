@@ -120,3 +120,28 @@ def test_same_bits_twice():
     a, b = simulate(sc, Straight(), 0), simulate(sc, Straight(), 0)
     for name in ("pose", "velocity", "z", "roll", "pitch", "command"):
         assert getattr(a.trajectory, name).tobytes() == getattr(b.trajectory, name).tobytes()
+
+
+def test_the_verdict_names_what_happened_where_and_the_metrics_see_height():
+    from pytest_navscenario.harness.runner import run_scenario
+    from pytest_navscenario.verdict.result import Outcome
+
+    dock = run_scenario(scene([Platform("dock", 0.0, 0.0, length=6.0, width=4.0, height=1.2)]), Straight)
+    assert dock.outcome is Outcome.FALL
+    assert dock.message.startswith("fell off platform 'dock' at t=3.") and "1.2 m drop" in dock.message
+    stuck = run_scenario(scene([Platform("kerb", 7.0, 0.0, length=4.0, width=3.0, height=0.15)],
+                               body=WheeledBody(clearance=0.2)), Straight)
+    assert stuck.outcome is Outcome.TIMEOUT
+    assert "stuck on terrain at t=" in stuck.message and "cannot climb the 0.15 m step of platform 'kerb'" in stuck.message
+    bank = run_scenario(scene([Ramp("bank", 5.0, 0.0, length=6.0, width=10.0, rise=6.0 * math.tan(math.radians(38)),
+                                    yaw=90.0)], start=(2.0, 0.5, 0.0), goal=(9.0, 0.5),
+                              footprint=Footprint(length=0.9, width=0.4)), Straight)
+    assert bank.outcome is Outcome.FALL and bank.message.startswith("tipped over on ramp 'bank'")
+    up = run_scenario(scene(ramp_to(10.0), goal=(10.0, 0.0)), Straight)
+    assert up.outcome is Outcome.SUCCESS
+    m = up.metrics
+    assert 8.0 < m.max_pitch < 20.0 and m.climb == pytest.approx(4.0 * math.tan(math.radians(10.0)), abs=0.03)
+    xy = np.hypot(*np.diff(up.trajectory.pose[:, :2], axis=0).T).sum()
+    assert m.path_length > xy                    # over the ground: the climb counts
+    wall = run_scenario(scene([Platform("wall", 4.0, 0.0, length=1.0, width=3.0, height=0.6)]), Straight)
+    assert wall.outcome is Outcome.COLLISION and wall.message.startswith("collision with the face of platform 'wall'")
