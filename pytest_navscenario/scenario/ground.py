@@ -99,20 +99,11 @@ def _piece_height(piece: Piece, u: np.ndarray) -> np.ndarray:
 
 
 def _grid_height(element: TerrainElement, scenario, u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Height of a grid element (rough, heightfield) at local (u, v) inside it: bilinear."""
-    from .heightmap import height_grid    # the grid's owner (seeded rough ground, files)
+    """Height of a grid element (rough, heightfield) at local (u, v) inside it, on the grid's
+    triangles as MuJoCo collides them (scenario/heightmap.py owns the grid)."""
+    from .heightmap import height_grid
 
-    grid, _ = height_grid(element, scenario)
-    rows, cols = grid.shape
-    fx = np.clip((u / element.length + 0.5) * (cols - 1), 0, cols - 1)
-    fy = np.clip((v / element.width + 0.5) * (rows - 1), 0, rows - 1)
-    x0, y0 = np.minimum(np.floor(fx).astype(int), cols - 2 if cols > 1 else 0), \
-        np.minimum(np.floor(fy).astype(int), rows - 2 if rows > 1 else 0)
-    x1, y1 = np.minimum(x0 + 1, cols - 1), np.minimum(y0 + 1, rows - 1)
-    ax, ay = fx - x0, fy - y0
-    top = grid[y0, x0] * (1 - ax) + grid[y0, x1] * ax
-    bottom = grid[y1, x0] * (1 - ax) + grid[y1, x1] * ax
-    return element.z + top * (1 - ay) + bottom * ay
+    return element.z + height_grid(element, scenario).sample(u, v)
 
 
 def ground_height(scenario, px, py) -> np.ndarray:
@@ -195,3 +186,55 @@ def highest(scenario) -> float:
         el = scenario.terrain[i]
         tops.append(el.z + getattr(el, "max_height", getattr(el, "amplitude", 0.0)))
     return max([FLOOR] + tops)
+
+
+BODY_DRIVES = {"planar": ("omni", "diff"), "wheeled": ("diff",), "legged": ("omni", "diff"),
+               "mjcf": ("omni", "diff")}
+FACE_STEP = 0.3     # m: ground under a footprint differing by more than this stands it in a face
+
+
+def body_problem(scenario) -> tuple[str, str, str] | None:
+    """(field, message, fix) when the robot's body and drive, or its body and the terrain, do not
+    go together; None when they do (which combinations exist: sim/bodies/__init__.py)."""
+    kind, drive = scenario.robot.body.kind, scenario.robot.drive
+    if drive not in BODY_DRIVES[kind]:
+        return ("robot.drive", f"a {kind} body cannot drive '{drive}': it cannot move sideways",
+                f"set robot.drive: {BODY_DRIVES[kind][0]}")
+    if kind == "planar" and scenario.terrain:
+        return ("robot.body", "the planar body (the default) slides on a flat floor and cannot ride terrain",
+                "give the robot a body that meets the ground: robot.body: {type: wheeled} "
+                "(or legged, or mjcf with your own robot)")
+    return None
+
+
+def mission_problem(scenario) -> tuple[str, str, str] | None:
+    """(field, message, fix) when the start or the goal stands over a hole (a pit, a stairwell) or
+    inside a terrain face (the ground under its footprint differs by more than FACE_STEP: half on a
+    platform, half off), or a waypoint lies over a hole; None when the mission stands on the ground."""
+    if not scenario.terrain:
+        return None
+    from .geometry import footprint_polygon
+
+    m = scenario.mission
+    checks = [("mission.start", m.start, True), ("mission.goal", m.goal, True)]
+    checks += [(f"mission.waypoints[{i}]", w, False) for i, w in enumerate(m.waypoints)]
+    cuts = [(piece, scenario.terrain[piece.element]) for piece in pieces(scenario.terrain) if piece.cut]
+    for field, pose, footprint in checks:
+        for piece, el in cuts:
+            u, v = to_local(el, np.float64(pose.x), np.float64(pose.y))
+            if piece.u0 <= float(u) <= piece.u1 and abs(float(v)) <= el.width / 2:
+                return (field, f"({pose.x:g}, {pose.y:g}) lies over {describe_element(el)}, "
+                               f"{-piece.top0:g} m below the floor",
+                        f"move it onto the ground, or move {describe_element(el)}")
+        if footprint:
+            outline = np.asarray(footprint_polygon(scenario.robot.footprint, pose.x, pose.y,
+                                                   pose.yaw_rad).exterior.coords)
+            heights = ground_height(scenario, outline[:, 0], outline[:, 1])
+            if float(heights.max() - heights.min()) > FACE_STEP:
+                el = element_at(scenario, pose.x, pose.y, margin=1.0)
+                what = describe_element(scenario.terrain[el]) if el is not None else "the terrain"
+                return (field, f"the robot's footprint at ({pose.x:g}, {pose.y:g}) stands in a face of "
+                               f"{what}: the ground under it spans {float(heights.min()):.2f} to "
+                               f"{float(heights.max()):.2f} m",
+                        f"move it fully onto {what} or off it")
+    return None

@@ -64,7 +64,8 @@ def add_terrain(spec: mujoco.MjSpec, scenario: Scenario) -> None:
         from ..scenario.heightmap import height_grid
         for i in grids:
             el = scenario.terrain[i]
-            add_heightfield(spec, el, height_grid(el, scenario), name=f"terrain:{i}/0", **common)
+            add_heightfield(spec, el, height_grid(el, scenario), name=f"terrain:{i}/0",
+                            contype=common["contype"], conaffinity=common["conaffinity"])
 
 
 def _add_floor(spec: mujoco.MjSpec, scenario: Scenario, bottom: float, common: dict) -> None:

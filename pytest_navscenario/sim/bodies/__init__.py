@@ -21,23 +21,15 @@ from __future__ import annotations
 from ...core.errors import ScenarioError
 from ...scenario.model import Scenario
 
-BODY_DRIVES = {"planar": ("omni", "diff"), "wheeled": ("diff",), "legged": ("omni", "diff"),
-               "mjcf": ("omni", "diff")}
-
-
 def check_body(scenario: Scenario) -> None:
-    """ScenarioError when the body and the drive, or the body and the terrain, do not go together."""
-    kind = scenario.robot.body.kind
-    drive = scenario.robot.drive
-    if drive not in BODY_DRIVES[kind]:
-        raise ScenarioError(f"a {kind} body cannot drive '{drive}': it cannot move sideways",
-                            path=scenario.source, field="robot.drive",
-                            hint=f"set robot.drive: {BODY_DRIVES[kind][0]}")
-    if kind == "planar" and scenario.terrain:
-        raise ScenarioError("the planar body (the default) slides on a flat floor and cannot ride "
-                            "terrain", path=scenario.source, field="robot.body",
-                            hint="give the robot a body that meets the ground: robot.body: "
-                                 "{type: wheeled} (or legged, or mjcf with your own robot)")
+    """ScenarioError when the body and the drive, or the body and the terrain, do not go together
+    (scenario/ground.body_problem: the loader checks the same)."""
+    from ...scenario.ground import body_problem
+
+    problem = body_problem(scenario)
+    if problem is not None:
+        field, message, fix = problem
+        raise ScenarioError(message, path=scenario.source, field=field, hint=fix)
 
 
 def body_model(scenario: Scenario):
