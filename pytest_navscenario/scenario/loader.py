@@ -322,6 +322,12 @@ def check_scenario(scenario: Scenario, *, _ctx: _Ctx | None = None) -> None:
                            f"e.g. {key}: {round(ticks) / sim.control_rate:g}")
     if scenario.obstacles:
         _check_clear(scenario, ctx)
+    if scenario.terrain or scenario.robot.body.kind != "planar":
+        from .ground import body_problem, mission_problem
+        problem = body_problem(scenario) or mission_problem(scenario)
+        if problem is not None:
+            field, message, fix = problem
+            raise ctx.fail(message, field, lines.get(field, lines.get(field.split(".")[0])), fix)
 
 
 def _check_clear(scenario: Scenario, ctx: _Ctx) -> None:
