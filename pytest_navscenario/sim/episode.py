@@ -545,6 +545,7 @@ class RidingEpisode(Episode):
         super().__init__(scenario, planner, seed, max_ticks, tick_limit=tick_limit, stuck_after=stuck_after)
         world = self.world
         self.body = world.body
+        self.control = self.body          # the body's controller of this episode (start: body.begin)
         self.base_qpos, self.base_qvel = self.body.views(self.data)
         self.mount = float(scenario.robot.lidar.mount_height)
         self.probe = GroundProbe(scenario)
@@ -565,6 +566,7 @@ class RidingEpisode(Episode):
         m, d, start = self.model, self.data, self.scenario.mission.start
         z, roll, pitch = resting_pose(self.scenario, start.x, start.y, start.yaw_rad)
         self.body.place(d, start.x, start.y, start.yaw_rad, self.body.start_height(z), roll, pitch)
+        self.control = self.body.begin(d)
         if self.moving is not None:
             self.moving.write(0)
         mujoco.mj_step1(m, d)
@@ -633,7 +635,7 @@ class RidingEpisode(Episode):
         state's base recorded; the contacts are looked at only when the chassis touches something."""
         m, d, ctrl, qpos7, qvel6, pose_buf, qvel_buf, inner = self.stepping
         self.setpoint = setpoint
-        self.body.command(ctrl, setpoint, self.state3d)
+        self.control.command(ctrl, setpoint, self.state3d)
         rows = self.moving.rows_for_tick(self.i) if self.moving is not None else None
         mocap = self.moving.mocap_pos if rows is not None else None
         sensordata, k_chassis = self.sensordata, self.chassis_sensor
