@@ -547,7 +547,8 @@ class RidingEpisode(Episode):
         self.body = world.body
         self.control = self.body          # the body's controller of this episode (start: body.begin)
         self.base_qpos, self.base_qvel = self.body.views(self.data)
-        self.mount = float(scenario.robot.lidar.mount_height)
+        self.offset = float(self.body.ground_offset)   # the base's origin above its ground (MJCF bodies)
+        self.mount = float(scenario.robot.lidar.mount_height) - self.offset
         self.probe = GroundProbe(scenario)
         self.watch = TerrainWatch(scenario, self.body, self.spt * self.dt, self.probe)
         self.sensordata, self.chassis_sensor = self.data.sensordata, world.chassis_sensor
@@ -600,6 +601,8 @@ class RidingEpisode(Episode):
 
     def observe(self) -> tuple[tuple[float, ...], Observation]:
         state = base_state(self.base_qpos, self.base_qvel)
+        if self.offset:
+            state = state[:2] + (state[2] - self.offset,) + state[3:]
         x, y, z, roll, pitch, yaw, vx, vy, vz, wz = state
         t = self.i * self.dt
         if not math.isfinite(x + y + z + yaw + vx + vy + vz + wz):
@@ -690,7 +693,7 @@ class RidingEpisode(Episode):
             ranges=self.lidar.ranges(self.tick), angles=self.lidar.angles,
             waypoint_times=tuple(self.mission.passed_at),
             believed=None if self.faults is None else self.faults.believed_poses(),
-            z=q[:, 2].copy(), roll=np.asarray(roll), pitch=np.asarray(pitch))
+            z=q[:, 2] - self.offset, roll=np.asarray(roll), pitch=np.asarray(pitch))
 
     def result(self):
         out = super().result()

@@ -57,10 +57,13 @@ class FreeBase:
     drop_limit: float = 0.1
     #: roll or pitch (degrees) past which it counts as tipped over
     tip_angle: float = 45.0
+    #: the base's origin above the ground it stands on (0: on it; the MJCF body's base is higher)
+    ground_offset: float = 0.0
 
     def __init__(self, scenario: Scenario):
         self.scenario = scenario
         self.spec_body = scenario.robot.body
+        self.kind_name = self.spec_body.kind
         self.tip_angle = float(getattr(self.spec_body, "tip_angle", 45.0))
 
     # -- the model -------------------------------------------------------------------------
@@ -76,6 +79,7 @@ class FreeBase:
         self.chassis_geoms = frozenset(
             g for g in range(model.ngeom)
             if model.geom_bodyid[g] == self.base_body and model.geom_contype[g] & 1)
+        self.robot_geoms = self.chassis_geoms       # the geoms that meet obstacles
 
     # -- per episode -----------------------------------------------------------------------
     def place(self, d: mujoco.MjData, x: float, y: float, yaw: float, z: float,

@@ -97,6 +97,7 @@ class LeggedModel(FreeBase):
         super().bind(model)
         # the volume meeting obstacles is what collides (the torso meets the terrain only)
         self.chassis_geoms = frozenset([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "footprint")])
+        self.robot_geoms = self.chassis_geoms
         self.weight = float(model.body_mass[self.base_body]) * GRAVITY
 
     def start_height(self, ground_z: float) -> float:
