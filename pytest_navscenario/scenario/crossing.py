@@ -100,3 +100,38 @@ def look_ahead(cap: Capability, move: float, spacing: float = SPACING) -> int:
     """Samples a profile needs to decide a move of ``move`` metres: the move, the widest gap and
     two samples more (so a far side within max_gap is seen)."""
     return int(math.ceil((move + cap.max_gap) / spacing)) + 3
+
+
+# ---------------------------------------------------------------- what each body can cross
+
+# The wheeled body's limits are estimates from its wheels, measured in MuJoCo with a straight
+# drive (benchmarks/measure_wheeled_limits.py; default body: 50 kg, 10 N m, wheels of 0.1 m): it
+# climbed steps of 0.044 m (diff: its ball casters, 0.05 m, meet a step first) and 0.081 m (skid),
+# slopes of 17.5 deg (diff: the casters carry load, the driven wheels lose grip) and 32.5 deg
+# (skid), and crossed gaps of 0.09-0.13 m. The estimates below stay under those figures.
+WHEELED_CASTER_STEP = 0.8     # of the caster's radius (diff)
+WHEELED_WHEEL_STEP = 0.7      # of the wheel's radius (skid)
+WHEELED_SLOPE = {"diff": 15.0, "skid": 30.0}   # degrees, at most the torque's limit
+WHEELED_GAP = 0.5             # of the wheel's radius
+
+
+def body_capability(scenario) -> Capability | None:
+    """What the scenario's body can cross: a legged body's declared limits, a wheeled body's
+    estimated ones (see WHEELED_*), None for a body that declares none (planar: no terrain;
+    mjcf: its limits are the user's model's, unknown here)."""
+    body = scenario.robot.body
+    if body.kind == "legged":
+        return Capability(float(body.max_step), float(body.max_slope), float(body.max_gap))
+    if body.kind != "wheeled":
+        return None
+    r = float(body.wheel_radius)
+    g = 9.81
+    driven = 4 if body.drive_wheels == "skid" else 2
+    torque = math.degrees(math.atan(driven * body.max_wheel_torque / (r * body.mass * g)))
+    if body.drive_wheels == "skid":
+        step = WHEELED_WHEEL_STEP * r
+    else:
+        caster = max(0.02, min(body.clearance, r / 2))      # sim/bodies/wheeled.py's casters
+        step = WHEELED_CASTER_STEP * caster
+    return Capability(min(step, float(body.clearance)), min(torque, WHEELED_SLOPE[body.drive_wheels]),
+                      WHEELED_GAP * r)
