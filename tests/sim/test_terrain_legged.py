@@ -135,3 +135,31 @@ terrain:
     res = run_scenario(sc, Straight)
     assert res.outcome is Outcome.TIMEOUT
     assert "stuck on terrain" in res.message and "cannot climb the 0.17 m step of steps 'stairs'" in res.message
+
+
+def test_moving_obstacles_walk_on_the_ground_or_at_their_own_height():
+    """A person walking up a ramp has its base on the ramp at every step; one with an explicit z
+    keeps it; the robot standing beside sees the first where it is."""
+    import mujoco
+
+    from pytest_navscenario.scenario import ground
+    from pytest_navscenario.scenario.model import CylinderObstacle, Motion
+    from pytest_navscenario.sim.body_world import compiled_body_world
+    from pytest_navscenario.sim.moving import MovingObstacles
+
+    walk = Motion(path=((2.0, 4.0), (8.0, 4.0)), speed=1.0)
+    terrain = [Ramp("ramp", 5.0, 4.0, length=6.0, width=2.0, rise=0.6)]
+    people = [CylinderObstacle("walker", 2.0, 4.0, 0.3, motion=walk),
+              CylinderObstacle("drone", 2.0, 6.0, 0.3, z=1.5, motion=walk)]
+    sc = scene(terrain, obstacles=people, goal=(1.0, 0.0))
+    world = compiled_body_world(sc)
+    d = mujoco.MjData(world.model)
+    moving = MovingObstacles(sc, d.mocap_pos, sc.simulation.timestep, 10)
+    rows = moving.rows_for_tick(300)                       # t = 3 s: the walker is up the ramp
+    x = rows[0, 0, 0]
+    assert 4.9 < x < 5.1
+    edge = float(ground.ground_height(sc, x + 0.3, 4.0))    # its outline's highest ground
+    assert rows[0, 0, 2] == pytest.approx(edge, abs=1e-9) and 0.3 < rows[0, 0, 2] < 0.4
+    assert rows[0, 1, 2] == 1.5
+    res = simulate(sc, Straight(), 0, max_ticks=2)           # the episode writes them so
+    assert res.ticks == 2
