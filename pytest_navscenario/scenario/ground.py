@@ -67,9 +67,26 @@ def to_local(element: TerrainElement, px: np.ndarray, py: np.ndarray) -> tuple[n
     return c * dx + s * dy, -s * dx + c * dy
 
 
-def pieces(terrain: Sequence[TerrainElement]) -> list[Piece]:
+def pieces(terrain: Sequence[TerrainElement]) -> tuple[Piece, ...]:
     """The convex blocks of every primitive element (ramps, steps, platforms, pits); rough ground
-    and heightfields are grids (scenario/heightmap.py) and have none."""
+    and heightfields are grids (scenario/heightmap.py) and have none. Cached per terrain (the ground
+    is asked for heights every tick)."""
+    terrain = tuple(terrain)
+    try:
+        return _PIECES[terrain]
+    except KeyError:
+        pass
+    out = _pieces(terrain)
+    if len(_PIECES) >= 256:
+        _PIECES.clear()
+    _PIECES[terrain] = out
+    return out
+
+
+_PIECES: dict = {}
+
+
+def _pieces(terrain: tuple) -> tuple[Piece, ...]:
     out: list[Piece] = []
     for i, el in enumerate(terrain):
         if isinstance(el, Ramp):
@@ -84,7 +101,7 @@ def pieces(terrain: Sequence[TerrainElement]) -> list[Piece]:
                 top = el.z + sign * (k + 1) * el.rise
                 u0 = -el.length / 2 + k * el.run
                 out.append(Piece(i, u0, u0 + el.run, top, top, cut=top < FLOOR - 1e-12))
-    return out
+    return tuple(out)
 
 
 def grid_elements(terrain: Sequence[TerrainElement]) -> list[int]:
