@@ -118,12 +118,14 @@ def culprit_of(res: Any) -> str:
         name = min_clearance(res.scenario, res.trajectory.t[-1:], pose[-1:])[1]
         if name:
             return name
+        if res.scenario.terrain:       # no obstacle near: the terrain element it ended beside
+            return terrain_culprit(res.scenario, "", float(pose[-1, 0]), float(pose[-1, 1]), margin=1.0)
     return res.metrics.min_clearance_obstacle
 
 
-def terrain_culprit(scenario: Any, label: str, x: float, y: float) -> str:
+def terrain_culprit(scenario: Any, label: str, x: float, y: float, margin: float = 0.3) -> str:
     """``terrain:<name>`` of the element a message names ("off platform 'dock'", "ramp 'r'"), or
-    of the element under (x, y); "" over the plain floor."""
+    of the element under (x, y) (its outline grown by ``margin``); "" over the plain floor."""
     import re
 
     names = {el.name for el in scenario.terrain}
@@ -131,7 +133,7 @@ def terrain_culprit(scenario: Any, label: str, x: float, y: float) -> str:
     if quoted and quoted[-1] in names:
         return f"terrain:{quoted[-1]}"
     from ..scenario.ground import element_at
-    i = element_at(scenario, x, y, margin=0.3)
+    i = element_at(scenario, x, y, margin=margin)
     return f"terrain:{scenario.terrain[i].name}" if i is not None else ""
 
 
