@@ -337,6 +337,12 @@ def check_scenario(scenario: Scenario, *, _ctx: _Ctx | None = None) -> None:
                            f"shorten the delay below {timeout:g} s, or lengthen mission.timeout")
     if scenario.obstacles:
         _check_clear(scenario, ctx)
+    if scenario.terrain or scenario.robot.body.kind != "planar":
+        from .ground import body_problem, mission_problem
+        problem = body_problem(scenario) or mission_problem(scenario)
+        if problem is not None:
+            field, message, fix = problem
+            raise ctx.fail(message, field, lines.get(field, lines.get(field.split(".")[0])), fix)
 
 
 def _check_clear(scenario: Scenario, ctx: _Ctx) -> None:

@@ -164,17 +164,18 @@ class WheeledBody:
     low-level controller in the harness turns the planner's velocity command into wheel torques
     within ``max_wheel_torque`` (N m per wheel) and ``max_wheel_speed`` (rad/s; None: the speed
     that gives limits.max_speed). ``track`` (lateral wheel spacing) and ``wheelbase`` (skid: axle
-    spacing) default to the footprint's size. The robot counts as tipped over when its roll or
+    spacing) default to the footprint's size (the wheels inside it). The robot counts as tipped over when its roll or
     pitch passes ``tip_angle`` degrees."""
     drive_wheels: Literal["diff", "skid"] = "diff"
     wheel_radius: float = 0.1            # m
     wheel_width: float = 0.05            # m
-    track: float | None = None           # m; None: the footprint's width
+    track: float | None = None           # m; None: the footprint's width less wheel_width (wheels inside it)
     wheelbase: float | None = None       # m, skid only; None: 0.6 x the footprint's length
     mass: float = 50.0                   # kg, chassis and wheels
     max_wheel_torque: float = 10.0       # N m per driven wheel
     max_wheel_speed: float | None = None  # rad/s; None: limits.max_speed / wheel_radius
-    clearance: float = 0.05              # m, chassis underside above the ground on a flat floor
+    clearance: float = 0.1               # m, chassis underside above the ground on a flat floor (0.05 with a
+                                         # 0.9 m footprint: a 6 deg approach angle, no 10 deg ramp)
     tip_angle: float = 45.0              # degrees of roll or pitch that count as tipped over
     kind: Literal["wheeled"] = field(default="wheeled", init=False)
 
