@@ -40,6 +40,11 @@ SCENARIO = section(Scenario, "", "a navigation test case: robot, mission, obstac
     Rule("latencies are whole multiples of the control period and shorter than the timeout", None),
     Rule("the robot's footprint at the start and the goal, and each waypoint, are clear of obstacles (a moving "
          "obstacle where it stands at t = 0, and it may cross the goal and the waypoints)", None),
+    Rule("the body goes with the drive (a wheeled body cannot drive omni) and with the terrain (the planar "
+         "body cannot ride it); start and goal stand on the ground (not over a pit or stairwell, not half "
+         "on a platform), and no waypoint lies over a hole", None),
+    Rule("free-form data (provenance, mark arguments) holds only text, numbers, true/false, null, lists and "
+         "mappings: a YAML date must be quoted", None),
 ])
 
 

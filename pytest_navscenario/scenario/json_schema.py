@@ -177,7 +177,7 @@ def describe_range(key: K.Key) -> str:
     if isinstance(key, K.Number):
         return _interval(key.low, key.low_open, key.le)
     if isinstance(key, K.Integer):
-        return f"whole number {key.ge} … {key.le:g}" if key.le < 10**9 else f"whole number {key.ge} … 2⁶³−1"
+        return f"{key.ge} … {key.le}" if key.le < 10**9 else f"{key.ge} … 2⁶³−1"
     if isinstance(key, (K.Choice,)):
         return " | ".join(key.options)
     if isinstance(key, K.Version):

@@ -88,7 +88,7 @@ SEARCH = section(None, "search", "the failure search's space around this seed", 
             le=int(SCENARIO_LIMITS["max_obstacles"]), default=0),
 ], what="the search settings (a mapping)", rules=[
     Rule("frozen names parts of this seed; remove is at most its number of obstacles; its obstacles plus "
-         "insert stay within the obstacle limit", None),
+         "insert stay within the obstacle limit; insert_size is [lo, hi] with lo <= hi", None),
 ])
 
 
