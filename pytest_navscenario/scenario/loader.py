@@ -63,6 +63,7 @@ from .model import (  # noqa: F401  (DRIVES ... PERSON_SPEED: re-exported, they 
     Simulation,
 )
 from .reading import (  # the readers, under the names this module always used
+    _MAX_ABS,
     _Ctx,
     _Section,
     _build_section,
@@ -80,6 +81,7 @@ from .reading import (  # the readers, under the names this module always used
     _read_sub,
     _read_text,
 )
+from .search_settings import read_search
 from .yaml_tree import YMap, YNode, YScalar, YSeq, describe, from_plain, parse_yaml
 
 _LIST_LIMITS = {"obstacles": (int(SCENARIO_LIMITS["max_obstacles"]), "obstacles")}  # refused while parsing
@@ -198,6 +200,11 @@ def _mesh(ctx: _Ctx, sec: _Section, decl: K.Section, values: dict[str, Any]) -> 
     try:
         path = resolve_mesh_path(folder, file)
         verts, tris = read_mesh(path)
+        reach = max(float(abs(verts[:, k]).max()) * scale[k] for k in range(3))   # m, scale included
+        if not reach <= _MAX_ABS:
+            raise MeshError(f"{Path(file).name}: a vertex lies {reach:g} m from the mesh's origin (scale "
+                            f"included), beyond the supported magnitude of {_MAX_ABS:g} m; check the file's "
+                            f"units and the scale (e.g. scale: 0.001 for millimetres)")
         outline, height = mesh_outline(verts, tris, scale, Path(file).name)
     except MeshError as exc:
         raise ctx.fail(str(exc), _join(sec.path, "file"), sec.line_of("file"),
@@ -320,6 +327,14 @@ def check_scenario(scenario: Scenario, *, _ctx: _Ctx | None = None) -> None:
                            f"({1.0 / sim.control_rate:g} s at {sim.control_rate:g} Hz)", field,
                            lines.get(field, lines.get("robot.latency")),
                            f"e.g. {key}: {round(ticks) / sim.control_rate:g}")
+        timeout = scenario.mission.timeout
+        if delay >= timeout:
+            field = f"robot.latency.{key}"
+            what = ("the planner would see nothing after the first observation" if key == "observation"
+                    else "no command would act before the episode ends: the robot never moves")
+            raise ctx.fail(f"a delay of {delay!r} s is not shorter than the timeout ({timeout!r} s): {what}",
+                           field, lines.get(field, lines.get("robot.latency")),
+                           f"shorten the delay below {timeout:g} s, or lengthen mission.timeout")
     if scenario.obstacles:
         _check_clear(scenario, ctx)
     if scenario.terrain or scenario.robot.body.kind != "planar":
@@ -409,6 +424,9 @@ def _build(root: YNode | None, ctx: _Ctx, name: str | None, family: str | None) 
         provenance=_mapping(ctx, top, "provenance"),
         source=ctx.source,
     )
+    if scenario.search is not None:     # the search's space, checked on plain runs too
+        read_search(ctx, top.get("search"), "search", top.line_of("search"),
+                    obstacles=tuple(o.name for o in scenario.obstacles), waypoints=len(scenario.mission.waypoints))
     check_scenario(scenario, _ctx=ctx)
     return scenario
 
