@@ -114,6 +114,41 @@ def pytest_sessionstart(session: pytest.Session) -> None:
         except OSError as exc:
             raise pytest.UsageError(f"navscenario: cannot create the folder of the results file "
                                     f"{settings.results}: {exc}") from None
+        if not config.option.collectonly and not _search_run(config):
+            _lock_results(config, settings.results)
+
+
+def _search_run(config: pytest.Config) -> bool:
+    from .parallel import _wants_search
+    return _wants_search(config)
+
+
+def _lock_results(config: pytest.Config, path: Path) -> None:
+    """One run at a time writes a results file: two runs would each write their own records
+    whole, and the file would keep only the last run's (issue 26). A second run is refused at
+    once, naming the first; the lock goes when this run ends (or dies: the OS drops it)."""
+    import datetime
+    import os
+    import shlex
+    import socket
+
+    from ..core.files import FileBusy, WriterLock
+
+    started = datetime.datetime.now().strftime("%Y-%m-%d %H:%M:%S")
+    command = shlex.join(["pytest", *map(str, config.invocation_params.args)])
+    me = f"pid {os.getpid()} on {socket.gethostname()}, started {started}: {command}"
+    try:
+        lock = WriterLock(path, me)
+    except FileBusy as busy:
+        raise pytest.UsageError(
+            f"navscenario: another run is writing the results file {path} ({busy.holder or 'its pid is unknown'}); "
+            f"two runs writing one results file would leave only one run's records in it. Wait for "
+            f"that run to end, or give this one a file of its own, e.g. --nav-results="
+            f"{path.with_name(path.stem + '-2' + path.suffix).name}") from None
+    except OSError as exc:
+        raise pytest.UsageError(f"navscenario: cannot lock the results file {path} against a second "
+                                f"writer ({exc}); is its folder writable?") from None
+    config.add_cleanup(lock.release)
 
 
 def pytest_report_header(config: pytest.Config) -> list[str]:
@@ -269,6 +304,9 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
         return
     if config.option.collectonly:  # nothing ran: keep an existing results file
         return
+    if not state.records and (state.settings.results.exists() or _search_run(config)):
+        state.results_kept = True   # a run that recorded no episode (a search, -k matching nothing)
+        return                      # leaves the file as it was
     from ..report.flaky import annotate_repeats
     from ..report.results_file import write_results
     try:
@@ -307,7 +345,14 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
     if state.results_error is not None:
         tr.write_line(state.results_error, red=True, bold=True)
     elif state.settings.results is not None and not config.option.collectonly:
-        tr.write_line(f"navscenario: wrote {len(state.records)} record(s) to {state.settings.results}")
+        if not state.results_kept:
+            tr.write_line(f"navscenario: wrote {len(state.records)} record(s) to {state.settings.results}")
+        elif _search_run(config):
+            tr.write_line(f"navscenario: a search records its simulations in its own log, not in the "
+                          f"results file; {state.settings.results} was left as it was")
+        else:
+            tr.write_line(f"navscenario: no episode ran, so the results file {state.settings.results} "
+                          f"was left as it was")
     if state.failed_artifacts:
         tr.write_line(f"navscenario: artifacts of {len(state.failed_artifacts)} failing item(s) in "
                       f"{state.settings.artifacts}")
