@@ -27,16 +27,16 @@ class MeshError(ValueError):
     """A mesh file cannot be used: the message says why (the loader adds where)."""
 
 
-def resolve_mesh_path(scenario_dir: Path, relative: str) -> Path:
-    """The mesh file for ``relative`` (a path written in the scenario), which must stay inside the
-    scenario's folder (no absolute paths, no ``..`` or links out of it)."""
+def resolve_mesh_path(scenario_dir: Path, relative: str, what: str = "mesh") -> Path:
+    """The ``what`` (mesh, heightfield...) file for ``relative`` (a path written in the scenario),
+    which must stay inside the scenario's folder (no absolute paths, no ``..`` or links out of it)."""
     if os.path.isabs(relative) or relative.startswith(("/", "\\")):
-        raise MeshError(f"{relative!r} is an absolute path; mesh files must lie beside the scenario "
+        raise MeshError(f"{relative!r} is an absolute path; {what} files must lie beside the scenario "
                         f"(write a path relative to {scenario_dir})")
     folder = scenario_dir.resolve()
     path = (folder / relative).resolve()
     if path != folder and folder not in path.parents:
-        raise MeshError(f"{relative!r} leaves the scenario's folder {folder}; copy the mesh next to "
+        raise MeshError(f"{relative!r} leaves the scenario's folder {folder}; copy the {what} next to "
                         f"the scenario (or into a folder below it)")
     return path
 
