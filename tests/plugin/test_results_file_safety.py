@@ -21,17 +21,20 @@ mission: {start: {x: 0, y: 0}, goal: {x: 3, y: 0}, timeout: 10}
 obstacles: [{type: box, name: crate, x: 1.5, y: 1.2, length: 0.4, width: 0.4}]
 search: {obstacle_dx: 0.5, obstacle_dy: 0.5}
 """
-SLOW = '''
+HELD = '''
+import os
 import time
 
 
-class Slow:
-    """Drives to the goal, 20 ms per tick (an episode of about a second)."""
+class Held:
+    """Waits (up to 30 s) until the file "go" exists, then drives to the goal: the run stays busy
+    for as long as the test needs it to."""
     def reset(self, scenario):
-        pass
+        deadline = time.monotonic() + 30
+        while not os.path.exists("go") and time.monotonic() < deadline:
+            time.sleep(0.02)
 
     def act(self, obs):
-        time.sleep(0.02)
         return (0.8, 0.0, 0.0)
 '''
 
@@ -78,60 +81,74 @@ def test_a_run_that_recorded_no_episode_keeps_the_file(project: pytest.Pytester)
     assert not list(project.path.glob(".results.jsonl*"))     # no lock file, no temporary file left
 
 
-def start_slow_run(folder: Path, *extra: str) -> subprocess.Popen:
+def start_run(folder: Path, *extra: str) -> subprocess.Popen:
     path = os.pathsep.join(p for p in (str(folder), os.environ.get("PYTHONPATH", "")) if p)
     env = dict(os.environ, PYTEST_DISABLE_PLUGIN_AUTOLOAD="1", PYTHONPATH=path)
     return subprocess.Popen(
         [sys.executable, "-m", "pytest", "-p", "pytest_navscenario.plugin", "-p", "no:cacheprovider",
-         "scenarios", "--nav-subject=slow:Slow", "--nav-results=out/r.jsonl", "--nav-plots=none", "-v",
+         "scenarios", "--nav-subject=held:Held", "--nav-results=out/r.jsonl", "--nav-plots=none", "-v",
          *extra], cwd=folder, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
 
 
-def wait_for_first_item(proc: subprocess.Popen) -> None:
+def wait_until_collected(proc: subprocess.Popen) -> None:
+    """Until the run has started (its session start, where it takes the lock, is over)."""
     assert proc.stdout is not None
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline:
         line = proc.stdout.readline()
-        if " PASSED" in line or not line:
+        if line.startswith("collect") or not line:
             return
-    raise AssertionError("the first run did not start its items")
+    raise AssertionError("the first run did not start")
 
 
-def test_a_second_run_writing_the_same_results_file_is_refused(tmp_path: Path):
-    (tmp_path / "slow.py").write_text(SLOW)
-    (tmp_path / "scenarios").mkdir()
+@pytest.fixture
+def held(pytester: pytest.Pytester, monkeypatch: pytest.MonkeyPatch) -> pytest.Pytester:
+    """A project whose planner holds a run until the test lets it go."""
+    monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
+    pytester.makepyfile(held=HELD)
+    pytester.syspathinsert()
+    (pytester.path / "scenarios").mkdir()
     for i in range(4):
-        (tmp_path / "scenarios" / f"s{i}.yaml").write_text(SCENARIO.format(x=0.8))
-    first = start_slow_run(tmp_path)
+        (pytester.path / "scenarios" / f"s{i}.yaml").write_text(SCENARIO.format(x=0.5))
+    return pytester
+
+
+def run_here(pytester: pytest.Pytester) -> pytest.RunResult:
+    """The same run as ``start_run``, in this process (one interpreter start-up less)."""
+    return pytester.runpytest_inprocess("-p", "pytest_navscenario.plugin", "scenarios", "--nav-subject=held:Held",
+                                        "--nav-results=out/r.jsonl", "--nav-plots=none")
+
+
+def test_a_second_run_writing_the_same_results_file_is_refused(held: pytest.Pytester):
+    """Before: both runs said "wrote 4 record(s)" and the file kept only the last one's."""
+    first = start_run(held.path)
     try:
-        wait_for_first_item(first)
-        second = start_slow_run(tmp_path)
-        out, _ = second.communicate(timeout=60)
-        assert second.returncode == pytest.ExitCode.USAGE_ERROR, out[-3000:]
-        assert "another run is writing the results file" in out and f"pid {first.pid}" in out, out[-3000:]
-        assert "--nav-results=r-2.jsonl" in out
+        wait_until_collected(first)
+        second = run_here(held)
+        out = second.stdout.str()
+        assert second.ret == pytest.ExitCode.USAGE_ERROR, out[-3000:]
+        text = second.stderr.str()
+        assert "another run is writing the results file" in text and f"pid {first.pid}" in text, text
+        assert "--nav-results=r-2.jsonl" in text
         assert "PASSED" not in out
+        (held.path / "go").write_text("")
         rest, _ = first.communicate(timeout=120)
     finally:
         if first.poll() is None:
             first.kill()
     assert first.returncode == 0, rest[-3000:]
-    assert len(read_results(tmp_path / "out" / "r.jsonl")) == 4      # the first run's records, all of them
-    assert [p.name for p in (tmp_path / "out").iterdir()] == ["r.jsonl"]   # its lock file is gone
+    assert len(read_results(held.path / "out" / "r.jsonl")) == 4      # the first run's records, all of them
+    assert [p.name for p in (held.path / "out").iterdir()] == ["r.jsonl"]   # its lock file is gone
 
 
-def test_a_killed_writer_does_not_block_the_next_run(tmp_path: Path):
+def test_a_killed_writer_does_not_block_the_next_run(held: pytest.Pytester):
     """The lock dies with its holder (SIGKILL included): no stale lock to remove by hand."""
-    (tmp_path / "slow.py").write_text(SLOW)
-    (tmp_path / "scenarios").mkdir()
-    (tmp_path / "scenarios" / "s0.yaml").write_text(SCENARIO.format(x=0.8))
-    (tmp_path / "scenarios" / "s1.yaml").write_text(SCENARIO.format(x=3))
-    first = start_slow_run(tmp_path)
-    wait_for_first_item(first)
+    first = start_run(held.path)
+    wait_until_collected(first)
     first.send_signal(signal.SIGKILL)
     first.communicate(timeout=60)
-    assert (tmp_path / "out" / ".r.jsonl.lock").exists()         # left behind by the killed run
-    again = start_slow_run(tmp_path, "-k", "s0")
-    out, _ = again.communicate(timeout=120)
-    assert again.returncode == 0, out[-3000:]
-    assert len(read_results(tmp_path / "out" / "r.jsonl")) == 1
+    assert (held.path / "out" / ".r.jsonl.lock").exists()         # left behind by the killed run
+    (held.path / "go").write_text("")
+    again = run_here(held)
+    assert again.ret == 0, again.stdout.str()[-3000:]
+    assert len(read_results(held.path / "out" / "r.jsonl")) == 4
