@@ -23,6 +23,7 @@ import multiprocessing
 import os
 import pickle
 import signal
+import threading
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
@@ -73,7 +74,27 @@ class _Slot:
     job: EpisodeJob
     future: Future
     generation: int
-    attempts: int = 0
+    attempts: int = 0          # times the worker running this job died of it
+    death: str = ""            # how it died the last time: "exit code 3", "killed by SIGKILL"
+
+
+def _dead_workers(pool: ProcessPoolExecutor | None) -> dict[int, str]:
+    """pid -> how it ended, of the workers of a broken pool that ended on their own (not by the
+    SIGTERM with which the pool stops the others once one has died)."""
+    if pool is None or not getattr(pool, "_broken", False):
+        return {}
+    procs = dict(getattr(pool, "_processes", None) or {})
+    manager = getattr(pool, "_executor_manager_thread", None)
+    if manager is not None:      # it stops and reaps the other workers (~0.1 s): then every code is
+        manager.join(timeout=10)  # known, and only it reads them (two readers could garble one)
+    dead = {}
+    for pid, proc in procs.items():
+        code = proc.exitcode
+        if code is None or code == -signal.SIGTERM:
+            continue
+        dead[pid] = (f"killed by {signal.Signals(-code).name}" if code < 0 and -code in signal.valid_signals()
+                     else f"exit code {code}")
+    return dead
 
 
 _STARTED: Any = None   # worker side: the pipe end on which a worker says which job it started
@@ -92,8 +113,51 @@ def _worker_init(started: Any) -> None:
 
 
 def _pool_run(key: int, job: Any) -> Any:
-    _STARTED.send(key)   # a few bytes: one atomic pipe write, whichever worker writes at once
+    _STARTED.send((key, os.getpid()))   # a few bytes: one atomic pipe write, whichever worker writes
     return run_job(job)
+
+
+class _StartLog:
+    """Which job each worker process started last (pid -> key), from the workers' pipe.
+
+    A thread of this process reads the pipe as the messages come, so it never fills: unread, it
+    held ~4000 messages, after which every worker blocked on its next one and the pool hung (a
+    suite or a search of more than a few thousand episodes on -n 2). When a worker dies, the job it
+    started last (unless that one finished) is the one that killed it."""
+
+    def __init__(self, reader: Any):
+        self._reader = reader
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self.last: dict[int, int] = {}          # pid -> key of the job it started last
+        self._thread = threading.Thread(target=self._read, name="navscenario-pool-starts", daemon=True)
+        self._thread.start()
+
+    def _read(self) -> None:
+        while not self._stop.is_set():
+            try:
+                if self._reader.poll(0.1):
+                    with self._lock:
+                        self._take()
+            except (EOFError, OSError):
+                return
+
+    def _take(self) -> None:
+        while self._reader.poll(0):
+            key, pid = self._reader.recv()
+            self.last[pid] = key
+
+    def close(self) -> dict[int, int]:
+        """Stop reading, take what is left in the pipe, and return pid -> last started key."""
+        self._stop.set()
+        self._thread.join(timeout=5)
+        with self._lock:
+            try:
+                self._take()
+            except (EOFError, OSError):
+                pass
+            self._reader.close()
+        return self.last
 
 
 class _Warm:
@@ -117,7 +181,7 @@ class ProcessExecutor:
         self.start_method = start_method or default_start_method()
         self.description = f"{workers} local worker process(es) ({self.start_method})"
         self._pool: ProcessPoolExecutor | None = None
-        self._started: Any = None               # reading end of the workers' "started" pipe
+        self._starts: _StartLog | None = None   # which job each worker started last
         self._generation = 0
         self._keys = itertools.count()
         self._open: dict[int, _Slot] = {}      # submitted, result not yet taken
@@ -128,7 +192,8 @@ class ProcessExecutor:
             if self.start_method == "forkserver":
                 ctx.set_forkserver_preload(PRELOAD)
             # a plain pipe, not a SimpleQueue: its semaphore upsets the resource tracker at exit
-            self._started, writer = ctx.Pipe(duplex=False)
+            reader, writer = ctx.Pipe(duplex=False)
+            self._starts = _StartLog(reader)
             self._pool = ProcessPoolExecutor(self.workers, mp_context=ctx, initializer=_worker_init,
                                              initargs=(writer,))
             self._generation += 1
@@ -174,8 +239,9 @@ class ProcessExecutor:
                 if slot.attempts >= MAX_ATTEMPTS:
                     self._open.pop(slot.key, None)
                     return EpisodeError("WorkerDied", f"the worker process running this episode died "
-                                        f"{slot.attempts} times (killed, out of memory, or the planner "
-                                        f"crashed the interpreter); it was not run again",
+                                        f"{slot.attempts} times (last: {slot.death}; the planner ended "
+                                        f"its process or crashed the interpreter, or the process was "
+                                        f"killed or ran out of memory); it was not run again",
                                         "", worker_name(), None)
                 continue
             self._open.pop(slot.key, None)
@@ -187,43 +253,54 @@ class ProcessExecutor:
         self._open.pop(slot.key, None)
 
     def _recover(self) -> None:
-        """The pool broke (a worker died): run every unfinished job again on a new pool; the jobs
-        that had started count an attempt (the one that killed its worker is among them)."""
-        started = set()
-        while self._started is not None and self._started.poll():
-            started.add(self._started.recv())
+        """The pool broke (a worker died): run every unfinished job again on a new pool. Only the
+        job whose episode killed its worker (the one that worker started last) counts an attempt;
+        the jobs the pool stopped with it are innocent and run again as if nothing had happened. If
+        no worker can be singled out (each ended by SIGTERM, as the pool ends the others), every
+        job that had started counts one."""
         old, self._pool = self._pool, None
+        starts, self._starts = self._starts, None
+        dead = _dead_workers(old)
+        last = starts.close() if starts is not None else {}
         if old is not None:
             old.shutdown(wait=False, cancel_futures=True)
+        culprits = {last[pid]: why for pid, why in dead.items() if pid in last}
+        started = set(last.values())
         pool = self._ensure_pool()
         for slot in self._open.values():
             done_ok = slot.future.done() and not slot.future.cancelled() and slot.future.exception() is None
             if done_ok:
                 continue
-            if slot.key in started:
+            if slot.key in culprits or (not culprits and slot.key in started):
                 slot.attempts += 1
-            if slot.attempts < MAX_ATTEMPTS:
+                slot.death = culprits.get(slot.key, "ended by a signal")
+            if slot.attempts < MAX_ATTEMPTS:   # else its broken future stays: _wait reports it
                 slot.future = pool.submit(_pool_run, slot.key, slot.job)
-            slot.generation = self._generation
+                slot.generation = self._generation
 
     def close(self, cancel: bool = False) -> None:
         """Stop the workers; with ``cancel`` (Ctrl-C, an error) at once, dropping unfinished jobs."""
         pool, self._pool = self._pool, None
+        starts, self._starts = self._starts, None
         self._open.clear()
-        if pool is None:
-            return
-        if not cancel:
-            pool.shutdown(wait=True)
-            return
-        procs = list((getattr(pool, "_processes", None) or {}).values())   # gone after shutdown
-        pool.shutdown(wait=False, cancel_futures=True)
-        for proc in procs:
-            try:
-                proc.kill()
-            except Exception:
-                pass
-        for proc in procs:
-            proc.join(timeout=5)
+        try:
+            if pool is None:
+                return
+            if not cancel:
+                pool.shutdown(wait=True)
+                return
+            procs = list((getattr(pool, "_processes", None) or {}).values())   # gone after shutdown
+            pool.shutdown(wait=False, cancel_futures=True)
+            for proc in procs:
+                try:
+                    proc.kill()
+                except Exception:
+                    pass
+            for proc in procs:
+                proc.join(timeout=5)
+        finally:
+            if starts is not None:     # after the workers: none is left to write to its pipe
+                starts.close()
 
 
 def make_local_executor(workers: int | None) -> SerialExecutor | ProcessExecutor:
