@@ -95,3 +95,36 @@ def test_without_nav_isolate_the_serial_run_ends_with_the_planner(project: pytes
     result = run(project)
     assert result.ret == 3 and "passed" not in result.stdout.str()
     assert not (project.path / "r.jsonl").exists()
+
+
+QUICK_JOBS = """
+from pytest_navscenario.dispatch.local import ProcessExecutor
+
+
+class Quick:
+    def run(self):
+        return 1
+
+    def restore(self, outcome):
+        return outcome
+
+
+if __name__ == "__main__":
+    pool = ProcessExecutor(2)
+    print(sum(pool.map([Quick() for _ in range(6000)])))
+    pool.close()
+"""
+
+
+def test_a_pool_runs_thousands_of_jobs_without_hanging(tmp_path):
+    """Before: each job's "started" message waited in a pipe nobody read until a worker died; after
+    ~4000 of them the pipe was full, every worker blocked on its next one and the run hung for good
+    (a suite or search of a few thousand episodes on -n 2)."""
+    import os
+    import subprocess
+    import sys
+
+    (tmp_path / "quick.py").write_text(QUICK_JOBS)
+    done = subprocess.run([sys.executable, "quick.py"], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=120, env=dict(os.environ))
+    assert done.returncode == 0 and done.stdout.strip() == "6000", done.stderr[-2000:]
