@@ -79,9 +79,10 @@ class _Slot:
 _STARTED: Any = None   # worker side: the pipe end on which a worker says which job it started
 
 
-def _worker_init(started: Any) -> None:
+def _worker_init(started: Any, alive: Any = None) -> None:
     """In each worker: leave Ctrl-C to the parent (it cancels the batch and stops the pool),
-    note started jobs, and stop exec: planner programs when the worker exits."""
+    note started jobs, stop exec: planner programs when the worker exits, and exit when the
+    parent is gone (``_exit_with_parent``)."""
     global _STARTED
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     _STARTED = started
@@ -89,6 +90,27 @@ def _worker_init(started: Any) -> None:
 
     from ..subjects.external import _shutdown_all
     Finalize(None, _shutdown_all, exitpriority=10)
+    if alive is not None:
+        import threading
+        threading.Thread(target=_exit_with_parent, args=(alive,), name="navscenario-parent-watch",
+                         daemon=True).start()
+
+
+def _exit_with_parent(alive: Any) -> None:
+    """Worker side: wait for the end of file on ``alive``, a pipe whose only writing end the
+    parent holds, then stop this worker's exec: planners and exit. The end of file comes when the
+    parent closes the pool or dies, even by SIGKILL: a pool's worker otherwise waits for its next
+    job forever (it holds its job queue's writing end itself), and with it the forkserver and the
+    resource tracker (they exit when the last process holding their pipes does)."""
+    try:
+        alive.recv()
+    except (EOFError, OSError):
+        pass
+    try:
+        from ..subjects.external import _shutdown_all
+        _shutdown_all()
+    finally:
+        os._exit(0)
 
 
 def _pool_run(key: int, job: Any) -> Any:
@@ -118,6 +140,7 @@ class ProcessExecutor:
         self.description = f"{workers} local worker process(es) ({self.start_method})"
         self._pool: ProcessPoolExecutor | None = None
         self._started: Any = None               # reading end of the workers' "started" pipe
+        self._alive: Any = None                 # writing end of the workers' "parent alive" pipe
         self._generation = 0
         self._keys = itertools.count()
         self._open: dict[int, _Slot] = {}      # submitted, result not yet taken
@@ -129,8 +152,9 @@ class ProcessExecutor:
                 ctx.set_forkserver_preload(PRELOAD)
             # a plain pipe, not a SimpleQueue: its semaphore upsets the resource tracker at exit
             self._started, writer = ctx.Pipe(duplex=False)
+            alive, self._alive = ctx.Pipe(duplex=False)   # only this process holds the writing end
             self._pool = ProcessPoolExecutor(self.workers, mp_context=ctx, initializer=_worker_init,
-                                             initargs=(writer,))
+                                             initargs=(writer, alive))
             self._generation += 1
         return self._pool
 
@@ -195,6 +219,7 @@ class ProcessExecutor:
         old, self._pool = self._pool, None
         if old is not None:
             old.shutdown(wait=False, cancel_futures=True)
+        self._let_workers_go()
         pool = self._ensure_pool()
         for slot in self._open.values():
             done_ok = slot.future.done() and not slot.future.cancelled() and slot.future.exception() is None
@@ -206,6 +231,12 @@ class ProcessExecutor:
                 slot.future = pool.submit(_pool_run, slot.key, slot.job)
             slot.generation = self._generation
 
+    def _let_workers_go(self) -> None:
+        """Close this process's end of the "parent alive" pipe: every worker still running exits."""
+        alive, self._alive = self._alive, None
+        if alive is not None:
+            alive.close()
+
     def close(self, cancel: bool = False) -> None:
         """Stop the workers; with ``cancel`` (Ctrl-C, an error) at once, dropping unfinished jobs."""
         pool, self._pool = self._pool, None
@@ -214,9 +245,11 @@ class ProcessExecutor:
             return
         if not cancel:
             pool.shutdown(wait=True)
+            self._let_workers_go()
             return
         procs = list((getattr(pool, "_processes", None) or {}).values())   # gone after shutdown
         pool.shutdown(wait=False, cancel_futures=True)
+        self._let_workers_go()
         for proc in procs:
             try:
                 proc.kill()
