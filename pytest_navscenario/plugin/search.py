@@ -127,6 +127,7 @@ class SearchState:
     done: list[dict[str, Any]] = field(default_factory=list)   # controller: summary entries
     junit_items: list[Any] = field(default_factory=list)
     recorders: dict[str, Any] = field(default_factory=dict)   # seed name -> its search's SearchRecorder
+    html_error: str = ""
 
 
 STATE_KEY = pytest.StashKey[SearchState]()
@@ -397,7 +398,7 @@ class _Progress:
         n, nf = report.sims_used, len(report.failures)
         out = f"navsearch {self.name}: {n}/{self.budget} sims, {nf} distinct failure(s)"
         if math.isfinite(report.best_clearance):
-            out += f", best clearance {report.best_clearance:.3f} m"
+            out += f", lowest clearance so far {report.best_clearance:.3f} m"
         rob = report.best_robustness
         if math.isfinite(rob) and not nf:
             out += f", closest to failing {rob:.2f}"
@@ -452,7 +453,8 @@ def report_to_payload(report: Any) -> dict[str, Any]:
         "seed_value": report.seed_value, "budget": report.budget, "shrink_budget": report.shrink_budget,
         "params": report.params, "sims_used": report.sims_used, "shrink_sims": report.shrink_sims,
         "shrink_total": report.shrink_total,
-        "discarded": dict(report.discarded), "skipped": report.skipped, "interrupted": report.interrupted,
+        "discarded": dict(report.discarded), "discard_log": [list(d) for d in report.discard_log],
+        "skipped": report.skipped, "interrupted": report.interrupted,
         "stop_reason": report.stop_reason, "wall_time": report.wall_time,
         "episode_seed": report.episode_seed, "first_failure": report.first_failure,
         "candidates": [cand(c) for c in report.candidates],
@@ -480,6 +482,7 @@ def payload_to_report(data: dict[str, Any], space: Any) -> Any:
                                    "episode_seed")}
     report = SearchReport(**fields)
     report.skipped = data.get("skipped", 0)
+    report.discard_log = [(int(n), str(k)) for n, k in data.get("discard_log", [])]
     report.first_failure = data.get("first_failure", 0)
     report.shrink_total = data.get("shrink_total", 0)
     report.candidates = cands
@@ -536,6 +539,9 @@ def _finish_search(payload: dict[str, Any], state: SearchState, config: pytest.C
                               f"{type(exc).__name__}: {exc}")
     if state.settings.suite is not None:
         _write_suite(entry, state.settings.suite, config)
+    from .search_report import failure_rows, wanted
+    if wanted(config)[0]:   # --nav-plots / --nav-html: a picture of each frozen failure
+        entry["rows"] = failure_rows(config, entry)
     state.done.append(entry)
     state.junit_items.append((search, job.space))
     if state.settings.junit is not None:   # after every search: an interrupted session keeps it too
@@ -557,6 +563,17 @@ def _write_suite(entry: dict[str, Any], folder: Path, config: pytest.Config) -> 
             f"could not write the generated suite under {folder}: {type(exc).__name__}: {exc}")
 
 
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    state = session.config.stash.get(STATE_KEY, None)
+    if state is None or state.is_worker:
+        return
+    from .search_report import write_html
+    try:
+        write_html(session.config, state.done)
+    except Exception as exc:  # never lose the summary: say what could not be written
+        state.html_error = f"could not write the search's HTML report: {type(exc).__name__}: {exc}"
+
+
 def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pytest.Config) -> None:
     state = config.stash.get(STATE_KEY, None)
     if state is None or state.is_worker:
@@ -573,6 +590,8 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
                           f"stopped before it)")
     if state.settings.junit is not None and state.junit_items:
         tr.write_line(f"JUnit file of the generated suite: {state.settings.junit}")
+    if state.html_error:
+        tr.write_line(f"ERROR {state.html_error}", red=True)
     from ..core.interrupts import held
     if held():
         tr.write_line("a second interrupt came while what was found was being saved: it was held until "
@@ -587,15 +606,15 @@ def _rel(config: pytest.Config, path: Path) -> str:
 
 
 def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
+    from .search_report import lowest_clearance_text
+
     r = entry["report"]
     by = ", ".join(f"{k} {v}" for k, v in sorted(r.failures_by_outcome().items())) or "none"
     disc = ", ".join(f"{k} {v}" for k, v in sorted(r.discarded.items()))
-    best = r.best_clearance
     version = f" {r.subject_version}" if r.subject_version else ""
     lines = [f"{r.seed_name} vs {r.subject}{version} ({r.strategy}, search seed {r.seed_value}): "
              f"{r.sims_used}/{r.budget} sims, {r.discarded_total} discarded" + (f" ({disc})" if disc else "")
-             + f", {len(r.failures)} distinct failure(s) ({by}), best clearance "
-             + (f"{best:.3f} m" if math.isfinite(best) else "n/a")
+             + f", {len(r.failures)} distinct failure(s) ({by}), " + lowest_clearance_text(r)
              + (f", first at sim {r.first_failure}" if r.first_failure else "")
              + f", {r.sims_used} sims searching + {r.shrink_sims} shrinking"
              + (f" (shrink budget {r.shrink_total})" if r.shrink_total else "") + f", {r.wall_time:.1f} s"]
@@ -617,6 +636,11 @@ def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
         c = f.clearance
         lines.append(f"  {state} {_rel(config, f.path)}  {f.outcome}, clearance "
                      + (f"{c:.3f} m" if math.isfinite(c) else "n/a") + ("" if f.new else " (already frozen)"))
+    pictures = [row.picture for row in entry.get("rows") or [] if row.picture]
+    if pictures:
+        folders = sorted({str(Path(p).parent) for p in pictures})
+        lines.append(f"  pictures of {len(pictures)} failure(s) in {folders[0] if len(folders) == 1 else ', '.join(folders)}/ "
+                     f"(the frozen file's name, .png)")
     if entry["log"] is not None:
         lines.append(f"  log  {_rel(config, entry['log'])}")
     suite = entry.get("suite")

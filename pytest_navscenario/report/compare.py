@@ -21,7 +21,7 @@ from typing import Any, Iterable, Sequence
 from .results_file import OUTCOMES, ResultsFileError, read_results
 from .stats import mcnemar_exact, rate_with_interval
 
-RATE_OUTCOMES = ("success", "safety-stop", "timeout", "collision", "subject-error")
+RATE_OUTCOMES = ("success", "safety-stop", "timeout", "collision", "fall", "subject-error")
 # compared over the pairs both subjects passed: (record metrics key, label)
 METRICS = (("path_efficiency", "path efficiency"), ("duration", "duration (s)"),
            ("mean_speed", "mean speed (m/s)"), ("min_clearance", "min clearance (m)"))
@@ -146,16 +146,30 @@ class Comparison:
         return self.record_command(pair.b if side == "b" else pair.a, side)
 
     def record_command(self, rec: dict[str, Any], side: str = "b") -> str:
-        """The command that re-runs the scenario of one record with that side's subject."""
-        subject = self.subject_specs.get(side, rec.get("subject") or "")
+        """The command that re-runs the scenario of one record with that side's subject: the
+        ``--nav-subject`` spec given for that side, else the one the record carries
+        (``subject_spec``), never the planner's display name (``subject``), which need not be
+        importable. Without a spec the command says why in a comment (see ``spec_note``)."""
+        spec = self.subject_specs.get(side) or rec.get("subject_spec")
         cmd = f"{self.command_prefix}pytest {shlex.quote(rec['nodeid'])}"
-        if subject:
-            cmd += f" {shlex.quote(f'--nav-subject={subject}')}"
+        if spec:
+            cmd += f" {shlex.quote(f'--nav-subject={spec}')}"
         if self.extra_args:
             cmd += f" {self.extra_args}"
+        notes = [] if spec else [spec_note(rec)]
         if rec.get("repeat"):
-            cmd += f"  # repeat {rec['repeat']}, episode seed {rec.get('seed')}"
-        return cmd
+            notes.append(f"repeat {rec['repeat']}, episode seed {rec.get('seed')}")
+        return cmd + (f"  # {'; '.join(notes)}" if notes else "")
+
+
+def spec_note(rec: dict[str, Any]) -> str:
+    """Why a record names no ``--nav-subject`` spec: a conftest hook made the subject (the
+    project's hook makes it again), or the file predates the ``subject_spec`` field."""
+    name = rec.get("subject") or "?"
+    if "subject_spec" in rec:
+        return f"subject {name} from the project's pytest_navscenario_make_subject hook"
+    return (f"subject {name}: its --nav-subject spec is unknown (the results file does not record "
+            f"it); add --nav-subject=SPEC")
 
 
 def _passed(rec: dict[str, Any]) -> bool:
@@ -274,7 +288,7 @@ def _p(p: float) -> str:
 
 
 SHORT = {"success": "success", "safety-stop": "safety-stop", "timeout": "timeout",
-         "collision": "collision", "subject-error": "error"}
+         "collision": "collision", "fall": "fall", "subject-error": "error"}
 
 
 def format_comparison(cmp: Comparison, *, max_listed: int = 50, max_unpaired: int | None = None,
@@ -284,8 +298,8 @@ def format_comparison(cmp: Comparison, *, max_listed: int = 50, max_unpaired: in
     lines = [f"A = {cmp.a_name}: {cmp.a_subject}", f"B = {cmp.b_name}: {cmp.b_subject}",
              f"{len(cmp.pairs)} paired scenario runs (same nodeid and repeat index); rates over these pairs",
              "with 95 % Wilson intervals; change = B - A success; p = exact McNemar test on success"]
-    outcomes = [o for o in RATE_OUTCOMES
-                if o != "subject-error" or cmp.overall.a[o].count or cmp.overall.b[o].count]
+    outcomes = [o for o in RATE_OUTCOMES        # errors and falls get a column when there are any
+                if o not in ("subject-error", "fall") or cmp.overall.a[o].count or cmp.overall.b[o].count]
     fw = max([14] + [len(f.family) for f in cmp.families])
     header = f"{'family':<{fw}} {'n':>4}  {'':2}" + "".join(f" {SHORT[o]:>15}" for o in outcomes) \
         + f" {'change':>8} {'broke':>5} {'fixed':>5} {'p':>6}"

@@ -1,0 +1,152 @@
+"""Height grids: heightfield files (greyscale PNG 8/16-bit, .npy) read as maps seen from above, each
+bad file refused with its reason, rough ground drawn from its seed (same seed, same bits)."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from pytest_navscenario.core.errors import ScenarioError
+from pytest_navscenario.scenario import heightmap
+from pytest_navscenario.scenario.heightmap import HeightmapError, height_grid, load_heightfield
+from pytest_navscenario.scenario.model import Scenario
+from pytest_navscenario.scenario.terrain import Heightfield, Rough
+
+
+@pytest.fixture(autouse=True)
+def _fresh_cache():
+    heightmap.clear_grid_cache()
+    yield
+    heightmap.clear_grid_cache()
+
+
+def _scenario(folder: Path) -> Scenario:
+    from pytest_navscenario.scenario.loader import loads_scenario
+    return loads_scenario("version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 0, y: 5}}\n",
+                          source=str(folder / "s.yaml"))
+
+
+def test_a_16_bit_png_is_a_map_seen_from_above_scaled_from_min_to_max_height(tmp_path):
+    img = np.zeros((3, 5), dtype=np.uint16)         # 5 columns (x), 3 rows (y); top row = +y
+    img[0, 4] = 60000                                # top right: the (+x, +y) corner is the highest
+    img[2, 0] = 30000                                # bottom left: (-x, -y), half as high
+    img[1, 2] = 10000                                # so that the lowest value (0) is elsewhere
+    Image.fromarray(img).save(tmp_path / "h.png")
+    element = Heightfield("hf", 1.0, 2.0, file="h.png", length=4.0, width=2.0, min_height=-0.5,
+                          max_height=1.5)
+    grid = height_grid(element, _scenario(tmp_path))
+    assert grid.heights.shape == (3, 5) and grid.cell == (1.0, 1.0)
+    assert grid.heights[2, 4] == pytest.approx(1.5)           # row 2 = the +y edge
+    assert grid.heights[0, 0] == pytest.approx(-0.5 + 2.0 * 0.5)
+    assert grid.heights.min() == pytest.approx(-0.5)
+    assert grid.sample(2.0, 1.0) == pytest.approx(1.5)         # the element's own frame, centred
+    assert np.isnan(grid.sample(2.1, 0.0))                     # outside: NaN
+    assert not grid.heights.flags.writeable
+    assert height_grid(element, _scenario(tmp_path)) is grid   # cached per process
+
+
+def test_an_8_bit_png_and_an_npy_of_the_same_map_give_the_same_grid(tmp_path):
+    values = np.array([[0, 10, 20], [30, 40, 255]], dtype=np.uint8)
+    Image.fromarray(values).save(tmp_path / "a.png")
+    np.save(tmp_path / "b.npy", values.astype(float) * 3.0 - 7.0)    # any numbers: lowest to highest
+    scenario = _scenario(tmp_path)
+    a = height_grid(Heightfield("a", 0, 0, file="a.png", length=2, width=1, max_height=2.0), scenario)
+    b = height_grid(Heightfield("b", 0, 0, file="b.npy", length=2, width=1, max_height=2.0), scenario)
+    assert np.array_equal(a.heights, b.heights)
+    assert load_heightfield(tmp_path, "a.png", 2, 1)[1] != load_heightfield(tmp_path, "b.npy", 2, 1)[1]
+
+
+def test_sampling_follows_mujocos_triangles_not_bilinear(tmp_path):
+    np.save(tmp_path / "h.npy", np.array([[0.0, 1.0], [0.0, 0.0]])[::-1])   # only (+x, -y) is high
+    grid = height_grid(Heightfield("h", 0, 0, file="h.npy", length=1, width=1), _scenario(tmp_path))
+    assert grid.heights[0, 1] == 1.0
+    # centre of the cell: on the diagonal from (c, r) to (c+1, r+1), halfway between 0 and 0
+    assert grid.sample(0.0, 0.0) == pytest.approx(0.0)
+    assert grid.sample(0.25, -0.25) == pytest.approx(0.5)      # in the lower triangle: planar
+    assert grid.sample(-0.25, 0.25) == pytest.approx(0.0)      # in the upper triangle: flat
+
+
+def _write(tmp_path: Path, name: str, content) -> None:
+    path = tmp_path / name
+    if isinstance(content, bytes):
+        path.write_bytes(content)
+    elif isinstance(content, Image.Image):
+        content.save(path)
+    else:
+        np.save(path, content)
+
+
+@pytest.mark.parametrize("name, content, file, length, width, field, words", [
+    ("h.png", None, "missing.png", 2, 2, "file", "does not exist"),
+    ("h.png", b"not a png at all", "h.png", 2, 2, "file", "cannot be read as a PNG"),
+    ("h.npy", b"\x93NUMPY garbage", "h.npy", 2, 2, "file", "cannot be read as a NumPy"),
+    ("h.npy", np.array([[0.0, np.nan], [1.0, 2.0]]), "h.npy", 2, 2, "file", "row 0, column 1"),
+    ("h.npy", np.array([[0.0, np.inf], [1.0, 2.0]]), "h.npy", 2, 2, "file", "not finite"),
+    ("h.npy", np.zeros((2, 2, 2)), "h.npy", 2, 2, "file", "3-D array"),
+    ("h.npy", np.array([["a", "b"], ["c", "d"]]), "h.npy", 2, 2, "file", "holds <U1"),
+    ("h.npy", np.zeros((1, 5)), "h.npy", 2, 2, "file", "at least 2 x 2"),
+    ("h.npy", np.zeros((2, 1100)), "h.npy", 2, 2, "file", "more than the limit of 1024"),
+    ("h.npy", np.zeros((11, 101)), "h.npy", 1, 10, "length", "give length and width in the proportion"),
+    ("h.png", Image.new("RGB", (3, 3), (200, 10, 10)), "h.png", 2, 2, "file", "colour image"),
+    ("h.tif", b"II*\x00", "h.tif", 2, 2, "file", "unknown heightfield format .tif"),
+    ("h.npy", np.zeros((3, 3)), "../h.npy", 2, 2, "file", "leaves the scenario's folder"),
+    ("h.npy", np.zeros((3, 3)), "/etc/h.npy", 2, 2, "file", "absolute path"),
+])
+def test_each_bad_heightfield_is_refused_with_its_reason(tmp_path, name, content, file, length, width,
+                                                         field, words):
+    folder = tmp_path / "scenarios"
+    folder.mkdir()
+    if content is not None:
+        _write(folder if not file.startswith("..") else tmp_path, name, content)
+    with pytest.raises(HeightmapError) as info:
+        load_heightfield(folder, file, length, width)
+    assert words in str(info.value)
+    assert info.value.field == field
+    # at simulation time the same problem names the scenario and the element's field
+    with pytest.raises(ScenarioError) as info:
+        height_grid(Heightfield("dock", 0, 0, file=file, length=length, width=width), _scenario(folder))
+    assert words in str(info.value) and f"terrain[dock].{field}" in str(info.value)
+    assert str(folder / "s.yaml") in str(info.value)
+
+
+def test_an_oversized_file_is_refused_unread(tmp_path, monkeypatch):
+    np.save(tmp_path / "h.npy", np.zeros((50, 50)))
+    monkeypatch.setattr(heightmap, "MAX_HEIGHTFIELD_BYTES", 1000)
+    with pytest.raises(HeightmapError, match="h.npy is 0.0 MB, more than the limit"):
+        load_heightfield(tmp_path, "h.npy", 2, 2)
+
+
+def test_a_file_changed_after_loading_is_an_error_not_another_terrain(tmp_path):
+    np.save(tmp_path / "h.npy", np.arange(9.0).reshape(3, 3))
+    _, digest = load_heightfield(tmp_path, "h.npy", 2, 2)
+    element = Heightfield("h", 0, 0, file="h.npy", length=2, width=2, digest=digest)
+    height_grid(element, _scenario(tmp_path))
+    np.save(tmp_path / "h.npy", np.arange(9.0).reshape(3, 3)[::-1])
+    with pytest.raises(ScenarioError, match="has changed since the scenario was loaded"):
+        height_grid(element, _scenario(tmp_path))
+
+
+def test_rough_ground_is_seeded_bounded_tapered_and_bumps_about_a_wavelength_apart():
+    from scipy.ndimage import maximum_filter
+
+    rough = Rough("yard", 0, 0, length=20.0, width=10.0, amplitude=0.15, wavelength=1.0, seed=7)
+    grid = height_grid(rough)
+    assert grid.heights.shape == (81, 161) and grid.cell == (0.125, 0.125)
+    assert grid.heights.max() == pytest.approx(0.15, rel=0.05) and grid.heights.min() >= 0.0
+    assert np.all(grid.heights[0] == 0) and np.all(grid.heights[:, -1] == 0)   # meets its base
+    heightmap.clear_grid_cache()
+    assert np.array_equal(height_grid(rough).heights, grid.heights)              # same seed, same bits
+    from dataclasses import replace
+    assert not np.array_equal(height_grid(replace(rough, seed=8)).heights, grid.heights)
+    inner = grid.heights[8:-8, 8:-8]
+    peaks = (inner == maximum_filter(inner, size=3)).sum()
+    area = (inner.shape[0] * 0.125) * (inner.shape[1] * 0.125)
+    assert 0.5 < area / peaks < 2.0          # about one bump per square wavelength
+
+
+def test_rough_ground_too_fine_for_the_grid_limit_says_what_to_change():
+    with pytest.raises(HeightmapError, match="make the patch smaller") as info:
+        heightmap.check_rough(200.0, 5.0, 0.5)
+    assert info.value.field == "wavelength"
+    with pytest.raises(ScenarioError, match=r"terrain\[r\].wavelength: a rough patch 200 x 5 m .* 3201 x 81"):
+        height_grid(Rough("r", 0, 0, length=200.0, width=5.0, amplitude=0.1, wavelength=0.5))
