@@ -24,6 +24,7 @@ import os
 import pickle
 import signal
 import threading
+import time
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
@@ -38,6 +39,7 @@ PRELOAD = ["pytest_navscenario.harness.runner", "pytest_navscenario.sim.episode"
            "pytest_navscenario.verdict.feasibility",
            "pytest_navscenario.subjects.planners.dwa"]
 MAX_ATTEMPTS = 3           # a job whose worker died this many times is reported as an error
+STOP_GRACE = 2.0           # s the workers have to stop their planners' processes when the pool closes
 
 
 def available_cores() -> int:
@@ -100,16 +102,58 @@ def _dead_workers(pool: ProcessPoolExecutor | None) -> dict[int, str]:
 _STARTED: Any = None   # worker side: the pipe end on which a worker says which job it started
 
 
-def _worker_init(started: Any) -> None:
+def _worker_init(started: Any, alive: Any = None) -> None:
     """In each worker: leave Ctrl-C to the parent (it cancels the batch and stops the pool),
-    note started jobs, and stop exec: planner programs when the worker exits."""
+    note started jobs, stop what the planners started (exec: programs, processes an in-process
+    planner left) whenever the worker ends: at exit, on SIGTERM (a broken pool stops the others
+    so), and when the parent is gone (``_exit_with_parent``)."""
     global _STARTED
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _stop_on_sigterm)
     _STARTED = started
     from multiprocessing.util import Finalize
 
+    Finalize(None, _stop_planner_processes, exitpriority=10)
+    if alive is not None:
+        threading.Thread(target=_exit_with_parent, args=(alive,), name="navscenario-parent-watch",
+                         daemon=True).start()
+
+
+def _stop_planner_processes() -> None:
+    """Worker side: end the exec: planner programs (their process groups) and the processes
+    in-process planners left running (core/processes.py)."""
+    from ..core.processes import end_left_behind
     from ..subjects.external import _shutdown_all
-    Finalize(None, _shutdown_all, exitpriority=10)
+    try:
+        _shutdown_all()
+    finally:
+        end_left_behind(grace=0.5)
+
+
+def _stop_on_sigterm(signum: int, frame: Any) -> None:
+    """Worker side: stop the planners' processes, then die of the SIGTERM as before (its exit
+    code -15 tells the parent this worker was stopped, not killed by its episode)."""
+    try:
+        _stop_planner_processes()
+    finally:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGTERM)
+
+
+def _exit_with_parent(alive: Any) -> None:
+    """Worker side: wait for the end of file on ``alive``, a pipe whose only writing end the
+    parent holds, then stop this worker's planners' processes and exit. The end of file comes
+    when the parent closes the pool or dies, even by SIGKILL: a pool's worker otherwise waits for
+    its next job forever (it holds its job queue's writing end itself), and with it the
+    forkserver and the resource tracker (they exit when the last process holding their pipes does)."""
+    try:
+        alive.recv()
+    except (EOFError, OSError):
+        pass
+    try:
+        _stop_planner_processes()
+    finally:
+        os._exit(0)
 
 
 def _pool_run(key: int, job: Any) -> Any:
@@ -182,6 +226,7 @@ class ProcessExecutor:
         self.description = f"{workers} local worker process(es) ({self.start_method})"
         self._pool: ProcessPoolExecutor | None = None
         self._starts: _StartLog | None = None   # which job each worker started last
+        self._alive: Any = None                 # writing end of the workers' "parent alive" pipe
         self._generation = 0
         self._keys = itertools.count()
         self._open: dict[int, _Slot] = {}      # submitted, result not yet taken
@@ -194,8 +239,9 @@ class ProcessExecutor:
             # a plain pipe, not a SimpleQueue: its semaphore upsets the resource tracker at exit
             reader, writer = ctx.Pipe(duplex=False)
             self._starts = _StartLog(reader)
+            alive, self._alive = ctx.Pipe(duplex=False)   # only this process holds the writing end
             self._pool = ProcessPoolExecutor(self.workers, mp_context=ctx, initializer=_worker_init,
-                                             initargs=(writer,))
+                                             initargs=(writer, alive))
             self._generation += 1
         return self._pool
 
@@ -264,6 +310,7 @@ class ProcessExecutor:
         last = starts.close() if starts is not None else {}
         if old is not None:
             old.shutdown(wait=False, cancel_futures=True)
+        self._let_workers_go()
         culprits = {last[pid]: why for pid, why in dead.items() if pid in last}
         started = set(last.values())
         pool = self._ensure_pool()
@@ -278,6 +325,12 @@ class ProcessExecutor:
                 slot.future = pool.submit(_pool_run, slot.key, slot.job)
                 slot.generation = self._generation
 
+    def _let_workers_go(self) -> None:
+        """Close this process's end of the "parent alive" pipe: every worker still running exits."""
+        alive, self._alive = self._alive, None
+        if alive is not None:
+            alive.close()
+
     def close(self, cancel: bool = False) -> None:
         """Stop the workers; with ``cancel`` (Ctrl-C, an error) at once, dropping unfinished jobs."""
         pool, self._pool = self._pool, None
@@ -288,14 +341,20 @@ class ProcessExecutor:
                 return
             if not cancel:
                 pool.shutdown(wait=True)
+                self._let_workers_go()
                 return
             procs = list((getattr(pool, "_processes", None) or {}).values())   # gone after shutdown
             pool.shutdown(wait=False, cancel_futures=True)
+            self._let_workers_go()    # each worker stops its exec: planners and leftovers, and exits
+            deadline = time.monotonic() + STOP_GRACE
             for proc in procs:
-                try:
-                    proc.kill()
-                except Exception:
-                    pass
+                proc.join(timeout=max(0.0, deadline - time.monotonic()))
+            for proc in procs:        # one stuck in C code that ignores its parent-watch thread
+                if proc.exitcode is None:
+                    try:
+                        proc.kill()
+                    except Exception:
+                        pass
             for proc in procs:
                 proc.join(timeout=5)
         finally:
