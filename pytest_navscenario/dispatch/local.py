@@ -119,15 +119,21 @@ def _worker_init(started: Any, alive: Any = None) -> None:
                          daemon=True).start()
 
 
+_STOPPING = threading.RLock()   # re-entered by the SIGTERM handler in the thread holding it
+
+
 def _stop_planner_processes() -> None:
     """Worker side: end the exec: planner programs (their process groups) and the processes
-    in-process planners left running (core/processes.py)."""
+    in-process planners left running (core/processes.py). Several ends may come at once (the
+    worker's exit and its parent-watch thread): the first does the work, the others wait for it,
+    so that none exits the process while the first is still ending a group."""
     from ..core.processes import end_left_behind
     from ..subjects.external import _shutdown_all
-    try:
-        _shutdown_all()
-    finally:
-        end_left_behind(grace=0.5)
+    with _STOPPING:
+        try:
+            _shutdown_all()
+        finally:
+            end_left_behind(grace=0.5)
 
 
 def _stop_on_sigterm(signum: int, frame: Any) -> None:

@@ -297,6 +297,7 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
     from .state import STATE_KEY
     config = session.config
     state = config.stash.get(STATE_KEY, None)
+    _end_left_running(state)
     if state is not None and state.is_worker and (state.not_scenarios or state.scenario_folders):
         from .skipped import WORKER_KEY
         config.workeroutput[WORKER_KEY] = {  # type: ignore[attr-defined]
@@ -321,6 +322,18 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
             session.exitstatus = pytest.ExitCode.INTERNAL_ERROR
 
 
+def _end_left_running(state: Any) -> None:
+    """End the processes in-process planners left running in this process (its episodes: the
+    controller's in a serial run, an xdist worker's own); the controller says so in its summary."""
+    import sys
+    processes = sys.modules.get("pytest_navscenario.core.processes")   # loaded once an episode ran
+    if processes is None:
+        return
+    ended = processes.end_left_behind()
+    if state is not None and ended:
+        state.ended_left_running = [f"pid {p.pid} after {p.episode}" for p in ended]
+
+
 def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pytest.Config) -> None:
     from .collect import rel_path
     from .state import STATE_KEY
@@ -330,6 +343,10 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
     from .skipped import summary_lines
     for line in summary_lines(state, lambda p: rel_path(config, p), config.getoption("verbose") > 0):
         terminalreporter.write_line(line)
+    if state.ended_left_running:
+        shown = state.ended_left_running[:5] + (["..."] if len(state.ended_left_running) > 5 else [])
+        terminalreporter.write_line(f"navscenario: ended {len(state.ended_left_running)} process(es) the planner "
+                                    f"had left running ({', '.join(shown)}; see the warnings)", yellow=True)
     if not state.records and state.settings.results is None:
         return
     tr = terminalreporter
