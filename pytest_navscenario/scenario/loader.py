@@ -19,6 +19,7 @@ import difflib
 import math
 import os
 import re
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -111,7 +112,34 @@ TYPE_KEYS = {e.type: ("type",) + e.section.names for e in OBSTACLES.types}
 # --------------------------------------------------------------------------- sections
 
 def _robot(ctx: _Ctx, top: _Section) -> Robot:
-    return _read_sub(ctx, top, SCENARIO["robot"])
+    robot = _read_sub(ctx, top, SCENARIO["robot"])
+    if robot.body.kind == "mjcf":
+        robot = replace(robot, body=_mjcf_file(ctx, robot.body))
+    return robot
+
+
+def _mjcf_file(ctx: _Ctx, body: Any) -> Any:
+    """An MJCF body's file: beside the scenario (the mesh path rules), there and readable; its
+    digest (a hash of the file's bytes) made part of the content. MuJoCo reads it at run time."""
+    import hashlib
+
+    from .mesh import MeshError, resolve_mesh_path
+
+    field = "robot.body.file"
+    line = ctx.lines.get(field, ctx.lines.get("robot.body", ctx.lines.get("robot")))
+    folder = Path(ctx.source).parent if ctx.source else Path.cwd()
+    fix = "write the MJCF file's path relative to the scenario's folder"
+    try:
+        path = resolve_mesh_path(folder, body.file, what="MJCF")
+    except MeshError as exc:
+        raise ctx.fail(str(exc), field, line, fix) from None
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        raise ctx.fail(f"{path} does not exist", field, line, fix) from None
+    except OSError as exc:
+        raise ctx.fail(f"{path} cannot be read: {exc.strerror or exc}", field, line, fix) from None
+    return replace(body, digest=hashlib.sha256(data).hexdigest()[:16])
 
 
 def _pose(ctx: _Ctx, node: YNode | None, path: str, line: int | None, what: str) -> Pose:
@@ -629,3 +657,23 @@ _TOP_KEY = re.compile(r"^(?:---[ \t]*\n)?[\"']?([A-Za-z_][\w-]*)[\"']?[ \t]*:", 
 # --------------------------------------------------------------------------- dumping
 
 
+
+
+def field_line(source: str | os.PathLike | None, field: str) -> int | None:
+    """The line of a dotted field (``robot.body.file``) in the scenario file ``source``, for an
+    error found after loading (at run time); None when the file or the field is not there."""
+    if not source:
+        return None
+    try:
+        text = _decode(Path(source).read_bytes()[:int(SCENARIO_LIMITS["max_file_bytes"])], os.fspath(source))
+        node = parse_yaml(text, os.fspath(source), max_depth=int(SCENARIO_LIMITS["max_depth"]),
+                          max_nodes=int(SCENARIO_LIMITS["max_nodes"]))
+    except (OSError, ScenarioError):
+        return None
+    line = None
+    for key in field.split("."):
+        if not isinstance(node, YMap) or key not in node.items:
+            break
+        key_line, node = node.items[key]
+        line = key_line or node.line
+    return line
