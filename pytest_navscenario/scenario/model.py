@@ -44,7 +44,7 @@ class Pose:
         return math.radians(self.yaw)
 
 
-POSE = section(Pose, "mission.start", "a planar pose", [
+POSE = section(Pose, "pose", "a planar pose", [
     Number("x", "m", "position along x", example="x: 0.0"),
     Number("y", "m", "position along y", example="y: 0.0"),
     Number("yaw", "deg", "heading, counter-clockwise from +x"),
