@@ -148,7 +148,8 @@ def _obstacles(ctx: _Ctx, top: _Section) -> tuple[Obstacle, ...]:
 def _obstacle(ctx: _Ctx, sec: _Section, element: K.Element, name: str) -> Obstacle:
     """One obstacle: its motion first (a path places it), then its keys as declared."""
     decl = element.section
-    motion = _motion(ctx, sec, decl["motion"].section)
+    keys = decl.by_name
+    motion = _motion(ctx, sec, keys["motion"].section) if "motion" in sec.node.items else None
     if motion is not None and motion.path:
         for key in ("x", "y"):
             if sec.has(key):
@@ -157,7 +158,7 @@ def _obstacle(ctx: _Ctx, sec: _Section, element: K.Element, name: str) -> Obstac
                                f"remove '{key}', or make it the path's first point")
         x, y = motion.path[0]
     else:
-        x, y = _read_number(ctx, sec, decl["x"]), _read_number(ctx, sec, decl["y"])
+        x, y = _read_number(ctx, sec, keys["x"]), _read_number(ctx, sec, keys["y"])
     values: dict[str, Any] = {"name": name, "x": x, "y": y, "motion": motion}
     if element.type == "mesh":
         return _mesh(ctx, sec, decl, values)
