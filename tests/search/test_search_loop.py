@@ -594,7 +594,7 @@ def test_an_interrupt_while_a_strategy_draws_is_held_until_it_has_drawn():
     import signal
     import time
 
-    from pytest_navscenario.search.engine import _interrupts_deferred
+    from pytest_navscenario.core.interrupts import deferred as _interrupts_deferred
 
     old = signal.signal(signal.SIGINT, signal.default_int_handler)
     drawn = []
