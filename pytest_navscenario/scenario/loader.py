@@ -19,6 +19,7 @@ import difflib
 import math
 import os
 import re
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -65,6 +66,7 @@ from .model import (  # noqa: F401  (DRIVES ... PERSON_SPEED: re-exported, they 
     Simulation,
 )
 from .reading import (  # the readers, under the names this module always used
+    _MAX_ABS,
     _Ctx,
     _Section,
     _build_section,
@@ -82,6 +84,7 @@ from .reading import (  # the readers, under the names this module always used
     _read_sub,
     _read_text,
 )
+from .search_settings import read_search
 from .yaml_tree import YMap, YNode, YScalar, YSeq, describe, from_plain, parse_yaml
 
 _LIST_LIMITS = {"obstacles": (int(SCENARIO_LIMITS["max_obstacles"]), "obstacles")}  # refused while parsing
@@ -109,7 +112,34 @@ TYPE_KEYS = {e.type: ("type",) + e.section.names for e in OBSTACLES.types}
 # --------------------------------------------------------------------------- sections
 
 def _robot(ctx: _Ctx, top: _Section) -> Robot:
-    return _read_sub(ctx, top, SCENARIO["robot"])
+    robot = _read_sub(ctx, top, SCENARIO["robot"])
+    if robot.body.kind == "mjcf":
+        robot = replace(robot, body=_mjcf_file(ctx, robot.body))
+    return robot
+
+
+def _mjcf_file(ctx: _Ctx, body: Any) -> Any:
+    """An MJCF body's file: beside the scenario (the mesh path rules), there and readable; its
+    digest (a hash of the file's bytes) made part of the content. MuJoCo reads it at run time."""
+    import hashlib
+
+    from .mesh import MeshError, resolve_mesh_path
+
+    field = "robot.body.file"
+    line = ctx.lines.get(field, ctx.lines.get("robot.body", ctx.lines.get("robot")))
+    folder = Path(ctx.source).parent if ctx.source else Path.cwd()
+    fix = "write the MJCF file's path relative to the scenario's folder"
+    try:
+        path = resolve_mesh_path(folder, body.file, what="MJCF")
+    except MeshError as exc:
+        raise ctx.fail(str(exc), field, line, fix) from None
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        raise ctx.fail(f"{path} does not exist", field, line, fix) from None
+    except OSError as exc:
+        raise ctx.fail(f"{path} cannot be read: {exc.strerror or exc}", field, line, fix) from None
+    return replace(body, digest=hashlib.sha256(data).hexdigest()[:16])
 
 
 def _pose(ctx: _Ctx, node: YNode | None, path: str, line: int | None, what: str) -> Pose:
@@ -200,6 +230,11 @@ def _mesh(ctx: _Ctx, sec: _Section, decl: K.Section, values: dict[str, Any]) -> 
     try:
         path = resolve_mesh_path(folder, file)
         verts, tris = read_mesh(path)
+        reach = max(float(abs(verts[:, k]).max()) * scale[k] for k in range(3))   # m, scale included
+        if not reach <= _MAX_ABS:
+            raise MeshError(f"{Path(file).name}: a vertex lies {reach:g} m from the mesh's origin (scale "
+                            f"included), beyond the supported magnitude of {_MAX_ABS:g} m; check the file's "
+                            f"units and the scale (e.g. scale: 0.001 for millimetres)")
         outline, height = mesh_outline(verts, tris, scale, Path(file).name)
     except MeshError as exc:
         raise ctx.fail(str(exc), _join(sec.path, "file"), sec.line_of("file"),
@@ -322,6 +357,14 @@ def check_scenario(scenario: Scenario, *, _ctx: _Ctx | None = None) -> None:
                            f"({1.0 / sim.control_rate:g} s at {sim.control_rate:g} Hz)", field,
                            lines.get(field, lines.get("robot.latency")),
                            f"e.g. {key}: {round(ticks) / sim.control_rate:g}")
+        timeout = scenario.mission.timeout
+        if delay >= timeout:
+            field = f"robot.latency.{key}"
+            what = ("the planner would see nothing after the first observation" if key == "observation"
+                    else "no command would act before the episode ends: the robot never moves")
+            raise ctx.fail(f"a delay of {delay!r} s is not shorter than the timeout ({timeout!r} s): {what}",
+                           field, lines.get(field, lines.get("robot.latency")),
+                           f"shorten the delay below {timeout:g} s, or lengthen mission.timeout")
     if scenario.obstacles:
         _check_clear(scenario, ctx)
         _check_speeds(scenario, ctx)
@@ -491,6 +534,9 @@ def _build(root: YNode | None, ctx: _Ctx, name: str | None, family: str | None) 
         provenance=_mapping(ctx, top, "provenance"),
         source=ctx.source,
     )
+    if scenario.search is not None:     # the search's space, checked on plain runs too
+        read_search(ctx, top.get("search"), "search", top.line_of("search"),
+                    obstacles=tuple(o.name for o in scenario.obstacles), waypoints=len(scenario.mission.waypoints))
     check_scenario(scenario, _ctx=ctx)
     return scenario
 
@@ -611,3 +657,23 @@ _TOP_KEY = re.compile(r"^(?:---[ \t]*\n)?[\"']?([A-Za-z_][\w-]*)[\"']?[ \t]*:", 
 # --------------------------------------------------------------------------- dumping
 
 
+
+
+def field_line(source: str | os.PathLike | None, field: str) -> int | None:
+    """The line of a dotted field (``robot.body.file``) in the scenario file ``source``, for an
+    error found after loading (at run time); None when the file or the field is not there."""
+    if not source:
+        return None
+    try:
+        text = _decode(Path(source).read_bytes()[:int(SCENARIO_LIMITS["max_file_bytes"])], os.fspath(source))
+        node = parse_yaml(text, os.fspath(source), max_depth=int(SCENARIO_LIMITS["max_depth"]),
+                          max_nodes=int(SCENARIO_LIMITS["max_nodes"]))
+    except (OSError, ScenarioError):
+        return None
+    line = None
+    for key in field.split("."):
+        if not isinstance(node, YMap) or key not in node.items:
+            break
+        key_line, node = node.items[key]
+        line = key_line or node.line
+    return line
