@@ -314,7 +314,8 @@ RUN_ONLY = ("must be greater than", "must not be below", "physics steps", "whole
             "not shorter than the timeout", "overlaps obstacle", "so at most that many can be removed",
             "could pass the limit", "is not an obstacle or mission part of this seed", "has no length",
             "does not increase", "does not exist", "unknown mesh format", "leaves the scenario's folder",
-            "is an absolute path", "is not a file", "cannot be read")
+            "is an absolute path", "is not a file", "cannot be read",
+            "is faster than the simulation can follow")   # a mover's speed against its size, the robot's, the timestep
 
 
 def _probes(key: K.Key) -> list[Any]:
