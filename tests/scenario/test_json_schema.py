@@ -216,6 +216,9 @@ def test_check_jsonschema_refuses_them_in_ci_as_the_docs_say(tmp_path):
 
 
 def _write_part(path: Path) -> None:
+    """The files the probes name, beside the probe: a tetrahedron STL (``path``) and the small MJCF
+    robot of the body tests as robot.xml."""
+    (path.parent / "robot.xml").write_text((Path(__file__).parents[1] / "data" / "mjcf" / "cart.xml").read_text())
     v = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
     faces = [(0, 2, 1), (0, 1, 3), (1, 2, 3), (2, 0, 3)]
     with open(path, "wb") as fh:
