@@ -2,8 +2,12 @@
 ``yaml.load(CSafeLoader)`` of the same text, and the time to refuse hostile files.
 
     python benchmarks/bench_loader.py [--repeat N] [--cpu]
+    python benchmarks/bench_loader.py --paired OTHER_CHECKOUT [--rounds 10]
 
 Prints medians (ms) and ratios; docs/reference/scenario-format.md and docs/benchmarks.md quote them.
+``--paired`` compares this checkout's loader with another one's (e.g. main's, from ``git archive``):
+A and B alternate as separate processes (A B A B ...), each timing the CPU time of loading every
+shipped seed and the 5000-obstacle file; it prints the ratio B/A of each pair and their median.
 """
 from __future__ import annotations
 
@@ -54,11 +58,53 @@ def many_obstacles(n: int) -> str:
                           f"width: 1, yaw: 15}}\n" for i in range(n))
 
 
+def seeds_cpu_ms(repeat: int) -> tuple[float, float]:
+    """CPU ms to load every shipped seed once (median of ``repeat``), and one 5000-obstacle file."""
+    texts = [(p.read_text(), str(p)) for p in sorted((ROOT / "scenarios").glob("*.yaml"))]
+
+    def seeds() -> None:
+        for text, src in texts:
+            loads_scenario(text, src)
+    global CLOCK
+    CLOCK = time.process_time
+    big = many_obstacles(int(SCENARIO_LIMITS["max_obstacles"]))
+    return median_ms(seeds, repeat), median_ms(lambda: loads_scenario(big), max(3, repeat // 20))
+
+
+def paired(other: str, rounds: int, repeat: int) -> None:
+    import os
+    import subprocess
+    code = ("import sys; sys.argv=['x']; sys.path.insert(0, {root!r}); import importlib.util as u; "
+            "spec = u.spec_from_file_location('b', {script!r}); m = u.module_from_spec(spec); "
+            "spec.loader.exec_module(m); print(*m.seeds_cpu_ms({repeat}))")
+    checkouts = {"A": str(Path(other).resolve()), "B": str(ROOT)}
+    results: dict[str, list[tuple[float, float]]] = {"A": [], "B": []}
+    for _ in range(rounds):
+        for label in ("A", "B"):
+            root = checkouts[label]
+            env = dict(os.environ, PYTHONPATH=root)
+            env.pop("PYTHONDONTWRITEBYTECODE", None)
+            out = subprocess.run([sys.executable, "-c", code.format(root=root, script=__file__, repeat=repeat)],
+                                 env=env, capture_output=True, text=True, check=True, cwd=root).stdout.split()
+            results[label].append((float(out[0]), float(out[1])))
+    print(f"A = {checkouts['A']}\nB = {checkouts['B']}  (CPU ms, median of {repeat} loads per process)")
+    for i, what in enumerate(("all shipped seeds", "5000 obstacles")):
+        ratios = [b[i] / a[i] for a, b in zip(results["A"], results["B"])]
+        print(f"{what:<18} A {statistics.median(r[i] for r in results['A']):8.3f}  "
+              f"B {statistics.median(r[i] for r in results['B']):8.3f}  B/A per pair: "
+              + " ".join(f"{r:.3f}" for r in ratios) + f"  median {statistics.median(ratios):.3f}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=50)
     parser.add_argument("--cpu", action="store_true", help="time with process CPU time instead of wall time")
+    parser.add_argument("--paired", metavar="OTHER_CHECKOUT", help="compare with another checkout's loader")
+    parser.add_argument("--rounds", type=int, default=10, help="A/B pairs for --paired")
     args = parser.parse_args()
+    if args.paired:
+        paired(args.paired, args.rounds, args.repeat)
+        return
     global CLOCK
     if args.cpu:
         CLOCK = time.process_time

@@ -108,13 +108,42 @@ def escape(text: str) -> str:
     return re.sub(r"([\\`*_\[\]|])", r"\\\1", text)
 
 
-def _ini_default(ini: Ini) -> str:
+_STATES_DEFAULT = re.compile(r"\bdefault\b", re.IGNORECASE)
+
+
+def states_default(help_text: str) -> bool:
+    """True when the help text says what the default is ("default 100", "yes (default) or no",
+    "Default: the built-in 'dwa'"): the page then shows the help's own words, never a second,
+    machine-made default next to it that could contradict them."""
+    return bool(_STATES_DEFAULT.search(help_text))
+
+
+def _value_text(value: Any, choices: tuple[str, ...] = ()) -> str:
+    """A default written as a user types it: yes/no for a {yes,no} choice (true/false for a
+    plain ini boolean), 1 not 1.0, list items separated by spaces."""
+    if isinstance(value, bool):
+        if {"yes", "no"} <= set(choices):
+            return "yes" if value else "no"
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return f"{value:g}"
+    if isinstance(value, (list, tuple)):
+        return " ".join(str(v) for v in value)
+    return str(value)
+
+
+def _ini_default(ini: Ini, choices: tuple[str, ...] = ()) -> str:
     default = ini.default
     if default is _NOTSET or default in ("", None, []):
         return "not set"
-    if isinstance(default, (list, tuple)):
-        return " ".join(str(v) for v in default)
-    return str(default)
+    return _value_text(default, choices)
+
+
+def _metavar_choices(metavar: str | None) -> tuple[str, ...]:
+    """The accepted values of a metavar written as {a,b,c}."""
+    if metavar and metavar.startswith("{") and metavar.endswith("}"):
+        return tuple(metavar[1:-1].split(","))
+    return ()
 
 
 def _option_block(option: Option, inis: dict[str, Ini]) -> list[str]:
@@ -124,8 +153,8 @@ def _option_block(option: Option, inis: dict[str, Ini]) -> list[str]:
     ini = inis.get(option.dest)
     help_text = _INI_SUFFIX.sub("", (option.attrs.get("help") or "").replace("%%", "%"))   # argparse's escape
     facts = [f"ini: `{ini.name}`" if ini else "no ini twin"]
-    if ini is not None:
-        facts.append(f"default: `{_ini_default(ini)}`")
+    if ini is not None and not states_default(help_text):
+        facts.append(f"default: `{_ini_default(ini, _metavar_choices(metavar))}`")
     if option.attrs.get("action") == "append":
         facts.append("repeatable")
     return [f"### `{title}` {{ #{option.dest} }}", "", escape(help_text), "",
@@ -149,9 +178,11 @@ def pytest_options_markdown() -> str:
                   "or `setup.cfg`; there is no command-line flag (`-o NAME=VALUE` works as for any "
                   "ini setting).", ""]
         for ini in ini_only:
-            kind = f" ({ini.type})" if ini.type else ""
-            lines += [f"### `{ini.name}` {{ #{ini.name} }}", "", escape(ini.help), "",
-                      f"default: `{_ini_default(ini)}`{kind}", ""]
+            facts = [] if states_default(ini.help) else [f"default: `{_ini_default(ini)}`"]
+            if ini.type:
+                facts.append(f"type: {ini.type}")
+            lines += [f"### `{ini.name}` {{ #{ini.name} }}", "", escape(ini.help), ""]
+            lines += [" · ".join(facts), ""] if facts else []
     return "\n".join(lines)
 
 
@@ -167,22 +198,22 @@ def _usage(parser: argparse.ArgumentParser) -> str:
             os.environ["COLUMNS"] = old
 
 
+def _invocation(parser: argparse.ArgumentParser, action: argparse.Action) -> str:
+    """An argument as the command's own --help writes it: ``--frame {auto,map,odom}``,
+    ``-s SPEC, --subject SPEC``, ``SCENARIO.yaml``."""
+    return parser._get_formatter()._format_action_invocation(action)
+
+
 def _argument_row(parser: argparse.ArgumentParser, action: argparse.Action) -> str:
-    if action.option_strings:
-        name = ", ".join(action.option_strings)
-        if action.nargs != 0:
-            name += " " + (action.metavar or action.dest.upper())
-    else:
-        name = action.metavar or action.dest
-    if action.choices and not isinstance(action, argparse._SubParsersAction):
-        name += " {" + ",".join(str(c) for c in action.choices) + "}"
+    name = _invocation(parser, action)
     formatter = parser._get_formatter()
     try:
         help_text = formatter._expand_help(action) if action.help else ""
     except (KeyError, TypeError, ValueError):
         help_text = action.help or ""
     default = action.default
-    shown = "" if default in (None, False, argparse.SUPPRESS, "") or action.nargs == 0 else f"`{default}`"
+    shown = ("" if default in (None, False, argparse.SUPPRESS, "") or action.nargs == 0
+             else f"`{_value_text(default, tuple(str(c) for c in action.choices or ()))}`")
     return f"| `{name}` | {escape(help_text)} | {shown} |"
 
 

@@ -2,7 +2,8 @@
 
 Exit status: 0, or 1 with ``--fail-on-regression`` when B broke a scenario A passed or when
 nothing could be compared (B empty, no scenario in common: the reason is printed); 2 when a file
-cannot be read (the error names the file and line).
+cannot be read (the error names the file and line), or when ``--side-by-side`` could make none of
+the plots it was due to (e.g. no ``--nav-subject`` spec to re-run a side by: the reason is printed).
 """
 from __future__ import annotations
 
@@ -28,13 +29,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="list at most N scenarios per list (default 50)")
     p.add_argument("--side-by-side", metavar="DIR",
                    help="re-run the scenarios B broke (then those it fixed) with both subjects and write "
-                        "one side-by-side trajectory plot per scenario into DIR")
+                        "one side-by-side trajectory plot per scenario into DIR (exit status 2 when none "
+                        "can be made, e.g. a subject with no spec to re-run it by)")
     p.add_argument("--max-plots", type=int, default=10, metavar="N",
                    help="at most N side-by-side plots (default 10)")
     p.add_argument("--a-subject", metavar="SPEC",
-                   help="subject to re-run A with (default: the subject named in A's records)")
+                   help="subject to re-run A with (default: the --nav-subject spec A's records carry, "
+                        "subject_spec; needed when A's subject came from a conftest hook)")
     p.add_argument("--b-subject", metavar="SPEC",
-                   help="subject to re-run B with (default: the subject named in B's records)")
+                   help="subject to re-run B with (default: the --nav-subject spec B's records carry, "
+                        "subject_spec; needed when B's subject came from a conftest hook)")
     p.add_argument("--root", default=".", metavar="DIR",
                    help="folder the records' scenario paths are relative to (the pytest rootdir; default .)")
 
@@ -61,18 +65,40 @@ def run(args: argparse.Namespace) -> int:
         write_html(args.html, entries, template="compare_report.html.j2", title=f"navscenario compare: {cmp.a_subject} → {cmp.b_subject}",
                    comparison=cmp, bars_png=bars, info=[f"A: {args.a}", f"B: {args.b}"])
         print(f"HTML report written to {args.html}")
+    failed_side_by_side = False
     if args.side_by_side:
-        from ..report.rerun import rerun_side_by_side
-        written, problems = rerun_side_by_side(cmp, args.side_by_side, root=args.root, limit=args.max_plots,
-                                               a_subject=args.a_subject, b_subject=args.b_subject)
-        for line in problems:
-            print(f"side-by-side: {line}", file=sys.stderr)
-        print(f"{len(written)} side-by-side plot(s) written to {args.side_by_side}")
+        failed_side_by_side = _side_by_side(cmp, args)
     why = cmp.nothing_compared()
     if why is not None:
         verdict = "FAILED the gate" if args.fail_on_regression else "warning"
         print(f"navscenario compare: {verdict}: nothing was compared: {why}", file=sys.stderr)
+    if failed_side_by_side:
+        return 2
     if args.fail_on_regression and (cmp.has_regressions or why is not None):
         return 1
     return 0
+
+
+def _side_by_side(cmp, args: argparse.Namespace) -> bool:
+    """Re-run what B broke and fixed for side-by-side plots; True when plots were due and none
+    could be made (the reasons printed: e.g. a subject with no spec to re-run it by)."""
+    import os
+
+    from ..report.rerun import rerun_side_by_side
+
+    due = (cmp.broke + cmp.fixed)[:max(0, args.max_plots)]
+    if not due:
+        print("no side-by-side plots: B neither broke nor fixed a scenario A ran (nothing to show)")
+        return False
+    written, problems = rerun_side_by_side(cmp, args.side_by_side, root=args.root, limit=args.max_plots,
+                                           a_subject=args.a_subject, b_subject=args.b_subject,
+                                           project=[os.getcwd()])
+    for line in problems:
+        print(f"side-by-side: {line}", file=sys.stderr)
+    if not written:
+        print(f"navscenario compare: error: --side-by-side {args.side_by_side}: none of the {len(due)} "
+              f"side-by-side plot(s) could be made (see above)", file=sys.stderr)
+        return True
+    print(f"{len(written)} of {len(due)} side-by-side plot(s) written to {args.side_by_side}")
+    return False
 

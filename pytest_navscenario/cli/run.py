@@ -9,10 +9,14 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 from typing import Any
 
+from ..sim.deadline import DEFAULT_TICK_LIMIT
 from ..subjects.loading import BUILTIN_SUBJECTS, DEFAULT_SUBJECT
+
+HUNG_TICK = 10.0   # = harness.conformance.HUNG_TICK (not imported: `run --help` stays light)
 
 _SUBJECT_HELP = (f"planner under test: a built-in name ({', '.join(sorted(BUILTIN_SUBJECTS))}), "
                  f"'package.module:Attribute' (a class or zero-argument factory) or "
@@ -25,8 +29,10 @@ def add_arguments_run(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, default=None, metavar="N",
                    help="base seed (integer >= 0) mixed with the scenario's simulation.seed "
                         "(default: the scenario's own)")
-    p.add_argument("--tick-limit", type=float, default=None, metavar="SECONDS",
-                   help="a planner tick slower than this is a subject error (default: no limit)")
+    p.add_argument("--tick-limit", type=float, default=DEFAULT_TICK_LIMIT, metavar="SECONDS",
+                   help=f"a planner tick slower than this is a subject error (default {DEFAULT_TICK_LIMIT:g}, "
+                        f"as pytest's --nav-tick-limit, so that run gives a pytest item's outcome; 0: no "
+                        f"limit, e.g. to step through act() in a debugger)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
 
 
@@ -57,12 +63,22 @@ def _json_safe(value: Any) -> Any:
     return value
 
 
+def look_in_current_folder(spec: str) -> None:
+    """Load a subject's module now, looked up on sys.path, then in the current folder, as
+    ``python -m`` would find it (an installed module of the same name wins: core/user_code.py).
+    SubjectLoadError (exit 2) when it cannot be found; an ``exec:`` program is left to the run."""
+    from ..subjects.loading import load_subject
+    if not spec.strip().startswith("exec:"):
+        load_subject(spec, project=[os.getcwd()])
+
+
 def run_run(args: argparse.Namespace) -> int:
     from ..scenario.loader import load_scenario
     from ..harness.runner import run_scenario
 
     scenario = load_scenario(args.scenario)
-    result = run_scenario(scenario, args.subject, seed=args.seed, tick_limit=args.tick_limit)
+    look_in_current_folder(args.subject)
+    result = run_scenario(scenario, args.subject, seed=args.seed, tick_limit=args.tick_limit or None)
     if args.json:
         record = {
             "scenario": scenario.name, "file": args.scenario, "subject": result.subject,
@@ -94,8 +110,11 @@ def add_arguments_check_planner(p: argparse.ArgumentParser) -> None:
     p.add_argument("--ticks", type=int, default=20, metavar="N",
                    help="control ticks to run, at least 1 (default 20)")
     p.add_argument("--seed", type=int, default=0, metavar="N", help="lidar noise seed (default 0)")
-    p.add_argument("--tick-limit", type=float, default=10.0, metavar="SECONDS",
-                   help="stop and report an act() call that takes longer (default 10; 0: no limit)")
+    p.add_argument("--tick-limit", type=float, default=HUNG_TICK, metavar="SECONDS",
+                   help=f"stop and report an act() call that takes longer (default {HUNG_TICK:g}, longer "
+                        f"than the {DEFAULT_TICK_LIMIT:g} s pytest and navscenario run allow, so that a slow "
+                        f"tick is measured and reported, with a warning when it is over {DEFAULT_TICK_LIMIT:g} "
+                        f"s, rather than cut short; 0: no limit)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
 
 
@@ -109,6 +128,7 @@ def run_check_planner(args: argparse.Namespace) -> int:
     if args.ticks < 1:
         print("navscenario check-planner: error: --ticks must be at least 1", file=sys.stderr)
         return 2
+    look_in_current_folder(args.subject)
     check = check_planner(args.subject, scenario, ticks=args.ticks, seed=args.seed,
                           tick_limit=args.tick_limit if args.tick_limit > 0 else None)
     if args.json:

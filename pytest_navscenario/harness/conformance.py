@@ -28,7 +28,8 @@ from ..subjects.loading import load_subject
 from ..scenario.model import BoxObstacle, CylinderObstacle, Mission, Pose, Scenario
 
 SLOW_TICK = 0.05            # s: a tick slower than this gets a warning (10 Hz control leaves 0.1 s)
-HUNG_TICK = 10.0            # s: an act() call this long is stopped and reported as a problem
+HUNG_TICK = 10.0            # s: an act() call this long is stopped and reported as a problem (longer
+                            # than sim.deadline.DEFAULT_TICK_LIMIT: a slow tick is measured, not cut short)
 LIMIT_SLACK = 1.05          # commands up to 5 % over a limit are not worth a warning
 # frames in these folders are the harness's own, not the planner's
 _HARNESS_FILES = tuple(str(Path(__file__).resolve().parents[1] / layer) for layer in ("sim", "harness"))
@@ -238,6 +239,15 @@ def _check_names(check: PlannerCheck, instance: Any) -> None:
 
 
 def _check_speed(check: PlannerCheck, scenario: Scenario, times: list[float], slow_tick: float) -> None:
+    from ..sim.deadline import DEFAULT_TICK_LIMIT
+
+    over = [k for k, t in enumerate(times) if t > DEFAULT_TICK_LIMIT]
+    if over:
+        check.warnings.append(
+            f"act() took {max(times):.2f} s (at tick {times.index(max(times))}; {len(over)} tick(s) over "
+            f"{DEFAULT_TICK_LIMIT:g} s): over the {DEFAULT_TICK_LIMIT:g} s a tick may take by default in "
+            f"pytest and navscenario run, where that episode would end as a subject-error; make act() "
+            f"faster or raise --nav-tick-limit / --tick-limit")
     steady = times[1:]   # the first tick may pay one-time set-up (caches, tables)
     if steady and max(steady) > slow_tick:
         slow = sum(t > slow_tick for t in steady)

@@ -100,6 +100,7 @@ def pytest_sessionstart(session: pytest.Session) -> None:
         settings = dataclasses.replace(settings, seed=int(config.workerinput[WORKER_SEED_KEY]))  # type: ignore[attr-defined]
     origin = "--nav-subject" if config.getoption("nav_subject") else "ini nav_subject"
     subject = resolve_subject(config, settings.subject_spec, origin)
+    subject.locate()   # in every process, before any worker starts: workers copy sys.path
     config.stash[STATE_KEY] = NavState(settings=settings, subject=subject, is_worker=worker)
     # With --nav-ray the subject need only load on the nodes: parallel.py checks each of them.
     if not worker and subject.origin != "built-in default" and settings.ray is None:

@@ -80,6 +80,9 @@ def nav_run(request: pytest.FixtureRequest) -> Callable[..., Any]:
             scenario = load_scenario(_find(Path(scenario), request))
         scenario = apply_overrides(scenario, overrides)
         subject = state.subject.runner_arg if planner is None else planner
+        if isinstance(planner, str):   # looked up like --nav-subject: sys.path, then the rootdir
+            from ..subjects.loading import locate_subject
+            locate_subject(planner, state.subject.project)
         return run_scenario(scenario, subject, seed=state.settings.seed if seed is None else seed,
                             tick_limit=state.settings.tick_limit,
                             reset_timeout=state.settings.reset_timeout)

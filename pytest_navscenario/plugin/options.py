@@ -14,10 +14,11 @@ from pathlib import Path
 
 import pytest
 
+from ..sim.deadline import DEFAULT_TICK_LIMIT  # noqa: F401  (re-exported; light: signal, threading, time)
+
 DEFAULT_GLOB = ["*.yaml", "*.yml"]
 DEFAULT_SCENARIO_PATHS = ["scenarios"]
 DEFAULT_ARTIFACTS = "nav-artifacts"
-DEFAULT_TICK_LIMIT = 1.0
 DEFAULT_RESET_TIMEOUT = 10.0   # = subjects.external.RESET_TIMEOUT (not imported: plugin load stays light)
 
 # (option, ini name, help); used for --help, the ini registration and the docs (docs/reference/options.md).
@@ -38,7 +39,9 @@ OPTIONS = (
      "print the per-family outcome table at the end: yes (default) or no."),
     ("--nav-tick-limit", "nav_tick_limit",
      "seconds one planner tick (act) may take; a slower or hanging planner ends the episode as a "
-     "subject-error and the next item runs. Default 1; 0 or none: no limit."),
+     "subject-error and the next item runs. Default 1 (as in navscenario run: a hanging planner "
+     "cannot stall the suite; navscenario check-planner allows 10 s to measure slow ticks); 0 or "
+     "none: no limit."),
     ("--nav-reset-timeout", "nav_reset_timeout",
      "seconds an external (exec:) planner may take to answer reset, its start-up included; after "
      "one reset timed out, the later items of that planner fail at once with the same message. "

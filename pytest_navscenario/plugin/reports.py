@@ -45,7 +45,8 @@ OPTIONS = (
      "warn (report only)"),
     ("--nav-baseline-subject", "nav_baseline_subject", "",
      "the baseline's subject spec, to re-run it for side-by-side plots of regressions (default: the "
-     "subject named in the baseline's records; built-in names work as they are)"),
+     "--nav-subject spec the baseline's records carry; needed when its subject came from a conftest "
+     "hook)"),
     ("--nav-plots", "nav_plots", "failed",
      "trajectory plots: failed (default: for failing items), all, or none"),
     ("--nav-plots-max", "nav_plots_max", "20",
@@ -243,7 +244,7 @@ def pytest_navscenario_episode_report(config: pytest.Config, report: pytest.Test
         base = state.baseline_index.get(key)
         if (failed and base is not None and base["outcome"] == "success"
                 and base["scenario_hash"] == rec["scenario_hash"]):
-            side = _side_by_side(state, episode, base, rec)
+            side = _side_by_side(config, state, episode, base, rec)
             if side is not None:
                 state.side_by_side[key] = (save_figure(side, path.with_name(f"{path.stem}-vs-baseline.png"))
                                            if to_file else png_bytes(side))
@@ -251,7 +252,8 @@ def pytest_navscenario_episode_report(config: pytest.Config, report: pytest.Test
         state.plot_errors.append(f"{rec['nodeid']}: {type(exc).__name__}: {exc}")
 
 
-def _side_by_side(state: ReportState, episode: Any, base: dict[str, Any], rec: dict[str, Any]) -> Any:
+def _side_by_side(config: pytest.Config, state: ReportState, episode: Any, base: dict[str, Any],
+                  rec: dict[str, Any]) -> Any:
     """A regression: re-run the baseline's subject on the same scenario with the baseline's episode
     seed and return the side-by-side figure (A = baseline | B = this run), or None with a note."""
     import dataclasses
@@ -260,9 +262,19 @@ def _side_by_side(state: ReportState, episode: Any, base: dict[str, Any], rec: d
     from ..report.plots import comparison_figure
     from ..harness.runner import run_scenario
 
-    spec = state.settings.baseline_subject or base.get("subject")
-    if not spec or spec in state.bad_baseline_subjects:
+    from ..report.rerun import rerun_spec
+    from ..subjects.loading import locate_subject
+
+    try:   # the spec the baseline's records carry, never the planner's display name
+        spec = rerun_spec(base, state.settings.baseline_subject, "the baseline", "--nav-baseline-subject")
+    except NavScenarioError as exc:
+        if not state.bad_baseline_subjects:
+            state.notes.append(f"no side-by-side plots: {exc}")
+        state.bad_baseline_subjects.add("")
         return None
+    if spec in state.bad_baseline_subjects:
+        return None
+    locate_subject(spec, [str(config.rootpath)])
     sim = dataclasses.replace(episode.scenario.simulation, seed=int(base.get("seed") or 0))
     try:
         res_a = run_scenario(dataclasses.replace(episode.scenario, simulation=sim), spec)

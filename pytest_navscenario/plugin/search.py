@@ -391,7 +391,7 @@ class _Progress:
         n, nf = report.sims_used, len(report.failures)
         out = f"navsearch {self.name}: {n}/{self.budget} sims, {nf} distinct failure(s)"
         if math.isfinite(report.best_clearance):
-            out += f", best clearance {report.best_clearance:.3f} m"
+            out += f", lowest clearance so far {report.best_clearance:.3f} m"
         rob = report.best_robustness
         if math.isfinite(rob) and not nf:
             out += f", closest to failing {rob:.2f}"
@@ -562,16 +562,33 @@ def _rel(config: pytest.Config, path: Path) -> str:
         return str(path)
 
 
+def lowest_clearance(report: Any) -> Any:
+    """The search-phase candidate that came closest to an obstacle (the first of equals), or None."""
+    best = None
+    for c in report.candidates:
+        if c.phase == "search" and math.isfinite(c.clearance) and (best is None or c.clearance < best.clearance):
+            best = c
+    return best
+
+
+def lowest_clearance_text(report: Any) -> str:
+    """"lowest clearance of any run 0.029 m (sim 57, a run that passed)": the closest any simulated
+    candidate came, and the run it came from, so that it is not read as a frozen failure's."""
+    c = lowest_clearance(report)
+    if c is None:
+        return "lowest clearance of any run n/a"
+    what = "a run that passed" if c.outcome == "success" else f"a {c.outcome}"
+    return f"lowest clearance of any run {c.clearance:.3f} m (sim {c.sim}, {what})"
+
+
 def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
     r = entry["report"]
     by = ", ".join(f"{k} {v}" for k, v in sorted(r.failures_by_outcome().items())) or "none"
     disc = ", ".join(f"{k} {v}" for k, v in sorted(r.discarded.items()))
-    best = r.best_clearance
     version = f" {r.subject_version}" if r.subject_version else ""
     lines = [f"{r.seed_name} vs {r.subject}{version} ({r.strategy}, search seed {r.seed_value}): "
              f"{r.sims_used}/{r.budget} sims, {r.discarded_total} discarded" + (f" ({disc})" if disc else "")
-             + f", {len(r.failures)} distinct failure(s) ({by}), best clearance "
-             + (f"{best:.3f} m" if math.isfinite(best) else "n/a")
+             + f", {len(r.failures)} distinct failure(s) ({by}), " + lowest_clearance_text(r)
              + (f", first at sim {r.first_failure}" if r.first_failure else "")
              + f", {r.sims_used} sims searching + {r.shrink_sims} shrinking"
              + (f" (shrink budget {r.shrink_total})" if r.shrink_total else "") + f", {r.wall_time:.1f} s"]

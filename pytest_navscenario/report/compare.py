@@ -146,16 +146,30 @@ class Comparison:
         return self.record_command(pair.b if side == "b" else pair.a, side)
 
     def record_command(self, rec: dict[str, Any], side: str = "b") -> str:
-        """The command that re-runs the scenario of one record with that side's subject."""
-        subject = self.subject_specs.get(side, rec.get("subject") or "")
+        """The command that re-runs the scenario of one record with that side's subject: the
+        ``--nav-subject`` spec given for that side, else the one the record carries
+        (``subject_spec``), never the planner's display name (``subject``), which need not be
+        importable. Without a spec the command says why in a comment (see ``spec_note``)."""
+        spec = self.subject_specs.get(side) or rec.get("subject_spec")
         cmd = f"{self.command_prefix}pytest {shlex.quote(rec['nodeid'])}"
-        if subject:
-            cmd += f" {shlex.quote(f'--nav-subject={subject}')}"
+        if spec:
+            cmd += f" {shlex.quote(f'--nav-subject={spec}')}"
         if self.extra_args:
             cmd += f" {self.extra_args}"
+        notes = [] if spec else [spec_note(rec)]
         if rec.get("repeat"):
-            cmd += f"  # repeat {rec['repeat']}, episode seed {rec.get('seed')}"
-        return cmd
+            notes.append(f"repeat {rec['repeat']}, episode seed {rec.get('seed')}")
+        return cmd + (f"  # {'; '.join(notes)}" if notes else "")
+
+
+def spec_note(rec: dict[str, Any]) -> str:
+    """Why a record names no ``--nav-subject`` spec: a conftest hook made the subject (the
+    project's hook makes it again), or the file predates the ``subject_spec`` field."""
+    name = rec.get("subject") or "?"
+    if "subject_spec" in rec:
+        return f"subject {name} from the project's pytest_navscenario_make_subject hook"
+    return (f"subject {name}: its --nav-subject spec is unknown (the results file does not record "
+            f"it); add --nav-subject=SPEC")
 
 
 def _passed(rec: dict[str, Any]) -> bool:

@@ -8,6 +8,8 @@ Fields hold exactly the values written in YAML, in YAML units, so that
   and deg/s^2. The simulation and the planner protocol work in radians; convert with
   the ``*_rad`` helpers, never by hand.
 
+Each dataclass is followed by the declaration of its YAML keys (``keys.py``: type, range, unit,
+default, one-line description), which the loader, the JSON Schema and the reference page read.
 Loading, validation and dumping live in ``loader.py``; this module has no I/O.
 """
 from __future__ import annotations
@@ -16,9 +18,18 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Literal, Mapping, Union
 
+from .keys import (REQUIRED, SCENARIO_LIMITS, Choice, Element, Elements, Flag, Integer, Listed, Number, Point, Points,
+                   Rows, Rule, Scale, Sub, Text, section)
 from .terrain import Body, Lidar3D, PlanarBody, TerrainElement
 
 SCHEMA_VERSION = 1
+DRIVES = ("omni", "diff")
+SHAPES = ("box", "circle")
+REFERENCE_COMPARE = ("time", "path")
+MAX_POLYGON_POINTS = 1000
+PERSON_RADIUS = 0.25            # m
+PERSON_HEIGHT = 1.7             # m
+PERSON_SPEED = 1.3              # m/s, a typical walking speed
 
 
 @dataclass(frozen=True)
@@ -32,6 +43,12 @@ class Pose:
     def yaw_rad(self) -> float:
         return math.radians(self.yaw)
 
+
+POSE = section(Pose, "mission.start", "a planar pose", [
+    Number("x", "m", "position along x", example="x: 0.0"),
+    Number("y", "m", "position along y", example="y: 0.0"),
+    Number("yaw", "deg", "heading, counter-clockwise from +x"),
+], what="a mapping {x, y, yaw}", home=False)
 
 MOTION_MODES = ("once", "back-and-forth", "loop")
 
@@ -48,6 +65,34 @@ class Motion:
     mode: Literal["once", "back-and-forth", "loop"] = "once"
     start: float = 0.0
     velocity: tuple[float, float] | None = None
+
+
+def _motion_schema(sec: Any, required: list[str]) -> dict[str, Any]:
+    """velocity excludes path, speed and mode; without it, the path (and a speed with no
+    default) are required."""
+    needed = [k for k in ("path", "speed") if k in required]
+    for k in needed:
+        required.remove(k)
+    return {"if": {"required": ["velocity"]},
+            "then": {"properties": {"path": False, "speed": False, "mode": False}},
+            "else": {"required": needed}}
+
+
+MOTION = section(Motion, "obstacles[].motion", "how an obstacle moves: along a path, or at a constant velocity", [
+    Points("path", "m", "the points [x, y] it walks through; it stands at the first one until start",
+           min=2, max=int(SCENARIO_LIMITS["max_obstacles"]), default=REQUIRED,
+           example="path: [[0.0, -3.0], [0.0, 3.0]]' or 'velocity: [0.0, 1.0]"),
+    Number("speed", "m/s", "its speed along the path", gt=0, default=REQUIRED, example="speed: 1.0"),
+    Choice("mode", "", "once: it stays at the last point; back-and-forth; loop: straight back to the "
+           "first point and round again", options=MOTION_MODES),
+    Number("start", "s", "when it starts moving, in seconds from the episode start", ge=0),
+    Point("velocity", "m/s", "instead of a path: a constant velocity [vx, vy] (world frame) from its x, y, "
+          "without end", nullable=True),
+], what="the obstacle's motion (a mapping)", rules=[
+    Rule("'velocity' does not go with 'path', 'speed' or 'mode'; without it, 'path' is required", None,
+         _motion_schema),
+    Rule("a path has some length (its points are not all the same)", None),
+])
 
 
 @dataclass(frozen=True)
@@ -130,6 +175,82 @@ class MeshObstacle:
         return math.radians(self.yaw)
 
 
+_NAME = Text("name", "", "a unique label (generated when absent: box1, cyl1, person1, polygon1, mesh1 ..., "
+             "numbered per type in file order)", default=None, name_rules=True,
+             default_doc="generated")
+_X = Number("x", "m", "where it stands, along x", example="x: 0.0")
+_Y = Number("y", "m", "where it stands, along y", example="y: 0.0")
+_YAW = Number("yaw", "deg", "its rotation, counter-clockwise")
+_HEIGHT = Number("height", "m", "its height, for the 3-D model (below the lidar plane, 0.2 m, it is not "
+                 "seen but still collides)", gt=0)
+_MOTION = Sub("motion", "", "makes it move (absent: static)", section=MOTION, default=None)
+_VISIBLE = Flag("visible_to_lidar", "", "false: the lidar and the safety layer do not see it (glass, "
+                "thin wires); the robot still collides with it")
+
+
+def _placed_by_path(sec: Any, required: list[str]) -> dict[str, Any]:
+    """A path's first point is where a moving obstacle stands: no x, y beside it; else the
+    x and y without a default are required."""
+    needed = [k for k in ("x", "y") if k in required]
+    for k in needed:
+        required.remove(k)
+    return {"if": {"required": ["motion"], "properties": {"motion": {"type": "object", "required": ["path"]}}},
+            "then": {"properties": {"x": False, "y": False}},
+            "else": {"required": needed} if needed else {}}
+
+
+_PATH_PLACES = Rule("with a motion path, 'x' and 'y' are not written (the obstacle starts at the "
+                    "path's first point)", None, _placed_by_path)
+_MAX_OBSTACLES = int(SCENARIO_LIMITS["max_obstacles"])
+
+BOX = section(BoxObstacle, "obstacles[] (box)", "a box centred on (x, y)", [
+    _NAME, _X, _Y,
+    Number("length", "m", "its size along its own x axis", gt=0, example="length: 1.0"),
+    Number("width", "m", "its size across", gt=0, example="width: 1.0"),
+    _YAW, _HEIGHT, _MOTION, _VISIBLE,
+], rules=[_PATH_PLACES])
+CYLINDER = section(CylinderObstacle, "obstacles[] (cylinder)", "an upright cylinder centred on (x, y)", [
+    _NAME, _X, _Y, Number("radius", "m", "its radius", gt=0, example="radius: 0.5"),
+    _HEIGHT, _MOTION, _VISIBLE,
+], rules=[_PATH_PLACES])
+PERSON = CYLINDER.derive("obstacles[] (person)", "a cylinder with a person's size, walking at 1.3 m/s "
+                         "by default; saved (dumped, frozen) as the cylinder it is",
+                         defaults={"radius": PERSON_RADIUS, "height": PERSON_HEIGHT},
+                         keys={"motion": Sub("motion", "", "makes it move (absent: static)", default=None,
+                                             section=MOTION.derive(MOTION.path, MOTION.doc,
+                                                                   defaults={"speed": PERSON_SPEED}))})
+POLYGON = section(PolygonObstacle, "obstacles[] (polygon)", "a prism on any simple outline, convex or not", [
+    _NAME,
+    Number("x", "m", "where the points' origin is placed, along x (0: the points are world coordinates)",
+           default=0.0),
+    Number("y", "m", "where the points' origin is placed, along y", default=0.0),
+    Points("points", "m", "three or more corners [x, y] in order around the outline (a closing repeat of "
+           "the first is dropped)", min=3, max=MAX_POLYGON_POINTS,
+           example="points: [[0, 0], [2, 0], [2, 1], [0, 1]]"),
+    _YAW, _HEIGHT, _MOTION, _VISIBLE,
+], rules=[_PATH_PLACES, Rule("a polygon's edges do not cross and it has an area", None)])
+MESH = section(MeshObstacle, "obstacles[] (mesh)", "a triangle mesh (.stl or .obj) beside the scenario, "
+               "collided as its outline seen from above", [
+    _NAME,
+    Number("x", "m", "where the mesh's origin is placed, along x", default=0.0),
+    Number("y", "m", "where the mesh's origin is placed, along y", default=0.0),
+    Text("file", "", "an .stl (binary or ASCII) or .obj file, relative to the scenario's folder and "
+         "inside it", path=True, example="file: parts/press.stl"),
+    Scale("scale", "", "one number for all axes or [sx, sy, sz], e.g. 0.001 for millimetres", le=1000.0,
+          default_doc="1"),
+    _YAW, _MOTION, _VISIBLE,
+], rules=[_PATH_PLACES, Rule("the mesh file exists, is readable, well-formed and within the size "
+                             "limits, and its outline is one piece", None)])
+
+OBSTACLES = Elements("obstacles", "", "the obstacles", max=_MAX_OBSTACLES, what="obstacles", default=(), types=(
+    Element("box", BOX, "box", BOX.doc),
+    Element("cylinder", CYLINDER, "cyl", CYLINDER.doc),
+    Element("person", PERSON, "person", PERSON.doc),
+    Element("polygon", POLYGON, "polygon", POLYGON.doc),
+    Element("mesh", MESH, "mesh", MESH.doc),
+))
+
+
 Obstacle = Union[BoxObstacle, CylinderObstacle, PolygonObstacle, MeshObstacle]
 
 
@@ -142,6 +263,28 @@ class Footprint:
     radius: float = 0.3
 
 
+def _footprint_keys(values: Mapping[str, Any], given: Any) -> tuple[str, str, str] | None:
+    shape = values["shape"]
+    for key in ("radius",) if shape == "box" else ("length", "width"):
+        if key in given:
+            return (key, f"'{key}' does not apply to shape: {shape}",
+                    f"remove '{key}'" + (", or set shape: circle" if shape == "box" else ", or set shape: box"))
+    return None
+
+
+FOOTPRINT = section(Footprint, "robot.footprint", "the robot's outline for collisions and distances", [
+    Choice("shape", "", "box (length along the heading, width) or circle (radius)", options=SHAPES),
+    Number("length", "m", "a box footprint's size along the heading", gt=0),
+    Number("width", "m", "a box footprint's size across", gt=0),
+    Number("radius", "m", "a circle footprint's radius", gt=0),
+], what="the footprint (a mapping)", rules=[
+    Rule("a box takes length and width, a circle radius: the other shape's keys are refused", _footprint_keys,
+         {"if": {"required": ["shape"], "properties": {"shape": {"const": "circle"}}},
+          "then": {"properties": {"length": False, "width": False}},
+          "else": {"properties": {"radius": False}}}),
+])
+
+
 @dataclass(frozen=True)
 class Limits:
     """Velocity and acceleration limits, enforced by the simulated actuators."""
@@ -150,6 +293,15 @@ class Limits:
     max_yaw_rate: float = 90.0      # deg/s
     max_accel: float = 2.0          # m/s^2
     max_yaw_accel: float = 180.0    # deg/s^2
+
+
+LIMITS = section(Limits, "robot.limits", "velocity and acceleration limits, enforced by the simulated actuators", [
+    Number("max_speed", "m/s", "forward and backward speed limit", gt=0),
+    Number("max_lateral_speed", "m/s", "sideways speed limit (omnidirectional drive only)", ge=0),
+    Number("max_yaw_rate", "deg/s", "turning rate limit", gt=0),
+    Number("max_accel", "m/s²", "acceleration limit", gt=0),
+    Number("max_yaw_accel", "deg/s²", "angular acceleration limit", gt=0),
+], what="the velocity limits (a mapping)")
 
 
 @dataclass(frozen=True)
@@ -172,6 +324,30 @@ class Lidar:
         return math.radians(self.fov)
 
 
+def _lidar_range(values: Mapping[str, Any], given: Any) -> tuple[str, str, str] | None:
+    if values["range_max"] <= values["range_min"]:
+        return ("range_max", f"range_max ({values['range_max']!r} m) must be greater than range_min "
+                f"({values['range_min']!r} m)", "raise range_max")
+    return None
+
+
+LIDAR = section(Lidar, "robot.lidar", "a planar lidar at the robot's centre, ray-cast once per control tick", [
+    Integer("beams", "", "beams over the field of view", ge=1, le=int(SCENARIO_LIMITS["max_lidar_beams"])),
+    Number("fov", "deg", "field of view, centred on the heading", gt=0, le=360.0),
+    Number("range_min", "m", "shortest range it reads", ge=0),
+    Number("range_max", "m", "longest range; no return reads as range_max", gt=0),
+    Number("noise_sigma", "m", "Gaussian noise on each range", ge=0),
+    Number("dropout", "", "probability that a beam reads as no return", ge=0, le=1.0),
+    Number("noise_per_metre", "m/m", "the noise's sigma grows by this per metre of range", ge=0, le=1.0),
+    Number("dropout_at_max", "", "dropout probability at range_max, growing linearly from dropout at 0 m "
+           "(none: dropout at every range)", ge=0, le=1.0, nullable=True),
+    Number("spurious", "", "probability that a beam returns a spurious range short of the true one", ge=0,
+           le=1.0),
+], what="the lidar settings (a mapping)", rules=[
+    Rule("range_max is greater than range_min", _lidar_range),
+])
+
+
 @dataclass(frozen=True)
 class Safety:
     """The collision safety layer: halts the robot when its current velocity, held for
@@ -179,6 +355,14 @@ class Safety:
     enabled: bool = True
     horizon: float = 0.5            # s
     margin: float = 0.05            # m
+
+
+SAFETY = section(Safety, "robot.safety", "the collision safety layer", [
+    Flag("enabled", "", "the safety layer halts the robot (outcome safety-stop) when its current velocity, "
+         "held for horizon, sweeps the footprint grown by margin into an obstacle"),
+    Number("horizon", "s", "how long the current velocity is held in the prediction", gt=0),
+    Number("margin", "m", "the footprint is grown by this in the prediction", ge=0),
+], what="the safety layer settings (a mapping)")
 
 
 @dataclass(frozen=True)
@@ -197,12 +381,26 @@ class Localisation:
         return bool(self.drift_per_metre or self.drift_per_second or self.yaw_drift_per_metre)
 
 
+LOCALISATION = section(Localisation, "robot.localisation", "the error of the pose the planner is given "
+                       "(a seeded random walk)", [
+    Number("drift_per_metre", "m/√m", "position error spread after 1 m travelled", ge=0, le=10.0),
+    Number("drift_per_second", "m/√s", "position error spread after 1 s", ge=0, le=10.0),
+    Number("yaw_drift_per_metre", "deg/√m", "heading error spread after 1 m travelled", ge=0, le=90.0),
+], what="the localisation error (a mapping)")
+
+
 @dataclass(frozen=True)
 class Latency:
     """Delays, in seconds, whole multiples of the control period: the planner sees observations
     ``observation`` seconds old; its commands take effect ``command`` seconds after it answered."""
     observation: float = 0.0
     command: float = 0.0
+
+
+LATENCY = section(Latency, "robot.latency", "delays, whole multiples of the control period", [
+    Number("observation", "s", "the planner sees observations this old", ge=0, le=10.0),
+    Number("command", "s", "the planner's commands act this much later", ge=0, le=10.0),
+], what="the delays (a mapping)")
 
 
 @dataclass(frozen=True)
@@ -218,10 +416,28 @@ class Robot:
     lidar3d: Lidar3D | None = None  # a multi-ring lidar, off by default
 
 
+ROBOT = section(Robot, "robot", "the robot: its outline, drive, limits, sensor and faults", [
+    Sub("footprint", "", "the outline used for collisions and distances", section=FOOTPRINT),
+    Choice("drive", "", "omni: commands (vx, vy, wz); diff: (v, wz)", options=DRIVES),
+    Sub("limits", "", "velocity and acceleration limits", section=LIMITS),
+    Sub("lidar", "", "the planar lidar", section=LIDAR),
+    Sub("safety", "", "the collision safety layer", section=SAFETY),
+    Sub("localisation", "", "the planner's localisation error", section=LOCALISATION),
+    Sub("latency", "", "observation and command delays", section=LATENCY),
+], what="the robot settings (a mapping)")
+
+
 @dataclass(frozen=True)
 class GoalTolerance:
     position: float = 0.3           # m
     yaw: float | None = None        # degrees; None = heading at the goal is not checked
+
+
+GOAL_TOLERANCE = section(GoalTolerance, "mission.goal_tolerance", "when the goal counts as reached", [
+    Number("position", "m", "distance to the goal that counts as reached", gt=0),
+    Number("yaw", "deg", "heading tolerance at the goal (none: the heading is not checked)", gt=0, le=180.0,
+           nullable=True),
+], what="the goal tolerance (a mapping {position, yaw})")
 
 
 @dataclass(frozen=True)
@@ -235,11 +451,32 @@ class Mission:
     timeout: float = 30.0            # s
 
 
+MISSION = section(Mission, "mission", "drive from start through the waypoints to the goal before the timeout", [
+    Sub("start", "m, deg", "where the robot starts {x, y, yaw}; its footprint there must not touch an "
+        "obstacle", section=POSE, nullable=False, example="start: {x: 0.0, y: 0.0, yaw: 90.0}"),
+    Sub("goal", "m, deg", "where it must go {x, y, yaw}; its footprint there must not touch a static "
+        "obstacle", section=POSE, nullable=False, example="goal: {x: 0.0, y: 0.0, yaw: 90.0}"),
+    Listed("waypoints", "m, deg", "poses {x, y[, yaw]} passed in order; none may lie inside an obstacle",
+           section=POSE, max=int(SCENARIO_LIMITS["max_waypoints"]), what="waypoints"),
+    Sub("goal_tolerance", "", "when the goal counts as reached", section=GOAL_TOLERANCE),
+    Number("waypoint_tolerance", "m", "a waypoint counts as passed within this distance", gt=0),
+    Number("timeout", "s", "the episode ends unsuccessfully after this", gt=0),
+], what="the mission (a mapping)")
+
+
 @dataclass(frozen=True)
 class Simulation:
     timestep: float = 0.01          # s, physics step
     control_rate: float = 10.0      # Hz, planner ticks; must divide 1/timestep into whole steps
     seed: int = 0                   # noise seed of the episode (the run's base seed is mixed in)
+
+
+SIMULATION = section(Simulation, "simulation", "the physics step, the planner's rate and the noise seed", [
+    Number("timestep", "s", "the physics step", gt=0, le=1.0),
+    Number("control_rate", "Hz", "planner ticks per second; 1 / (timestep × control_rate) must be a whole "
+           "number of physics steps", gt=0, le=1000.0),
+    Integer("seed", "", "the episode's noise seed (the run's base seed is mixed in)", ge=0, le=2**63 - 1),
+], what="the simulation settings (a mapping)")
 
 
 @dataclass(frozen=True)
@@ -260,6 +497,26 @@ class Reference:
     file: str | None = None
     points: tuple[tuple[float, float, float], ...] = ()
     compare: Literal["time", "path"] = "time"   # time: at the same times; path: the same way, whatever the pace
+
+
+def _one_source(values: Mapping[str, Any], given: Any) -> tuple[str, str, str] | None:
+    if ("file" in given) == ("points" in given):
+        return ("", "give exactly one of 'file' or 'points'",
+                "file: path/to/trajectory.csv (relative to this file), or points: [[t, x, y], ...]")
+    return None
+
+
+REFERENCE = section(Reference, "reference", "a recorded trajectory to compare the run with", [
+    Text("file", "", "a CSV or bag file, relative to the scenario file", path=True, default=None),
+    Rows("points", "s, m, m", "rows [t, x, y] given inline, t strictly increasing", columns=("t", "x", "y"),
+         max=int(SCENARIO_LIMITS["max_reference_points"])),
+    Choice("compare", "", "time: the run at the same times; path: where both went, whatever the pace",
+           options=REFERENCE_COMPARE),
+], what="the reference trajectory (a mapping {file | points})", rules=[
+    Rule("exactly one of 'file' or 'points'", _one_source,
+         {"oneOf": [{"required": ["file"]}, {"required": ["points"]}]}),
+    Rule("the reference points' times increase strictly", None),
+])
 
 
 @dataclass(frozen=True)

@@ -16,6 +16,16 @@ import threading
 import time
 
 
+# s: what one planner tick may take in a pytest item (--nav-tick-limit) and in `navscenario run`
+# (the same, so that `run` gives the item's outcome): ten control periods at 10 Hz, so a slow
+# planner is reported as a subject-error and one that hangs cannot stall a suite. The other
+# defaults, and why: `navscenario check-planner` 10 s (harness.conformance.HUNG_TICK: it measures
+# and reports slow ticks, so it lets them finish, and warns when a tick is over this limit);
+# `run_scenario` in Python none (a library call runs the planner as any function call; nav_run
+# passes --nav-tick-limit).
+DEFAULT_TICK_LIMIT = 1.0
+
+
 class PlannerTimeout(BaseException):
     """Raised inside a planner that overran its tick limit. A BaseException so that a planner's
     own ``except Exception:`` cannot swallow it."""

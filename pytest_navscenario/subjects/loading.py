@@ -4,10 +4,11 @@ episode) or ``exec:PROGRAM [ARGS]`` (an external process). Each is checked again
 protocol (see protocol.py) before any episode runs."""
 from __future__ import annotations
 
-import importlib
-from typing import Any
+import os
+from typing import Any, Iterable
 
 from ..core.errors import SubjectLoadError
+from ..core.user_code import load_object, look_in_project, spec_module
 from ..core.interrupts import from_the_user
 from .protocol import PlannerFactory
 
@@ -19,10 +20,12 @@ BUILTIN_SUBJECTS = {
 DEFAULT_SUBJECT = "dwa"
 
 
-def load_subject(spec: str, *, cwd: str | None = None) -> PlannerFactory:
+def load_subject(spec: str, *, cwd: str | None = None, project: Iterable[str | os.PathLike] = ()) -> PlannerFactory:
     """Resolve ``package.module:Attribute``, a built-in name such as ``dwa``, or
     ``exec:PROGRAM [ARGS]`` (an external planner, see external.py; resolved and started in
-    ``cwd`` when given) to a planner factory.
+    ``cwd`` when given) to a planner factory. A module that is not on sys.path is also looked
+    up in the ``project`` folders (pytest's rootdir, the CLI's current folder): see
+    core/user_code.py for the order and which one wins.
 
     Raises SubjectLoadError with what is wrong and how to fix it.
     """
@@ -35,26 +38,22 @@ def load_subject(spec: str, *, cwd: str | None = None) -> PlannerFactory:
         raise SubjectLoadError(
             f"subject {spec!r} is not of the form 'package.module:Attribute' "
             f"(built-in subjects: {', '.join(sorted(BUILTIN_SUBJECTS))})")
-    module_name, _, attr_path = target.partition(":")
-    try:
-        module = importlib.import_module(module_name)
-    except Exception as exc:  # ImportError, or an error raised by the module's own code
-        raise SubjectLoadError(
-            f"subject {spec!r}: cannot import module {module_name!r}: {type(exc).__name__}: {exc} "
-            f"(is it installed, or on sys.path / the rootdir?)") from exc
-    obj: Any = module
-    for part in attr_path.split("."):
-        try:
-            obj = getattr(obj, part)
-        except AttributeError:
-            public = sorted(n for n in dir(module) if not n.startswith("_"))
-            raise SubjectLoadError(
-                f"subject {spec!r}: module {module_name!r} has no attribute {attr_path!r} "
-                f"(it has: {', '.join(public[:20])})") from None
+    obj = load_object(target, what="subject", project=project)
     if not callable(obj):
         raise SubjectLoadError(
-            f"subject {spec!r}: {attr_path!r} is a {type(obj).__name__}, not a class or factory")
+            f"subject {spec!r}: {target.partition(':')[2]!r} is a {type(obj).__name__}, not a class or factory")
     return obj
+
+
+def locate_subject(spec: str | None, project: Iterable[str | os.PathLike]) -> None:
+    """Make a ``package.module:Attribute`` subject importable from the ``project`` folders when
+    sys.path does not have its module (core/user_code.look_in_project); nothing is imported.
+    Called before worker processes start, so that they find it too."""
+    if not spec:
+        return
+    module = spec_module(BUILTIN_SUBJECTS.get(spec.strip(), spec))
+    if module is not None and not spec.strip().startswith("exec:"):
+        look_in_project(module, project)
 
 
 def subject_identity(planner: Any, spec: str) -> tuple[str, str | None]:
@@ -64,14 +63,15 @@ def subject_identity(planner: Any, spec: str) -> tuple[str, str | None]:
     return str(name), (str(version) if version is not None else None)
 
 
-def make_planner(planner: Any = None) -> tuple[Any, str]:
+def make_planner(planner: Any = None, *, project: Iterable[str | os.PathLike] = ()) -> tuple[Any, str]:
     """(planner instance, spec) from None (built-in default), a spec string, a class or factory,
-    or a ready planner object. Raises SubjectLoadError in plain words."""
+    or a ready planner object (a spec's module also looked up in the ``project`` folders, see
+    load_subject). Raises SubjectLoadError in plain words."""
     if planner is None:
         planner = DEFAULT_SUBJECT
     if isinstance(planner, str):
         spec = planner
-        factory = load_subject(spec)
+        factory = load_subject(spec, project=project)
     elif hasattr(planner, "act") and not isinstance(planner, type):
         return planner, _spec_of(planner)
     elif callable(planner):

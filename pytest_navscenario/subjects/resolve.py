@@ -10,7 +10,7 @@ from typing import Any, Callable
 
 import pytest
 
-from .loading import BUILTIN_SUBJECTS, DEFAULT_SUBJECT, load_subject
+from .loading import BUILTIN_SUBJECTS, DEFAULT_SUBJECT, load_subject, locate_subject
 
 
 @dataclass
@@ -20,6 +20,8 @@ class Subject:
     spec: str | None
     origin: str                        # "--nav-subject", "ini nav_subject", "built-in default", "hook"
     _factory: Callable[[], Any] | None = field(default=None, repr=False)
+    # folders a 'package.module:Attribute' spec's module is also looked up in (the rootdir)
+    project: tuple[str, ...] = ()
 
     @property
     def label(self) -> str:
@@ -35,7 +37,7 @@ class Subject:
     def factory(self) -> Callable[[], Any]:
         """The zero-argument planner factory (loaded on first use). Raises SubjectLoadError."""
         if self._factory is None:
-            self._factory = load_subject(self.spec or DEFAULT_SUBJECT)
+            self._factory = load_subject(self.spec or DEFAULT_SUBJECT, project=self.project)
         return self._factory
 
     @property
@@ -48,18 +50,25 @@ class Subject:
         """A fresh planner instance."""
         return self.factory()
 
+    def locate(self) -> None:
+        """Make the spec's module importable from the project folders when sys.path does not have
+        it (nothing is imported): before any worker process starts, as workers copy sys.path."""
+        locate_subject(self.spec, self.project)
+
     def check(self, keep_running: bool = True) -> None:
         """Load the subject and make one planner; SubjectLoadError if it breaks the protocol.
         An external (exec:) planner's program is started, so one that cannot start is found now;
         ``keep_running`` leaves it up for this process's episodes (False when workers run them)."""
         from .external import check_start
         from .loading import make_planner
-        planner, _ = make_planner(self.runner_arg)
+        planner, _ = make_planner(self.runner_arg, project=self.project)
         check_start(planner, keep_running)
 
 
 def resolve_subject(config: pytest.Config, spec: str | None, origin: str) -> Subject:
-    """Ask the hook first, then use ``spec`` (from option/ini), else the built-in default."""
+    """Ask the hook first, then use ``spec`` (from option/ini), else the built-in default. A
+    spec's module is looked up on sys.path, then in the rootdir (core/user_code.py)."""
+    project = (str(config.rootpath),)
     try:
         provided = config.hook.pytest_navscenario_make_subject(config=config)
     except Exception as exc:
@@ -67,12 +76,12 @@ def resolve_subject(config: pytest.Config, spec: str | None, origin: str) -> Sub
                                 f"{type(exc).__name__}: {exc}") from exc
     if provided is not None:
         if isinstance(provided, str):
-            return Subject(spec=provided.strip(), origin="pytest_navscenario_make_subject hook")
+            return Subject(spec=provided.strip(), origin="pytest_navscenario_make_subject hook", project=project)
         if not callable(provided):
             raise pytest.UsageError(
                 f"pytest_navscenario_make_subject returned {type(provided).__name__} {provided!r}; "
                 f"return a zero-argument factory or class, a 'package.module:Attribute' string, or None")
         return Subject(spec=None, origin="hook", _factory=provided)
     if spec:
-        return Subject(spec=spec, origin=origin)
-    return Subject(spec=DEFAULT_SUBJECT, origin="built-in default")
+        return Subject(spec=spec, origin=origin, project=project)
+    return Subject(spec=DEFAULT_SUBJECT, origin="built-in default", project=project)

@@ -56,3 +56,29 @@ def test_check_planner_passes_builtins_and_fails_a_broken_user_planner(tmp_path,
                      "--scenario", str(SEEDS_DIR / "corridor.yaml")]) == 1
     record = json.loads(capsys.readouterr().out)
     assert record["ok"] is False and len(record["problems"]) == 1
+
+
+def test_run_has_pytests_tick_limit_and_check_planner_warns_about_a_tick_over_it(tmp_path, monkeypatch, capsys):
+    """Issue 23 item 8: `navscenario run` gives a pytest item's outcome (1 s per tick by default,
+    0 = no limit); check-planner lets a slow tick finish and says pytest would stop it."""
+    (tmp_path / "nu_slow_nav.py").write_text(textwrap.dedent("""
+        import time
+        class Planner:
+            name = "slow"
+            version = "1"
+            def reset(self, scenario):
+                pass
+            def act(self, obs):
+                if obs.tick == 0:
+                    time.sleep(1.2)
+                return (0.5, 0.0, 0.0)
+    """))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    short = tmp_path / "short.yaml"
+    short.write_text("version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 0.6, y: 0}, timeout: 5}\n")
+    assert cli.main(["run", str(short), "--subject", "nu_slow_nav:Planner"]) == 1
+    out = capsys.readouterr().out
+    assert "outcome: subject-error" in out and "per-tick limit of 1 s" in out
+    assert cli.main(["check-planner", "nu_slow_nav:Planner", "--ticks", "2"]) == 0
+    out = capsys.readouterr().out
+    assert "over the 1 s a tick may take by default in pytest and navscenario run" in out

@@ -78,7 +78,8 @@ def test_option_reference_shows_defaults_and_escapes_markdown(reference):
     assert "### `--nav-subject=SPEC` { #nav_subject }" in text
     assert "### `--nav-bag={failed,all,none}` { #nav_bag }" in text
     block = text.split("{ #nav_bag_format }", 1)[1].split("###", 1)[0]
-    assert "default: `mcap`" in block and "ini: `nav_bag_format`" in block
+    assert "mcap (rosbag2 + MCAP, default" in block and "ini: `nav_bag_format`" in block
+    assert "default: `" not in block                 # the help says it; not said twice
     block = text.split("{ #navsearch }", 1)[1].split("###", 1)[0]
     assert "repeatable" in block
     assert "{ #nav_scenario_glob }" in text.split("## Ini-only settings", 1)[1]
@@ -94,7 +95,9 @@ def _cli_arguments(parser: argparse.ArgumentParser, prefix: str = "navscenario")
                 yield prefix, name
                 yield from _cli_arguments(sub, f"{prefix} {name}")
         elif not isinstance(action, argparse._HelpAction):
-            for option in action.option_strings or [action.metavar or action.dest]:
+            positional = action.metavar or (
+                "{" + ",".join(map(str, action.choices)) + "}" if action.choices else action.dest)
+            for option in action.option_strings or [positional]:   # as --help writes a positional
                 yield prefix, option
 
 
@@ -152,3 +155,86 @@ def test_python_api_page_names_every_public_name():
     page = (ROOT / "docs" / "reference" / "python-api.md").read_text(encoding="utf-8")
     missing = [name for name in pytest_navscenario.__all__ if name != "__version__" and name not in page]
     assert not missing, f"public names missing from docs/reference/python-api.md: {missing}"
+
+
+def _blocks(text: str) -> dict[str, str]:
+    """Option reference: anchor (dest or ini name) -> its block of text."""
+    import re
+    return {m.group(1): m.group(2) for m in re.finditer(r"\{ #([a-z_]+) \}\n(.*?)(?=\n###|\n## |\Z)", text, re.S)}
+
+
+def test_option_defaults_are_rendered_as_the_help_says(reference):
+    """Issue 23 item 8: no `default: True` for a yes/no choice, no `default: not set` where the help
+    says `default 100`: an option whose help states its default gets no second, machine-made one."""
+    text = reference.pytest_options_markdown()
+    assert "`True`" not in text and "`False`" not in text and "`1.0`" not in text
+    blocks = _blocks(text)
+    for name in ("nav_summary", "navsearch_budget", "navsearch_seed", "navsearch_strategy",
+                 "navsearch_shrink_budget", "navsearch_stuck_after", "navsearch_out", "nav_tick_limit",
+                 "nav_plots_max", "nav_scenario_glob"):
+        assert "default" in blocks[name].lower(), name                     # the help says it ...
+        assert "default: `" not in blocks[name], (name, blocks[name])      # ... and nothing contradicts it
+    assert "default: `not set`" in blocks["nav_results"]                 # says nothing: the real default
+    assert reference._value_text(True, ("yes", "no")) == "yes" and reference._value_text(False) == "false"
+
+
+def _stated_number(help_text: str) -> float | None:
+    """The number a help text gives as its default ("default 20", "Default 1;", "(default: 10)")."""
+    import re
+    m = re.search(r"\bdefault:?\s+(-?\d+(?:\.\d+)?)\b(?![%\w])", help_text, re.I)
+    return float(m.group(1)) if m else None
+
+
+def test_defaults_stated_in_help_texts_are_the_real_defaults(plugin_registers):
+    """A number a help text states as the default is the value the code uses (pytest options: the
+    ini default when it has one; every navscenario argument: argparse's default)."""
+    from pytest_navscenario.cli.main import build_parser
+    _, inis = plugin_registers
+    checked = 0
+    for name, (help_text, _, default) in inis.items():
+        number = _stated_number(help_text)
+        if number is not None and default not in ("", None):
+            assert float(default) == number, (name, help_text, default)
+            checked += 1
+    for prog, action in _cli_actions(build_parser()):
+        number = _stated_number(action.help or "")
+        if number is not None:
+            assert action.default == number, (prog, action.option_strings, action.help, action.default)
+            checked += 1
+    assert checked >= 8
+
+
+def _cli_actions(parser: argparse.ArgumentParser, prefix: str = "navscenario"):
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                yield from _cli_actions(sub, f"{prefix} {name}")
+        elif not isinstance(action, argparse._HelpAction):
+            yield prefix, action
+
+
+def test_cli_reference_writes_each_argument_as_its_help_does(reference):
+    text = reference.cli_markdown()
+    assert "| `--frame {auto,map,odom}` |" in text and "FRAME {auto" not in text
+    assert "| `--subject SPEC, -s SPEC` |" in text
+    assert "| `SCENARIO.yaml` |" in text
+    assert "`10.0`" not in text and "`1.0`" not in text          # 10 and 1, as the help says them
+
+
+def test_the_tick_limit_defaults_and_their_reasons_are_stated():
+    """pytest and navscenario run share one default (run gives an item's outcome); check-planner's
+    longer one says why; the docs table gives all of them."""
+    from pytest_navscenario.cli.main import build_parser
+    from pytest_navscenario.harness.conformance import HUNG_TICK
+    from pytest_navscenario.plugin.options import OPTIONS
+    from pytest_navscenario.sim.deadline import DEFAULT_TICK_LIMIT
+
+    subs = {name: sub for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)
+            for name, sub in a.choices.items()}
+    limit = {name: next(a for a in subs[name]._actions if "--tick-limit" in a.option_strings)
+             for name in ("run", "check-planner")}
+    assert limit["run"].default == DEFAULT_TICK_LIMIT and "pytest" in limit["run"].help
+    assert limit["check-planner"].default == HUNG_TICK and "pytest" in limit["check-planner"].help
+    assert "check-planner" in dict((o, h) for o, _, h in OPTIONS)["--nav-tick-limit"]
+    page = (ROOT / "docs/reference/planner-protocol.md").read_text()
+    assert "**How long one tick may take**, and why the defaults differ" in page

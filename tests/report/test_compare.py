@@ -11,13 +11,18 @@ from pytest_navscenario.report.compare import compare_files, compare_records, fo
 from pytest_navscenario.report.results_file import ResultsFileError, write_results
 
 
-def rec(nodeid, outcome, *, family=None, subject="dwa", h=None, repeat=0, seed=7, message=""):
+_SAME = object()
+
+
+def rec(nodeid, outcome, *, family=None, subject="dwa", h=None, repeat=0, seed=7, message="", spec=_SAME):
+    """A record as pytest writes it; ``spec`` (default: the subject) is its subject_spec."""
     name = nodeid.split("::")[-1]
     return {
         "format": "navscenario-results", "format_version": 1, "tool_version": "0.1.0",
         "nodeid": nodeid, "path": nodeid.split("::")[0], "scenario": name,
         "family": family or nodeid.split("/")[1], "scenario_hash": h or f"h-{name}",
         "subject": subject, "subject_version": None, "seed": seed, "repeat": repeat,
+        "subject_spec": subject if spec is _SAME else spec,
         "outcome": outcome, "passed": outcome == "success", "message": message or outcome,
         "metrics": {"min_clearance": 0.2}, "wall_time": 0.01,
     }
@@ -164,7 +169,8 @@ def test_side_by_side_reruns_regressions_with_both_subjects(tmp_path, capsys):
     h = content_hash(loads_scenario(text))  # moved.yaml was edited after the run: its hash differs now
     a_recs = [dict(rec("s/short.yaml::short", "success", h=h, subject="dwa"), path="s/short.yaml"),
               dict(rec("s/moved.yaml::moved", "success", h=h, subject="dwa"), path="s/moved.yaml")]
-    b_recs = [dict(r, outcome="collision", subject="potential-field") for r in a_recs]
+    b_recs = [dict(r, outcome="collision", subject="potential-field", subject_spec="potential-field")
+              for r in a_recs]
     a, b = tmp_path / "a.jsonl", tmp_path / "b.jsonl"
     write_results(a, a_recs)
     write_results(b, b_recs)
@@ -174,9 +180,48 @@ def test_side_by_side_reruns_regressions_with_both_subjects(tmp_path, capsys):
     pngs = list(out.glob("*.png"))
     assert len(pngs) == 1 and pngs[0].name.startswith("s_short.yaml_short")
     assert imread(str(pngs[0])).shape[1] > 600
-    assert "1 side-by-side plot(s) written" in captured.out
+    assert "1 of 2 side-by-side plot(s) written" in captured.out
     assert "s/short.yaml::short: B re-run gave success, the results file says collision" in captured.err
     assert "moved.yaml changed since the run" in captured.err
+
+
+def test_reproduce_commands_use_the_recorded_spec_never_the_display_name(files, tmp_path, capsys):
+    """Issue 23 item 2: a planner named "careful" ran as --nav-subject=mynav:Careful."""
+    broke = dict(BASE, **{"scenarios/boxes/b2.yaml::b2": "safety-stop"})
+    a, b = files(suite(BASE), suite(broke, subject="careful", spec="mynav:Careful"))
+    xml = tmp_path / "compare.xml"
+    assert main(["compare", str(a), str(b), "--junit", str(xml)]) == 0
+    out = capsys.readouterr().out
+    assert "reproduce: pytest scenarios/boxes/b2.yaml::b2 --nav-subject=mynav:Careful" in out
+    assert "--nav-subject=careful" not in out
+    junit = xml.read_text()
+    assert "--nav-subject=mynav:Careful" in junit and "--nav-subject=careful" not in junit
+
+    hook = suite(broke, subject="careful", spec=None)     # a conftest hook made the subject
+    old = [{k: v for k, v in r.items() if k != "subject_spec"} for r in hook]   # an older file
+    cmp = compare_records(suite(BASE), hook)
+    assert cmp.reproduce_command(cmp.broke[0]) == (
+        "pytest scenarios/boxes/b2.yaml::b2  # subject careful from the project's "
+        "pytest_navscenario_make_subject hook")
+    cmp = compare_records(suite(BASE), old)
+    assert cmp.reproduce_command(cmp.broke[0]).startswith(
+        "pytest scenarios/boxes/b2.yaml::b2  # subject careful: its --nav-subject spec is unknown")
+
+
+def test_side_by_side_without_a_spec_to_rerun_says_what_is_needed_and_fails(files, tmp_path, capsys):
+    broke = dict(BASE, **{"scenarios/boxes/b2.yaml::b2": "safety-stop"})
+    a, b = files(suite(BASE, subject="careful", spec=None), suite(broke, subject="careful", spec=None))
+    out = tmp_path / "sbs"
+    assert main(["compare", str(a), str(b), "--side-by-side", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "cannot re-run A (subject 'careful'): its results file records no --nav-subject spec " \
+           "(it came from a conftest pytest_navscenario_make_subject hook); give it with --a-subject SPEC" in err
+    assert err.count("cannot re-run A") == 1      # said once, not once per scenario
+    assert "none of the 1 side-by-side plot(s) could be made" in err
+    assert not list(tmp_path.glob("sbs/*.png"))
+    a, b = files(suite(BASE), suite(BASE))           # nothing broke or fixed: nothing to show
+    assert main(["compare", str(a), str(b), "--side-by-side", str(out)]) == 0
+    assert "no side-by-side plots: B neither broke nor fixed a scenario A ran" in capsys.readouterr().out
 
 
 def test_html_comparison_report(files, tmp_path):

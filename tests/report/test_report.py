@@ -138,6 +138,9 @@ def test_warn_mode_reports_but_passes_and_plots_every_item_under_xdist(runs):
     assert len(plots) == 2 and any(p.startswith("scenarios_ok") for p in plots)  # passing items too
     assert "navscenario: 2 trajectory plot(s) in" in out
     assert "1 more item(s) not plotted: at most 2 plots per session (--nav-plots-max=N" in out
+    # the baseline's records name a planner "old-planner" and no spec: never re-run by that name
+    assert ("no side-by-side plots: cannot re-run the baseline (subject 'old-planner'): its results file "
+            "records no --nav-subject spec") in out and "give it with --nav-baseline-subject SPEC" in out
 
 
 def test_default_passing_run_does_not_import_matplotlib(runs):

@@ -54,7 +54,8 @@ def test_search_freezes_failures_that_fail_again_when_collected(project):
     assert len(cases) == 6
     failing = [r for r in log if r["phase"] == "search" and r["outcome"] != "success"]
     assert sum(1 for c in cases if c.find("failure") is not None) == len(failing) > 0
-    result.stdout.fnmatch_lines(["navsearch crate: 6/6 sims, * failure(s), best clearance *"])  # live progress
+    result.stdout.fnmatch_lines(["navsearch crate: 6/6 sims, * failure(s), lowest clearance so far *"])  # live progress
+    result.stdout.fnmatch_lines(["crate vs *, lowest clearance of any run * m (sim *, a*)*"])
 
     from pytest_navscenario.scenario.loader import load_scenario
     prov = load_scenario(frozen[0]).provenance
@@ -188,3 +189,21 @@ def test_the_old_per_failure_shrink_budget_still_works(project):
     search, shrink, total = map(int, re.search(r"(\d+) sims searching \+ (\d+) shrinking \(shrink budget "
                                                r"(\d+)\)", line).groups())
     assert failures > 0 and total == 3 * failures and shrink <= total, line
+
+
+def test_the_summary_says_which_run_the_lowest_clearance_came_from():
+    """Issue 23 item 4: "best clearance 0.029 m" beside frozen failures of 0.26-0.55 m read as a
+    failure's; the summary says it is the lowest of any run and whether that run passed."""
+    from pytest_navscenario.plugin.search import lowest_clearance_text
+    from pytest_navscenario.search.engine import Candidate, Failure, SearchReport
+
+    def cand(sim, outcome, clearance, phase="search"):
+        return Candidate(sim, phase, "explore", (0.1,), outcome, clearance, "box", "", {}, "h", 0.0)
+
+    report = SearchReport("s", None, "dwa", None, "evolve", 0, 3, "25%", ["x"])
+    report.candidates = [cand(1, "safety-stop", 0.26), cand(2, "success", 0.029), cand(3, "timeout", 0.55),
+                         cand(1, "safety-stop", 0.001, phase="shrink")]
+    report.failures = [Failure(report.candidates[0], report.candidates[0])]
+    assert lowest_clearance_text(report) == "lowest clearance of any run 0.029 m (sim 2, a run that passed)"
+    report.candidates[1].clearance = 0.4
+    assert lowest_clearance_text(report) == "lowest clearance of any run 0.260 m (sim 1, a safety-stop)"
