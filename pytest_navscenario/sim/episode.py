@@ -29,6 +29,7 @@ from ..subjects.protocol import Observation
 from .command import Drive, call_planner, planner_traceback, validate_command
 from .deadline import PlannerTimeout, TickDeadline
 from .lidar import Lidar
+from .lidar3d import CloudLidar, LEVEL
 from .faults import Faults
 from .moving import MovingObstacles, describe_collision
 from .trajectory import Collision, SafetyStop, SubjectFailure, Trajectory
@@ -155,6 +156,10 @@ class Episode:
         self.warn_count = d.warning.number         # a live view
         self.own_handler = mujoco.get_mju_user_warning() is on_mujoco_warning
         self.lidar = Lidar(scenario, world, d, self.n_ticks + 1, seed)
+        self.cloud = (CloudLidar(scenario, world, d, self.n_ticks + 1, seed)
+                      if scenario.robot.lidar3d is not None else None)
+        if self.cloud is not None:
+            self.observe = self.observe_cloud       # the planar body's 3D scan, level at z = 0
         self.moving = (MovingObstacles(scenario, d.mocap_pos, dt, spt) if world.model.nmocap else None)
         self._allocate_records(self.n_ticks * spt + 1)
         robot = scenario.robot
@@ -163,7 +168,7 @@ class Episode:
                        else None)
         self.i = 0              # physics step index of the current state
         self.tick = 0           # control ticks run
-        self.t_physics = self.t_rays = self.t_planner = self.t_safety = 0.0
+        self.t_physics = self.t_rays = self.t_planner = self.t_safety = self.t_cloud = 0.0
         self.collision: Collision | None = None
         self.safety_stop: SafetyStop | None = None
         self.failure: SubjectFailure | None = None
@@ -309,8 +314,25 @@ class Episode:
         obs = _new(Observation)
         obs.__dict__.update(tick=tick, time=t, pose=self.seen_pose[tick], velocity=self.seen_vel[tick],
                             ranges=ranges, angles=lidar.angles, goal=mission.goal,
-                            waypoints=mission.left, obstacles=self.obstacles)
+                            waypoints=mission.left, obstacles=self.obstacles, points=None, attitude=LEVEL)
         return (t, x, y, yaw, vx, vy, wz), obs
+
+    def observe_cloud(self) -> tuple[tuple[float, ...], Observation]:
+        """``observe`` with the 3D lidar's points (the planar body: level, its base at z = 0)."""
+        state, obs = Episode.observe(self)
+        x, y, yaw = state[1], state[2], state[3]
+        c, s = math.cos(yaw), math.sin(yaw)
+        obs.__dict__["points"] = self.scan_cloud(obs.tick, np.array([x, y, 0.0]),
+                                                 np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]))
+        return state, obs
+
+    def scan_cloud(self, tick: int, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
+        """The 3D lidar's points from a base at ``pos`` turned by ``rot`` (world from base), its
+        time counted apart (``timings["lidar3d"]``)."""
+        t0 = perf_counter()
+        points = self.cloud.scan(tick, pos, rot)
+        self.t_cloud += perf_counter() - t0
+        return points
 
     def check_stuck(self, tick: int, x: float, y: float) -> None:
         """End the episode ("stuck", a timeout) when the robot has entered no new square of
@@ -480,14 +502,17 @@ class Episode:
             command=np.array(self.commands, dtype=float).reshape(-1, 3),
             ranges=self.lidar.ranges(self.tick), angles=self.lidar.angles,
             waypoint_times=tuple(self.mission.passed_at),
-            believed=None if self.faults is None else self.faults.believed_poses())
+            believed=None if self.faults is None else self.faults.believed_poses(),
+            cloud=None if self.cloud is None else self.cloud.ranges(self.tick))
 
     def result(self) -> SimResult:
         trajectory = self.trajectory()
         total = perf_counter() - self.t_start
-        spent = self.t_physics + self.t_rays + self.t_planner
+        spent = self.t_physics + self.t_rays + self.t_planner + self.t_cloud
         timings = {"physics": self.t_physics, "rays": self.t_rays, "planner": self.t_planner,
                    "safety": self.t_safety, "harness": total - spent, "total": total}
+        if self.cloud is not None:
+            timings["lidar3d"] = self.t_cloud      # the 3D lidar's scans, on their own
         return SimResult(trajectory, self.collision, self.safety_stop, self.failure, self.end == "goal",
                          self.end, self.tick, timings)
 

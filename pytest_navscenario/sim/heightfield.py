@@ -75,3 +75,24 @@ def add_heightfield(spec: mujoco.MjSpec, element: Any, grid: HeightGrid, *, name
         pos=[float(element.x), float(element.y), bottom],
         quat=[math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0)],
         contype=contype, conaffinity=conaffinity, group=HFIELD_GROUP, rgba=list(rgba), **extra)
+
+
+GRID_KINDS = ("rough", "heightfield")
+_PLACED: dict[Any, tuple[PlacedGrid, ...]] = {}
+
+
+def placed_grids(scenario: Any) -> tuple[PlacedGrid, ...]:
+    """The scenario's rough and heightfield elements as PlacedGrids (empty without any), the same
+    objects for the same terrain within a process (the ray cast prepares each grid once)."""
+    elements = tuple(el for el in getattr(scenario, "terrain", ()) if el.kind in GRID_KINDS)
+    if not elements:
+        return ()
+    from ..scenario.heightmap import height_grid
+
+    key = (elements, scenario.source if any(el.kind == "heightfield" for el in elements) else None)
+    placed = _PLACED.get(key)
+    if placed is None:
+        if len(_PLACED) >= 64:
+            _PLACED.clear()
+        placed = _PLACED[key] = tuple(placed_grid(el, height_grid(el, scenario)) for el in elements)
+    return placed

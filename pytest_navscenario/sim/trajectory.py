@@ -48,6 +48,8 @@ class Trajectory:
     angles: np.ndarray       # (beams,) rad, beam directions in the robot frame
     waypoint_times: tuple[float, ...] = ()  # when each intermediate waypoint was passed
     believed: np.ndarray | None = None      # (m, 3) the pose the planner believed at each tick (drift)
+    cloud: np.ndarray | None = None         # (m, rings, beams) float32 3D lidar ranges (robot.lidar3d),
+                                            # no return = its range_max; None without one
 
     @property
     def duration(self) -> float:
