@@ -1,0 +1,195 @@
+"""The safety layer's view of the ground, for a robot that rides it: what it predicts with, and why
+it can stop before a pit it sees and cannot before a drop it does not.
+
+The collision safety layer (``safety.py``) predicts with the obstacles the 2D lidar sees, as on the
+real robot, and keeps doing so on terrain. A 2D lidar does not see the ground: a drop-off, a pit or
+a stairwell going down lies below its plane, so with a 2D lidar alone the layer cannot stop the
+robot before one (it drives off the edge and the episode ends in a fall).
+
+Where a 3D lidar is fitted the layer also keeps a map of the ground it has seen (``GroundMap``,
+cells of ``CELL`` metres, world frame, from every scan of the episode: the ground right in front of
+the robot is below the lowest ring and was seen from further away) and, each tick, predicts the
+footprint's sweep over ``safety.horizon`` as the collision layer does and halts the robot when the
+sweep would enter
+
+* a hole: cells that a beam ending more than the body's drop limit below the ground the robot
+  stands on crossed below that ground's level (a beam that dives into a pit, or past a platform's
+  edge to the floor below: there is no ground there at the robot's level, the shadow behind the
+  edge included), or cells whose ground it saw that low;
+* ground steeper than the body's slope limit (between neighbouring cells it has seen).
+
+The body's limits (``limits_of``): a drop deeper than the body lands from (the simulation's own
+fall threshold for it), a slope steeper than the body climbs (a legged body's ``max_slope``; a
+wheeled body's torque limit: sin(slope) = driven wheels x max_wheel_torque / (mass g radius), and
+never more than its tip angle). What the lidar never saw the layer does not know: it stops for the
+ground it has seen, never for ground it has not.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+import numpy as np
+
+from ..scenario.model import Scenario
+from .safety import SAMPLE_SPACING, twist_poses
+
+CELL = 0.1                # m, the ground map's cells
+MARGIN_CELLS = 60         # cells of map beyond the scenario's extent (6 m) on every side
+HOLE_LEVEL = 0.02         # m: below the robot's ground by this, a beam is in a hole's shadow
+GRAVITY = 9.81
+
+
+@dataclass(frozen=True)
+class GroundLimits:
+    """What the body can meet: the deepest drop (m) it survives, the steepest slope (degrees)."""
+    drop: float
+    slope: float
+
+
+def limits_of(scenario: Scenario, drop_limit: float) -> GroundLimits:
+    """The body's limits; ``drop_limit`` is the simulation's fall threshold for it (the body
+    model's ``drop_limit``)."""
+    body = scenario.robot.body
+    tip = float(getattr(body, "tip_angle", 45.0))
+    if body.kind == "legged":
+        slope = min(float(body.max_slope), tip)
+    elif body.kind == "wheeled":
+        driven = 2 if body.drive_wheels == "diff" else 4
+        grip = driven * body.max_wheel_torque / (body.mass * GRAVITY * body.wheel_radius)
+        slope = min(math.degrees(math.asin(min(grip, 1.0))), tip)
+    else:
+        slope = tip
+    return GroundLimits(float(drop_limit), slope)
+
+
+class GroundMap:
+    """The ground the 3D lidar has seen in an episode: per cell the lowest return (NaN: none) and
+    whether a beam passed through it too low for the robot (a hole)."""
+
+    def __init__(self, bounds: tuple[float, float, float, float]):
+        x0, y0, x1, y1 = bounds
+        self.x0, self.y0 = x0 - MARGIN_CELLS * CELL, y0 - MARGIN_CELLS * CELL
+        self.nx = int(math.ceil((x1 - x0) / CELL)) + 2 * MARGIN_CELLS
+        self.ny = int(math.ceil((y1 - y0) / CELL)) + 2 * MARGIN_CELLS
+        self.low = np.full(self.nx * self.ny, np.nan)
+        self.hole = np.zeros(self.nx * self.ny, dtype=bool)
+
+    def cells(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(flat cell index, inside the map) of world points."""
+        i = np.floor((np.asarray(x) - self.x0) / CELL).astype(np.intp)
+        j = np.floor((np.asarray(y) - self.y0) / CELL).astype(np.intp)
+        inside = (i >= 0) & (i < self.nx) & (j >= 0) & (j < self.ny)
+        return np.where(inside, j * self.nx + i, 0), inside
+
+    def see(self, origin: np.ndarray, points: np.ndarray, ground_z: float, drop: float) -> None:
+        """Add a scan's returns (world frame, from ``origin``) taken from ground at ``ground_z``:
+        the lowest return of each cell, and as holes the cells a beam that ended more than ``drop``
+        below the ground crossed below the ground's level (no ground there at the robot's level:
+        the shadow behind an edge, the inside of a pit)."""
+        if not len(points):
+            return
+        k, inside = self.cells(points[:, 0], points[:, 1])
+        np.fmin.at(self.low, k[inside], points[inside, 2])
+        deep = points[:, 2] < ground_z - drop
+        if not deep.any():
+            return
+        p, o = points[deep], np.asarray(origin, dtype=float)
+        d = p - o
+        level = ground_z - HOLE_LEVEL
+        start = np.clip((level - o[2]) / np.where(d[:, 2] < 0, d[:, 2], -1e-12), 0.0, 1.0)
+        length = np.hypot(d[:, 0], d[:, 1]) * (1.0 - start)
+        n = np.maximum(1, np.ceil(length / (CELL / 2.0)).astype(np.intp)) + 1
+        ray = np.repeat(np.arange(len(p)), n)
+        step = np.arange(len(ray)) - np.repeat(np.cumsum(n) - n, n)
+        f = start[ray] + (1.0 - start[ray]) * step / (n[ray] - 1).clip(1)
+        k, inside = self.cells(o[0] + d[ray, 0] * f, o[1] + d[ray, 1] * f)
+        self.hole[k[inside]] = True
+
+
+class GroundSafety:
+    """Per tick: would the predicted sweep enter a hole or too steep ground the map has seen?"""
+
+    def __init__(self, scenario: Scenario, limits: GroundLimits, bounds: tuple[float, float, float, float]):
+        safety = scenario.robot.safety
+        self.horizon, self.margin = float(safety.horizon), float(safety.margin)
+        fp = scenario.robot.footprint
+        if fp.shape == "circle":
+            r = fp.radius + self.margin
+            g = np.arange(-r, r + 1e-9, CELL / 2.0)
+            gx, gy = np.meshgrid(g, g)
+            keep = np.hypot(gx, gy) <= r
+            self.samples = np.column_stack([gx[keep], gy[keep]])
+            self.reach = r
+        else:
+            hl, hw = fp.length / 2.0 + self.margin, fp.width / 2.0 + self.margin
+            gx, gy = np.meshgrid(np.linspace(-hl, hl, max(2, int(math.ceil(2 * hl / (CELL / 2.0))) + 1)),
+                                 np.linspace(-hw, hw, max(2, int(math.ceil(2 * hw / (CELL / 2.0))) + 1)))
+            self.samples = np.column_stack([gx.ravel(), gy.ravel()])
+            self.reach = math.hypot(hl, hw)
+        self.limits = limits
+        self.tan_slope = math.tan(math.radians(limits.slope))
+        self.map = GroundMap(bounds)
+
+    def see(self, origin: np.ndarray, points_world: np.ndarray, ground_z: float) -> None:
+        """Add a 3D scan (world frame) taken while the robot stood on ground at ``ground_z``."""
+        self.map.see(origin, points_world, ground_z, self.limits.drop)
+
+    def check(self, x: float, y: float, ground_z: float, yaw: float, vx: float, vy: float,
+              wz: float) -> str | None:
+        """What the sweep over the horizon would enter (a readable phrase), or None."""
+        speed = math.hypot(vx, vy)
+        travel = (speed + abs(wz) * self.reach) * self.horizon
+        n = int(min(64, max(1, math.ceil(travel / SAMPLE_SPACING))))
+        poses = twist_poses(x, y, yaw, vx, vy, wz, np.linspace(0.0, self.horizon, n + 1)[1:])
+        c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
+        px = poses[:, 0:1] + c * self.samples[:, 0] - s * self.samples[:, 1]
+        py = poses[:, 1:2] + s * self.samples[:, 0] + c * self.samples[:, 1]
+        m = self.map
+        k, inside = m.cells(px.ravel(), py.ravel())
+        k = np.unique(k[inside])
+        if m.hole[k].any():
+            low = m.low[k[m.hole[k]]]
+            depth = ground_z - np.nanmin(low) if np.isfinite(low).any() else None
+            return (f"a drop ahead (no ground within {self.limits.drop:g} m below the robot"
+                    + (f"; ground seen {depth:.2f} m down" if depth is not None else "") + ")")
+        low = m.low[k]
+        if np.any(low < ground_z - self.limits.drop):
+            return f"a drop of {ground_z - np.nanmin(low):.2f} m ahead"
+        return self._slope(k)
+
+    def _slope(self, k: np.ndarray) -> str | None:
+        """Too steep ground between neighbouring seen cells under the sweep (their lowest returns)."""
+        m = self.map
+        for step in (1, m.nx):
+            a = m.low[k]
+            b = m.low[np.minimum(k + step, len(m.low) - 1)]
+            rise = np.abs(b - a)
+            both = np.isfinite(rise)
+            if both.any() and rise[both].max() > self.tan_slope * CELL * 1.5:
+                # confirm over two cells (one bad return is not a slope)
+                c2 = m.low[np.minimum(k + 2 * step, len(m.low) - 1)]
+                rise2 = np.abs(c2 - a)
+                both2 = np.isfinite(rise2)
+                if both2.any() and rise2[both2].max() > self.tan_slope * 2 * CELL:
+                    angle = math.degrees(math.atan(rise2[both2].max() / (2 * CELL)))
+                    return f"a slope of {angle:.0f} degrees ahead (the body climbs {self.limits.slope:.0f})"
+        return None
+
+
+def scenario_bounds(scenario: Scenario) -> tuple[float, float, float, float]:
+    """(x0, y0, x1, y1) around the mission, the obstacles and the terrain."""
+    xs = [scenario.mission.start.x, scenario.mission.goal.x] + [w.x for w in scenario.mission.waypoints]
+    ys = [scenario.mission.start.y, scenario.mission.goal.y] + [w.y for w in scenario.mission.waypoints]
+    for item in tuple(scenario.obstacles) + tuple(scenario.terrain):
+        r = math.hypot(getattr(item, "length", 0.0) or 0.0, getattr(item, "width", 0.0) or 0.0) / 2.0 \
+            + (getattr(item, "radius", 0.0) or 0.0)
+        xs += [item.x - r, item.x + r]
+        ys += [item.y - r, item.y + r]
+    return min(xs), min(ys), max(xs), max(ys)
+
+
+def ground_safety(scenario: Scenario, drop_limit: float) -> GroundSafety | None:
+    """The ground layer of an episode: only with the safety layer on and a 3D lidar fitted."""
+    if not scenario.robot.safety.enabled or scenario.robot.lidar3d is None:
+        return None
+    return GroundSafety(scenario, limits_of(scenario, drop_limit), scenario_bounds(scenario))
