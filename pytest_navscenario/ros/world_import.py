@@ -10,8 +10,10 @@
   on load). A model with plugins (which may move it) is imported where it stands, with a note that
   what the plugins do is not carried over. Planes are ignored; everything else (other meshes,
   spheres, includes, tilted shapes, non-static models without plugins) is listed in a warning,
-  never dropped silently. A file that is not quite well-formed XML but that Gazebo reads anyway (a
-  bare ``&``, more after ``</sdf>``) is repaired and read, with a warning saying what was repaired.
+  never dropped silently. A ``<heightmap>`` (a PNG) becomes heightfield terrain, its image copied
+  beside the seed (``sdf_terrain.py``); the robot then needs a body that rides the ground. A file
+  that is not quite well-formed XML but that Gazebo reads anyway (a bare ``&``, more after
+  ``</sdf>``) is repaired and read, with a warning saying what was repaired.
 
 Also home of ``write_seed``, which every importer uses to write its scenario file.
 """
@@ -111,6 +113,7 @@ class SdfWorld:
     names: set[str] = field(default_factory=set)
     notes: list[str] = field(default_factory=list)          # imported, but not all of it (said how)
     meshes: dict[str, bytes] = field(default_factory=dict)   # files to write beside the seed
+    terrain: list = field(default_factory=list)              # <heightmap>s as heightfields (sdf_terrain.py)
 
 
 def _pose6(elem: ET.Element | None, where: str, path: Path) -> tuple[float, ...]:
@@ -245,6 +248,11 @@ def _model(path: Path, model: ET.Element, parent: tuple[float, ...], state_poses
                 out.warnings.append(f"{where}: {shape.tag} of a non-static model (not imported)")
                 continue
             cpose = _compose(lpose, _pose6(col.find("pose"), where, path))
+            if shape.tag == "heightmap":
+                from .sdf_terrain import heightmap_terrain
+                heightmap_terrain(path, where, shape, cpose, mname if mname not in out.names
+                                  else f"{mname}/{lname}/{cname}", _find_mesh, out)
+                continue
             if shape.tag in ("polyline", "mesh") and not (abs(cpose[3]) > tilt or abs(cpose[4]) > tilt):
                 _outlined(path, mname, lname, cname, where, geom, shape, cpose, out)
                 continue
@@ -368,13 +376,15 @@ def run(args: argparse.Namespace) -> int:
         if world.warnings:
             print(f"navscenario import: warning: {len(world.warnings)} element(s) of {src} not imported "
                   f"(listed above)", file=sys.stderr)
+    terrain = tuple(world.terrain) if args.format == "sdf" else ()
     scenario = Scenario(mission=Mission(start=start, goal=goal, waypoints=waypoints, timeout=args.timeout),
-                        obstacles=tuple(obstacles), name=args.name,
+                        obstacles=tuple(obstacles), name=args.name, terrain=terrain,
                         description=f"Imported from {args.format} file {src.name}.")
     write_seed(scenario, args.output, force=args.force, extra_files=extra)
     for note in notes:
         print(f"navscenario import: {note}")
-    print(f"navscenario import: {len(obstacles)} obstacle(s) -> wrote {args.output}")
+    print(f"navscenario import: {len(obstacles)} obstacle(s)"
+          + (f", {len(terrain)} terrain element(s)" if terrain else "") + f" -> wrote {args.output}")
     return 0
 
 
