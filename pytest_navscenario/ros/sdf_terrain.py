@@ -23,12 +23,12 @@ from ..scenario.terrain import Heightfield
 
 
 def heightmap_terrain(path: Path, where: str, shape: ET.Element, pose: tuple[float, ...], name: str,
-                      find: Callable[[Path, str], Path | None], out: Any) -> None:
+                      find: Callable[[Path, str], Path | None], floats: Callable[..., list[float]],
+                      out: Any) -> None:
     """Add the ``<heightmap>`` ``shape`` of a collision at ``pose`` (x, y, z, roll, pitch, yaw) to
     ``out.terrain`` and its image to ``out.meshes`` (files written beside the seed), or say in
-    ``out.warnings`` why not. ``find`` resolves the image's uri as meshes are resolved."""
-    from .world_import import _floats
-
+    ``out.warnings`` why not. ``find`` resolves the image's uri as meshes are resolved, ``floats``
+    reads an element's numbers as the world importer does (its errors)."""
     tilt = math.radians(1.0)
     if abs(pose[3]) > tilt or abs(pose[4]) > tilt:
         out.warnings.append(f"{where}: heightmap tilted (roll {math.degrees(pose[3]):.1f}, pitch "
@@ -39,9 +39,9 @@ def heightmap_terrain(path: Path, where: str, shape: ET.Element, pose: tuple[flo
         out.warnings.append(f"{where}: heightmap {uri or '(no uri)'}: only PNG heightmaps are read (a DEM or "
                             f"another image format is not; convert it to a 16-bit greyscale PNG) (not imported)")
         return
-    sx, sy, sz = _floats(shape.find("size"), 3, f"{where} heightmap size", path) if shape.find("size") is not None \
+    sx, sy, sz = floats(shape.find("size"), 3, f"{where} heightmap size", path) if shape.find("size") is not None \
         else (1.0, 1.0, 1.0)
-    px, py, pz = _floats(shape.find("pos"), 3, f"{where} heightmap pos", path) if shape.find("pos") is not None \
+    px, py, pz = floats(shape.find("pos"), 3, f"{where} heightmap pos", path) if shape.find("pos") is not None \
         else (0.0, 0.0, 0.0)
     found = find(path, uri)
     if found is None:

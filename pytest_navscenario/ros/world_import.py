@@ -251,7 +251,7 @@ def _model(path: Path, model: ET.Element, parent: tuple[float, ...], state_poses
             if shape.tag == "heightmap":
                 from .sdf_terrain import heightmap_terrain
                 heightmap_terrain(path, where, shape, cpose, mname if mname not in out.names
-                                  else f"{mname}/{lname}/{cname}", _find_mesh, out)
+                                  else f"{mname}/{lname}/{cname}", _find_mesh, _floats, out)
                 continue
             if shape.tag in ("polyline", "mesh") and not (abs(cpose[3]) > tilt or abs(cpose[4]) > tilt):
                 _outlined(path, mname, lname, cname, where, geom, shape, cpose, out)

@@ -65,12 +65,17 @@ class Trajectory:
 _TRAJ_ARRAYS = ("t", "pose", "velocity", "tick_t", "command", "ranges", "angles")
 
 
-def trajectory_to_dict(traj: Trajectory) -> dict[str, Any]:
-    """Plain lists (JSON / xdist-serialisable). Inverse: trajectory_from_dict."""
+def trajectory_to_dict(traj: Trajectory, *, cloud: bool = False) -> dict[str, Any]:
+    """Plain lists (JSON / xdist-serialisable). Inverse: trajectory_from_dict. ``cloud``: with the
+    3D lidar's ranges, as base64 float32 (a list would be ten times the size)."""
     out: dict[str, Any] = {name: np.asarray(getattr(traj, name)).tolist() for name in _TRAJ_ARRAYS}
     out["waypoint_times"] = list(traj.waypoint_times)
     if traj.believed is not None:
         out["believed"] = np.asarray(traj.believed).tolist()
+    if cloud and traj.cloud is not None:
+        import base64
+        data = np.ascontiguousarray(traj.cloud, dtype="<f4")
+        out["cloud"] = {"shape": list(data.shape), "float32": base64.b64encode(data.tobytes()).decode("ascii")}
     return out
 
 
@@ -86,5 +91,10 @@ def trajectory_from_dict(data: dict[str, Any]) -> Trajectory:
         "angles": np.asarray(data["angles"], dtype=float),
     }
     believed = data.get("believed")
+    cloud = data.get("cloud")
+    if cloud is not None:
+        import base64
+        cloud = np.frombuffer(base64.b64decode(cloud["float32"]), dtype="<f4").reshape(cloud["shape"]).copy()
     return Trajectory(**arrays, waypoint_times=tuple(data.get("waypoint_times", ())),
-                      believed=None if believed is None else np.asarray(believed, dtype=float).reshape(-1, 3))
+                      believed=None if believed is None else np.asarray(believed, dtype=float).reshape(-1, 3),
+                      cloud=cloud)
