@@ -29,7 +29,7 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            os.fchmod(fh.fileno(), 0o666 & ~_umask())  # mkstemp makes 0600; give the usual mode
+            os.fchmod(fh.fileno(), usual_mode())  # mkstemp makes 0600; give the usual mode
             fh.write(text)
             fh.flush()
             os.fsync(fh.fileno())
@@ -46,6 +46,12 @@ def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
     return mask
+
+
+def usual_mode() -> int:
+    """The mode a new file gets from ``open`` (0666 less the umask): what a file written through a
+    temporary one (mkstemp makes 0600) must be given before it is renamed into place."""
+    return 0o666 & ~_umask()
 
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")

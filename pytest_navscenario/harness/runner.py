@@ -78,7 +78,7 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
     outcome, message = oracle.classify(
         scenario, facts.trajectory, collision=facts.collision, safety_stop=facts.safety_stop,
         subject_failure=facts.subject_failure, goal_reached=facts.goal_reached,
-        stuck_after=stuck_after if facts.end == "stuck" else None)
+        stuck_after=stuck_after if facts.end == "stuck" else None, terrain_event=facts.terrain_event)
     figures = metrics.compute_metrics(scenario, facts.trajectory, collision=facts.collision)
     t2 = time.perf_counter()
     timings = dict(facts.timings)
@@ -87,4 +87,4 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
         scenario=scenario, outcome=outcome, metrics=figures, trajectory=facts.trajectory, seed=ep_seed,
         subject=name, subject_version=version, message=message, collision=facts.collision,
         safety_stop=facts.safety_stop, subject_failure=facts.subject_failure,
-        wall_time=t2 - t0, timings=timings)
+        wall_time=t2 - t0, timings=timings, terrain_event=facts.terrain_event)

@@ -126,6 +126,7 @@ class SearchState:
     is_worker: bool
     done: list[dict[str, Any]] = field(default_factory=list)   # controller: summary entries
     junit_items: list[Any] = field(default_factory=list)
+    html_error: str = ""
 
 
 STATE_KEY = pytest.StashKey[SearchState]()
@@ -446,7 +447,8 @@ def report_to_payload(report: Any) -> dict[str, Any]:
         "seed_value": report.seed_value, "budget": report.budget, "shrink_budget": report.shrink_budget,
         "params": report.params, "sims_used": report.sims_used, "shrink_sims": report.shrink_sims,
         "shrink_total": report.shrink_total,
-        "discarded": dict(report.discarded), "skipped": report.skipped, "interrupted": report.interrupted,
+        "discarded": dict(report.discarded), "discard_log": [list(d) for d in report.discard_log],
+        "skipped": report.skipped, "interrupted": report.interrupted,
         "stop_reason": report.stop_reason, "wall_time": report.wall_time,
         "episode_seed": report.episode_seed, "first_failure": report.first_failure,
         "candidates": [cand(c) for c in report.candidates],
@@ -474,6 +476,7 @@ def payload_to_report(data: dict[str, Any], space: Any) -> Any:
                                    "episode_seed")}
     report = SearchReport(**fields)
     report.skipped = data.get("skipped", 0)
+    report.discard_log = [(int(n), str(k)) for n, k in data.get("discard_log", [])]
     report.first_failure = data.get("first_failure", 0)
     report.shrink_total = data.get("shrink_total", 0)
     report.candidates = cands
@@ -515,6 +518,9 @@ def pytest_runtest_logreport(report: pytest.TestReport) -> None:
         entry["error"] = f"could not write the frozen failures under {state.settings.out}: {type(exc).__name__}: {exc}"
     if state.settings.suite is not None:
         _write_suite(entry, state.settings.suite, config)
+    from .search_report import failure_rows, wanted
+    if wanted(config)[0]:   # --nav-plots / --nav-html: a picture of each frozen failure
+        entry["rows"] = failure_rows(config, entry)
     state.done.append(entry)
     state.junit_items.append((search, job.space))
 
@@ -531,10 +537,16 @@ def _write_suite(entry: dict[str, Any], folder: Path, config: pytest.Config) -> 
 
 def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
     state = session.config.stash.get(STATE_KEY, None)
-    if state is None or state.is_worker or state.settings.junit is None or not state.junit_items:
+    if state is None or state.is_worker:
         return
-    from ..search.freeze import write_junit
-    write_junit(state.junit_items, state.settings.junit)
+    if state.settings.junit is not None and state.junit_items:
+        from ..search.freeze import write_junit
+        write_junit(state.junit_items, state.settings.junit)
+    from .search_report import write_html
+    try:
+        write_html(session.config, state.done)
+    except Exception as exc:  # never lose the summary: say what could not be written
+        state.html_error = f"could not write the search's HTML report: {type(exc).__name__}: {exc}"
 
 
 def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pytest.Config) -> None:
@@ -553,6 +565,8 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
                           f"stopped before it)")
     if state.settings.junit is not None and state.junit_items:
         tr.write_line(f"JUnit file of the generated suite: {state.settings.junit}")
+    if state.html_error:
+        tr.write_line(f"ERROR {state.html_error}", red=True)
 
 
 def _rel(config: pytest.Config, path: Path) -> str:
@@ -562,26 +576,9 @@ def _rel(config: pytest.Config, path: Path) -> str:
         return str(path)
 
 
-def lowest_clearance(report: Any) -> Any:
-    """The search-phase candidate that came closest to an obstacle (the first of equals), or None."""
-    best = None
-    for c in report.candidates:
-        if c.phase == "search" and math.isfinite(c.clearance) and (best is None or c.clearance < best.clearance):
-            best = c
-    return best
-
-
-def lowest_clearance_text(report: Any) -> str:
-    """"lowest clearance of any run 0.029 m (sim 57, a run that passed)": the closest any simulated
-    candidate came, and the run it came from, so that it is not read as a frozen failure's."""
-    c = lowest_clearance(report)
-    if c is None:
-        return "lowest clearance of any run n/a"
-    what = "a run that passed" if c.outcome == "success" else f"a {c.outcome}"
-    return f"lowest clearance of any run {c.clearance:.3f} m (sim {c.sim}, {what})"
-
-
 def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
+    from .search_report import lowest_clearance_text
+
     r = entry["report"]
     by = ", ".join(f"{k} {v}" for k, v in sorted(r.failures_by_outcome().items())) or "none"
     disc = ", ".join(f"{k} {v}" for k, v in sorted(r.discarded.items()))
@@ -610,6 +607,11 @@ def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
         c = f.clearance
         lines.append(f"  {state} {_rel(config, f.path)}  {f.outcome}, clearance "
                      + (f"{c:.3f} m" if math.isfinite(c) else "n/a") + ("" if f.new else " (already frozen)"))
+    pictures = [row.picture for row in entry.get("rows") or [] if row.picture]
+    if pictures:
+        folders = sorted({str(Path(p).parent) for p in pictures})
+        lines.append(f"  pictures of {len(pictures)} failure(s) in {folders[0] if len(folders) == 1 else ', '.join(folders)}/ "
+                     f"(the frozen file's name, .png)")
     if entry["log"] is not None:
         lines.append(f"  log  {_rel(config, entry['log'])}")
     suite = entry.get("suite")

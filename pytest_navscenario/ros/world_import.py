@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..core.errors import NavScenarioError
+from ..core.files import usual_mode
 from .aerialist import aerialist_obstacles, mission_from_plan, read_aerialist  # noqa: F401 (re-exported)
 from ..scenario.model import BoxObstacle, CylinderObstacle, Mission, Obstacle, Pose, Scenario
 
@@ -67,8 +68,9 @@ def write_seed(scenario: Scenario, out: str | Path, *, extra_files: dict[str, st
                 (Path(tmp) / name).parent.mkdir(parents=True, exist_ok=True)
                 (Path(tmp) / name).write_bytes(data if isinstance(data, bytes) else data.encode("utf-8"))
             loads_scenario(text, source=Path(tmp) / out.name)
-    except ScenarioError as exc:
-        raise WorldImportError(f"{out}: not written, the imported scenario is invalid: {exc}") from None
+    except ScenarioError as exc:   # named by the user's file and field, not the temporary copy checked
+        exc.path, exc.line = None, None
+        raise WorldImportError(f"{out}: not written, the imported scenario is invalid: {exc.format()}") from None
     targets[out] = text
     out.parent.mkdir(parents=True, exist_ok=True)
     staged: list[tuple[str, Path]] = []
@@ -77,6 +79,7 @@ def write_seed(scenario: Scenario, out: str | Path, *, extra_files: dict[str, st
             path.parent.mkdir(parents=True, exist_ok=True)
             fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
             staged.append((tmp, path))
+            os.fchmod(fd, usual_mode())     # mkstemp makes 0600: a seed is an ordinary file
             with os.fdopen(fd, "wb") as fh:
                 fh.write(text if isinstance(text, bytes) else text.encode("utf-8"))
         for tmp, path in staged:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from .keys import REQUIRED, Free, Marks, Rule, Section, Sub, Text, Version, section, walk
 from .model import MISSION, OBSTACLES, REFERENCE, ROBOT, SCHEMA_VERSION, SIMULATION, Scenario
+from .terrain import TERRAIN
 
 SUPPORTED_VERSIONS = (SCHEMA_VERSION,)
 
@@ -25,6 +26,7 @@ SCENARIO = section(Scenario, "", "a navigation test case: robot, mission, obstac
     Sub("mission", "", "start, goal, waypoints, tolerances and timeout", section=MISSION, default=REQUIRED,
         nullable=False, example="mission: {start: {x: 0, y: 0}, goal: {x: 0, y: 10}}"),
     OBSTACLES,
+    TERRAIN,
     Sub("simulation", "", "physics step, control rate and noise seed", section=SIMULATION),
     Sub("reference", "", "a recorded trajectory to compare the run with", section=REFERENCE, default=None),
     Free("search", "", "the failure search's settings for this seed (see the failure search)", default=None),

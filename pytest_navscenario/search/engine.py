@@ -37,7 +37,7 @@ STRATEGIES = ("evolve", "random", "hillclimb")
 DISTINCT_DISTANCE = 0.1    # kept for is_near_failure (fraction of each parameter's range)
 DEFAULT_SHRINK_BUDGET = "25%"   # of the search budget, for the whole shrink phase
 MIN_SHRINK_SIMS = 10       # a failure given a share of the shrink budget gets at least this many
-SEVERITY = ("collision", "subject-error", "safety-stop", "timeout")   # shrunk first .. last
+SEVERITY = ("collision", "fall", "subject-error", "safety-stop", "timeout")   # shrunk first .. last
 DEFAULT_STUCK_AFTER = 15.0  # s without new ground covered: the episode ends as a stuck timeout (the
                             # longest stall a robot recovered from over the shipped seeds and the
                             # example suites x 3 planners: 14.5 s; benchmarks/check_stuck.py)
@@ -113,6 +113,9 @@ class SearchReport:
     shrink_sims: int = 0
     shrink_total: int = 0         # simulations the shrink phase was allowed (shrink_plan's total)
     discarded: dict[str, int] = field(default_factory=dict)   # reason -> count
+    # (simulations recorded by then, reason) of each discarded candidate: when the search spent
+    # its draws on invalid layouts (the search report's chart)
+    discard_log: list[tuple[int, str]] = field(default_factory=list)
     skipped: int = 0              # repeats of a simulated candidate, redrawn without simulating
     candidates: list[Candidate] = field(default_factory=list)  # search + shrink sims, in order
     failures: list[Failure] = field(default_factory=list)

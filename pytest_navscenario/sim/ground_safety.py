@@ -12,11 +12,12 @@ the robot is below the lowest ring and was seen from further away) and, each tic
 footprint's sweep over ``safety.horizon`` as the collision layer does and halts the robot when the
 sweep would enter
 
-* a hole: cells that a beam ending more than the body's drop limit below the ground the robot
-  stands on crossed below that ground's level (a beam that dives into a pit, or past a platform's
-  edge to the floor below: there is no ground there at the robot's level, the shadow behind the
-  edge included), or cells whose ground it saw that low;
-* ground steeper than the body's slope limit (between neighbouring cells it has seen).
+* the shadow of an edge: cells that a beam ending more than the body's drop limit below the
+  ground the robot stands on crossed below that ground's level (a beam that dives into a pit, or
+  past a platform's edge to the floor below) and that no beam has hit;
+* a step down: a cell seen lower than the robot's ground by more than the drop limit next to a cell
+  higher than it by more than that (a ramp or a slope down the body can take has no such jump);
+* ground sloping more steeply than the body's slope limit (between neighbouring ground cells).
 
 The body's limits (``limits_of``): a drop deeper than the body lands from (the simulation's own
 fall threshold for it), a slope steeper than the body climbs (a legged body's ``max_slope``; a
@@ -110,6 +111,7 @@ class GroundSafety:
     """Per tick: would the predicted sweep enter a hole or too steep ground the map has seen?"""
 
     def __init__(self, scenario: Scenario, limits: GroundLimits, bounds: tuple[float, float, float, float]):
+        self.scenario = scenario
         safety = scenario.robot.safety
         self.horizon, self.margin = float(safety.horizon), float(safety.margin)
         fp = scenario.robot.footprint
@@ -147,15 +149,41 @@ class GroundSafety:
         m = self.map
         k, inside = m.cells(px.ravel(), py.ravel())
         k = np.unique(k[inside])
-        if m.hole[k].any():
-            low = m.low[k[m.hole[k]]]
-            depth = ground_z - np.nanmin(low) if np.isfinite(low).any() else None
-            return (f"a drop ahead (no ground within {self.limits.drop:g} m below the robot"
-                    + (f"; ground seen {depth:.2f} m down" if depth is not None else "") + ")")
         low = m.low[k]
-        if np.any(low < ground_z - self.limits.drop):
-            return f"a drop of {ground_z - np.nanmin(low):.2f} m ahead"
-        return self._slope(k)
+        # 1. the shadow of an edge: cells a beam passed through below the robot's ground on its way
+        # deeper, that no beam has hit (where a beam hit, the ground is seen: rules 2 and 3)
+        shadow = m.hole[k] & np.isnan(low)
+        if shadow.any():
+            return (f"a drop ahead{self._where(k[shadow][0])} (no ground within {self.limits.drop:g} m "
+                    f"below the robot where the lidar's beams dived past an edge)")
+        # 2. a step down: a cell lower than the robot's ground by more than the drop limit, next to
+        # one higher by more than that (a gentle slope down never is: its neighbours are close)
+        seen = np.isfinite(low)
+        jump = self.limits.drop + self.tan_slope * CELL
+        deep = seen & (low < ground_z - self.limits.drop)
+        if deep.any():
+            kd, ld = k[deep], low[deep]
+            top = np.full(len(kd), -np.inf)
+            for step in (1, -1, m.nx, -m.nx):
+                np.fmax(top, m.low[np.clip(kd + step, 0, len(m.low) - 1)], out=top)
+            down = top - ld > jump
+            if down.any():
+                worst = int(np.argmax(np.where(down, top - ld, -np.inf)))
+                return (f"a drop of {top[worst] - ld[worst]:.2f} m ahead{self._where(kd[worst])}")
+        # 3. ground sloping down more steeply than the body takes (ground-level cells only: what
+        # rises above the robot's ground is an obstacle's side or a climb, not a fall)
+        return self._slope(k[seen & (low <= ground_z + self.limits.drop)])
+
+    def _where(self, cell: int) -> str:
+        """", at pit 'hole'": the terrain element under a map cell, for the message (the layer
+        sees only points; the scenario names the place)."""
+        from ..scenario.ground import describe_element, element_at
+
+        m = self.map
+        x = m.x0 + (cell % m.nx + 0.5) * CELL
+        y = m.y0 + (cell // m.nx + 0.5) * CELL
+        i = element_at(self.scenario, x, y, margin=CELL)
+        return "" if i is None else f" at {describe_element(self.scenario.terrain[i])}"
 
     def _slope(self, k: np.ndarray) -> str | None:
         """Too steep ground between neighbouring seen cells under the sweep (their lowest returns)."""

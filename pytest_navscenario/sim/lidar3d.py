@@ -121,6 +121,7 @@ class CloudLidar:
         frame, the base's origin) turned by ``rot`` (3 x 3, world from base); the ranges are
         recorded as row ``tick``."""
         origin = pos + rot @ self.offset
+        self.last_origin = origin
         np.dot(self.base_dirs, rot.T, out=self.dirs)
         dist, geom, rmax = self.dist, self.geom, self.range_max
         if self.n:
@@ -132,9 +133,15 @@ class CloudLidar:
         self.record[tick] = ranges.reshape(self.rings, self.per_ring)
         self.ticks = max(self.ticks, tick + 1)
         seen = ranges < rmax
+        self.last_seen, self.last_ranges = seen, ranges
         points = (self.local_dirs[seen] * ranges[seen, None]).astype(np.float32)
         points.flags.writeable = False
         return points
+
+    def world_points(self) -> np.ndarray:
+        """The last scan's returns in the world frame (N x 3, float64), as its beams flew."""
+        seen = self.last_seen
+        return self.last_origin + self.dirs[seen] * self.last_ranges[seen, None]
 
     def _noisy(self, dist: np.ndarray, hit: np.ndarray) -> np.ndarray:
         """The ranges the beams read (float32, no return = range_max): the 2D lidar's noise models

@@ -84,4 +84,5 @@ def describe_collision(collision: Collision, scenario: Scenario, qvel: np.ndarra
             obstacle_speed = math.hypot(*Track(obs).velocity(collision.time))
             break
     return Collision(collision.time, collision.obstacle, collision.x, collision.y, collision.depth,
-                     robot_speed=speed, robot_moving=moving, obstacle_speed=obstacle_speed)
+                     robot_speed=speed, robot_moving=moving, obstacle_speed=obstacle_speed,
+                     terrain=collision.terrain)

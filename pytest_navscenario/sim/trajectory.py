@@ -19,13 +19,34 @@ class Collision:
     robot_speed: float = 0.0      # m/s, the robot's speed at the contact
     robot_moving: bool = True     # False: the robot stood still and was hit (sim/moving.py)
     obstacle_speed: float = 0.0   # m/s, the obstacle's speed at the contact (0: static)
+    terrain: bool = False         # True: the chassis hit a terrain face ("obstacle" names the element)
 
 
 @dataclass(frozen=True)
 class SafetyStop:
     time: float
-    obstacle: str          # the obstacle the predicted sweep would have hit
+    obstacle: str          # the obstacle the predicted sweep would have hit ("" for the ground)
     speed: float           # robot speed (m/s) when halted
+    ground: str = ""       # the ground it would have driven into, as a phrase ("a drop of 0.50 m
+                           # ahead"): the ground layer (sim/ground_safety.py) of a 3D lidar
+
+
+@dataclass(frozen=True)
+class TerrainEvent:
+    """The robot lost its footing or could not go on over the terrain: ``kind`` "fell" (off an edge
+    or into a hole: ``drop`` metres), "tipped" (roll or pitch past the body's limit) or "stuck"
+    (driven but not moving: ``detail`` says what held it). ``element`` names the terrain element
+    ("platform 'dock'"; "" on the plain floor); (x, y, z) is where the base was."""
+    kind: str
+    time: float
+    element: str
+    x: float
+    y: float
+    z: float
+    drop: float = 0.0          # m, fell
+    roll: float = 0.0          # degrees, at the event
+    pitch: float = 0.0         # degrees
+    detail: str = ""
 
 
 @dataclass(frozen=True)
@@ -48,6 +69,11 @@ class Trajectory:
     angles: np.ndarray       # (beams,) rad, beam directions in the robot frame
     waypoint_times: tuple[float, ...] = ()  # when each intermediate waypoint was passed
     believed: np.ndarray | None = None      # (m, 3) the pose the planner believed at each tick (drift)
+    # a body that rides the ground (None for the planar body): physics-rate base height (m) and
+    # attitude (rad) of the chassis
+    z: np.ndarray | None = None             # (n,)
+    roll: np.ndarray | None = None          # (n,)
+    pitch: np.ndarray | None = None         # (n,)
     cloud: np.ndarray | None = None         # (m, rings, beams) float32 3D lidar ranges (robot.lidar3d),
                                             # no return = its range_max; None without one
 
@@ -63,6 +89,7 @@ class Trajectory:
 
 
 _TRAJ_ARRAYS = ("t", "pose", "velocity", "tick_t", "command", "ranges", "angles")
+_ATTITUDE = ("z", "roll", "pitch")
 
 
 def trajectory_to_dict(traj: Trajectory, *, cloud: bool = False) -> dict[str, Any]:
@@ -72,6 +99,10 @@ def trajectory_to_dict(traj: Trajectory, *, cloud: bool = False) -> dict[str, An
     out["waypoint_times"] = list(traj.waypoint_times)
     if traj.believed is not None:
         out["believed"] = np.asarray(traj.believed).tolist()
+    for name in _ATTITUDE:
+        value = getattr(traj, name)
+        if value is not None:
+            out[name] = np.asarray(value).tolist()
     if cloud and traj.cloud is not None:
         import base64
         data = np.ascontiguousarray(traj.cloud, dtype="<f4")
@@ -91,10 +122,11 @@ def trajectory_from_dict(data: dict[str, Any]) -> Trajectory:
         "angles": np.asarray(data["angles"], dtype=float),
     }
     believed = data.get("believed")
+    attitude = {name: np.asarray(data[name], dtype=float) for name in _ATTITUDE if data.get(name) is not None}
     cloud = data.get("cloud")
     if cloud is not None:
         import base64
         cloud = np.frombuffer(base64.b64decode(cloud["float32"]), dtype="<f4").reshape(cloud["shape"]).copy()
     return Trajectory(**arrays, waypoint_times=tuple(data.get("waypoint_times", ())),
                       believed=None if believed is None else np.asarray(believed, dtype=float).reshape(-1, 3),
-                      cloud=cloud)
+                      cloud=cloud, **attitude)

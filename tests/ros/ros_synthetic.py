@@ -53,11 +53,12 @@ def _hit_distances(world: World, ox: float, oy: float, dirs: np.ndarray) -> tupl
     return best, height
 
 
-def laser_ranges(world: World, x: float, y: float, yaw: float, angles: np.ndarray, z: float = 0.2,
+def laser_ranges(world: World, x, y, yaw, angles: np.ndarray, z: float = 0.2,
                  range_max: float = 10.0) -> np.ndarray:
-    """A planar scan from a laser at (x, y, yaw) and height ``z``: inf where nothing is hit."""
-    a = yaw + angles
-    d, h = _hit_distances(world, x, y, np.stack([np.cos(a), np.sin(a)], 1))
+    """A planar scan from a laser at (x, y, yaw) and height ``z``: inf where nothing is hit. ``x``,
+    ``y``, ``yaw`` may be arrays, one pose per beam (a laser that moves while it scans)."""
+    a = np.asarray(yaw) + angles
+    d, h = _hit_distances(world, np.asarray(x), np.asarray(y), np.stack([np.cos(a), np.sin(a)], 1))
     d = np.where((h >= z) & (d <= range_max), d, np.inf)
     return d.astype(np.float32)
 
@@ -145,10 +146,39 @@ LASER = (0.1, 0.0, 0.2)           # x, y, z of the laser on base_link (turned 0)
 SCAN_ANGLES = np.radians(np.arange(-180.0, 180.0, 1.0))
 
 
+@dataclass(frozen=True)
+class ScanTiming:
+    """How a generated laser takes its scans, as real drivers do: beams ``increment`` seconds apart
+    (the truth), the fields it writes (``time_increment``, ``scan_time``: what a driver declares,
+    which may be 0 or wrong), its stamp (``stamp``: "start" = the first beam, "end" = the last),
+    the stamp moved by ``stamp_error`` (a driver's clock off), and the bag receiving each scan
+    ``latency`` seconds after its last beam."""
+    increment: float = 0.0
+    time_increment: float | None = None     # None: write ``increment``
+    scan_time: float | None = None          # None: beams x increment
+    stamp: str = "start"
+    stamp_error: float = 0.0
+    latency: float = 0.002
+
+    def beam_times(self, t: float) -> np.ndarray:
+        return t + self.increment * np.arange(len(SCAN_ANGLES))
+
+    def fields(self) -> tuple[float, float]:
+        ti = self.increment if self.time_increment is None else self.time_increment
+        st = self.increment * len(SCAN_ANGLES) if self.scan_time is None else self.scan_time
+        return float(ti), float(st)
+
+
+def pose_at(truth: np.ndarray, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The truth's x, y, yaw interpolated at times ``t`` (yaw unwrapped)."""
+    return (np.interp(t, truth[:, 0], truth[:, 1]), np.interp(t, truth[:, 0], truth[:, 2]),
+            np.interp(t, truth[:, 0], np.unwrap(truth[:, 3])))
+
+
 def robot_bag(path: Path, world: World, truth: np.ndarray, *, drift: np.ndarray | None = None,
               ros1: bool = False, scans: bool = True, cloud: dict | None = None, extra=None,
               tf_map: bool = True, laser: tuple[float, float, float] = LASER, pitch: float = 0.0,
-              world_at=None) -> Path:
+              world_at=None, timing: ScanTiming | None = None, odom_keep=None) -> Path:
     """A bag of a robot driving ``truth`` ((n, 4) t, x, y, yaw in the map frame) through ``world``.
 
     ``drift`` ((n, 3) the map -> odom transform at each time): the odometry is the truth seen
@@ -157,7 +187,11 @@ def robot_bag(path: Path, world: World, truth: np.ndarray, *, drift: np.ndarray 
     ``cloud_points`` (azimuths, elevations) plus "layout" ("velodyne" or "ouster") for a
     PointCloud2 on /points instead of (or beside) the scans; ``pitch`` (degrees, positive nose
     down) tilts the lidar, on /tf_static and in its points; ``world_at(t)`` gives the world at time t
-(something that moves) instead of ``world``. ``extra(bag)`` writes more.
+    (something that moves) instead of ``world``. ``extra(bag)`` writes more. ``timing``: the laser
+    takes each beam at its own time (the scan starts at the pose's time; each beam is cast from the
+    truth interpolated at its time) and stamps and declares it as ``ScanTiming`` says; without it,
+    every beam at once, as a simulator does. ``odom_keep(t)`` False: that odometry message is not
+    written (a gap).
     """
     p = math.radians(pitch)
     tilt = np.array([[math.cos(p), 0, math.sin(p)], [0, 1, 0], [-math.sin(p), 0, math.cos(p)]])  # sensor -> level
@@ -170,21 +204,34 @@ def robot_bag(path: Path, world: World, truth: np.ndarray, *, drift: np.ndarray 
              "transform": {"translation": dict(zip("xyz", laser)),
                            "rotation": {"y": math.sin(p / 2), "w": math.cos(p / 2)}}}]})
         for (t, x, y, yaw), (ox, oy, oyaw), (dx, dy, dyaw) in zip(truth, odom, drift):
-            bag.write("/odom", "nav_msgs/msg/Odometry", t, {
-                "header": {"stamp": stamp(t), "frame_id": "odom"}, "child_frame_id": "base_link",
-                "pose": {"pose": pose_msg(ox, oy, oyaw)}})
+            if odom_keep is None or odom_keep(t):
+                bag.write("/odom", "nav_msgs/msg/Odometry", t, {
+                    "header": {"stamp": stamp(t), "frame_id": "odom"}, "child_frame_id": "base_link",
+                    "pose": {"pose": pose_msg(ox, oy, oyaw)}})
             if tf_map:
                 bag.write("/tf", "tf2_msgs/msg/TFMessage", t, {"transforms": [
                     {"header": {"stamp": stamp(t), "frame_id": "map"}, "child_frame_id": "odom",
                      "transform": {"translation": {"x": dx, "y": dy}, "rotation": quat(dyaw)}}]})
             lx, ly = x + math.cos(yaw) * laser[0], y + math.sin(yaw) * laser[0]
             world = world_at(t) if world_at is not None else world
-            if scans:
+            if scans and timing is None:
                 bag.write("/scan", "sensor_msgs/msg/LaserScan", t, {
                     "header": {"stamp": stamp(t), "frame_id": "laser"}, "angle_min": float(SCAN_ANGLES[0]),
                     "angle_max": float(SCAN_ANGLES[-1]), "angle_increment": float(SCAN_ANGLES[1] - SCAN_ANGLES[0]),
                     "range_min": 0.05, "range_max": 10.0,
                     "ranges": laser_ranges(world, lx, ly, yaw, SCAN_ANGLES, z=laser[2])})
+            elif scans:
+                bt = timing.beam_times(t)
+                bx, by, byaw = pose_at(truth, bt)
+                ranges = laser_ranges(world, bx + np.cos(byaw) * laser[0], by + np.sin(byaw) * laser[0], byaw,
+                                      SCAN_ANGLES, z=laser[2])
+                ti, st = timing.fields()
+                stamped = (bt[0] if timing.stamp == "start" else bt[-1]) + timing.stamp_error   # first / last in the array
+                bag.write("/scan", "sensor_msgs/msg/LaserScan", bt.max() + timing.latency, {
+                    "header": {"stamp": stamp(stamped), "frame_id": "laser"}, "angle_min": float(SCAN_ANGLES[0]),
+                    "angle_max": float(SCAN_ANGLES[-1]), "angle_increment": float(SCAN_ANGLES[1] - SCAN_ANGLES[0]),
+                    "time_increment": ti, "scan_time": st, "range_min": 0.05, "range_max": 10.0,
+                    "ranges": ranges})
             if cloud is not None:
                 args = {k: v for k, v in cloud.items() if k != "layout"}
                 pts = cloud_points(world, lx, ly, yaw, laser[2], **args) @ tilt   # level -> the sensor's axes

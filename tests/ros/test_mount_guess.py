@@ -69,9 +69,9 @@ def test_a_wrong_guess_is_an_error_about_the_mounting(tmp_path, capsys):
     assert len(seed.scenario.obstacles) == 1
 
 
-def test_something_that_moved_off_the_path_is_a_warning_not_an_error(tmp_path):
-    """A person stands 3 m ahead for the first 3 s, then walks away; the robot later drives through
-    where they stood. That is not a wrong mounting: the seed is written and a warning names it."""
+def test_someone_who_walked_away_is_carved_from_the_seed(tmp_path):
+    """A person stands 3 m ahead for the first 3 s, then walks away; the robot's later beams pass
+    through where they stood (issue 24: free space carved), so they are not in the seed at all."""
     from ros_synthetic import robot_bag
 
     t = np.arange(100) * 0.1
@@ -81,5 +81,21 @@ def test_something_that_moved_off_the_path_is_a_warning_not_an_error(tmp_path):
     empty = World(boxes=walls)
     path = robot_bag(tmp_path / "person", empty, drive, tf_map=False, world_at=lambda s: person if s < 3 else empty)
     seed = scenario_from_bag(path)
-    warn = [n for n in seed.notes if n.startswith("warning: pillar1 at (3.00, 0.00) lies where the robot drove")]
+    assert not [o for o in seed.scenario.obstacles if abs(o.y) < 0.8], seed.scenario.obstacles
+    assert any("crossed by later beams more often than hit" in n for n in seed.notes), seed.notes
+
+
+def test_something_that_stepped_onto_the_path_behind_the_robot_is_a_warning(tmp_path):
+    """A person steps onto the path 1.5 m behind the robot after it passed and stays there: seen in
+    every later scan, they are kept, on the driven path; not a wrong mounting: a warning names them."""
+    from ros_synthetic import robot_bag
+
+    t = np.arange(100) * 0.1
+    drive = np.stack([t, 0.5 * t, 0 * t, 0 * t], 1)
+    walls = [(2.5, 1.2, 8.0, 0.2, 0.0, 1.0), (2.5, -1.2, 8.0, 0.2, 0.0, 1.0)]
+    person = World(pillars=[(1.0, 0.0, 0.2, 1.7)], boxes=walls)
+    empty = World(boxes=walls)
+    path = robot_bag(tmp_path / "behind", empty, drive, tf_map=False, world_at=lambda s: person if s > 5 else empty)
+    seed = scenario_from_bag(path)
+    warn = [n for n in seed.notes if n.startswith("warning: pillar1 at (1.00, 0.00) lies where the robot drove")]
     assert len(warn) == 1 and "something that moved" in warn[0], seed.notes

@@ -194,7 +194,7 @@ def test_the_old_per_failure_shrink_budget_still_works(project):
 def test_the_summary_says_which_run_the_lowest_clearance_came_from():
     """Issue 23 item 4: "best clearance 0.029 m" beside frozen failures of 0.26-0.55 m read as a
     failure's; the summary says it is the lowest of any run and whether that run passed."""
-    from pytest_navscenario.plugin.search import lowest_clearance_text
+    from pytest_navscenario.plugin.search_report import lowest_clearance_text
     from pytest_navscenario.search.engine import Candidate, Failure, SearchReport
 
     def cand(sim, outcome, clearance, phase="search"):
@@ -207,3 +207,47 @@ def test_the_summary_says_which_run_the_lowest_clearance_came_from():
     assert lowest_clearance_text(report) == "lowest clearance of any run 0.029 m (sim 2, a run that passed)"
     report.candidates[1].clearance = 0.4
     assert lowest_clearance_text(report) == "lowest clearance of any run 0.260 m (sim 1, a safety-stop)"
+
+
+def test_a_search_draws_its_failures_and_writes_its_html_report(project):
+    """Issue 23 item 3: --nav-plots and --nav-html were ignored by a search ("0 scenario run(s)")."""
+    out = project.path / "scenarios" / "regressions" / "crate"
+    result = run(project, "--navsearch", "crate", "--budget", "8", "--navsearch-seed", "3",
+                 "--navsearch-shrink-budget", "0", "--nav-plots=failed", "--nav-html=search.html")
+    assert result.ret == 0, result.stdout.str()
+    frozen = sorted(out.glob("crate-*.yaml"))
+    assert frozen
+    pictures = sorted(out.glob("crate-*.png"))
+    assert [p.stem for p in pictures] == [p.stem for p in frozen]     # one beside each frozen file
+    assert all(p.stat().st_size > 20_000 for p in pictures)
+    result.stdout.fnmatch_lines([f"  pictures of {len(frozen)} failure(s) in scenarios/regressions/crate/ *"])
+    page = (project.path / "search.html").read_text()
+    assert "scenario run(s)" not in page and "navsearch report: crate" in page
+    assert f"{len(frozen)} distinct failure(s) frozen" in page
+    for path in frozen:
+        assert f"pytest scenarios/regressions/crate/{path.name} --nav-subject=straight_planner:Straight" in page
+    assert page.count('<section class="failure"') == len(frozen)
+    assert page.count("data:image/png;base64,") == len(frozen) + 1                  # + the progress chart
+    assert "crate vs straight_planner:Straight 1.0: progress" in page
+    assert "Discarded before simulation" in page and "lowest clearance of any run" in page
+    assert 'class="nav-view"' in page                                               # the time slider
+
+    # without --nav-plots (its default is for scenario items) a search draws nothing
+    for p in pictures:
+        p.unlink()
+    quiet = run(project, "--navsearch", "crate", "--budget", "8", "--navsearch-seed", "3",
+                "--navsearch-shrink-budget", "0")
+    assert quiet.ret == 0 and not list(out.glob("*.png"))
+
+
+def test_the_search_report_shows_a_failure_probability_column_when_rows_have_one(tmp_path):
+    """The page's data has room for what a search may learn about a failure beyond one run."""
+    from pytest_navscenario.report.search_page import FailureRow, Progress, SearchSection, build_search_html
+
+    row = FailureRow(file="scenarios/regressions/s/s-1.yaml", new=True, outcome="timeout", message="m",
+                     culprit="box", clearance=0.2, found_at=3, reproduce="pytest x")
+    section = SearchSection(title="s vs dwa", facts=[("budget", "8")], progress=Progress(), failures=[row])
+    assert "fails in" not in build_search_html([section])
+    row.probability, row.interval = 0.6, (0.31, 0.83)
+    page = build_search_html([section])
+    assert "<th>fails in</th>" in page and "60% <small>[31&ndash;83]</small>" in page

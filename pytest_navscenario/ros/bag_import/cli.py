@@ -10,6 +10,7 @@ import numpy as np
 from .clouds import CloudSettings
 from .frames import FRAMES
 from .reading import PATH_AS, BagImportError
+from .scans import STAMPS
 from .seed import scenario_from_bag
 
 
@@ -54,6 +55,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="laser (or 3D lidar) pose in the odometry child frame (m, m, degrees; e.g. --laser-pose "
                         "-0.064,0,0); default /tf_static, else the first /tf transforms, else guessed "
                         "from the scans among the common mountings (turned 0, 90, 180, -90 degrees)")
+    p.add_argument("--scan-stamp", choices=STAMPS, default="auto",
+                   help="what a scan's header stamp is: the scan's start (the ROS convention: its first beam), its "
+                        "end (drivers that stamp a scan when it is complete), or auto (default: told from how long "
+                        "after its stamp the bag received each scan; the output says which was used)")
+    p.add_argument("--scan-time-offset", type=float, default=0.0, metavar="SECONDS",
+                   help="add this to every scan's stamp, for a driver that stamps its scans late or early against "
+                        "the odometry (default 0)")
     p.add_argument("--frame", choices=FRAMES, default="auto",
                    help="the seed's world frame: auto (default: the map frame when the bag has map -> odom on /tf "
                         "or a pose topic in the map frame, else the odometry frame), map (an error without one), odom")
@@ -105,14 +113,19 @@ def import_bag(args: argparse.Namespace):
                              robot_radius=args.robot_radius, frame=args.frame, map_frame=args.map_frame,
                              pose_topic=args.pose_topic, cloud_topic=args.cloud_topic,
                              cloud=_cloud_settings(args), goal_topic=args.goal_topic, at=args.at,
-                             window=args.window)
+                             window=args.window, scan_stamp=args.scan_stamp, scan_offset=args.scan_time_offset)
     extra = {}
     if args.path_as != "waypoints":
         extra[csv_name] = reference_csv(seed.path)
+    if seed.fit is not None:
+        extra[f"{out.stem}.fit.json"] = seed.fit.to_json()
     write_seed(seed.scenario, out, extra_files=extra, force=args.force)
     for note in seed.notes:
         print(f"navscenario from-bag: {note}")
-    print(f"navscenario from-bag: wrote {out}" + (f" and {out.parent / csv_name}" if extra else ""))
+    print(f"navscenario from-bag: wrote {out}" + "".join(f" and {out.parent / name}" for name in extra))
+    for line in seed.fit.lines() if seed.fit is not None else ["no fit figure: the bag has no 2D laser scans to "
+                                                               "compare the seed with"]:
+        print(f"navscenario from-bag: {line}")
     return seed, out
 
 

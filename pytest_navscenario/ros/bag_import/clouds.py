@@ -46,6 +46,7 @@ def cloud_xyz(msg: Any, where: str) -> tuple[np.ndarray, int]:
                              f"(datatype {fields[bad[0]].datatype}); cannot read them as metres")
     order = ">" if msg.is_bigendian else "<"
     step, width, height = int(msg.point_step), int(msg.width), max(int(msg.height), 1)
+    _check_layout(msg, fields, step, width, height, where)
     dt = np.dtype({"names": list("xyz"), "formats": [order + FLOAT_TYPES[fields[n].datatype] for n in "xyz"],
                    "offsets": [int(fields[n].offset) for n in "xyz"], "itemsize": step})
     raw = np.frombuffer(memoryview(msg.data), np.uint8)
@@ -59,6 +60,31 @@ def cloud_xyz(msg: Any, where: str) -> tuple[np.ndarray, int]:
     if ok.all():
         return pts, 0
     return pts[ok], int(n - ok.sum())
+
+
+def _check_layout(msg: Any, fields: dict, step: int, width: int, height: int, where: str) -> None:
+    """A cloud whose header does not describe its data is refused with what does not fit (reading
+    it anyway would give points made of the wrong bytes)."""
+    if step <= 0:
+        raise BagImportError(f"{where}: the point cloud's point_step is {step}: each point must take at least "
+                             f"the bytes of its x, y, z; the cloud is not readable")
+    for name in "xyz":
+        f = fields[name]
+        size = np.dtype(FLOAT_TYPES[f.datatype]).itemsize
+        if int(f.offset) < 0 or int(f.offset) + size > step:
+            raise BagImportError(f"{where}: point cloud field {name} at offset {int(f.offset)} ({size} bytes) lies "
+                                 f"outside a point of point_step {step} bytes; the cloud's header is wrong")
+    row = int(msg.row_step) or step * width
+    if row < step * width:
+        raise BagImportError(f"{where}: the point cloud's row_step {row} is shorter than width {width} x point_step "
+                             f"{step} = {step * width} bytes; the cloud's header is wrong")
+    have = len(msg.data)
+    need = row * (height - 1) + step * width
+    if have < need:
+        per = f"; its data holds {have / (width * height):.4g} bytes a point" if width * height else ""
+        raise BagImportError(f"{where}: the point cloud's data is {have} bytes, but its header (width {width} x height "
+                             f"{height}, point_step {step}, row_step {row}) needs {need}{per}: point_step or the "
+                             f"size is wrong")
 
 
 def _quat_matrix(q: tuple[float, ...]) -> np.ndarray:
@@ -191,10 +217,10 @@ class CloudResult:
 def grid_clouds(data: BagData, laser_pose: tuple[float, float, float] | None, s: CloudSettings,
                 res: float) -> CloudResult:
     """Stream the bag's clouds on ``data.cloud_topic`` into a grid (one cloud in memory at a time)."""
-    from .reading import open_reader
+    from .reading import bag_pass
 
     g = CloudGrid(data, laser_pose, s, res)
-    with open_reader(data.path) as reader:
+    with bag_pass(data) as reader:
         conns = [c for c in reader.connections if c.topic == data.cloud_topic]
         for conn, bag_ns, raw in reader.messages(connections=conns):
             msg = reader.deserialize(raw, conn.msgtype)

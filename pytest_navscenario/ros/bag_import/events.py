@@ -9,19 +9,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from .frames import compose, held
+from .motion import STILL, resample, reverse_spans, runs, turn_spans
 from .reading import BagData
 
-STEP = 0.1            # s, resampling step of the odometry
-STILL = 0.02          # m/s, slower is standing still
 STOP_MIN = 2.0        # s, a stop shorter than this is not an event
-REVERSE = -0.05       # m/s, forward speed below this is driving backwards
-REVERSE_MIN = 0.5     # s
-TURN_RATE = 0.3       # rad/s, turning in place above this ...
-TURN_MIN = 3.0        # s, ... for this long
 NEAR_GOAL = 0.5       # m, closer than this the goal counts as reached
 
 
@@ -31,25 +27,6 @@ class Event:
     duration: float   # s
     kind: str         # stopped, reversed, turned, cmd-zero, close
     text: str
-
-
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """(first, last + 1) index pairs of the runs of True in ``mask``."""
-    d = np.diff(np.r_[0, mask.astype(np.int8), 0])
-    return list(zip(np.nonzero(d == 1)[0], np.nonzero(d == -1)[0]))
-
-
-def _motion(od: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Resampled times, poses (k, 3), forward speed and yaw rate (central differences over 0.4 s)."""
-    t = np.arange(od[0, 0], od[-1, 0] + 1e-9, STEP)
-    pose = np.stack([np.interp(t, od[:, 0], od[:, 1]), np.interp(t, od[:, 0], od[:, 2]),
-                     np.interp(t, od[:, 0], np.unwrap(od[:, 3]))], 1)
-    k = 2
-    d = np.zeros_like(pose)
-    if len(t) > 2 * k:
-        d[k:-k] = (pose[2 * k:] - pose[:-2 * k]) / (2 * k * STEP)
-    fwd = d[:, 0] * np.cos(pose[:, 2]) + d[:, 1] * np.sin(pose[:, 2])
-    return t, pose, fwd, d[:, 2]
 
 
 def _goal_distance(data: BagData, corr: np.ndarray | None, t: np.ndarray, pose: np.ndarray) -> np.ndarray:
@@ -75,11 +52,11 @@ def find_events(data: BagData, corr: np.ndarray | None, robot_radius: float, mar
     od = data.full_odom
     if corr is not None:
         od = np.c_[od[:, 0], compose(held(corr, od[:, 0]), od[:, 1:4])]
-    t, pose, fwd, rate = _motion(od)
+    t, pose, fwd, rate = resample(od)
     goal = _goal_distance(data, corr, t, pose)
     speed = np.abs(fwd)
     events: list[Event] = []
-    for a, b in _runs((speed < STILL) & (np.abs(rate) < 0.05)):
+    for a, b in runs((speed < STILL) & (np.abs(rate) < 0.05)):
         dur = t[b - 1] - t[a]
         if dur < STOP_MIN or a == 0:
             continue
@@ -88,16 +65,14 @@ def find_events(data: BagData, corr: np.ndarray | None, robot_radius: float, mar
             events.append(Event(t[a], dur, "stopped", f"stopped {g:.1f} m from the goal for {dur:.1f} s"))
         elif b < len(t):
             events.append(Event(t[a], dur, "stopped", f"stopped for {dur:.1f} s, then drove on (no goal recorded)"))
-    for a, b in _runs(fwd < REVERSE):
-        if t[b - 1] - t[a] >= REVERSE_MIN:
-            dist = float(np.hypot(*(pose[b - 1, :2] - pose[a, :2])))
-            events.append(Event(t[a], t[b - 1] - t[a], "reversed", f"drove backwards {dist:.1f} m"))
-    for a, b in _runs((np.abs(rate) > TURN_RATE) & (speed < 2 * STILL + 0.03)):
-        if t[b - 1] - t[a] >= TURN_MIN:
-            # the differences blur each end by 2 steps: measure the turn over the run widened by them
-            turn = math.degrees(abs(pose[min(b + 1, len(t) - 1), 2] - pose[max(a - 2, 0), 2]))
-            events.append(Event(t[a], t[b - 1] - t[a], "turned", f"turned in place {turn:.0f} deg in "
-                                                                    f"{t[b - 1] - t[a]:.1f} s"))
+    for a, b in reverse_spans(t, fwd):
+        dist = float(np.hypot(*(pose[b - 1, :2] - pose[a, :2])))
+        events.append(Event(t[a], t[b - 1] - t[a], "reversed", f"drove backwards {dist:.1f} m"))
+    for a, b in turn_spans(t, fwd, rate):
+        # the differences blur each end by 2 steps: measure the turn over the run widened by them
+        turn = math.degrees(abs(pose[min(b + 1, len(t) - 1), 2] - pose[max(a - 2, 0), 2]))
+        events.append(Event(t[a], t[b - 1] - t[a], "turned", f"turned in place {turn:.0f} deg in "
+                                                                f"{t[b - 1] - t[a]:.1f} s"))
     events += _command_drops(data, t, goal)
     events += _close_returns(np.zeros((0, 2)) if nearest is None else nearest, robot_radius, margin)
     return sorted(events, key=lambda e: (e.t, e.kind))
@@ -119,14 +94,20 @@ def _command_drops(data: BagData, t: np.ndarray, goal: np.ndarray) -> list[Event
 
 
 def scan_nearest(data: BagData, mount: tuple[float, float, float]) -> np.ndarray:
-    """(k, 2) time and distance from the base to the nearest valid return of each scan."""
-    mx, my, myaw = mount
-    rng = data.scan_ranges.astype(float)
-    valid = np.isfinite(rng) & (rng > data.range_min) & (rng < data.range_max * 0.99)
-    rng = np.where(valid, rng, 0.0)
-    ang = data.scan_angles[None, :] + myaw
-    dist = np.hypot(mx + rng * np.cos(ang), my + rng * np.sin(ang))
-    return np.stack([data.scan_t, np.where(valid, dist, np.inf).min(axis=1)], 1)
+    """(k, 2) time and distance from the base to the nearest valid return of each scan, streamed
+    (scans.stream_scans: one batch in memory, however long the bag)."""
+    from .projection import beam_rays, poses_at
+    from .streaming import stream_scans
+
+    rows = []
+    for batch in stream_scans(data):
+        r = beam_rays(data, batch, mount)
+        rng = np.where(r.valid, r.range, 0.0).astype(float)
+        px, py = r.ox + rng * np.cos(r.angle), r.oy + rng * np.sin(r.angle)
+        base = poses_at(data, np.broadcast_to(r.t, r.range.shape))
+        dist = np.where(r.valid, np.hypot(px - base[..., 0], py - base[..., 1]), np.inf)
+        rows.append(np.stack([batch.t, dist.min(axis=1)], 1))
+    return np.concatenate(rows) if rows else np.zeros((0, 2))
 
 
 def _close_returns(nearest: np.ndarray, radius: float, margin: float) -> list[Event]:
@@ -135,7 +116,7 @@ def _close_returns(nearest: np.ndarray, radius: float, margin: float) -> list[Ev
         return []
     gap = nearest[:, 1] - radius
     out = []
-    for a, b in _runs(gap < margin):
+    for a, b in runs(gap < margin):
         g = float(gap[a:b].min())
         out.append(Event(float(nearest[a, 0]), float(nearest[b - 1, 0] - nearest[a, 0]), "close",
                          f"nearest return {g * 100:.0f} cm from the footprint (margin {margin * 100:.0f} cm)"))
@@ -155,12 +136,21 @@ def bag_events(path, *, odom_topic: str | None = None, scan_topic: str | None = 
                pose_topic: str | None = None, laser_pose: tuple[float, float, float] | None = None,
                robot_radius: float | None = None, margin: float = 0.05) -> tuple[list[Event], list[str]]:
     """The candidate moments of a whole bag, and notes on the frame and sensors used."""
+    from .reading import close_bag, open_bag, read_bag
+
+    reader = open_bag(Path(path))    # one open bag for both passes
+    try:
+        data = read_bag(path, odom_topic=odom_topic, scan_topic=scan_topic, cloud_topic=cloud_topic, reader=reader)
+        return _events(data, frame, map_frame, pose_topic, laser_pose, robot_radius, margin)
+    finally:
+        close_bag(reader)
+
+
+def _events(data: BagData, frame, map_frame, pose_topic, laser_pose, robot_radius, margin):
     from .footprint import footprint_from_bag, inner_radius
     from .frames import to_world_frame
     from .mount import choose_mount
-    from .reading import read_bag
 
-    data = read_bag(path, odom_topic=odom_topic, scan_topic=scan_topic, cloud_topic=cloud_topic)
     corr = to_world_frame(data, frame, map_frame, pose_topic, data.full_odom)
     notes = list(data.notes)
     fp, how, _ = footprint_from_bag(data, robot_radius)
@@ -171,7 +161,11 @@ def bag_events(path, *, odom_topic: str | None = None, scan_topic: str | None = 
         mount, how = choose_mount(data, laser_pose)
         notes.append(f"laser {data.scan_frame} at x={mount[0]:.3f} y={mount[1]:.3f} "
                      f"yaw={math.degrees(mount[2]):.1f} deg in {data.base_frame}, {how}")
+        from .projection import settle_timing
+        settle_timing(data, mount)
         nearest = scan_nearest(data, mount)
+        from .streaming import stream_notes
+        notes.extend(stream_notes(data))
     elif data.cloud_topic is not None:
         from .clouds import CloudSettings, grid_clouds
         clouds = grid_clouds(data, laser_pose, CloudSettings(near=radius), 0.05)

@@ -119,7 +119,9 @@ def to_world_frame(data: BagData, frame: str = "auto", map_frame: str = "map",
     data.notes.append(f"world frame: {map_frame}, odometry corrected with {source}")
     if corr[0, 0] > od[0, 0] + 1e-6:
         data.notes.append(f"the first correction is at t={corr[0, 0]:.1f} s: it is used before it too")
+    sensed = "scans" if data.scan_topic else "clouds" if data.cloud_topic else None
     for t, d, a in jumps(corr):
         data.notes.append(f"relocalisation jump at t={t:.1f} s: {map_frame} -> {data.odom_frame} moved {d:.2f} m, "
-                          f"{a:.0f} deg; scans on each side are placed with their own correction")
+                          f"{a:.0f} deg" + (f"; {sensed} on each side are placed with their own correction"
+                                            if sensed else ""))
     return corr

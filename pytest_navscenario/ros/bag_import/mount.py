@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 
-from .projection import project_scans
+from .projection import beam_rays, cell_count
 from .reading import BagData
 
 
@@ -29,32 +29,36 @@ def laser_mount(data: BagData, source: str = "/tf_static") -> tuple[float, float
 
 
 
-def _sharpness(points: np.ndarray, res: float) -> int:
-    cells = np.floor(points / res).astype(np.int64)
-    return len(np.unique(cells[:, 0] * 1_000_003 + cells[:, 1]))
-
-
 GUESS_YAWS = (0.0, 90.0, 180.0, -90.0)       # degrees: the laser turned as lasers commonly are
 GUESS_OFFSETS = np.round(np.arange(-0.16, 0.1601, 0.016), 3)   # m, ahead of the base frame
 GUESS_TRIED = (f"the laser turned {', '.join(f'{y:g}' for y in GUESS_YAWS)} degrees at forward offsets "
                f"{GUESS_OFFSETS[0]:g}..{GUESS_OFFSETS[-1]:g} m, kept the sharpest map")
 
 
-def estimate_mount(data: BagData, res: float = 0.02) -> tuple[float, float, float]:
+def estimate_mount(data: BagData, res: float = 0.02, sample=None) -> tuple[float, float, float]:
     """The common mounting (turned 0, 90, 180 or -90 degrees, forward offset) that makes the
-    accumulated map sharpest (fewest occupied cells).
+    accumulated map sharpest (fewest occupied cells), on ``sample`` (scans.ScanBatch; default
+    150 scans spread over the window).
 
     Used when the bag has no /tf_static and no --laser-pose is given: a laser mounted behind the
     base frame (TurtleBot3 Waffle: -0.064 m) smears round obstacles into rings, a laser turned
     backwards mirrors the world around the robot.
     """
-    sub = slice(None, None, max(1, len(data.scan_t) // 150))  # 150 scans suffice to compare
-    part = BagData(path=data.path, odom_topic=data.odom_topic, odom_frame=data.odom_frame,
-                   base_frame=data.base_frame, odom=data.odom, scan_t=data.scan_t[sub],
-                   scan_ranges=data.scan_ranges[sub], scan_angles=data.scan_angles,
-                   range_min=data.range_min, range_max=data.range_max)
+    from .streaming import sample_scans
+
+    part = sample if sample is not None else sample_scans(data, 150)   # 150 scans suffice to compare
+    base = beam_rays(data, part, (0.0, 0.0, 0.0))     # the base's pose at each beam; the mount varies below
+    px, py = base.ox[base.valid], base.oy[base.valid]
+    pyaw = np.broadcast_to(base.angle - data.scan_layout.angles[None, :], base.range.shape)[base.valid]
+    rng = base.range[base.valid].astype(float)
+    pc, ps = np.cos(pyaw), np.sin(pyaw)
+    bx, by = rng * np.cos(base.angle[base.valid]), rng * np.sin(base.angle[base.valid])
+
     def score(dx: float, yaw: float) -> int:
-        return _sharpness(project_scans(part, (float(dx), 0.0, math.radians(yaw)))[0], res)
+        c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
+        x = px + dx * pc + c * bx - s * by
+        y = py + dx * ps + s * bx + c * by
+        return cell_count(np.stack([x, y], 1), res)
 
     # a wrong turn smears far more than a wrong offset: pick the turn on every 5th offset, then the offset
     yaw = min(GUESS_YAWS, key=lambda y: min(score(dx, y) for dx in GUESS_OFFSETS[::5]))

@@ -1,6 +1,6 @@
 """Clustering the occupied cells and fitting obstacles: cylinders for round clusters, one box for
-a compact block, else oriented boxes for straight runs. Box walls are placed behind the observed
-surface, away from the viewpoints that saw it, so the free space the robot drove through stays free."""
+a compact block, else the cluster's outline as few simplified polygons (outline.py): a wall is one
+thin polygon along it, not a fan of boxes."""
 from __future__ import annotations
 
 import dataclasses
@@ -9,7 +9,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...scenario.model import BoxObstacle, CylinderObstacle, Obstacle
+from ...scenario.model import BoxObstacle, CylinderObstacle, Obstacle, PolygonObstacle
+from .outline import cell_outlines
 from .projection import Grid
 
 
@@ -18,18 +19,23 @@ class Cluster:
     points: np.ndarray    # (k, 2) per-cell mean of the returns
     viewpoint: np.ndarray  # (2,) mean laser position that saw them
     height: float | None = None  # m, highest return above the ground (3D sensors), else None
+    cells: np.ndarray | None = None   # (k, 2) the cells (column, row), for the outline
+    views: np.ndarray | None = None   # (k, 2) where each cell was seen from (mean laser position)
 
 
-
-def occupied_clusters(grid: Grid, *, min_hits: int = 2, link: float = 0.3,
-                      min_cells: int = 3) -> tuple[list[Cluster], int]:
-    """Keep cells hit ``min_hits`` times, group cells closer than ``link`` (sparse beams leave
-    gaps along a far face; a robot does not fit through ``link`` anyway).
+def occupied_clusters(grid: Grid, *, min_hits: int = 2, link: float = 0.3, min_cells: int = 3,
+                      occupied: np.ndarray | None = None) -> tuple[list[Cluster], int]:
+    """Keep cells hit ``min_hits`` times (and, given ``occupied`` (k,) bool per cell of ``grid``,
+    only those: the occupancy grid's verdict after free space was carved), group cells closer than
+    ``link`` (sparse beams leave gaps along a far face; a robot does not fit through ``link`` anyway).
 
     Returns the clusters and the number of small clusters (< ``min_cells``) dropped as noise.
     """
     kept = grid.counts >= min_hits
+    if occupied is not None:
+        kept &= occupied
     means = grid.means[kept]
+    cells = grid.cells[kept] if grid.keys is not None else None
     top = grid.top[kept] if grid.top is not None else None
     clusters, dropped = [], 0
     for members in _groups(means[:, :2], link):
@@ -38,7 +44,8 @@ def occupied_clusters(grid: Grid, *, min_hits: int = 2, link: float = 0.3,
             continue
         m = means[members]
         height = float(np.nanmax(top[members])) if top is not None and np.isfinite(top[members]).any() else None
-        clusters.append(Cluster(points=m[:, :2], viewpoint=m[:, 2:].mean(axis=0), height=height))
+        clusters.append(Cluster(points=m[:, :2], viewpoint=m[:, 2:].mean(axis=0), height=height,
+                                cells=None if cells is None else cells[members], views=m[:, 2:]))
     return clusters, dropped
 
 
@@ -86,12 +93,9 @@ class FitSettings:
     res: float = 0.05             # m, grid cell
     max_radius: float = 0.6       # m, largest round obstacle fitted as a cylinder
     circle_rms: float = 0.025     # m, max RMS residual of a cylinder fit
-    line_tol: float = 0.06        # m, max distance of a point from a wall line
-    gap: float = 0.3              # m, a wall line breaks at gaps wider than this
-    min_segment: float = 0.2      # m, shorter wall pieces are left to the box fallback
-    wall_width: float = 0.15      # m, thickness of a wall box (only its near face is seen)
     max_block: float = 2.5        # m, longest side of a cluster fitted as one solid box
     link: float = 0.3             # m, returns closer than this belong to one obstacle
+    wall_depth: float = 0.15      # m, a wall's outline reaches this far behind its seen face
 
 
 def _round(points: np.ndarray, s: FitSettings) -> tuple[float, float, float] | None:
@@ -108,84 +112,8 @@ def _round(points: np.ndarray, s: FitSettings) -> tuple[float, float, float] | N
     return cx, cy, r
 
 
-def _box_from_points(name: str, points: np.ndarray, viewpoint: np.ndarray, s: FitSettings,
-                     direction: np.ndarray | None = None) -> BoxObstacle:
-    """An oriented box around ``points``; a thin piece is thickened away from ``viewpoint``."""
-    centre = points.mean(axis=0)
-    if direction is None:
-        if len(points) >= 2:
-            _, vecs = np.linalg.eigh(np.cov((points - centre).T))
-            direction = vecs[:, 1]
-        else:
-            direction = np.array([1.0, 0.0])
-    d = direction / np.linalg.norm(direction)
-    n = np.array([-d[1], d[0]])
-    along = (points - centre) @ d
-    across = (points - centre) @ n
-    lo_a, hi_a = along.min() - s.res / 2, along.max() + s.res / 2
-    lo_n, hi_n = across.min() - s.res / 2, across.max() + s.res / 2
-    if hi_n - lo_n < s.wall_width:
-        side = float((viewpoint - centre) @ n)   # the viewer's side stays where it was
-        if side >= 0:
-            lo_n = hi_n - s.wall_width
-        else:
-            hi_n = lo_n + s.wall_width
-    mid = centre + d * (lo_a + hi_a) / 2 + n * (lo_n + hi_n) / 2
-    yaw = math.degrees(math.atan2(d[1], d[0]))
-    yaw = (yaw + 90.0) % 180.0 - 90.0  # a box is symmetric: keep yaw in [-90, 90)
-    return BoxObstacle(name=name, x=_r(mid[0]), y=_r(mid[1]), length=_r(hi_a - lo_a),
-                       width=_r(hi_n - lo_n), yaw=_r(yaw, 2))
-
-
 def _r(v: float, nd: int = 3) -> float:
     return float(round(float(v), nd)) + 0.0
-
-
-def _lines(points: np.ndarray, s: FitSettings) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Split points into straight runs (Hough peak, PCA refine, split at gaps): (points, direction)."""
-    out = []
-    rest = points
-    thetas = np.radians(np.arange(0.0, 180.0, 1.0))
-    cs, sn = np.cos(thetas), np.sin(thetas)
-    for _ in range(64):
-        if len(rest) < 4:
-            break
-        rho = rest[:, 0:1] * cs + rest[:, 1:2] * sn           # (k, 180)
-        bins = np.round(rho / s.line_tol).astype(np.int64)
-        best = (0, 0, 0)
-        for j in range(len(thetas)):
-            vals, cnt = np.unique(bins[:, j], return_counts=True)
-            k = int(cnt.argmax())
-            if cnt[k] > best[0]:
-                best = (int(cnt[k]), j, int(vals[k]))
-        count, j, b = best
-        if count < 4:
-            break
-        inl = np.abs(rho[:, j] - b * s.line_tol) <= s.line_tol
-        pts = rest[inl]
-        centre = pts.mean(axis=0)
-        _, vecs = np.linalg.eigh(np.cov((pts - centre).T))
-        d = vecs[:, 1]
-        nrm = np.array([-d[1], d[0]])
-        inl = np.abs((rest - centre) @ nrm) <= s.line_tol
-        pts = rest[inl]
-        along = (pts - centre) @ d
-        order = np.argsort(along)
-        pts, along = pts[order], along[order]
-        breaks = np.nonzero(np.diff(along) > s.gap)[0] + 1
-        used = np.zeros(len(pts), bool)
-        for run_idx in np.split(np.arange(len(pts)), breaks):
-            run = pts[run_idx]
-            if len(run) >= 4 and along[run_idx[-1]] - along[run_idx[0]] >= s.min_segment:
-                out.append((run, d))
-                used[run_idx] = True
-        if not used.any():
-            break
-        keep = np.ones(len(rest), bool)
-        keep[np.nonzero(inl)[0][order[used]]] = False
-        rest = rest[keep]
-    out.append((rest, None))  # leftovers, possibly empty
-    return out
 
 
 def _compact_box(points: np.ndarray, free_xy: np.ndarray | None, s: FitSettings) -> BoxObstacle | None:
@@ -216,13 +144,14 @@ def _compact_box(points: np.ndarray, free_xy: np.ndarray | None, s: FitSettings)
 
 
 def fit_obstacles(clusters: list[Cluster], s: FitSettings = FitSettings(),
-                  free_xy: np.ndarray | None = None) -> list[Obstacle]:
-    """Cylinders for round clusters, one box for a compact block, else oriented boxes for the
-    straight runs and small leftovers. ``free_xy``: positions the robot drove through."""
+                  free_xy: np.ndarray | None = None, seen_free=None) -> list[Obstacle]:
+    """Cylinders for round clusters, one box for a compact block, else the cluster's outline as
+    simplified wall polygons. ``free_xy``: positions the robot drove through; ``seen_free(columns,
+    rows)``: which cells the beams saw free (a wall's outline stays out of them)."""
     obstacles: list[Obstacle] = []
     for cl in sorted(clusters, key=lambda c: (round(float(c.points[:, 0].mean()), 3),
                                                round(float(c.points[:, 1].mean()), 3))):
-        fitted = _fit_cluster(cl, s, free_xy)
+        fitted = _fit_cluster(cl, s, free_xy, seen_free)
         if cl.height is not None:  # a 3D sensor saw how tall it is (a low obstacle keeps its height)
             fitted = [dataclasses.replace(o, height=_r(max(cl.height, 0.02), 2)) for o in fitted]
         obstacles.extend(fitted)
@@ -236,21 +165,27 @@ def fit_obstacles(clusters: list[Cluster], s: FitSettings = FitSettings(),
     return named
 
 
-def _fit_cluster(cl: Cluster, s: FitSettings, free_xy: np.ndarray | None) -> list[Obstacle]:
-    """A cylinder, one compact box, or boxes for the straight runs and leftovers of one cluster
-    (numbered per cluster; the caller numbers them again)."""
+def _fit_cluster(cl: Cluster, s: FitSettings, free_xy: np.ndarray | None, seen_free=None) -> list[Obstacle]:
+    """A cylinder, one compact box, or the cluster's outline as simplified polygons (numbered per
+    cluster; the caller numbers them again)."""
     circle = _round(cl.points, s)
     if circle is not None:
         return [CylinderObstacle(name="pillar", x=_r(circle[0]), y=_r(circle[1]), radius=_r(circle[2]))]
     block = _compact_box(cl.points, free_xy, s)
     if block is not None:
         return [dataclasses.replace(block, name="box")]
-    out: list[Obstacle] = []
-    for pts, direction in _lines(cl.points, s):
-        # leftovers of the line search (corners, stubs) are boxed per local group
-        groups = [pts] if direction is not None else [pts[g] for g in _groups(pts, 1.5 * s.res)]
-        out.extend(_box_from_points("wall", grp, cl.viewpoint, s, direction) for grp in groups if len(grp) >= 3)
-    return out
+    cells = cl.cells if cl.cells is not None else np.unique(np.floor(cl.points / s.res).astype(np.int64), axis=0)
+    views = cl.views if cl.views is not None and cl.cells is not None else None
+    return [_polygon("wall", poly) for poly in cell_outlines(cells, s.res, link=s.link, viewpoints=views,
+                                                             depth=s.wall_depth, seen_free=seen_free,
+                                                             points=cl.points if cl.cells is not None else None)]
+
+
+def _polygon(name: str, poly) -> PolygonObstacle:
+    """A polygon obstacle placed at the outline's centroid, its corners relative to it."""
+    c = poly.centroid
+    pts = tuple((_r(x - c.x), _r(y - c.y)) for x, y in list(poly.exterior.coords)[:-1])
+    return PolygonObstacle(name=name, x=_r(c.x), y=_r(c.y), points=pts)
 
 
 def _drop_contained(obstacles: list[Obstacle], share: float = 0.5) -> list[Obstacle]:

@@ -5,6 +5,7 @@ Reads ROS 1 bags, rosbag2 sqlite3 and MCAP (also old ROS 2 bags with no embedded
 definitions) with ``rosbags``."""
 from __future__ import annotations
 
+import array
 import contextlib
 import math
 from dataclasses import dataclass, field
@@ -39,11 +40,15 @@ class BagData:
     odom: np.ndarray                  # (n, 4) t, x, y, yaw (rad) in the time window, in the world frame
     scan_topic: str | None = None
     scan_frame: str = ""
-    scan_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    scan_ranges: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), np.float32))
-    scan_angles: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    range_min: float = 0.0
-    range_max: float = math.inf
+    # scans are not held: their layout and timing are read in the first pass, the scans themselves
+    # streamed in a second (scans.stream_scans); ``scan_received`` are the bag's receive times (ns)
+    # of every scan, for picking a sample without reading them
+    scan_layout: Any = None                              # scans.ScanLayout
+    scan_timing: Any = None                              # scans.ScanTiming
+    scan_stats: Any = None                               # scans.StreamStats of the last streamed pass
+    scan_received: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    scan_probe: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # s: stamp, receive time (a sample)
+    scan_probe_ranges: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), np.float32))  # its ranges
     static_tf: dict[str, tuple[str, float, float, float]] = field(default_factory=dict)  # child -> (parent, x, y, yaw)
     first_tf: dict[str, tuple[str, float, float, float]] = field(default_factory=dict)   # the same, first seen on /tf
     notes: list[str] = field(default_factory=list)
@@ -63,6 +68,19 @@ class BagData:
     cloud_count: int = 0
     frame: str = ""                                      # the seed's world frame (odometry or map)
     known_map: Any = None                                # the last OccupancyGrid on /map (known_map.KnownMap)
+    reader: Any = field(default=None, repr=False)        # the open bag the later passes reuse (or None)
+
+    @property
+    def scan_angles(self) -> np.ndarray:
+        return self.scan_layout.angles if self.scan_layout is not None else np.zeros(0)
+
+    @property
+    def range_min(self) -> float:
+        return self.scan_layout.range_min if self.scan_layout is not None else 0.0
+
+    @property
+    def range_max(self) -> float:
+        return self.scan_layout.range_max if self.scan_layout is not None else math.inf
 
 
 def _pick(path: Path, connections: list, wanted: str | None, types: Sequence[str], what: str,
@@ -95,24 +113,43 @@ def _pick(path: Path, connections: list, wanted: str | None, types: Sequence[str
 
 def read_bag(path: str | Path, *, odom_topic: str | None = None, scan_topic: str | None = None,
              start: float | None = None, end: float | None = None, cloud_topic: str | None = None,
-             at: float | None = None, window: float = 30.0) -> BagData:
-    """Read odometry, laser scans and static transforms; ``start``/``end`` are seconds after
-    the first odometry message (message header stamps; the bag's receive time where a stamp is
-    zero); ``at`` with ``window``: the ``window`` seconds before the moment ``at`` instead.
+             at: float | None = None, window: float = 30.0, scan_stamp: str = "auto",
+             scan_offset: float = 0.0, reader: Any = None) -> BagData:
+    """Read odometry, the laser's layout and timing, and static transforms; ``start``/``end`` are
+    seconds after the first odometry message (message header stamps; the bag's receive time where a
+    stamp is zero); ``at`` with ``window``: the ``window`` seconds before the moment ``at`` instead
+    (to the end of a turn in place or reversing under way at ``at``). The scans themselves are
+    streamed later (``scans.stream_scans``); ``scan_stamp`` ("auto", "start", "end") and
+    ``scan_offset`` (s) say when they were taken (``scans.choose_timing``). ``reader``: an open
+    bag (``open_bag``) that the later passes reuse; the caller closes it.
     Raises BagImportError naming the file and what is missing."""
     path = Path(path)
     if scan_topic and cloud_topic:
         raise BagImportError("--scan-topic and --cloud-topic: give one (obstacles come from a laser or a 3D lidar)")
-    with open_reader(path) as reader:
-        return _read(reader, path, odom_topic, scan_topic, (start, end, at, window), cloud_topic)
+    from .scans import STAMPS
+    if scan_stamp not in STAMPS:
+        raise BagImportError(f"--scan-stamp must be one of {', '.join(STAMPS)}, got {scan_stamp!r}")
+    if not (math.isfinite(scan_offset) and abs(scan_offset) <= 10.0):
+        raise BagImportError(f"--scan-time-offset must be a number of seconds in [-10, 10], got {scan_offset}")
+    if reader is not None:
+        data = _read(reader, path, odom_topic, scan_topic, (start, end, at, window), cloud_topic,
+                     (scan_stamp, scan_offset))
+        data.reader = reader
+        return data
+    opened = open_bag(path)
+    try:
+        return _read(opened, path, odom_topic, scan_topic, (start, end, at, window), cloud_topic,
+                     (scan_stamp, scan_offset))
+    finally:
+        close_bag(opened)
 
 
-@contextlib.contextmanager
-def open_reader(path: Path):
-    """An open rosbags AnyReader on ``path``; a bad or damaged bag is a BagImportError naming it."""
+def open_bag(path: Path) -> Any:
+    """An opened rosbags AnyReader on ``path`` (close it when done); a bad file is a BagImportError."""
     from rosbags.highlevel import AnyReader
     from rosbags.typesys import Stores, get_typestore
 
+    path = Path(path)
     if not path.exists():
         raise BagImportError(f"{path}: no such bag file or folder")
     try:
@@ -121,17 +158,48 @@ def open_reader(path: Path):
     except Exception as exc:  # rosbags raises several unrelated types for a bad file
         what = "a damaged or truncated bag" if _has_bag_magic(path) else "not a readable ROS 1 / rosbag2 bag"
         raise BagImportError(f"{path}: {what} ({_reason(exc)})") from None
+    return reader
+
+
+def close_bag(reader: Any) -> None:
     try:
-        yield reader
+        reader.close()
+    except Exception:
+        pass
+
+
+@contextlib.contextmanager
+def read_errors(path: Path):
+    """Errors while reading messages (rosbags raises many kinds) as one BagImportError naming the bag."""
+    try:
+        yield
     except NavScenarioError:
         raise
     except Exception as exc:
         raise BagImportError(f"{path}: bag is damaged or truncated ({_reason(exc)})") from None
+
+
+@contextlib.contextmanager
+def open_reader(path: Path):
+    """An open rosbags AnyReader on ``path``; a bad or damaged bag is a BagImportError naming it."""
+    reader = open_bag(path)
+    try:
+        with read_errors(path):
+            yield reader
     finally:
-        try:
-            reader.close()
-        except Exception:
-            pass
+        close_bag(reader)
+
+
+@contextlib.contextmanager
+def bag_pass(data: "BagData"):
+    """A reader for another pass over ``data``'s bag: the one its caller keeps open
+    (``data.reader``: the bag's index and message types are read once), else a new one."""
+    if data.reader is not None:
+        with read_errors(data.path):
+            yield data.reader
+    else:
+        with open_reader(data.path) as reader:
+            yield reader
 
 
 _MAGICS = (b"#ROSBAG V2.0", b"\x89MCAP", b"SQLite format 3")
@@ -155,12 +223,18 @@ def _reason(exc: Exception) -> str:
     return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
-def _stamp(header: Any, bag_ns: int) -> int:
+def stamp_ns(header: Any, bag_ns: int) -> int:
+    """A message's header stamp in ns; the bag's receive time where the stamp is zero."""
     ns = int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
     return ns if ns > 0 else bag_ns
 
 
-def _read(reader: Any, path: Path, odom_topic, scan_topic, cut: tuple, cloud_topic=None) -> BagData:
+_stamp = stamp_ns
+PROBE = 150           # scans read in the first pass: the driver's timing, the laser mount's guess
+
+
+def _read(reader: Any, path: Path, odom_topic, scan_topic, cut: tuple, cloud_topic=None,
+          timing: tuple[str, float] = ("auto", 0.0)) -> BagData:
     conns = list(reader.connections)
     odom_name = _pick(path, conns, odom_topic, ODOM_TYPES, "odometry", "--odom-topic", ("/odom",), True)
     scan_name = None if cloud_topic else \
@@ -168,12 +242,17 @@ def _read(reader: Any, path: Path, odom_topic, scan_topic, cut: tuple, cloud_top
     cloud_name = None if scan_name else \
         _pick(path, conns, cloud_topic, CLOUD_TYPES, "point cloud", "--cloud-topic", CLOUD_TOPICS, False)
     roles = {c.topic: role(c.topic, c.msgtype) for c in conns}
-    # the clouds are big: they are read in a second pass, one at a time (clouds.py), not here
+    # scans and clouds are big: they are streamed in a second pass (scans.py, clouds.py), not held here
     wanted = [c for c in conns if c.topic in (odom_name, scan_name) or roles[c.topic]]
-    col = _Collector(odom_name, scan_name, roles, _scan_window(*cut))
-    for conn, bag_ns, raw in reader.messages(connections=wanted):
-        col.take(conn.topic, reader.deserialize(raw, conn.msgtype), bag_ns)
-    if not col.odom:
+    scan_count = sum(int(getattr(c, "msgcount", 0) or 0) for c in conns if c.topic == scan_name)
+    col = _Collector(odom_name, scan_name, roles, probe_every=max(1, scan_count // PROBE))
+    with read_errors(path):    # only the reading: a mistake of ours is not called a damaged bag
+        for conn, bag_ns, raw in reader.messages(connections=wanted):
+            if conn.topic == scan_name:
+                col.scan_seen(reader, conn, raw, bag_ns)
+            else:
+                col.take(conn.topic, reader.deserialize(raw, conn.msgtype), bag_ns)
+    if not len(col.odom):
         raise BagImportError(f"{path}: topic {odom_name} has no messages; record odometry or choose "
                              f"another topic with --odom-topic")
     data, origin = _odometry(path, col, odom_name, *cut)
@@ -186,21 +265,26 @@ def _read(reader: Any, path: Path, odom_topic, scan_topic, cut: tuple, cloud_top
         data.notes.append(f"no laser scan topic (and no point cloud) in {path.name}: the seed has the "
                           f"trajectory only, no obstacles")
         return data
-    _attach_scans(data, col, scan_name, origin)
+    _attach_scans(data, col, scan_name, origin, *timing)
     return data
 
 
 class _Collector:
-    """What the first pass over the bag's messages keeps: odometry poses, scans of the first scan's
-    beam layout, transforms, localisation poses, goals, velocity commands, the robot's description
-    and footprint."""
+    """What the first pass over the bag's messages keeps: odometry poses, the scans' layout and a
+    few of them (their timing), transforms, localisation poses, goals, velocity commands, the
+    robot's description and footprint. Odometry is packed into a flat array of floats (32 bytes a
+    message), not a list of tuples."""
 
-    def __init__(self, odom_name: str, scan_name: str | None, roles: dict,
-                 window: tuple[float, float] = (-math.inf, math.inf)):
+    def __init__(self, odom_name: str, scan_name: str | None, roles: dict, probe_every: int = 1):
         self.odom_name, self.scan_name, self.roles = odom_name, scan_name, roles
-        self.window = window   # s after the first odometry message: scans outside it are not kept
-        self.odom: list[tuple[int, float, float, float]] = []
-        self.scans: list[tuple[int, np.ndarray]] = []
+        self.odom = array.array("d")                    # stamp (ns, as float), x, y, yaw, ...
+        self.odom_bad = 0                               # odometry messages with a NaN / inf pose
+        self.scan_received = array.array("q")           # every scan's receive time (ns)
+        self.probe: list[tuple[int, int]] = []          # (stamp ns, receive ns) of the probed scans
+        self.probe_ranges: list[np.ndarray] = []        # and their ranges
+        self.probe_every = probe_every
+        self.scan_layout: Any = None
+        self.bad_layout: tuple[int, str] = (0, "")      # scans whose beams cannot be placed, and why
         self.static_tf: dict[str, tuple[str, float, float, float]] = {}
         self.static_tf3: dict[str, tuple[str, tuple[float, ...]]] = {}
         self.first_tf: dict[str, tuple[str, float, float, float]] = {}
@@ -212,20 +296,41 @@ class _Collector:
         self.footprints: list[tuple[str, str, Any]] = []
         self.known_map: Any = None
         self.tf_seen = 0
-        self.odom_frame = self.base_frame = self.scan_frame = ""
-        self.scan_meta: tuple | None = None
-        self.odd_scans = 0
+        self.odom_frame = self.base_frame = ""
 
     def take(self, topic: str, msg: Any, bag_ns: int) -> None:
         if topic == self.odom_name:
             p = msg.pose.pose
-            self.odom.append((_stamp(msg.header, bag_ns), p.position.x, p.position.y, yaw_of(p.orientation)))
+            pose = (float(p.position.x), float(p.position.y), yaw_of(p.orientation))
+            if not all(math.isfinite(v) for v in pose):
+                self.odom_bad += 1
+                return
+            self.odom.extend((float(_stamp(msg.header, bag_ns)),) + pose)
             self.odom_frame = self.odom_frame or msg.header.frame_id.lstrip("/")
             self.base_frame = self.base_frame or msg.child_frame_id.lstrip("/")
-        elif topic == self.scan_name:
-            self._scan(msg, bag_ns)
         else:
             getattr(self, f"_{self.roles[topic].replace('tf_static', 'static')}")(topic, msg, bag_ns)
+
+    def scan_seen(self, reader: Any, conn: Any, raw: Any, bag_ns: int) -> None:
+        """Every scan's receive time; the layout of the first usable scan and a probe of every
+        ``probe_every``-th (their stamps), deserialised; the rest are read in the second pass."""
+        index = len(self.scan_received)
+        self.scan_received.append(bag_ns)
+        if self.scan_layout is not None and index % self.probe_every:
+            return
+        from .scans import layout_of, layout_problem
+        msg = reader.deserialize(raw, conn.msgtype)
+        layout = layout_of(msg, conn.topic)
+        problem = layout_problem(layout)
+        if problem is not None:
+            self.bad_layout = (self.bad_layout[0] + 1, problem)
+            return
+        if self.scan_layout is None:
+            self.scan_layout = layout
+        elif layout.key() != self.scan_layout.key():
+            return
+        self.probe.append((_stamp(msg.header, bag_ns), bag_ns))
+        self.probe_ranges.append(np.asarray(msg.ranges, dtype=np.float32))
 
     def _tf(self, topic: str, msg: Any, bag_ns: int) -> None:
         self.tf_seen += 1
@@ -277,33 +382,6 @@ class _Collector:
         from .known_map import from_message
         self.known_map = from_message(msg, topic)
 
-    def _scan(self, msg: Any, bag_ns: int) -> None:
-        ranges = np.asarray(msg.ranges, dtype=np.float32)
-        meta = (len(ranges), float(msg.angle_min), float(msg.angle_increment))
-        if self.scan_meta is None:
-            self.scan_meta = meta + (float(msg.range_min), float(msg.range_max))
-            self.scan_frame = msg.header.frame_id.lstrip("/")
-        elif meta != self.scan_meta[:3]:
-            self.odd_scans += 1  # another beam layout than the first scan's: skipped, reported later
-            return
-        stamp = _stamp(msg.header, bag_ns)
-        if self.odom:  # a time window is known once odometry started: hold only the scans in it
-            t = (stamp - self.odom[0][0]) * 1e-9
-            if not self.window[0] <= t <= self.window[1]:
-                return
-        self.scans.append((stamp, ranges))
-
-
-def _scan_window(start, end, at=None, window: float = 30.0) -> tuple[float, float]:
-    """The span (s after the first odometry message, 2 s wider each side for odometry stamps out
-    of order) whose scans the first pass keeps: a cut of a long bag holds only its own scans."""
-    if at is not None:
-        start, end = at - window, at
-    lo = -math.inf if start is None else start - 2.0
-    hi = math.inf if end is None else end + 2.0
-    return lo, hi
-
-
 def _attach_extras(data: BagData, col: _Collector, origin: float) -> None:
     """Transforms, poses, goals, commands, description and footprints, on the odometry's clock."""
     def sec(ns: int) -> float:
@@ -327,21 +405,49 @@ def _attach_extras(data: BagData, col: _Collector, origin: float) -> None:
 def _odometry(path: Path, col: _Collector, odom_name: str, start, end, at=None,
               window: float = 30.0) -> tuple[BagData, float]:
     """The odometry sorted by time, t = 0 at its first message, cut to ``start``..``end`` (or
-    ``at - window``..``at``); and the first message's stamp (ns), the origin of every other time."""
-    odom_arr = np.array(col.odom, dtype=float)
+    ``at - window``..``at``, to the end of a turn in place or reversing under way at ``at``); and
+    the first message's stamp (ns), the origin of every other time."""
+    from .motion import manoeuvre_at
+
+    odom_arr = np.frombuffer(col.odom, dtype=float).reshape(-1, 4).copy()
+    notes = []
+    if col.odom_bad:
+        if not len(odom_arr):
+            raise BagImportError(f"{path}: every pose on {odom_name} ({col.odom_bad} messages) has a NaN or infinite "
+                                 f"position or orientation: there is no pose to place the robot with")
+        notes.append(f"warning: {col.odom_bad} message(s) on {odom_name} with a NaN or infinite pose were left out "
+                     f"(the robot's pose there is interpolated from its neighbours)")
+    if len(odom_arr) < 2:
+        raise BagImportError(f"{path}: {odom_name} has {len(odom_arr)} usable message(s): a seed needs the robot's "
+                             f"poses over time (a start and a goal apart); record longer, or choose another topic "
+                             f"with --odom-topic")
     odom_arr = odom_arr[np.argsort(odom_arr[:, 0], kind="stable")]
     origin = float(odom_arr[0, 0])
+    if odom_arr[-1, 0] == origin:
+        raise BagImportError(f"{path}: all {len(odom_arr)} messages on {odom_name} have the same header stamp "
+                             f"({origin * 1e-9:.3f} s): their times are unknown, so the robot's speed and the moment "
+                             f"of each scan cannot be told; fix the clock of the node that publishes {odom_name}")
     odom_arr[:, 0] = (odom_arr[:, 0] - origin) * 1e-9
     data = BagData(path=path, odom_topic=odom_name, odom_frame=col.odom_frame or "odom",
                    base_frame=col.base_frame or "base_link", odom=odom_arr, static_tf=col.static_tf,
-                   first_tf=col.first_tf, duration=float(odom_arr[-1, 0]), full_odom=odom_arr)
+                   first_tf=col.first_tf, duration=float(odom_arr[-1, 0]), full_odom=odom_arr, notes=notes)
     if at is not None:
         if not (math.isfinite(at) and 0 < at <= data.duration):
             raise BagImportError(f"{path}: --at {at:g} is outside the bag: its odometry covers 0..{data.duration:.1f} s "
                                  f"(times are seconds after the first odometry message; --list-events shows candidates)")
         if not (math.isfinite(window) and window > 0):
             raise BagImportError(f"--window must be a positive number of seconds, got {window}")
-        start, end = max(0.0, at - window), at
+        start, end = at - window, at
+        if start < 0:
+            notes.append(f"the window of {window:g} s before --at {at:g} would reach before the bag's start: cut there, "
+                         f"it covers 0..{at:g} s ({at:g} s)")
+            start = 0.0
+        moving = manoeuvre_at(odom_arr, at)
+        if moving is not None and moving[2] > at:
+            kind, t0, t1 = moving
+            end = min(t1, data.duration)
+            notes.append(f"--at {at:g} falls on a {kind} (t={t0:.1f}..{t1:.1f} s): the seed runs to its end at "
+                         f"t={end:.1f} s so that it holds the {kind}")
     if start is not None or end is not None:
         keep = np.ones(len(odom_arr), bool)
         if start is not None:
@@ -355,23 +461,30 @@ def _odometry(path: Path, col: _Collector, odom_name: str, start, end, at=None,
     return data, origin
 
 
-def _attach_scans(data: BagData, col: _Collector, scan_name: str, origin: float) -> None:
-    """The scans inside the odometry's window, as one (scans, beams) array, with their beam angles."""
-    if col.scans:
-        st = (np.array([s[0] for s in col.scans], dtype=float) - origin) * 1e-9
-        inside = (st >= data.odom[0, 0]) & (st <= data.odom[-1, 0])
-        n, amin, ainc, rmin, rmax = col.scan_meta
-        if col.odd_scans:
-            data.notes.append(f"{col.odd_scans} scan(s) on {scan_name} with another beam count or angles than "
-                              f"the first ({n} beams from {math.degrees(amin):.1f} deg) were skipped")
-        data.scan_topic = scan_name
-        data.scan_frame = col.scan_frame
-        data.scan_t = st[inside]
-        data.scan_ranges = np.stack([s[1] for s, k in zip(col.scans, inside) if k]) if inside.any() \
-            else np.zeros((0, n), np.float32)
-        data.scan_angles = amin + ainc * np.arange(n)
-        data.range_min, data.range_max = rmin, rmax
-    if len(data.scan_t) == 0:
-        data.notes.append(f"topic {scan_name} has no scans within the odometry's time window: "
-                          f"the seed has the trajectory only, no obstacles")
-        data.scan_topic = None
+def _attach_scans(data: BagData, col: _Collector, scan_name: str, origin: float, stamp: str = "auto",
+                  offset: float = 0.0) -> None:
+    """The scans' layout and timing (scans.choose_timing): the scans themselves are streamed later."""
+    from .scans import choose_timing
+
+    bad, why = col.bad_layout
+    if col.scan_layout is None:
+        if bad:
+            raise BagImportError(f"{data.path}: every scan read on {scan_name} is unusable: {why}; fix the laser "
+                                 f"driver's output, or pass --scan-topic for another laser")
+        data.notes.append(f"topic {scan_name} has no scans: the seed has the trajectory only, no obstacles")
+        return
+    if bad:
+        data.notes.append(f"warning: scans on {scan_name} are unusable ({why}): {bad} of those read in the first "
+                          f"pass; every such scan is left out")
+    data.scan_topic = scan_name
+    data.scan_layout = col.scan_layout
+    data.scan_frame = col.scan_layout.frame
+    data.scan_received = np.frombuffer(col.scan_received, dtype=np.int64).copy()
+    probe = np.array(col.probe, dtype=float).reshape(-1, 2)
+    data.scan_probe = (probe - origin) * 1e-9
+    data.scan_probe_ranges = np.stack(col.probe_ranges)
+    rec = np.sort(data.scan_received)
+    period = float((rec[-1] - rec[0]) / (len(rec) - 1)) * 1e-9 if len(rec) > 1 else 0.0
+    data.scan_timing = choose_timing(col.scan_layout, data.scan_probe[:, 0], data.scan_probe[:, 1], period,
+                                     stamp, offset)
+    data.notes.extend(f"warning: {w}" for w in data.scan_timing.warnings)

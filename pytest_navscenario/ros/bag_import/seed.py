@@ -16,20 +16,23 @@ from ...scenario.model import (
     Limits,
     Mission,
     Obstacle,
+    PolygonObstacle,
     Pose,
     Reference,
     Robot,
     Scenario,
 )
 from .clouds import CloudSettings, grid_clouds
+from .fit import FitFigure, fit_figure
 from .footprint import footprint_from_bag, inner_radius
 from .frames import to_world_frame
 from .goal import choose_goal
 from .known_map import map_background, not_on_map
 from .mount import choose_mount
 from .obstacles import FitSettings, _r, fit_obstacles, occupied_clusters
-from .projection import grid_returns
-from .reading import PATH_AS, BagData, BagImportError, read_bag
+from .projection import map_scans, settle_timing
+from .reading import PATH_AS, BagData, BagImportError, close_bag, open_bag, read_bag
+from .streaming import stream_notes
 from .simplify import SeedSize, merge_neighbours, split_near_path
 
 
@@ -50,11 +53,13 @@ def _peak_rates(od: np.ndarray, window: float = 0.5) -> tuple[float, float]:
 
 @dataclass
 class BagSeed:
-    """The importer's result: the scenario, the driven path (t, x, y) and what to tell the user."""
+    """The importer's result: the scenario, the driven path (t, x, y), what to tell the user and
+    how well the seed agrees with its own scans (None without scans)."""
     scenario: Scenario
     path: np.ndarray
     notes: list[str]
     mount: tuple[float, float, float] | None = None
+    fit: FitFigure | None = None
 
 
 def decimate_path(xy: np.ndarray, tolerance: float = 0.15, min_spacing: float = 0.5) -> np.ndarray:
@@ -82,7 +87,8 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
                       settings: FitSettings = FitSettings(), frame: str = "auto", map_frame: str = "map",
                       pose_topic: str | None = None, cloud_topic: str | None = None,
                       cloud: CloudSettings = CloudSettings(), goal_topic: str | None = None,
-                      at: float | None = None, window: float = 30.0, size: SeedSize = SeedSize()) -> BagSeed:
+                      at: float | None = None, window: float = 30.0, size: SeedSize = SeedSize(),
+                      scan_stamp: str = "auto", scan_offset: float = 0.0) -> BagSeed:
     """Build a seed scenario from a bag (see the package docstring). ``laser_pose`` is x, y (m),
     yaw (degrees) of the laser in the robot's base frame; ``robot_radius`` the seed's circular
     footprint (m; default: from the bag's URDF or Nav2 footprint, else 0.15 m); ``reference_file`` is the CSV name
@@ -90,28 +96,50 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
     (waypoints to drive the loop and the reference to measure how closely the run replays it).
     ``at``: cut the ``window`` seconds before this moment instead of ``start``..``end``.
     ``frame``: "auto" (the map frame when the bag has ``map -> odom`` or a pose topic in it, else
-    the odometry frame), "map" or "odom"."""
+    the odometry frame), "map" or "odom". ``scan_stamp`` ("auto", "start", "end") and
+    ``scan_offset`` (s): when each scan was taken (scans.choose_timing)."""
     if robot_radius is not None and not (math.isfinite(robot_radius) and 0 < robot_radius <= 5):
         raise BagImportError(f"--robot-radius must be a length in (0, 5] m, got {robot_radius}")
     if path_as not in PATH_AS:
         raise BagImportError(f"--path-as must be one of {', '.join(PATH_AS)}, got {path_as!r}")
     if at is not None and (start is not None or end is not None):
         raise BagImportError("--at cuts the window before a moment: give it without --start/--end")
-    data = read_bag(path, odom_topic=odom_topic, scan_topic=scan_topic, start=start, end=end,
-                    cloud_topic=cloud_topic, at=at, window=window)
+    if scan_topic and cloud_topic:
+        raise BagImportError("--scan-topic and --cloud-topic: give one (obstacles come from a laser or a 3D lidar)")
+    reader = open_bag(Path(path))    # one open bag for every pass: its index and types are read once
+    try:
+        data = read_bag(path, odom_topic=odom_topic, scan_topic=scan_topic, start=start, end=end,
+                        cloud_topic=cloud_topic, at=at, window=window, scan_stamp=scan_stamp,
+                        scan_offset=scan_offset, reader=reader)
+        return _seed(data, laser_pose, path_as, reference_file, name, robot_radius, settings, frame, map_frame,
+                     pose_topic, cloud, goal_topic, size)
+    finally:
+        close_bag(reader)
+
+
+def _seed(data: BagData, laser_pose, path_as, reference_file, name, robot_radius, settings, frame, map_frame,
+          pose_topic, cloud, goal_topic, size) -> BagSeed:
     corr = to_world_frame(data, frame, map_frame, pose_topic, data.full_odom)
     goal, goal_note = choose_goal(data, corr, goal_topic)
     fp, fp_how, fp_warnings = footprint_from_bag(data, robot_radius)
     radius = inner_radius(fp)
     notes = list(data.notes) + [goal_note] + [f"warning: {w}" for w in fp_warnings] + [f"footprint: {fp_how}"]
     obstacles: list[Obstacle] = []
-    mount = None
+    mount = smap = None
     if data.scan_topic is not None:
         mount, how = choose_mount(data, laser_pose)
         notes.append(f"laser {data.scan_frame} at x={mount[0]:.3f} y={mount[1]:.3f} "
                      f"yaw={math.degrees(mount[2]):.1f} deg in {data.base_frame}, {how}")
-        obstacles = _obstacles_from_scans(data, mount, settings, notes)
-        notes += check_path_free(data, obstacles, radius, how)
+        settle_timing(data, mount)
+        smap = map_scans(data, mount, settings.res)
+        notes.extend(stream_notes(data))
+        if smap.scans:
+            notes.append(_timing_note(data, smap))
+            obstacles = _fit_scans(data, smap, settings, notes)
+            notes += check_path_free(data, obstacles, radius, how)
+        else:
+            notes.append(f"no scans on {data.scan_topic} within the window: the seed has the trajectory only, "
+                         f"no obstacles")
     elif data.cloud_topic is not None:
         clouds = grid_clouds(data, laser_pose, dataclasses.replace(cloud, near=max(cloud.near, radius)), settings.res)
         notes.extend(clouds.notes)
@@ -123,21 +151,63 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
     if background:
         scenario = dataclasses.replace(scenario, search={"frozen": background})
     notes.append(summary)
+    _check_moves(data, scenario)
+    fit = None
+    if smap is not None and smap.scans:
+        fit = fit_figure(scenario, data, mount, smap.sample, smap.first)
     od = data.odom
     path_rows = np.stack([od[:, 0] - od[0, 0], od[:, 1], od[:, 2]], axis=1)
-    return BagSeed(scenario=scenario, path=path_rows, notes=notes, mount=mount)
+    return BagSeed(scenario=scenario, path=path_rows, notes=notes, mount=mount, fit=fit)
 
 
-def _obstacles_from_scans(data: BagData, mount, settings: FitSettings, notes: list[str]) -> list[Obstacle]:
-    return _fit(data, grid_returns(data, mount, settings.res), settings, notes, f"{len(data.scan_t)} scans")
+def _timing_note(data: BagData, smap) -> str:
+    """When the scans' beams were taken, and how much the robot moved within one scan."""
+    timing = data.scan_timing
+    text = f"scan timing: {timing.how}"
+    if timing.skewed:
+        m, deg = smap.skew
+        text += (f"; each beam placed with the robot's pose at its own time (within one scan the robot moved up "
+                 f"to {m:.2f} m and turned up to {deg:.1f} deg)")
+    return text
 
 
-def _fit(data: BagData, grid, settings: FitSettings, notes: list[str], what: str) -> list[Obstacle]:
-    clusters, dropped = occupied_clusters(grid, link=settings.link)
-    obstacles = fit_obstacles(clusters, settings, free_xy=data.odom[:, 1:3])
+def _fit_scans(data: BagData, smap, settings: FitSettings, notes: list[str]) -> list[Obstacle]:
+    """Obstacles from the cells with returns that the occupancy grid still holds occupied after
+    every beam carved its free way (log-odds > 0)."""
+    grid = smap.grid
+    cells = grid.cells
+    occupied = smap.occupancy.at_cells(cells[:, 0], cells[:, 1]) > 0.0
+    hit = grid.counts >= 2
+    carved = int(np.count_nonzero(hit & ~occupied))
+    if carved:
+        notes.append(f"{carved} of {int(hit.sum())} cells with returns were crossed by later beams more often "
+                     f"than hit (a smear, or something that moved away): carved free")
+    occ = smap.occupancy
+    return _fit(data, grid, settings, notes, f"{smap.scans} scans", occupied=occupied,
+                seen_free=lambda cols, rows: occ.at_cells(cols, rows) < 0.0)
+
+
+def _check_moves(data: BagData, scenario: Scenario) -> None:
+    """A seed whose start already satisfies its goal tests nothing: the robot did not move."""
+    from ...verdict.feasibility import trivially_passed
+
+    if trivially_passed(scenario) is not None:
+        od = data.odom
+        moved = float(np.hypot(*(od[:, 1:3].max(axis=0) - od[:, 1:3].min(axis=0))))
+        raise BagImportError(f"{data.path}: the robot hardly moved in the window (t={od[0, 0]:.1f}..{od[-1, 0]:.1f} s, "
+                             f"{len(od)} poses within {moved:.2f} m) and no recorded goal lies farther: the seed's "
+                             f"start would already be at its goal; choose a window where the robot drives "
+                             f"(--start/--end, --at), or check {data.odom_topic}")
+
+
+def _fit(data: BagData, grid, settings: FitSettings, notes: list[str], what: str,
+         occupied: np.ndarray | None = None, seen_free=None) -> list[Obstacle]:
+    clusters, dropped = occupied_clusters(grid, link=settings.link, occupied=occupied)
+    obstacles = fit_obstacles(clusters, settings, free_xy=data.odom[:, 1:3], seen_free=seen_free)
     n_cyl = sum(isinstance(o, CylinderObstacle) for o in obstacles)
+    n_poly = sum(isinstance(o, PolygonObstacle) for o in obstacles)
     notes.append(f"{what}, {grid.returns} returns -> {len(clusters)} clusters -> "
-                 f"{n_cyl} cylinders, {len(obstacles) - n_cyl} boxes"
+                 f"{n_cyl} cylinders, {len(obstacles) - n_cyl - n_poly} boxes, {n_poly} wall outlines"
                  + (f" ({dropped} specks of < 3 cells ignored as noise)" if dropped else ""))
     return obstacles
 
