@@ -169,7 +169,8 @@ def _terrain_view(result: Any, idx: Any, pose: Any) -> dict[str, Any]:
         out["pitch"] = np.round(-np.degrees(np.asarray(traj.pitch, dtype=float)[idx]), 1).tolist()
     event = getattr(result, "terrain_event", None)
     if event is not None:
-        out["ev"] = {"x": event.x, "y": event.y, "t": event.time, "kind": event.kind}
+        out["ev"] = {"x": round(event.x, 3), "y": round(event.y, 3), "t": round(event.time - 0.005, 2),
+                     "kind": event.kind}       # t rounded down: the view's last instant shows it
     return out
 
 
