@@ -20,6 +20,9 @@ topic                            type                                rate
 /navscenario/obstacles           visualization_msgs/MarkerArray      once, latched (static ones)
 /navscenario/moving_obstacles    visualization_msgs/MarkerArray      with /odom, only when
                                  (moving obstacles where they are)   obstacles move
+/navscenario/terrain             visualization_msgs/MarkerArray      once, latched, only with
+                                 (the ground's surface, one          terrain
+                                 TRIANGLE_LIST per element)
 /navscenario/result              std_msgs/String (JSON)              once, at the end
 /navscenario/scenario            std_msgs/String (scenario YAML)     once, latched
 ===============================  ==================================  =====================
@@ -66,8 +69,10 @@ TOPICS: dict[str, str] = {
 }
 MOVING_TOPIC = "/navscenario/moving_obstacles"     # only in bags of episodes with moving obstacles
 CLOUD_TOPIC = "/points"                            # only in bags of episodes with a 3D lidar
+TERRAIN_TOPIC = "/navscenario/terrain"             # only in bags of scenarios with terrain
+TERRAIN_CELLS = 60                                 # ground samples along an element's longer side
 LATCHED = ("/tf_static", "/goal_pose", "/navscenario/waypoints", "/navscenario/obstacles",
-           "/navscenario/result", "/navscenario/scenario")
+           "/navscenario/result", "/navscenario/scenario", TERRAIN_TOPIC)
 
 
 class BagWriteError(NavScenarioError):
@@ -210,6 +215,8 @@ def _messages(result: EpisodeResult, ros1: bool):
     yield "/navscenario/waypoints", 0.0, {"header": header(0.0, ODOM_FRAME), "poses": [
         {"header": header(0.0, ODOM_FRAME), "pose": _pose(p.x, p.y, p.yaw_rad)} for p in points]}
     yield "/navscenario/obstacles", 0.0, {"markers": _markers(result)}
+    if scenario.terrain:
+        yield TERRAIN_TOPIC, 0.0, {"markers": terrain_markers(scenario)}
     from ..scenario.dump import dump_scenario
     yield "/navscenario/scenario", 0.0, {"data": dump_scenario(scenario)}  # the bag reproduces the run
 
@@ -290,6 +297,38 @@ def _clouds(result: EpisodeResult, header: Any):
             "header": header(float(tk), CLOUD_FRAME), "height": 1, "width": len(pts), "fields": fields,
             "is_bigendian": False, "point_step": record.itemsize, "row_step": record.itemsize * len(pts),
             "data": np.frombuffer(pts.tobytes(), dtype=np.uint8), "is_dense": True}
+
+
+def terrain_markers(scenario: Any) -> list[dict[str, Any]]:
+    """The ground's surface over each terrain element (and a margin of floor around it) as a
+    TRIANGLE_LIST marker: its height sampled on a grid of at most TERRAIN_CELLS a side (two
+    triangles a cell, so a step's riser is a steep band one cell wide), coloured by height per
+    vertex: blue below the floor, green to brown above."""
+    from ..scenario import ground
+
+    out = []
+    for i, el in enumerate(scenario.terrain):
+        corners = ground.outline(el)
+        (x0, y0), (x1, y1) = corners.min(axis=0) - 0.2, corners.max(axis=0) + 0.2
+        step = max(x1 - x0, y1 - y0) / TERRAIN_CELLS
+        xs = np.linspace(x0, x1, max(2, int(round((x1 - x0) / step)) + 1))
+        ys = np.linspace(y0, y1, max(2, int(round((y1 - y0) / step)) + 1))
+        gx, gy = np.meshgrid(xs, ys)
+        gz = ground.ground_height(scenario, gx, gy)
+        verts = np.stack([gx, gy, gz], axis=-1)
+        a, b, c, d = verts[:-1, :-1], verts[:-1, 1:], verts[1:, 1:], verts[1:, :-1]
+        tris = np.stack([a, b, c, a, c, d], axis=2).reshape(-1, 3)
+        z = tris[:, 2]
+        span = max(float(np.abs(gz).max()), 0.05)
+        up, down = np.clip(z / span, 0.0, 1.0), np.clip(-z / span, 0.0, 1.0)
+        colours = [{"r": float(0.75 - 0.35 * u - 0.55 * w), "g": float(0.8 - 0.45 * u - 0.35 * w),
+                    "b": float(0.7 - 0.45 * u + 0.25 * w), "a": 1.0} for u, w in zip(up.tolist(), down.tolist())]
+        out.append({"header": {"frame_id": ODOM_FRAME}, "ns": "terrain", "id": i, "type": 11, "action": 0,
+                    "pose": _pose(0.0, 0.0, 0.0), "scale": {"x": 1.0, "y": 1.0, "z": 1.0},
+                    "color": {"r": 0.6, "g": 0.55, "b": 0.45, "a": 1.0}, "text": ground.describe_element(el),
+                    "points": [{"x": float(p[0]), "y": float(p[1]), "z": float(p[2])} for p in tris.tolist()],
+                    "colors": colours})
+    return out
 
 
 _COLOURS = {"box": (0.55, 0.55, 0.6), "cylinder": (0.45, 0.5, 0.65), "polygon": (0.5, 0.55, 0.55),
@@ -406,6 +445,8 @@ def _write(result: EpisodeResult, path: Path, fmt: str) -> None:
             topics[MOVING_TOPIC] = TOPICS["/navscenario/obstacles"]
         if result.scenario.robot.lidar3d is not None and result.trajectory.cloud is not None:
             topics[CLOUD_TOPIC] = "sensor_msgs/msg/PointCloud2"
+        if result.scenario.terrain:
+            topics[TERRAIN_TOPIC] = TOPICS["/navscenario/obstacles"]
         for topic, msgtype in topics.items():
             if ros1:
                 conns[topic] = writer.add_connection(topic, msgtype, typestore=ts,

@@ -85,3 +85,39 @@ def test_the_scans_cross_from_a_worker_only_on_request_and_whole(episode):
     assert "cloud" not in trajectory_to_dict(traj)
     back = trajectory_from_dict(trajectory_to_dict(traj, cloud=True))
     assert back.cloud.dtype == np.float32 and np.array_equal(back.cloud, traj.cloud)
+
+
+def test_a_bag_of_a_robot_on_terrain_has_its_3d_pose_and_the_ground(tmp_path):
+    import sys
+    from pathlib import Path
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "sim"))
+    from test_sensors_riding import RAMP, Straight
+
+    from pytest_navscenario.ros.bag_writer import TERRAIN_TOPIC
+    from pytest_navscenario.scenario import ground
+
+    s = loads_scenario(RAMP.replace("  lidar3d: {rings: 16, beams: 360, mount_z: 0.5}\n", ""))
+    assert s.robot.lidar3d is None
+    result = run_scenario(s, Straight(speed=0.5))
+    bag = read_bag(write_episode_bag(result, tmp_path / "ramp"))
+    # the base's height and attitude on /tf and /odom, as recorded
+    traj = result.trajectory
+    tfs = [(ts, m.transforms[0]) for ts, m in bag["/tf"][1]]
+    up = [(ts, tf) for ts, tf in tfs if tf.transform.translation.z > 0.2]
+    assert up, "the base never rose on the ramp"
+    ts, tf = up[len(up) // 2]
+    i = int(round(ts * 1e-9 / s.simulation.timestep))
+    q = tf.transform.rotation
+    pitch = math.asin(max(-1.0, min(1.0, 2 * (q.w * q.y - q.z * q.x))))
+    assert tf.transform.translation.z == pytest.approx(traj.z[i], abs=1e-9)
+    assert pitch == pytest.approx(traj.pitch[i], abs=1e-6)
+    odom = bag["/odom"][1][len(bag["/odom"][1]) // 2][1]
+    assert odom.pose.pose.orientation.y != 0.0 or odom.pose.pose.position.z == 0.0
+    # the ground: a triangle list per element whose vertices lie on the ground
+    (markers,) = [m for _, m in bag[TERRAIN_TOPIC][1]]
+    assert [m.text for m in markers.markers] == ["ramp 'up'", "platform 'top'"]
+    ramp = markers.markers[0]
+    assert ramp.type == 11 and len(ramp.points) % 3 == 0 and len(ramp.colors) == len(ramp.points)
+    pts = np.array([(p.x, p.y, p.z) for p in ramp.points])
+    assert np.allclose(pts[:, 2], ground.ground_height(s, pts[:, 0], pts[:, 1]))
+    assert pts[:, 2].max() == pytest.approx(0.7053, abs=1e-3)
