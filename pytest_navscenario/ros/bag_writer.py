@@ -72,7 +72,8 @@ CLOUD_TOPIC = "/points"                            # only in bags of episodes wi
 TERRAIN_TOPIC = "/navscenario/terrain"             # only in bags of scenarios with terrain
 TERRAIN_CELLS = 60                                 # ground samples along an element's longer side
 LATCHED = ("/tf_static", "/goal_pose", "/navscenario/waypoints", "/navscenario/obstacles",
-           "/navscenario/result", "/navscenario/scenario", TERRAIN_TOPIC)
+           "/navscenario/result", "/navscenario/scenario")
+LATCHED_WHEN_THERE = (TERRAIN_TOPIC,)              # latched too, in the bags that have them
 
 
 class BagWriteError(NavScenarioError):
@@ -450,9 +451,9 @@ def _write(result: EpisodeResult, path: Path, fmt: str) -> None:
         for topic, msgtype in topics.items():
             if ros1:
                 conns[topic] = writer.add_connection(topic, msgtype, typestore=ts,
-                                                     latching=1 if topic in LATCHED else None)
+                                                     latching=1 if topic in LATCHED + LATCHED_WHEN_THERE else None)
             else:
-                qos = _latched_qos() if topic in LATCHED else ()
+                qos = _latched_qos() if topic in LATCHED + LATCHED_WHEN_THERE else ()
                 conns[topic] = writer.add_connection(topic, msgtype, typestore=ts,
                                                      offered_qos_profiles=qos)
         for topic, time_s, values in msgs:
