@@ -383,6 +383,14 @@ def run(args: argparse.Namespace) -> int:
     scenario = Scenario(mission=Mission(start=start, goal=goal, waypoints=waypoints, timeout=args.timeout),
                         obstacles=tuple(obstacles), name=args.name, terrain=terrain,
                         description=f"Imported from {args.format} file {src.name}.")
+    if terrain:          # the planar body cannot ride terrain: a wheeled robot, said as the guess it is
+        import dataclasses
+
+        from ..scenario.terrain import WheeledBody
+        scenario = dataclasses.replace(scenario, robot=dataclasses.replace(scenario.robot, body=WheeledBody(),
+                                                                           drive="diff"))
+        notes.append("robot.body: wheeled, drive: diff (a guess: the world does not say which robot drives it; "
+                     "set robot.body)")
     write_seed(scenario, args.output, force=args.force, extra_files=extra)
     for note in notes:
         print(f"navscenario import: {note}")

@@ -82,3 +82,20 @@ def test_the_imported_grid_is_the_one_gazebo_builds(tmp_path):
     grid: HeightGrid = height_grid(hf, SimpleNamespace(source=str(tmp_path / "seed.yaml")))
     gazebo = img.astype(float) / img.max() * 4.0              # pixel / brightest * size z
     assert np.allclose(grid.heights, gazebo[::-1])            # the image's top row is +y
+
+
+def test_the_command_line_writes_a_seed_that_loads_with_its_heightmap(tmp_path, capsys):
+    from pytest_navscenario.cli import main
+    from pytest_navscenario.scenario.loader import load_scenario
+
+    img = (np.arange(17 * 17).reshape(17, 17) % 200).astype(np.uint8)
+    Image.fromarray(img).save(tmp_path / "bumps.png")
+    src = _world(tmp_path, _heightmap("bumps.png", size="8 8 0.5", pos="0 0 0", pose="10 0 0 0 0 0"))
+    out = tmp_path / "seed" / "hills.yaml"
+    assert main(["import", "sdf", str(src), "--start=0,0,0", "--goal=4,0,0", "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "1 terrain element(s)" in printed and "robot.body: wheeled" in printed
+    seed = load_scenario(out)
+    (hf,) = seed.terrain
+    assert hf.kind == "heightfield" and hf.digest and (out.parent / hf.file).is_file()
+    assert seed.robot.body.kind == "wheeled"
