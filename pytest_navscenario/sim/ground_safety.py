@@ -37,6 +37,7 @@ from .safety import SAMPLE_SPACING, twist_poses
 CELL = 0.1                # m, the ground map's cells
 MARGIN_CELLS = 60         # cells of map beyond the scenario's extent (6 m) on every side
 HOLE_LEVEL = 0.02         # m: below the robot's ground by this, a beam is in a hole's shadow
+SLOPE_REACH = 0.3         # m above the robot's ground: higher returns are obstacles, not a slope
 GRAVITY = 9.81
 
 
@@ -172,7 +173,8 @@ class GroundSafety:
                 return (f"a drop of {top[worst] - ld[worst]:.2f} m ahead{self._where(kd[worst])}")
         # 3. ground sloping down more steeply than the body takes (ground-level cells only: what
         # rises above the robot's ground is an obstacle's side or a climb, not a fall)
-        return self._slope(k[seen & (low <= ground_z + self.limits.drop)])
+        top = ground_z + SLOPE_REACH
+        return self._slope(k[seen & (low <= top)], top)
 
     def _where(self, cell: int) -> str:
         """", at pit 'hole'": the terrain element under a map cell, for the message (the layer
@@ -185,22 +187,27 @@ class GroundSafety:
         i = element_at(self.scenario, x, y, margin=CELL)
         return "" if i is None else f" at {describe_element(self.scenario.terrain[i])}"
 
-    def _slope(self, k: np.ndarray) -> str | None:
-        """Too steep ground between neighbouring seen cells under the sweep (their lowest returns)."""
+    def _slope(self, k: np.ndarray, top: float) -> str | None:
+        """Ground too steep for the body under the sweep: three cells in a row (along x or y), all
+        seen and at ground level (lowest return at most ``top``: an obstacle's side is no slope),
+        rising or falling steadily by more than the slope limit over the two cells (a single odd
+        cell, a spurious return, is a bump, not a slope)."""
         m = self.map
+        last = len(m.low) - 1
         for step in (1, m.nx):
             a = m.low[k]
-            b = m.low[np.minimum(k + step, len(m.low) - 1)]
-            rise = np.abs(b - a)
-            both = np.isfinite(rise)
-            if both.any() and rise[both].max() > self.tan_slope * CELL * 1.5:
-                # confirm over two cells (one bad return is not a slope)
-                c2 = m.low[np.minimum(k + 2 * step, len(m.low) - 1)]
-                rise2 = np.abs(c2 - a)
-                both2 = np.isfinite(rise2)
-                if both2.any() and rise2[both2].max() > self.tan_slope * 2 * CELL:
-                    angle = math.degrees(math.atan(rise2[both2].max() / (2 * CELL)))
-                    return f"a slope of {angle:.0f} degrees ahead (the body climbs {self.limits.slope:.0f})"
+            b = m.low[np.minimum(k + step, last)]
+            c = m.low[np.minimum(k + 2 * step, last)]
+            ok = np.isfinite(a) & np.isfinite(b) & np.isfinite(c) & (b <= top) & (c <= top)
+            if not ok.any():
+                continue
+            d1, d2 = (b - a)[ok], (c - b)[ok]
+            rise = np.abs(c - a)[ok]
+            steady = (d1 * d2 > 0) & (np.minimum(np.abs(d1), np.abs(d2)) > self.tan_slope * CELL * 0.5)
+            steep = steady & (rise > self.tan_slope * 2 * CELL)
+            if steep.any():
+                angle = math.degrees(math.atan(rise[steep].max() / (2 * CELL)))
+                return f"a slope of {angle:.0f} degrees ahead (the body climbs {self.limits.slope:.0f})"
         return None
 
 

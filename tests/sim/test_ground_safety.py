@@ -83,3 +83,22 @@ def test_rough_ground_the_body_can_ride_does_not_halt_it():
         origin = pos + lidar.offset
         layer.see(origin, origin + lidar.scan(0, pos, rot).astype(float), z)
         assert layer.check(x, 0.0, z, 0.0, SPEED, 0.0, 0.0) is None, x
+
+
+@pytest.mark.parametrize("rise, halted", [(0.35, False), (1.2, True)])     # 10 and 31 degrees over 2 m
+def test_it_stops_before_a_slope_steeper_than_the_body_climbs(rise, halted):
+    scn = scenario(lidar3d=Lidar3D(rings=16, beams=360, mount_z=0.5))
+    world, data = build(scn, ramp=(3.0, 2.0, rise, 3.0))
+    lidar = CloudLidar(scn, world, data, 1, seed=0)
+    layer = GroundSafety(scn, GroundLimits(drop=0.1, slope=24.0), (-2.0, -3.0, 9.0, 3.0))
+    halt = None
+    for x in np.arange(-1.0, 3.0 - scn.robot.footprint.length / 2.0, 0.05):
+        pos, rot = np.array([x, 0.0, 0.0]), np.eye(3)
+        origin = pos + lidar.offset
+        layer.see(origin, origin + lidar.scan(0, pos, rot).astype(float), 0.0)
+        halt = layer.check(x, 0.0, 0.0, 0.0, SPEED, 0.0, 0.0)
+        if halt is not None:
+            break
+    assert (halt is not None) == halted, halt
+    if halted:
+        assert "a slope of" in halt and "(the body climbs 24)" in halt
