@@ -207,12 +207,12 @@ def draw_obstacles(ax: "Axes", scenario: Any, *, involved: set[str] = frozenset(
 
     # Collections, not one patch each: patches re-run autoscaling per patch (slow).
     polys = [obstacle_polygon(obs) for obs in scenario.obstacles]
-    from ..sim.world import LIDAR_HEIGHT
+    plane = float(scenario.robot.lidar.mount_height)    # the 2D lidar's plane above the floor
 
     still = [(obs, p) for obs, p in zip(scenario.obstacles, polys) if not is_moving(obs)]
     glass = [p for obs, p in still if not getattr(obs, "visible_to_lidar", True)]
-    seen = [p for obs, p in still if getattr(obs, "visible_to_lidar", True) and obs.height > LIDAR_HEIGHT]
-    low = [p for obs, p in still if getattr(obs, "visible_to_lidar", True) and obs.height <= LIDAR_HEIGHT]
+    seen = [p for obs, p in still if getattr(obs, "visible_to_lidar", True) and obs.height > plane]
+    low = [p for obs, p in still if getattr(obs, "visible_to_lidar", True) and obs.height <= plane]
     if glass:   # visible_to_lidar: false (glass): see-through, dashed
         ax.add_collection(PolyCollection([np.asarray(p.exterior.coords) for p in glass], closed=True,
                                          facecolors="#b3e5fc", edgecolors="#0277bd", linewidths=1.0,
@@ -225,7 +225,7 @@ def draw_obstacles(ax: "Axes", scenario: Any, *, involved: set[str] = frozenset(
         ax.add_collection(PolyCollection([np.asarray(p.exterior.coords) for p in low], closed=True,
                                          facecolors="#e0e0e0", edgecolors="#424242", linewidths=1.0,
                                          hatch="////", zorder=2,
-                                         label=f"below the lidar ({LIDAR_HEIGHT:g} m): unseen"),
+                                         label=f"below the lidar ({plane:g} m): unseen"),
                           autolim=False)
     for obs, poly in zip(scenario.obstacles, polys):
         if len(polys) > MAX_NAMED_OBSTACLES and obs.name not in involved:
