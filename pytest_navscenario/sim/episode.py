@@ -571,8 +571,10 @@ class RidingEpisode(Episode):
         super().__init__(scenario, planner, seed, max_ticks, tick_limit=tick_limit, stuck_after=stuck_after)
         world = self.world
         self.body = world.body
+        self.control = self.body          # the body's controller of this episode (start: body.begin)
         self.base_qpos, self.base_qvel = self.body.views(self.data)
-        self.mount = float(scenario.robot.lidar.mount_height)
+        self.offset = float(self.body.ground_offset)   # the base's origin above its ground (MJCF bodies)
+        self.mount = float(scenario.robot.lidar.mount_height) - self.offset
         self.probe = GroundProbe(scenario)
         self.watch = TerrainWatch(scenario, self.body, self.spt * self.dt, self.probe)
         self.sensordata, self.chassis_sensor = self.data.sensordata, world.chassis_sensor
@@ -593,6 +595,7 @@ class RidingEpisode(Episode):
         m, d, start = self.model, self.data, self.scenario.mission.start
         z, roll, pitch = resting_pose(self.scenario, start.x, start.y, start.yaw_rad)
         self.body.place(d, start.x, start.y, start.yaw_rad, self.body.start_height(z), roll, pitch)
+        self.control = self.body.begin(d)
         if self.moving is not None:
             self.moving.write(0)
         mujoco.mj_step1(m, d)
@@ -626,6 +629,8 @@ class RidingEpisode(Episode):
 
     def observe(self) -> tuple[tuple[float, ...], Observation]:
         state = base_state(self.base_qpos, self.base_qvel)
+        if self.offset:
+            state = state[:2] + (state[2] - self.offset,) + state[3:]
         x, y, z, roll, pitch, yaw, vx, vy, vz, wz = state
         t = self.i * self.dt
         if not math.isfinite(x + y + z + yaw + vx + vy + vz + wz):
@@ -653,8 +658,8 @@ class RidingEpisode(Episode):
         attitude = np.array([roll, pitch])
         attitude.flags.writeable = False
         points = None
-        if self.cloud is not None:
-            points = self.scan_cloud(tick, pos, rot)
+        if self.cloud is not None:   # mounted above the base's ground point, as the 2D lidar
+            points = self.scan_cloud(tick, pos - rot[:, 2] * self.offset if self.offset else pos, rot)
             if self.ground is not None:
                 t1 = perf_counter()
                 self.ground.see(self.cloud.last_origin, self.cloud.world_points(), z)
@@ -697,7 +702,7 @@ class RidingEpisode(Episode):
         state's base recorded; the contacts are looked at only when the chassis touches something."""
         m, d, ctrl, qpos7, qvel6, pose_buf, qvel_buf, inner = self.stepping
         self.setpoint = setpoint
-        self.body.command(ctrl, setpoint, self.state3d)
+        self.control.command(ctrl, setpoint, self.state3d)
         rows = self.moving.rows_for_tick(self.i) if self.moving is not None else None
         mocap = self.moving.mocap_pos if rows is not None else None
         sensordata, k_chassis = self.sensordata, self.chassis_sensor
@@ -752,7 +757,7 @@ class RidingEpisode(Episode):
             ranges=self.lidar.ranges(self.tick), angles=self.lidar.angles,
             waypoint_times=tuple(self.mission.passed_at),
             believed=None if self.faults is None else self.faults.believed_poses(),
-            z=q[:, 2].copy(), roll=np.asarray(roll), pitch=np.asarray(pitch),
+            z=q[:, 2] - self.offset, roll=np.asarray(roll), pitch=np.asarray(pitch),
             cloud=None if self.cloud is None else self.cloud.ranges(self.tick))
 
     def result(self):
