@@ -209,3 +209,22 @@ def test_a_loaded_heightfield_carries_its_grid_in_the_content_hash(tmp_path):
     moved = tmp_path / "moved" / "yard.yaml"
     moved.write_text(path.read_text().replace("h.npy", "g.npy"))
     assert content_hash(load_scenario(moved)) == content_hash(load_scenario(path))   # wherever the file is
+
+
+def test_a_frozen_failure_takes_its_heightfield_file_along(tmp_path):
+    """A failure frozen from a seed with a heightfield loads in its own folder and hashes the same."""
+    from pytest_navscenario.scenario.loader import load_scenario
+    from pytest_navscenario.scenario.model import content_hash
+    from pytest_navscenario.search.freeze import save_standalone
+
+    (tmp_path / "seeds" / "ground").mkdir(parents=True)
+    np.save(tmp_path / "seeds" / "ground" / "h.npy", np.arange(9.0).reshape(3, 3))
+    seed_path = tmp_path / "seeds" / "yard.yaml"
+    seed_path.write_text(LOADED.replace("{file}", "ground/h.npy").replace("{length}", "2")
+                         .replace("{wavelength}", "1.0"))
+    seed = load_scenario(seed_path)
+    out = tmp_path / "regressions" / "yard-1.yaml"
+    save_standalone(seed, seed, out)
+    frozen = load_scenario(out)
+    assert frozen.terrain[0].file.startswith("heightmaps/h-") and (out.parent / frozen.terrain[0].file).is_file()
+    assert content_hash(frozen) == content_hash(seed)
