@@ -130,14 +130,19 @@ def _prepared(placed: PlacedGrid) -> _Grid:
 
 
 def cast_grids(grids: Sequence[PlacedGrid], pnt: np.ndarray, dirs: np.ndarray, rmax: float,
-               out: np.ndarray | None = None) -> np.ndarray:
+               out: np.ndarray | None = None, within: np.ndarray | None = None) -> np.ndarray:
     """Distances (n,) along the unit ``dirs`` (n, 3) from ``pnt`` ((3,) or (n, 3), world frame) to
     the nearest of the ``grids``' surfaces, sides and bases within ``rmax``; ``np.inf`` where a ray
-    meets none. ``out`` (n,) is filled and returned when given."""
+    meets none. ``within`` (n,): look no further than this along each ray (what it met already:
+    a ray that hit the floor before reaching a patch costs nothing here). ``out`` (n,) is filled
+    and returned when given."""
     n = len(dirs)
     if out is None:
         out = np.empty(n)
-    out.fill(np.inf)
+    if within is None:
+        out.fill(np.inf)
+    else:                         # out holds each ray's limit; a ray meeting nothing keeps inf
+        np.copyto(out, within)
     for placed in grids:
         _cast_one(_prepared(placed), pnt, dirs, rmax, out)
     return out
@@ -164,6 +169,7 @@ def _cast_one(g: _Grid, pnt: np.ndarray, dirs: np.ndarray, rmax: float, out: np.
     # 1. the box: u in [0, cols - 1], v in [0, rows - 1], z in [zlow, zmax]
     with np.errstate(divide="ignore", invalid="ignore"):
         side = _clip(st, g, rmax)
+    np.minimum(st[TB], out, out=st[TB])          # a ray that met something before gives up there
     keep = st[TA] <= st[TB]
     if not keep.any():
         return
@@ -174,7 +180,6 @@ def _cast_one(g: _Grid, pnt: np.ndarray, dirs: np.ndarray, rmax: float, out: np.
         at = st[IDX, wall].astype(np.intp)
         out[at] = np.minimum(out[at], st[TA, wall])
         st = st[:, ~wall]
-    st[TB] = np.minimum(st[TB], out[st[IDX].astype(np.intp)])
     # the march's frame: p along the axis the ray moves fastest along, mirrored to move forwards
     along_u = np.abs(st[DU]) >= np.abs(st[DV])
     st[MS] = np.where(np.where(along_u, st[DU], st[DV]) >= 0, 1.0, -1.0)

@@ -78,8 +78,9 @@ def grid_hits(grids: tuple, pnt: np.ndarray, dirs: np.ndarray, rmax: float, geom
               dist: np.ndarray) -> None:
     """Lower ``mj_multiRay``'s results (``geom`` < 0: no hit) where a beam meets one of the
     ``grids`` nearer; such a beam's geom becomes ``HFIELD_HIT``."""
-    hf = cast_grids(grids, pnt, dirs, rmax)
-    nearer = hf < np.where(geom >= 0, dist, np.inf)
+    met = np.where(geom >= 0, dist, np.inf)
+    hf = cast_grids(grids, pnt, dirs, rmax, within=met)
+    nearer = hf < met
     if nearer.any():
         dist[nearer] = hf[nearer]
         geom[nearer] = HFIELD_HIT

@@ -102,3 +102,15 @@ def test_a_raised_patch_has_solid_sides_and_rays_above_it_cost_nothing_to_miss()
     # rays from above the highest point going up or level never enter the box
     up = cast_grids([placed], np.array([0.0, 0.0, 2.0]), np.array([[1.0, 0.0, 0.0], [0.0, 0.6, 0.8]]), 30.0)
     assert np.all(np.isinf(up))
+
+
+def test_a_ray_that_met_something_nearer_stops_looking_there():
+    element = Rough("mound", 0.0, 0.0, length=4, width=4, amplitude=0.3, wavelength=1.0, seed=1)
+    placed = [placed_grid(element, height_grid(element))]
+    pnt = np.array([-5.0, 0.0, 0.5])
+    dirs = np.array([[0.99, 0.0, -0.14], [0.99, 0.0, -0.14]])
+    dirs /= np.linalg.norm(dirs, axis=1)[:, None]
+    free = cast_grids(placed, pnt, dirs, 30.0)
+    assert np.isfinite(free).all()
+    limited = cast_grids(placed, pnt, dirs, 30.0, within=np.array([1.0, np.inf]))
+    assert limited[0] == 1.0 and limited[1] == free[1]     # the limit kept: nothing nearer on the grid
