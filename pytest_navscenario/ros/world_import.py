@@ -453,7 +453,15 @@ def run(args: argparse.Namespace) -> int:
                                                                            drive="diff"))
         notes.append("robot.body: wheeled, drive: diff (a guess: the world does not say which robot drives it; "
                      "set robot.body)")
-    timeout, timeout_note = mission_timeout(scenario, args.timeout)
+    if terrain:          # the route's length reads the heightfields: from their files, staged as beside the seed
+        with tempfile.TemporaryDirectory() as tmp:
+            for name, data in extra.items():
+                (Path(tmp) / name).parent.mkdir(parents=True, exist_ok=True)
+                (Path(tmp) / name).write_bytes(data if isinstance(data, bytes) else data.encode("utf-8"))
+            staged = dataclasses.replace(scenario, source=str(Path(tmp) / Path(args.output).name))
+            timeout, timeout_note = mission_timeout(staged, args.timeout)
+    else:
+        timeout, timeout_note = mission_timeout(scenario, args.timeout)
     scenario = dataclasses.replace(scenario, mission=dataclasses.replace(scenario.mission, timeout=timeout))
     write_seed(scenario, args.output, force=args.force, extra_files=extra)
     for note in [*notes, robot_note, timeout_note]:
