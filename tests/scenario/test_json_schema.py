@@ -216,8 +216,10 @@ def test_check_jsonschema_refuses_them_in_ci_as_the_docs_say(tmp_path):
 
 
 def _write_part(path: Path) -> None:
-    """A mesh file the probes' mesh obstacles read, and the heightfield file their heightfield
-    elements read (the declared example's path), beside it."""
+    """The files the probes name, beside the probe: a tetrahedron STL (``path``), the small MJCF
+    robot of the body tests as robot.xml, and the heightfield file their heightfield elements read
+    (the declared example's path)."""
+    (path.parent / "robot.xml").write_text((Path(__file__).parents[1] / "data" / "mjcf" / "cart.xml").read_text())
     import numpy as np
     from PIL import Image
     for grid in (path.parent / "ground" / "yard.png", path.parent / "ground.png"):
@@ -322,6 +324,7 @@ RUN_ONLY = ("must be greater than", "must not be below", "physics steps", "whole
             "could pass the limit", "is not an obstacle or mission part of this seed", "has no length",
             "does not increase", "does not exist", "unknown mesh format", "leaves the scenario's folder",
             "is an absolute path", "is not a file", "cannot be read",
+            "is faster than the simulation can follow",   # a mover's speed against its size, the robot's, the timestep
             # a heightfield's file and its stretch, a rough patch's grid (scenario/heightmap.py)
             "unknown heightfield format", "in the proportion of its columns and rows", "needs a grid of")
 
