@@ -244,6 +244,28 @@ def _mesh(ctx: _Ctx, sec: _Section, decl: K.Section, values: dict[str, Any]) -> 
     return MeshObstacle(**_read(ctx, sec, decl, values))
 
 
+def _terrain_element(ctx: _Ctx, sec: _Section, element: K.Element, name: str) -> Any:
+    """One terrain element as declared; a heightfield's file read now (a bad file is an error here,
+    at its line, and its digest makes the grid content), a rough patch's grid size checked."""
+    decl = element.section
+    values = _read(ctx, sec, decl, {"name": name})
+    if element.type not in ("heightfield", "rough"):
+        return decl.cls(**values)
+    from .heightmap import HeightmapError, check_rough, load_heightfield
+
+    try:
+        if element.type == "rough":
+            check_rough(values["length"], values["width"], values["wavelength"])
+        else:
+            folder = Path(ctx.source).parent if ctx.source else Path.cwd()
+            _, values["digest"] = load_heightfield(folder, values["file"], values["length"], values["width"])
+    except HeightmapError as exc:
+        hint = ("fix the file or the path (relative to the scenario's folder)" if exc.field == "file"
+                else f"change {exc.field}")
+        raise ctx.fail(str(exc), _join(sec.path, exc.field), sec.line_of(exc.field) or sec.line, hint) from None
+    return decl.cls(**values)
+
+
 def _motion(ctx: _Ctx, obs: _Section, decl: K.Section) -> Motion | None:
     """The obstacle's ``motion`` section: a path at a speed, or a constant velocity."""
     sec = obs.section("motion", decl.names, decl.what)
@@ -528,7 +550,7 @@ def _build(root: YNode | None, ctx: _Ctx, name: str | None, family: str | None) 
         robot=_robot(ctx, top),
         mission=_mission(ctx, top),
         obstacles=_obstacles(ctx, top),
-        terrain=_read_elements(ctx, top, SCENARIO["terrain"]),
+        terrain=_read_elements(ctx, top, SCENARIO["terrain"], _terrain_element),
         simulation=_simulation(ctx, top),
         reference=_reference(ctx, top),
         search=_mapping(ctx, top, "search"),
