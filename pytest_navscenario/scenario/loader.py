@@ -144,8 +144,8 @@ class _Section:
         self.ctx, self.path, self.keys = ctx, path, keys
         if not isinstance(node, YMap):
             raise ctx.fail(f"expected {what}, got {describe(node) if node is not None else 'nothing'}",
-                           path or None, node.line if node is not None and node.line else line,
-                           f"write it as 'key: value' lines with keys from: {', '.join(keys)}")
+                           path or None, line if line is not None else (node.line if node is not None else None),
+                           f"write it as 'key: value' lines with keys from: {', '.join(keys)}")   # the key's own line
         self.node = node
         self.line = line if line is not None else node.line
         for key, (key_line, _) in node.items.items():
