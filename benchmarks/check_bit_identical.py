@@ -150,7 +150,7 @@ def cases(extra: list[str]):
     yield "divergence", blowup, lambda: Constant((1e12, 0.0, 0.0)), 0, {}
 
 
-NEWER_EVENT_FIELDS = ("robot_speed", "robot_moving", "obstacle_speed")
+NEWER_EVENT_FIELDS = ("robot_speed", "robot_moving", "obstacle_speed", "terrain")  # terrain: issue 25
 
 
 def _event(ev):

@@ -13,7 +13,7 @@ the pictures (a.jsonl, b.jsonl) and the ``navscenario compare`` text is printed.
 Writes:
     trajectory.png   one episode that failed (the most interesting failure of B: smallest clearance)
     comparison.png   one scenario where A and B differ, side by side
-    bars.png         success up / safety-stop down per family, A beside B (the paper's chart)
+    bars.png         success up / failures by outcome down per family, A beside B (the paper's chart)
 """
 from __future__ import annotations
 

@@ -19,7 +19,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--junit", metavar="OUT.xml",
                    help="write the comparison as JUnit XML: one test case per scenario, failing where B broke what A passed")
     p.add_argument("--plot", metavar="OUT.png",
-                   help="write the two-sided bar chart (success up, safety-stop down, per family, A beside B)")
+                   help="write the two-sided bar chart (success up, failures by outcome down, per family, A beside B)")
     p.add_argument("--html", metavar="OUT.html",
                    help="write a self-contained HTML report: the comparison, the bar chart and B's runs")
     p.add_argument("--fail-on-regression", action="store_true",

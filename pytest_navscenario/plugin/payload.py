@@ -8,7 +8,7 @@ Format (set on the *call* report of every scenario item that ran an episode)::
       "scenario":   loader.scenario_to_dict(...)   # the scenario exactly as run
       "source":     "scenarios/boxes1.yaml"        # scenario file, relative to the rootdir
       "events":     {"collision": {...} | None, "safety_stop": {...} | None,
-                     "subject_failure": {...} | None}
+                     "subject_failure": {...} | None, "terrain": {...} | None}
       "metrics":    Metrics.as_dict()              # exact (inf/nan kept; the record has null)
       "timings":    {"physics": s, ...}            # the runner's timing breakdown
       "trajectory": result.trajectory_to_dict(...) # ONLY when requested, else None
@@ -31,6 +31,7 @@ from ..sim.trajectory import (
     Collision,
     SafetyStop,
     SubjectFailure,
+    TerrainEvent,
     Trajectory,
     trajectory_from_dict,
     trajectory_to_dict,
@@ -83,6 +84,7 @@ def episode_to_payload(result: EpisodeResult, *, nodeid: str, path: str,
             "collision": _event(result.collision),
             "safety_stop": _event(result.safety_stop),
             "subject_failure": _event(result.subject_failure),
+            "terrain": _event(result.terrain_event),
         },
         "metrics": _shallow(result.metrics),
         "timings": dict(result.timings),
@@ -125,4 +127,5 @@ def episode_from_payload(payload: dict[str, Any]) -> EpisodeResult:
         subject_failure=ev(SubjectFailure, "subject_failure"),
         wall_time=rec.get("wall_time", 0.0),
         timings=dict(payload.get("timings") or {}),
+        terrain_event=ev(TerrainEvent, "terrain"),
     )

@@ -48,7 +48,8 @@ OPTIONS = (
      "--nav-subject spec the baseline's records carry; needed when its subject came from a conftest "
      "hook)"),
     ("--nav-plots", "nav_plots", "failed",
-     "trajectory plots: failed (default: for failing items), all, or none"),
+     "trajectory plots: failed (default: for failing items), all, or none; given with --navsearch "
+     "(failed or all), a picture of each frozen failure beside its file"),
     ("--nav-plots-max", "nav_plots_max", "20",
      "make at most N trajectory plots per session (default 20; 0 = no limit): a plot costs ~0.25 s of "
      "CPU on the controller; --nav-html lifts the limit for failing items (the report shows them all)"),
@@ -56,7 +57,8 @@ OPTIONS = (
      "folder for trajectory plots; default: each item's artifacts folder (plots/trajectory.png), or "
      f"{DEFAULT_PLOTS_DIR}/ under the rootdir when artifacts are off"),
     ("--nav-html", "nav_html", "",
-     "write one self-contained HTML report (summary, comparison, every failure's plot) to this file"),
+     "write one self-contained HTML report (summary, comparison, every failure's plot) to this file; "
+     "with --navsearch the search's report (its failures with their pictures, how it went)"),
 )
 
 # accepted values in braces, or a unit (N, PATH, DIR, SPEC), as every option of the plugin shows it
@@ -149,6 +151,14 @@ def read_report_settings(config: pytest.Config, check_files: bool = True) -> Rep
 
 def _is_worker(config: pytest.Config) -> bool:
     return hasattr(config, "workerinput")
+
+
+def _is_search(config: pytest.Config) -> bool:
+    """A --navsearch session: it runs searches, not scenario items."""
+    try:
+        return bool(config.getoption("navsearch") or config.getini("navsearch"))
+    except (ValueError, pytest.UsageError):   # the search plugin is not loaded
+        return False
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -343,7 +353,7 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
             state.gate_failed = True
             if session.exitstatus == pytest.ExitCode.OK:
                 session.exitstatus = pytest.ExitCode.TESTS_FAILED
-    if s.html is not None:
+    if s.html is not None and not _is_search(config):   # a search writes its own (search_report.py)
         try:
             _write_html(config, state)
         except Exception as exc:

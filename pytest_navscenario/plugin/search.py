@@ -126,6 +126,8 @@ class SearchState:
     is_worker: bool
     done: list[dict[str, Any]] = field(default_factory=list)   # controller: summary entries
     junit_items: list[Any] = field(default_factory=list)
+    recorders: dict[str, Any] = field(default_factory=dict)   # seed name -> its search's SearchRecorder
+    html_error: str = ""
 
 
 STATE_KEY = pytest.StashKey[SearchState]()
@@ -350,14 +352,19 @@ class NavSearchItem(pytest.Item):
         s, job = state.settings, state.jobs[self.job_name]
         subject = core.subject.spec or core.subject.label
         factory, evaluator = search_subject_and_evaluator(self.config)   # -n N / --nav-ray: workers
+        recorder = None
+        if not state.is_worker:   # this process writes: each failure and log line as found
+            from ..search.freeze import SearchRecorder
+            recorder = state.recorders[job.seed.name] = SearchRecorder(job.space, s.out, root=self.config.rootpath)
         report = run_search(job.seed, factory, budget=s.budget, seed_value=s.seed,
                             strategy=s.strategy, shrink_budget=s.shrink_budget, space=job.space,
                             subject=subject, episode_seed=core.settings.seed, stuck_after=s.stuck_after,
                             progress=None if state.is_worker else _Progress(self.config, job.name, s.budget),
-                            evaluator=evaluator)
+                            evaluator=evaluator, recorder=recorder)
         self.navsearch_payload = report_to_payload(report)
         if report.interrupted and report.stop_reason.startswith("interrupted"):
-            self.session.shouldstop = (f"navsearch {job.name} was cut short by Ctrl-C after "
+            from ..core.interrupts import first_signal
+            self.session.shouldstop = (f"navsearch {job.name} was cut short by {first_signal() or 'Ctrl-C'} after "
                                        f"{report.sims_used} of {report.budget} simulations; "
                                        f"failures found so far were kept")
 
@@ -446,7 +453,8 @@ def report_to_payload(report: Any) -> dict[str, Any]:
         "seed_value": report.seed_value, "budget": report.budget, "shrink_budget": report.shrink_budget,
         "params": report.params, "sims_used": report.sims_used, "shrink_sims": report.shrink_sims,
         "shrink_total": report.shrink_total,
-        "discarded": dict(report.discarded), "skipped": report.skipped, "interrupted": report.interrupted,
+        "discarded": dict(report.discarded), "discard_log": [list(d) for d in report.discard_log],
+        "skipped": report.skipped, "interrupted": report.interrupted,
         "stop_reason": report.stop_reason, "wall_time": report.wall_time,
         "episode_seed": report.episode_seed, "first_failure": report.first_failure,
         "candidates": [cand(c) for c in report.candidates],
@@ -474,6 +482,7 @@ def payload_to_report(data: dict[str, Any], space: Any) -> Any:
                                    "episode_seed")}
     report = SearchReport(**fields)
     report.skipped = data.get("skipped", 0)
+    report.discard_log = [(int(n), str(k)) for n, k in data.get("discard_log", [])]
     report.first_failure = data.get("first_failure", 0)
     report.shrink_total = data.get("shrink_total", 0)
     report.candidates = cands
@@ -493,7 +502,9 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) ->
 
 
 def pytest_runtest_logreport(report: pytest.TestReport) -> None:
-    """Controller: write the frozen failures and the search log of a finished search."""
+    """Controller: a finished search's summary entry, its generated suite and the JUnit file (its
+    frozen failures and log were written while it ran, by its SearchRecorder). An interrupt that
+    comes while this writes waits until it is done."""
     payload = getattr(report, "navsearch", None)
     if payload is None or report.when != "call":
         return
@@ -503,20 +514,43 @@ def pytest_runtest_logreport(report: pytest.TestReport) -> None:
     state = config.stash.get(STATE_KEY, None)
     if state is None:
         return
+    from ..core.interrupts import deferred
+
+    with deferred():
+        _finish_search(payload, state, config)
+
+
+def _finish_search(payload: dict[str, Any], state: SearchState, config: pytest.Config) -> None:
     from ..search.freeze import freeze_failures, write_search_log
 
     job = next(j for j in state.jobs.values() if j.seed.name == payload["seed_name"])
     search = payload_to_report(payload, job.space)
     entry: dict[str, Any] = {"report": search, "job": job, "files": [], "log": None, "error": "", "suite": None}
-    try:
-        entry["files"] = freeze_failures(search, job.space, state.settings.out, root=config.rootpath)
-        entry["log"] = write_search_log(search, job.space, state.settings.out)
-    except Exception as exc:  # never lose the summary: say what could not be written
-        entry["error"] = f"could not write the frozen failures under {state.settings.out}: {type(exc).__name__}: {exc}"
+    recorder = state.recorders.pop(job.seed.name, None)
+    if recorder is not None:
+        entry["files"], entry["log"] = recorder.files, recorder.log_path
+        entry["error"] = recorder.error
+    else:   # the search ran elsewhere (an xdist worker): write what it found now
+        try:
+            entry["files"] = freeze_failures(search, job.space, state.settings.out, root=config.rootpath)
+            entry["log"] = write_search_log(search, job.space, state.settings.out)
+        except Exception as exc:  # never lose the summary: say what could not be written
+            entry["error"] = (f"could not write the frozen failures under {state.settings.out}: "
+                              f"{type(exc).__name__}: {exc}")
     if state.settings.suite is not None:
         _write_suite(entry, state.settings.suite, config)
+    from .search_report import failure_rows, wanted
+    if wanted(config)[0]:   # --nav-plots / --nav-html: a picture of each frozen failure
+        entry["rows"] = failure_rows(config, entry)
     state.done.append(entry)
     state.junit_items.append((search, job.space))
+    if state.settings.junit is not None:   # after every search: an interrupted session keeps it too
+        from ..search.freeze import write_junit
+        try:
+            write_junit(state.junit_items, state.settings.junit)
+        except Exception as exc:
+            entry["error"] += ("; " if entry["error"] else "") + (
+                f"could not write the JUnit file {state.settings.junit}: {type(exc).__name__}: {exc}")
 
 
 def _write_suite(entry: dict[str, Any], folder: Path, config: pytest.Config) -> None:
@@ -531,10 +565,13 @@ def _write_suite(entry: dict[str, Any], folder: Path, config: pytest.Config) -> 
 
 def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
     state = session.config.stash.get(STATE_KEY, None)
-    if state is None or state.is_worker or state.settings.junit is None or not state.junit_items:
+    if state is None or state.is_worker:
         return
-    from ..search.freeze import write_junit
-    write_junit(state.junit_items, state.settings.junit)
+    from .search_report import write_html
+    try:
+        write_html(session.config, state.done)
+    except Exception as exc:  # never lose the summary: say what could not be written
+        state.html_error = f"could not write the search's HTML report: {type(exc).__name__}: {exc}"
 
 
 def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pytest.Config) -> None:
@@ -553,6 +590,12 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
                           f"stopped before it)")
     if state.settings.junit is not None and state.junit_items:
         tr.write_line(f"JUnit file of the generated suite: {state.settings.junit}")
+    if state.html_error:
+        tr.write_line(f"ERROR {state.html_error}", red=True)
+    from ..core.interrupts import held
+    if held():
+        tr.write_line("a second interrupt came while what was found was being saved: it was held until "
+                      "everything was written (a third one stops at once)")
 
 
 def _rel(config: pytest.Config, path: Path) -> str:
@@ -562,26 +605,9 @@ def _rel(config: pytest.Config, path: Path) -> str:
         return str(path)
 
 
-def lowest_clearance(report: Any) -> Any:
-    """The search-phase candidate that came closest to an obstacle (the first of equals), or None."""
-    best = None
-    for c in report.candidates:
-        if c.phase == "search" and math.isfinite(c.clearance) and (best is None or c.clearance < best.clearance):
-            best = c
-    return best
-
-
-def lowest_clearance_text(report: Any) -> str:
-    """"lowest clearance of any run 0.029 m (sim 57, a run that passed)": the closest any simulated
-    candidate came, and the run it came from, so that it is not read as a frozen failure's."""
-    c = lowest_clearance(report)
-    if c is None:
-        return "lowest clearance of any run n/a"
-    what = "a run that passed" if c.outcome == "success" else f"a {c.outcome}"
-    return f"lowest clearance of any run {c.clearance:.3f} m (sim {c.sim}, {what})"
-
-
 def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
+    from .search_report import lowest_clearance_text
+
     r = entry["report"]
     by = ", ".join(f"{k} {v}" for k, v in sorted(r.failures_by_outcome().items())) or "none"
     disc = ", ".join(f"{k} {v}" for k, v in sorted(r.discarded.items()))
@@ -610,6 +636,11 @@ def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
         c = f.clearance
         lines.append(f"  {state} {_rel(config, f.path)}  {f.outcome}, clearance "
                      + (f"{c:.3f} m" if math.isfinite(c) else "n/a") + ("" if f.new else " (already frozen)"))
+    pictures = [row.picture for row in entry.get("rows") or [] if row.picture]
+    if pictures:
+        folders = sorted({str(Path(p).parent) for p in pictures})
+        lines.append(f"  pictures of {len(pictures)} failure(s) in {folders[0] if len(folders) == 1 else ', '.join(folders)}/ "
+                     f"(the frozen file's name, .png)")
     if entry["log"] is not None:
         lines.append(f"  log  {_rel(config, entry['log'])}")
     suite = entry.get("suite")

@@ -21,7 +21,7 @@ from typing import Any, Iterable, Sequence
 from .results_file import OUTCOMES, ResultsFileError, read_results
 from .stats import mcnemar_exact, rate_with_interval
 
-RATE_OUTCOMES = ("success", "safety-stop", "timeout", "collision", "subject-error")
+RATE_OUTCOMES = ("success", "safety-stop", "timeout", "collision", "fall", "subject-error")
 # compared over the pairs both subjects passed: (record metrics key, label)
 METRICS = (("path_efficiency", "path efficiency"), ("duration", "duration (s)"),
            ("mean_speed", "mean speed (m/s)"), ("min_clearance", "min clearance (m)"))
@@ -288,7 +288,7 @@ def _p(p: float) -> str:
 
 
 SHORT = {"success": "success", "safety-stop": "safety-stop", "timeout": "timeout",
-         "collision": "collision", "subject-error": "error"}
+         "collision": "collision", "fall": "fall", "subject-error": "error"}
 
 
 def format_comparison(cmp: Comparison, *, max_listed: int = 50, max_unpaired: int | None = None,
@@ -298,8 +298,8 @@ def format_comparison(cmp: Comparison, *, max_listed: int = 50, max_unpaired: in
     lines = [f"A = {cmp.a_name}: {cmp.a_subject}", f"B = {cmp.b_name}: {cmp.b_subject}",
              f"{len(cmp.pairs)} paired scenario runs (same nodeid and repeat index); rates over these pairs",
              "with 95 % Wilson intervals; change = B - A success; p = exact McNemar test on success"]
-    outcomes = [o for o in RATE_OUTCOMES
-                if o != "subject-error" or cmp.overall.a[o].count or cmp.overall.b[o].count]
+    outcomes = [o for o in RATE_OUTCOMES        # errors and falls get a column when there are any
+                if o not in ("subject-error", "fall") or cmp.overall.a[o].count or cmp.overall.b[o].count]
     fw = max([14] + [len(f.family) for f in cmp.families])
     header = f"{'family':<{fw}} {'n':>4}  {'':2}" + "".join(f" {SHORT[o]:>15}" for o in outcomes) \
         + f" {'change':>8} {'broke':>5} {'fixed':>5} {'p':>6}"

@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any, Sequence
 import numpy as np
 
 from ..scenario.geometry import footprint_polygon, footprint_polygons, obstacle_polygon
+from .labels import LabelPlacer, ring
 from ..scenario.motion import Track, displacement, is_moving
 from ..verdict.result import EpisodeResult
 
@@ -34,7 +35,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .compare import Comparison
 
 OUTCOME_COLOURS = {"success": "#2e7d32", "collision": "#c62828", "safety-stop": "#ef6c00",
-                   "timeout": "#6a1b9a", "subject-error": "#37474f"}
+                   "timeout": "#6a1b9a", "subject-error": "#37474f", "fall": "#8d1b1b"}
 A_COLOUR, B_COLOUR = "#7f9fbf", "#1f4e79"
 SPEED_CMAP = "viridis"
 MAX_NAMED_OBSTACLES = 40   # more obstacles than this: only the ones involved are named
@@ -143,26 +144,34 @@ _HALO = dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8)   # be
 
 def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
                  outline_every: float | None = None, title: str | None = None,
-                 legend: bool = False) -> Any:
+                 legend: bool = False, labels: LabelPlacer | None = None) -> Any:
     """Draw one episode on ``ax``; return the speed colour mapping (for a colour bar) or None.
 
     The picture is made in named steps, back to front: the obstacles, the shortest path, the
     footprint's path (swept area, outlines, centre line coloured by speed, time labels), the
     mission (start, waypoints, goal), the key moments (minimum clearance, narrowest gap,
-    collision or safety stop), then the axes (limits, grid, labels, legend, title). Artists are
-    added as collections with ``autolim=False``: the limits are set once, at the end.
+    collision, safety stop, or where the robot ended when it did neither and missed the goal),
+    then the axes (limits, grid, labels, legend, title). Artists are added as collections with
+    ``autolim=False``: the limits are set once, at the end. The steps ask for their text labels
+    and say where their markers are; the labels are placed last, clear of each other and of the
+    markers (labels.py). Pass ``labels`` to place them yourself later (``labels.place()``, once
+    the limits are final: side-by-side panels share theirs).
     """
     s = result.scenario
-    draw_obstacles(ax, s, involved=_involved_obstacles(result))
-    draw_moving_obstacles(ax, result)
+    placer = labels if labels is not None else LabelPlacer(ax)
+    draw_obstacles(ax, s, involved=_involved_obstacles(result), labels=placer)
+    draw_moving_obstacles(ax, result, labels=placer)
     _draw_shortest_path(ax, s)
-    mapping = _draw_footprint_path(ax, result, norm=norm, outline_every=outline_every)
-    _draw_believed(ax, result)
-    _draw_mission(ax, s.mission)
-    _draw_min_clearance(ax, result)
-    _draw_narrowest_gap(ax, s, result.metrics)
-    _draw_events(ax, result)
+    mapping = _draw_footprint_path(ax, result, norm=norm, outline_every=outline_every, labels=placer)
+    _draw_believed(ax, result, placer)
+    _draw_mission(ax, s.mission, placer)
+    _draw_min_clearance(ax, result, placer)
+    _draw_narrowest_gap(ax, s, result.metrics, placer)
+    _draw_events(ax, result, placer)
+    _draw_end(ax, result, placer)
     _finish_axes(ax, result, title=title, legend=legend)
+    if labels is None:
+        placer.place()
     return mapping
 
 
@@ -174,9 +183,11 @@ def _involved_obstacles(result: EpisodeResult) -> set[str]:
             result.safety_stop.obstacle if result.safety_stop else ""}
 
 
-def draw_obstacles(ax: "Axes", scenario: Any, *, involved: set[str] = frozenset()) -> None:  # type: ignore[assignment]
+def draw_obstacles(ax: "Axes", scenario: Any, *, involved: set[str] = frozenset(),  # type: ignore[assignment]
+                   labels: LabelPlacer | None = None) -> None:
     """The obstacles as grey polygons, with their names (on maps of more than
-    MAX_NAMED_OBSTACLES obstacles, only the ``involved`` ones are named).
+    MAX_NAMED_OBSTACLES obstacles, only the ``involved`` ones are named); with ``labels``, the
+    names are fixed labels the other labels keep clear of.
 
     This is the one place that draws the static obstacles; moving ones are drawn by
     ``draw_moving_obstacles`` (they need the episode's times), the step after this one.
@@ -211,8 +222,10 @@ def draw_obstacles(ax: "Axes", scenario: Any, *, involved: set[str] = frozenset(
         if is_moving(obs):
             continue    # named at its key moments (draw_moving_obstacles)
         at = poly.centroid if poly.contains(poly.centroid) else poly.representative_point()  # a U's notch
-        ax.annotate(obs.name, (at.x, at.y), ha="center", va="center",
-                    fontsize=7, zorder=8, bbox=_HALO)
+        if labels is not None:
+            labels.fixed(obs.name, (at.x, at.y), ha="center", va="center", fontsize=7, zorder=8, bbox=_HALO)
+        else:
+            ax.annotate(obs.name, (at.x, at.y), ha="center", va="center", fontsize=7, zorder=8, bbox=_HALO)
 
 
 MOVING_COLOUR = "#e65100"
@@ -248,10 +261,11 @@ def moving_key_moments(result: EpisodeResult, obs: Any) -> list[tuple[float, str
     return moments
 
 
-def draw_moving_obstacles(ax: "Axes", result: EpisodeResult) -> None:
+def draw_moving_obstacles(ax: "Axes", result: EpisodeResult, labels: LabelPlacer | None = None) -> None:
     """Each moving obstacle: the way it went during the episode (dotted, from where it stood
     to where it was at the end) and its outline at the key moments (moving_key_moments), the
-    last one filled, each labelled with its name and time."""
+    last one filled, each labelled with its name and time (placed by ``labels`` when given, which
+    other labels then keep off the outlines)."""
     from matplotlib.collections import PolyCollection
 
     traj = result.trajectory
@@ -274,10 +288,16 @@ def draw_moving_obstacles(ax: "Axes", result: EpisodeResult) -> None:
                                          edgecolors=MOVING_COLOUR, linewidths=1.2, zorder=5),
                           autolim=False)
         for k, ((t, label), poly) in enumerate(zip(moments, polys)):
-            ax.annotate(f"{obs.name} {label}" if k == 0 else label,
-                        (poly.centroid.x, poly.centroid.y), xytext=(0, (9, -15, 20)[k % 3]),
-                        textcoords="offset points", ha="center", fontsize=6, color=MOVING_COLOUR,
-                        zorder=8, bbox=_HALO)
+            text = f"{obs.name} {label}" if k == 0 else label
+            style = dict(fontsize=6, color=MOVING_COLOUR, zorder=8, bbox=_HALO)
+            if labels is None:
+                ax.annotate(text, (poly.centroid.x, poly.centroid.y), xytext=(0, (9, -15, 20)[k % 3]),
+                            textcoords="offset points", ha="center", **style)
+                continue
+            labels.avoid_area(np.asarray(poly.exterior.coords))
+            labels.add(text, (poly.centroid.x, poly.centroid.y), priority=4,
+                       offsets=ring((10.0, 18.0, 30.0), first=(0, 1)),
+                       leader=dict(color=MOVING_COLOUR, lw=0.5, zorder=7), **style)
 
 
 def _draw_shortest_path(ax: "Axes", scenario: Any) -> None:
@@ -294,7 +314,7 @@ def _draw_shortest_path(ax: "Axes", scenario: Any) -> None:
 
 
 def _draw_footprint_path(ax: "Axes", result: EpisodeResult, *, norm: Any,
-                         outline_every: float | None) -> Any:
+                         outline_every: float | None, labels: LabelPlacer | None = None) -> Any:
     """Where the robot went: the area its footprint swept (the "thick line"), its outline to
     scale every ``outline_every`` seconds, the centre path coloured by speed, and time labels.
     Returns the speed colour mapping, or None without a trajectory."""
@@ -308,11 +328,11 @@ def _draw_footprint_path(ax: "Axes", result: EpisodeResult, *, norm: Any,
     _draw_swept_area(ax, fp, pose)
     _draw_outlines(ax, fp, pose, t, outline_every or _nice_step(max(0.5, duration / 25.0)))
     mapping = _draw_speed_path(ax, pose, _speed(result), norm)
-    _draw_time_labels(ax, pose, t, duration)
+    _draw_time_labels(ax, pose, t, duration, labels)
     return mapping
 
 
-def _draw_believed(ax: "Axes", result: EpisodeResult) -> None:
+def _draw_believed(ax: "Axes", result: EpisodeResult, labels: LabelPlacer | None = None) -> None:
     """With localisation drift: the path the planner believed it drove (dashed purple, per tick)
     beside the true one, and at the end a line from where it believed it was to where it was."""
     believed = getattr(result.trajectory, "believed", None)
@@ -325,8 +345,10 @@ def _draw_believed(ax: "Axes", result: EpisodeResult) -> None:
     ax.plot([b[-1, 0], pose[-1, 0]], [b[-1, 1], pose[-1, 1]], ls=":", lw=1.0, color="#7b1fa2", zorder=6)
     ax.plot(b[-1, 0], b[-1, 1], marker="o", ms=5, mfc="white", mec="#7b1fa2", zorder=9, ls="none")
     err = math.hypot(b[-1, 0] - pose[-1, 0], b[-1, 1] - pose[-1, 1])
-    ax.annotate(f"believed: {err:.2f} m off", (b[-1, 0], b[-1, 1]), xytext=(6, -10),
-                textcoords="offset points", fontsize=6, color="#7b1fa2", zorder=11, bbox=_HALO)
+    _label(ax, labels, f"believed: {err:.2f} m off", (b[-1, 0], b[-1, 1]), (6, -10),
+           fontsize=6, color="#7b1fa2", zorder=11, bbox=_HALO)
+    if labels is not None:
+        labels.avoid((b[-1, 0], b[-1, 1]), 4)
 
 
 def _draw_swept_area(ax: "Axes", fp: Any, pose: np.ndarray) -> None:
@@ -369,21 +391,34 @@ def _draw_speed_path(ax: "Axes", pose: np.ndarray, speed: np.ndarray, norm: Any)
     return lc
 
 
-def _draw_time_labels(ax: "Axes", pose: np.ndarray, t: np.ndarray, duration: float) -> None:
-    """Dots with the time ("2s") at about six nice instants along the path."""
+def _draw_time_labels(ax: "Axes", pose: np.ndarray, t: np.ndarray, duration: float,
+                      labels: LabelPlacer | None = None) -> None:
+    """Dots with the time ("2s") at about six nice instants along the path. Where the robot
+    dwells (stands, dithers, circles) one stamp is kept per place: a stamp at least 0.4 m of
+    travel and 0.75 m in a straight line from every stamp kept before; with ``labels`` a stamp
+    whose text would cover another label or a marker is left out."""
     tick = _nice_step(duration / 6.0)
     ticks = np.arange(tick, t[-1], tick)
     idx = np.clip(np.searchsorted(t, ticks), 0, len(t) - 1)
     keep = set(_spread(pose, idx, 0.4).tolist())
+    kept: list[np.ndarray] = []
     for tt, i in zip(ticks, idx):
         if i not in keep:  # the robot stood still: one label is enough
             continue
-        ax.plot(*pose[i, :2], "o", ms=2.5, color="black", zorder=7)
-        ax.annotate(f"{tt:g}s", pose[i, :2], xytext=(4, -8), textcoords="offset points",
-                    fontsize=6, color="#212121", zorder=8)
+        if any(math.hypot(*(pose[i, :2] - k)) < 0.75 for k in kept):   # back where a stamp is
+            continue
+        kept.append(pose[i, :2])
+        dot = ax.plot(*pose[i, :2], "o", ms=2.5, color="black", zorder=7)
+        if labels is None:
+            ax.annotate(f"{tt:g}s", pose[i, :2], xytext=(4, -8), textcoords="offset points",
+                        fontsize=6, color="#212121", zorder=8)
+            continue
+        labels.avoid(tuple(pose[i, :2]), 3)
+        labels.add(f"{tt:g}s", tuple(pose[i, :2]), optional=True, priority=9, companions=dot,
+                   offsets=ring((4.0, 9.0, 16.0), first=(1, -1)), fontsize=6, color="#212121", zorder=8)
 
 
-def _draw_mission(ax: "Axes", mission: Any) -> None:
+def _draw_mission(ax: "Axes", mission: Any, labels: LabelPlacer | None = None) -> None:
     """Start, numbered waypoints, and the goal with its tolerance circle."""
     from matplotlib.patches import Circle
 
@@ -392,14 +427,29 @@ def _draw_mission(ax: "Axes", mission: Any) -> None:
     for k, w in enumerate(mission.waypoints, 1):
         ax.plot(w.x, w.y, marker="D", ms=6, color="#f9a825", zorder=9, ls="none",
                 label="waypoints" if k == 1 else None)
-        ax.annotate(str(k), (w.x, w.y), xytext=(5, 5), textcoords="offset points", fontsize=7)
+        _label(ax, labels, str(k), (w.x, w.y), (5, 5), fontsize=7)
+        if labels is not None:
+            labels.avoid((w.x, w.y), 5)
     ax.add_patch(Circle((mission.goal.x, mission.goal.y), mission.goal_tolerance.position,
                         fill=False, ls=":", ec="#2e7d32", zorder=5))
     ax.plot(mission.goal.x, mission.goal.y, marker="*", ms=13, color="#2e7d32", zorder=9, ls="none",
             label="goal")
+    if labels is not None:
+        labels.avoid((mission.start.x, mission.start.y), 6)
+        labels.avoid((mission.goal.x, mission.goal.y), 8)
 
 
-def _draw_min_clearance(ax: "Axes", result: EpisodeResult) -> None:
+def _label(ax: "Axes", labels: LabelPlacer | None, text: str, xy: tuple[float, float],
+           offset: tuple[float, float], **style: Any) -> None:
+    """A label at ``offset`` points from ``xy``: through the placer when there is one (the offset
+    tried first, then the ring around ``xy``), else written there."""
+    if labels is not None:
+        labels.add(text, xy, offsets=[offset, *ring()], **style)
+    else:
+        ax.annotate(text, xy, xytext=offset, textcoords="offset points", **style)
+
+
+def _draw_min_clearance(ax: "Axes", result: EpisodeResult, labels: LabelPlacer | None = None) -> None:
     """The moment of minimum clearance: the footprint then (red outline) and the segment from it
     to the nearest obstacle, labelled on the free side."""
     from matplotlib.patches import Polygon as MplPolygon
@@ -424,14 +474,20 @@ def _draw_min_clearance(ax: "Axes", result: EpisodeResult) -> None:
     # label on the free side: from the obstacle towards the robot
     d = np.array([a.x - b.x, a.y - b.y])
     d = d / np.linalg.norm(d) if np.linalg.norm(d) > 1e-9 else np.array([-0.7, 0.7])
-    ax.annotate(f"min clearance {m.min_clearance:.2f} m\n(t={m.min_clearance_time:.1f} s)",
-                (a.x, a.y), xytext=tuple(28 * d), textcoords="offset points", fontsize=7,
-                ha="right" if d[0] < 0 else "left", va="top" if d[1] < 0 else "bottom",
-                color="#d50000", zorder=11, bbox=_HALO,
-                arrowprops=dict(arrowstyle="-", color="#d50000", lw=0.6))
+    text = f"min clearance {m.min_clearance:.2f} m\n(t={m.min_clearance_time:.1f} s)"
+    style = dict(fontsize=7, color="#d50000", zorder=11, bbox=_HALO)
+    if labels is None:
+        ax.annotate(text, (a.x, a.y), xytext=tuple(28 * d), textcoords="offset points",
+                    ha="right" if d[0] < 0 else "left", va="top" if d[1] < 0 else "bottom",
+                    arrowprops=dict(arrowstyle="-", color="#d50000", lw=0.6), **style)
+        return
+    labels.avoid((a.x, a.y), 5)
+    free = [tuple(r * d) for r in (28.0, 44.0)]     # on the free side first, then anywhere near
+    labels.add(text, (a.x, a.y), priority=1, offsets=free + ring((28.0, 44.0, 64.0)),
+               leader=dict(color="#d50000", lw=0.6, zorder=10), **style)
 
 
-def _draw_narrowest_gap(ax: "Axes", scenario: Any, metrics: Any) -> None:
+def _draw_narrowest_gap(ax: "Axes", scenario: Any, metrics: Any, labels: LabelPlacer | None = None) -> None:
     """The narrowest gap between two obstacles: a double arrow with its width."""
     from shapely.ops import nearest_points
 
@@ -444,23 +500,54 @@ def _draw_narrowest_gap(ax: "Axes", scenario: Any, metrics: Any) -> None:
         return
     ax.annotate("", (a.x, a.y), (b.x, b.y), zorder=10,
                 arrowprops=dict(arrowstyle="<->", color="#ff6f00", lw=1.3, shrinkA=0, shrinkB=0))
-    ax.annotate(f"gap {gap:.2f} m", ((a.x + b.x) / 2, (a.y + b.y) / 2), xytext=(0, -7),
-                textcoords="offset points", ha="center", va="top", fontsize=7, color="#e65100",
-                zorder=11, bbox=_HALO)
+    mid = ((a.x + b.x) / 2, (a.y + b.y) / 2)
+    style = dict(fontsize=7, color="#e65100", zorder=11, bbox=_HALO)
+    if labels is None:
+        ax.annotate(f"gap {gap:.2f} m", mid, xytext=(0, -7), textcoords="offset points",
+                    ha="center", va="top", **style)
+        return
+    labels.add(f"gap {gap:.2f} m", mid, priority=2, offsets=ring((7.0, 16.0, 30.0), first=(0, -1)),
+               leader=dict(color="#e65100", lw=0.5, zorder=10), **style)
 
 
-def _draw_events(ax: "Axes", result: EpisodeResult) -> None:
+def _draw_events(ax: "Axes", result: EpisodeResult, labels: LabelPlacer | None = None) -> None:
     """Where the episode ended badly: the collision's contact point, the safety stop's pose."""
     if result.collision is not None:
         c = result.collision
         who = "" if getattr(c, "robot_moving", True) else ", robot standing"
         ax.plot(c.x, c.y, marker="X", ms=12, color="#b71c1c", mec="white", zorder=12, ls="none",
                 label=f"collision t={c.time:.1f} s{who}")
+        if labels is not None:
+            labels.avoid((c.x, c.y), 9)
     if result.safety_stop is not None:
         p = _pose_at(result, result.safety_stop.time)
         if p is not None:
             ax.plot(p[0], p[1], marker="8", ms=11, color="#ef6c00", mec="white", zorder=12, ls="none",
                     label=f"safety stop t={result.safety_stop.time:.1f} s")
+            if labels is not None:
+                labels.avoid((p[0], p[1]), 9)
+
+
+def _draw_end(ax: "Axes", result: EpisodeResult, labels: LabelPlacer | None = None) -> None:
+    """Where the robot ended when neither a collision nor a safety stop marks it and it is not at
+    the goal (a timeout, a planner error): its footprint then, outlined in the outcome's colour,
+    and a square at its centre, in the legend with the outcome and the time."""
+    from matplotlib.patches import Polygon as MplPolygon
+
+    if result.passed or result.collision is not None or result.safety_stop is not None:
+        return
+    traj = result.trajectory
+    if not len(traj.t):
+        return
+    x, y, yaw = (float(v) for v in np.asarray(traj.pose[-1], dtype=float))
+    colour = OUTCOME_COLOURS.get(result.outcome.value, "black")
+    outline = footprint_polygon(result.scenario.robot.footprint, x, y, yaw)
+    ax.add_patch(MplPolygon(np.asarray(outline.exterior.coords), closed=True, fill=False, ec=colour,
+                            lw=1.6, zorder=11))
+    ax.plot(x, y, marker="s", ms=8, color=colour, mec="white", zorder=12, ls="none",
+            label=f"end: {result.outcome.value} at t={float(traj.t[-1]):.1f} s")
+    if labels is not None:
+        labels.avoid((x, y), 7)
 
 
 def _finish_axes(ax: "Axes", result: EpisodeResult, *, title: str | None, legend: bool) -> None:
@@ -628,12 +715,15 @@ def comparison_figure(a: EpisodeResult, b: EpisodeResult, labels: tuple[str, str
     # outlines as dense as the shorter run needs (where a robot stood still they are thinned anyway)
     every = _nice_step(max(0.5, min(a.trajectory.duration or 1e9, b.trajectory.duration or 1e9, 100.0) / 25.0))
     width = max(30, int(_panel_size([a, b])[0] / 0.075))  # characters per title line, one panel
-    for ax, res, label in zip(axes, (a, b), labels):
-        mapping = draw_episode(ax, res, norm=norm, outline_every=every,
+    placers = [LabelPlacer(ax) for ax in axes]
+    for ax, res, label, placer in zip(axes, (a, b), labels, placers):
+        mapping = draw_episode(ax, res, norm=norm, outline_every=every, labels=placer,
                                title=episode_title(res, prefix=f"{label}: ", width=width)) or mapping
     boxes = [_extent(r) for r in (a, b)]  # the shared axes must show both runs whole
     axes[0].set_xlim(min(x[0] for x in boxes), max(x[1] for x in boxes))
     axes[0].set_ylim(min(x[2] for x in boxes), max(x[3] for x in boxes))
+    for placer in placers:   # now that the shared limits are final
+        placer.place()
     axes[1].set_ylabel("")
     _figure_legend(fig, axes)
     _colorbar(fig, mapping, cax)
@@ -648,47 +738,75 @@ def save_comparison(a: EpisodeResult, b: EpisodeResult, path: str | os.PathLike,
 
 # ------------------------------------------------------------------------------- bar chart
 
+FAILURE_HATCHES = {"safety-stop": "///", "timeout": "..", "collision": "xx", "subject-error": "--"}
+
+
 def bars_figure(cmp: "Comparison") -> "Figure":
-    """The paper's two-sided bar chart: per family, success rate up and safety-stop rate down,
-    A beside B, with 95 % Wilson intervals as error bars and n under each family."""
+    """The paper's two-sided bar chart, with every way of failing: per family, the success rate
+    up and the failures down, stacked by outcome (safety stop, timeout, collision, subject error;
+    each hatched its own way, its share written inside when there is room), A beside B. Error
+    bars: 95 % Wilson intervals of the success rate (up) and of all failures together (down);
+    n and McNemar's p under each family."""
+    from matplotlib.patches import Patch
+
     rows = list(cmp.families) + ([cmp.overall] if len(cmp.families) > 1 else [])
-    fig = _figure(max(6.0, 1.5 + 1.3 * len(rows)), 5.5)
+    fig = _figure(max(6.0, 1.5 + 1.3 * len(rows)), 5.8)
     ax = fig.add_subplot()
     x = np.arange(len(rows), dtype=float)
     width = 0.38
+    failing = [o for o in FAILURE_HATCHES
+               if any(getattr(r, side)[o].count for r in rows for side in ("a", "b"))] or ["safety-stop"]
+    halo = dict(boxstyle="square,pad=0.1", fc="white", ec="none", alpha=0.7)
     for side, offset, colour, name, subject in (("a", -width / 2, A_COLOUR, "A", cmp.a_subject),
                                                 ("b", width / 2, B_COLOUR, "B", cmp.b_subject)):
-        for key, sign, hatch in (("success", 1, None), ("safety-stop", -1, "///")):
-            rates = [getattr(r, side)[key] for r in rows]
-            vals = np.array([0.0 if rt.n == 0 else 100 * rt.rate for rt in rates])
-            err = np.array([[100 * (rt.rate - rt.low) if rt.n else 0 for rt in rates],
-                            [100 * (rt.high - rt.rate) if rt.n else 0 for rt in rates]])
-            err = np.maximum(err, 0.0)  # rounding: a 0 % rate's Wilson low can be 1e-17
-            if sign < 0:
-                err = err[::-1]
-            label = f"{name} {key} ({subject})" if len(subject) < 40 else f"{name} {key}"
-            ax.bar(x + offset, sign * vals, width, color=colour, hatch=hatch, ec="white" if hatch else colour,
-                   label=label, yerr=err, capsize=3, error_kw=dict(lw=0.8, ecolor="#424242"), zorder=3)
-            for xi, v in zip(x + offset, vals):
-                ax.annotate(f"{v:.0f}%", (xi, sign * v), xytext=(0, 3 if sign > 0 else -3),
-                            textcoords="offset points", ha="center", va="bottom" if sign > 0 else "top",
-                            fontsize=7, zorder=4, bbox=dict(boxstyle="square,pad=0.1", fc="white",
-                                                            ec="none", alpha=0.7))
+        rates = [getattr(r, side) for r in rows]
+        ok = np.array([0.0 if rt["success"].n == 0 else 100 * rt["success"].rate for rt in rates])
+        err = np.maximum(np.array([[100 * (rt["success"].rate - rt["success"].low) if rt["success"].n else 0 for rt in rates],
+                                   [100 * (rt["success"].high - rt["success"].rate) if rt["success"].n else 0 for rt in rates]]), 0.0)
+        label = f"{name}: {subject}" if len(subject) < 40 else name
+        ax.bar(x + offset, ok, width, color=colour, ec=colour, label=label, yerr=err, capsize=3,
+               error_kw=dict(lw=0.8, ecolor="#424242"), zorder=3)
+        for xi, v in zip(x + offset, ok):
+            ax.annotate(f"{v:.0f}%", (xi, v), xytext=(0, 3), textcoords="offset points", ha="center",
+                        va="bottom", fontsize=7, zorder=4, bbox=halo)
+        bottom = np.zeros(len(rows))
+        for outcome in failing:
+            vals = np.array([0.0 if rt[outcome].n == 0 else 100 * rt[outcome].rate for rt in rates])
+            ax.bar(x + offset, -vals, width, bottom=-bottom, color=colour, hatch=FAILURE_HATCHES[outcome],
+                   ec="white", lw=0.5, zorder=3)
+            total = np.array([sum(100 * rt[o].rate for o in failing if rt[o].n) for rt in rates])
+            for xi, b0, v, t in zip(x + offset, bottom, vals, total):
+                if v >= 9 and v < t - 0.5:   # room for the share inside, and not the whole stack
+                    ax.annotate(f"{v:.0f}%", (xi, -(b0 + v / 2)), ha="center", va="center", fontsize=6.5,
+                                zorder=4, bbox=halo)
+            bottom += vals
+        # all failures together: the interval of 1 - success, below the stack
+        low = np.array([[100 * (rt["success"].high - rt["success"].rate) if rt["success"].n else 0 for rt in rates],
+                        [100 * (rt["success"].rate - rt["success"].low) if rt["success"].n else 0 for rt in rates]])
+        ax.errorbar(x + offset, -bottom, yerr=np.maximum(low, 0.0), fmt="none", ecolor="#424242",
+                    elinewidth=0.8, capsize=3, zorder=4)
+        for xi, v in zip(x + offset, bottom):
+            ax.annotate(f"{v:.0f}%", (xi, -v), xytext=(0, -3), textcoords="offset points", ha="center",
+                        va="top", fontsize=7, zorder=4, bbox=halo)
     if not rows or not cmp.pairs:
         ax.text(0.5, 0.5, "no comparable scenario pairs:\nsee the 'only in A / only in B / not comparable' lists",
                 transform=ax.transAxes, ha="center", va="center", fontsize=10, color="#c62828")
     ax.axhline(0, color="black", lw=0.8)
     ax.set_xticks(x, [f"{r.family}\nn={r.n}" + (f"\np={r.mcnemar_p:.2g}" if r.n else "") for r in rows],
                   fontsize=8)
-    ax.set_ylim(-115, 115)
+    ax.set_ylim(-118, 115)
     ticks = np.arange(-100, 101, 25)
     ax.set_yticks(ticks, [f"{abs(t)}" for t in ticks])
-    ax.set_ylabel("safety-stop %   |   success %")
+    ax.set_ylabel("failed %   |   success %")
     ax.grid(True, axis="y", color="#e0e0e0", zorder=0)
-    ax.set_title(f"Success (up) and safety-stop (down) per family, A vs B\n"
+    ax.set_title(f"Success (up) and failures by outcome (down) per family, A vs B\n"
                  f"A = {cmp.a_subject}   B = {cmp.b_subject}   (error bars: 95 % Wilson; p: McNemar)",
                  fontsize=9)
-    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=2, frameon=False)
+    handles, labels = ax.get_legend_handles_labels()
+    handles += [Patch(facecolor="white", edgecolor="#424242", hatch=FAILURE_HATCHES[o], label=o) for o in failing]
+    labels += failing
+    ax.legend(handles, labels, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.18),
+              ncol=2 + len(failing), frameon=False)
     return fig
 
 

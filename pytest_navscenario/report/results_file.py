@@ -15,7 +15,7 @@ Record fields (format_version 1)::
                       conftest hook provided it)
     seed              the episode's effective noise seed
     repeat            repeat index (0 unless --nav-repeat)
-    outcome           "success" | "collision" | "safety-stop" | "timeout" | "subject-error"
+    outcome           "success" | "collision" | "fall" | "safety-stop" | "timeout" | "subject-error"
     passed            outcome == success
     message           one line: why this outcome
     metrics           Metrics.as_dict(); non-finite floats written as null (strict JSON)
@@ -41,7 +41,7 @@ from ..scenario.model import content_hash
 FORMAT = "navscenario-results"
 FORMAT_VERSION = 1
 REQUIRED_FIELDS = ("nodeid", "scenario", "family", "scenario_hash", "subject", "outcome", "metrics")
-OUTCOMES = ("success", "collision", "safety-stop", "timeout", "subject-error")
+OUTCOMES = ("success", "collision", "fall", "safety-stop", "timeout", "subject-error")
 
 
 class ResultsFileError(NavScenarioError):

@@ -53,8 +53,9 @@ def format_summary(records: list[dict[str, Any]]) -> str:
     if len(groups) > 1:
         groups[ALL] = list(records)
     outcomes = list(RATE_OUTCOMES)
-    if any(r["outcome"] == "subject-error" for r in records):
-        outcomes.append("subject-error")
+    for extra in ("fall", "subject-error"):          # a column only when some episode had it
+        if any(r["outcome"] == extra for r in records):
+            outcomes.append(extra)
 
     rate_rows, metric_rows = [], []
     for family, recs in groups.items():

@@ -71,7 +71,8 @@ def write_seed(scenario: Scenario, out: str | Path, *, extra_files: dict[str, st
     except ScenarioError as exc:   # named by the user's file and field, not the temporary copy checked
         exc.path, exc.line = None, None
         raise WorldImportError(f"{out}: not written, the imported scenario is invalid: {exc.format()}") from None
-    targets[out] = text
+    from ..scenario.modeline import ensure_project_schema, with_modeline
+    targets[out] = with_modeline(text, out)     # the schema for editors (a comment: same scenario)
     out.parent.mkdir(parents=True, exist_ok=True)
     staged: list[tuple[str, Path]] = []
     try:
@@ -88,6 +89,7 @@ def write_seed(scenario: Scenario, out: str | Path, *, extra_files: dict[str, st
         for tmp, _ in staged:
             if os.path.exists(tmp):
                 os.unlink(tmp)
+    ensure_project_schema(out)
     return out
 
 

@@ -9,8 +9,10 @@ from typing import Any, Mapping
 import yaml
 
 from ..core.files import atomic_write_text
+from . import keys as K
 from .loader import LATENCY_KEYS, LIDAR_KEYS, LIMITS_KEYS, LOCALISATION_KEYS
-from .model import BoxObstacle, Mark, MeshObstacle, Motion, Obstacle, PolygonObstacle, Pose, Scenario
+from .model import LIDAR, BoxObstacle, Mark, MeshObstacle, Motion, Obstacle, PolygonObstacle, Pose, Scenario
+from .terrain import BODY, LIDAR3D, PlanarBody
 
 
 def _f(value: Any) -> float:
@@ -47,6 +49,21 @@ def _mark_entry(mark: Mark) -> Any:
     return {mark.name: _plain(list(mark.args))}
 
 
+def _declared(value: Any, decl: K.Section) -> dict[str, Any]:
+    """A dataclass as the mapping of its declared keys (keys whose value is None are left out)."""
+    out: dict[str, Any] = {}
+    for key in decl.keys:
+        item = getattr(value, key.field)
+        if item is None:
+            continue
+        if isinstance(key, K.Number):
+            item = _f(item)
+        elif isinstance(key, K.Integer):
+            item = int(item)
+        out[key.name] = item
+    return out
+
+
 def _obstacle_dict(obs: Obstacle) -> dict[str, Any]:
     if isinstance(obs, BoxObstacle):
         out = {"type": "box", "name": obs.name, "x": _f(obs.x), "y": _f(obs.y), "length": _f(obs.length),
@@ -62,6 +79,8 @@ def _obstacle_dict(obs: Obstacle) -> dict[str, Any]:
                "radius": _f(obs.radius), "height": _f(obs.height)}
     if not getattr(obs, "visible_to_lidar", True):
         out["visible_to_lidar"] = False
+    if getattr(obs, "z", None) is not None:
+        out["z"] = _f(obs.z)
     motion = getattr(obs, "motion", None)
     if motion is not None:
         out["motion"] = _motion_dict(motion)
@@ -107,13 +126,19 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
         "safety": {"enabled": bool(saf.enabled), "horizon": _f(saf.horizon), "margin": _f(saf.margin)},
     }
     # the sensor and localisation faults: written when set (files without them stay as they were)
-    for key in LIDAR_KEYS[6:]:
+    for key in ("noise_per_metre", "dropout_at_max", "spurious"):
         if getattr(lid, key) not in (0.0, None):
             out["robot"]["lidar"][key] = _f(getattr(lid, key))
+    if lid.mount_height != LIDAR["mount_height"].default:
+        out["robot"]["lidar"]["mount_height"] = _f(lid.mount_height)
     if r.localisation.drifts:
         out["robot"]["localisation"] = {k: _f(getattr(r.localisation, k)) for k in LOCALISATION_KEYS}
     if r.latency.observation or r.latency.command:
         out["robot"]["latency"] = {k: _f(getattr(r.latency, k)) for k in LATENCY_KEYS}
+    if not isinstance(r.body, PlanarBody):     # terrain: written when not today's planar body
+        out["robot"]["body"] = {"type": r.body.kind, **_declared(r.body, BODY.element(r.body.kind).section)}
+    if r.lidar3d is not None:
+        out["robot"]["lidar3d"] = _declared(r.lidar3d, LIDAR3D)
     m = s.mission
     mission: dict[str, Any] = {"start": _pose_dict(m.start), "goal": _pose_dict(m.goal)}
     if m.waypoints:
@@ -124,6 +149,9 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
     mission.update(goal_tolerance=tol, waypoint_tolerance=_f(m.waypoint_tolerance), timeout=_f(m.timeout))
     out["mission"] = mission
     out["obstacles"] = [_obstacle_dict(o) for o in s.obstacles]
+    if s.terrain:
+        from .terrain import TERRAIN
+        out["terrain"] = [{"type": e.kind, **_declared(e, TERRAIN.element(e.kind).section)} for e in s.terrain]
     sim = s.simulation
     out["simulation"] = {"timestep": _f(sim.timestep), "control_rate": _f(sim.control_rate), "seed": int(sim.seed)}
     if s.reference is not None:
@@ -150,5 +178,7 @@ def dump_scenario(scenario: Scenario) -> str:
 
 
 def save_scenario(scenario: Scenario, path: str | os.PathLike) -> None:
-    """Write the scenario to ``path`` atomically (never a half-written file)."""
-    atomic_write_text(path, dump_scenario(scenario))
+    """Write the scenario to ``path`` atomically (never a half-written file), its first line the
+    YAML language server's modeline naming the project's scenario schema (``modeline.py``)."""
+    from .modeline import with_modeline
+    atomic_write_text(path, with_modeline(dump_scenario(scenario), path))

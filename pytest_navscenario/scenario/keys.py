@@ -241,7 +241,8 @@ class Elements(Key):
     nullable: bool = True
     types: tuple["Element", ...] = ()
     max: int = 0
-    what: str = ""
+    what: str = ""              # the items in messages: "obstacles"
+    item: str = "element"       # one of them: "obstacle"
     kind: ClassVar[str] = "elements"
 
     def element(self, type_name: Any) -> "Element | None":
@@ -253,6 +254,18 @@ class Elements(Key):
     @property
     def type_names(self) -> tuple[str, ...]:
         return tuple(e.type for e in self.types)
+
+
+@dataclass(frozen=True)
+class Variant(Key):
+    """One mapping of one of ``types``, chosen by its ``type`` key (``body: {type: wheeled, ...}``)."""
+    _: KW_ONLY
+    nullable: bool = True
+    types: tuple["Element", ...] = ()
+    kind: ClassVar[str] = "variant"
+
+    element = Elements.element
+    type_names = Elements.type_names
 
 
 @dataclass(frozen=True)
@@ -379,6 +392,6 @@ def walk(root: Section, path: str = "") -> Iterator[tuple[str, Section]]:
         child = f"{path}.{key.name}" if path else key.name
         if isinstance(key, (Sub, Listed)) and key.section is not None:
             yield from walk(key.section, child + ("[]" if isinstance(key, Listed) else ""))
-        elif isinstance(key, Elements):
+        elif isinstance(key, (Elements, Variant)):
             for element in key.types:
-                yield from walk(element.section, child + "[]")
+                yield from walk(element.section, child + ("[]" if isinstance(key, Elements) else ""))

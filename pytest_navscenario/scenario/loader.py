@@ -17,17 +17,16 @@ from __future__ import annotations
 import codecs
 import difflib
 import math
-import numbers
 import os
 import re
+from dataclasses import replace
 from pathlib import Path
-from types import MappingProxyType
 from typing import Any, Mapping
 
 
 from ..core.errors import ScenarioError
 from . import keys as K
-from .format import SCENARIO, SUPPORTED_VERSIONS, key_homes
+from .format import SCENARIO, SUPPORTED_VERSIONS
 from .keys import SCENARIO_LIMITS
 from .model import (  # noqa: F401  (DRIVES ... PERSON_SPEED: re-exported, they used to live here)
     DRIVES,
@@ -53,6 +52,8 @@ from .model import (  # noqa: F401  (DRIVES ... PERSON_SPEED: re-exported, they 
     SHAPES,
     SIMULATION,
     GOAL_TOLERANCE,
+    BoxObstacle,
+    CylinderObstacle,
     Mark,
     MeshObstacle,
     Mission,
@@ -64,12 +65,29 @@ from .model import (  # noqa: F401  (DRIVES ... PERSON_SPEED: re-exported, they 
     Scenario,
     Simulation,
 )
-from .yaml_tree import YMap, YNode, YScalar, YSeq, describe, from_plain, parse_yaml, to_plain
+from .reading import (  # the readers, under the names this module always used
+    _MAX_ABS,
+    _Ctx,
+    _Section,
+    _build_section,
+    _check_family,
+    _check_name,
+    _free,
+    _join,
+    _mapping,
+    _point,
+    _read,
+    _read_choice,
+    _read_elements,
+    _read_number,
+    _read_scale,
+    _read_sub,
+    _read_text,
+)
+from .search_settings import read_search
+from .yaml_tree import YMap, YNode, YScalar, YSeq, describe, from_plain, parse_yaml
 
-_MAX_ABS = float(SCENARIO_LIMITS["max_abs_value"])
 _LIST_LIMITS = {"obstacles": (int(SCENARIO_LIMITS["max_obstacles"]), "obstacles")}  # refused while parsing
-_REQUIRED = K.REQUIRED
-_NUMBER_WORD = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)[eE][-+]?\d+")  # 1e-3: a string in YAML 1.1
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 
 # The keys of each section, as declared (model.py, format.py); kept under their old names.
@@ -89,360 +107,39 @@ SIMULATION_KEYS = SIMULATION.names
 REFERENCE_KEYS = REFERENCE.names
 OBSTACLE_TYPES = OBSTACLES.type_names
 TYPE_KEYS = {e.type: ("type",) + e.section.names for e in OBSTACLES.types}
-_KEY_HOMES = key_homes()
-_ALIASES = {  # common synonyms -> the spelling the format uses (for the hint)
-    "omnidirectional": "omni", "holonomic": "omni", "differential": "diff", "diff-drive": "diff",
-    "rectangle": "box", "rect": "box", "cuboid": "box", "square": "box", "cyl": "cylinder",
-    "circle": "cylinder", "disc": "cylinder", "disk": "cylinder", "round": "circle",
-}
-
-
-# --------------------------------------------------------------------------- reading helpers
-
-class _Ctx:
-    """Where we are: the source file (for messages) and the line of every field read."""
-
-    def __init__(self, source: str | None):
-        self.source = source
-        self.lines: dict[str, int | None] = {}
-
-    def fail(self, message: str, field: str | None, line: int | None, hint: str | None = None) -> ScenarioError:
-        return ScenarioError(message, path=self.source, line=line, field=field, hint=hint)
-
-
-def _did_you_mean(word: Any, options: tuple[str, ...]) -> str:
-    text = str(word)
-    alias = _ALIASES.get(text.lower())
-    if alias in options:
-        return f"did you mean '{alias}'?"
-    match = difflib.get_close_matches(text.lower(), options, n=1, cutoff=0.6)
-    if match:
-        return f"did you mean '{match[0]}'?"
-    return "use one of: " + ", ".join(options)
-
-
-def _unknown_key_hint(key: Any, keys: tuple[str, ...], path: str) -> str:
-    """Did-you-mean among this section's keys, else where the key belongs if it is known elsewhere."""
-    text = str(key)
-    if not difflib.get_close_matches(text.lower(), keys, n=1, cutoff=0.6):
-        homes = [home for home, section_keys in _KEY_HOMES
-                 if text in section_keys and home != path and not (home == "obstacles[]" and path.startswith("obstacles["))]
-        if homes:
-            return f"'{text}' belongs under '{homes[0]}'" + (f" (or '{homes[1]}')" if len(homes) > 1 else "")
-    return _did_you_mean(key, keys)
-
-
-def _join(path: str, key: str) -> str:
-    return f"{path}.{key}" if path else key
-
-
-class _Section:
-    """A YAML mapping with a known set of keys; typed getters that raise located errors."""
-
-    def __init__(self, ctx: _Ctx, node: YNode | None, path: str, keys: tuple[str, ...], *,
-                 line: int | None = None, what: str = "a mapping"):
-        self.ctx, self.path, self.keys = ctx, path, keys
-        if not isinstance(node, YMap):
-            raise ctx.fail(f"expected {what}, got {describe(node) if node is not None else 'nothing'}",
-                           path or None, line if line is not None else (node.line if node is not None else None),
-                           f"write it as 'key: value' lines with keys from: {', '.join(keys)}")   # the key's own line
-        self.node = node
-        self.line = line if line is not None else node.line
-        for key, (key_line, _) in node.items.items():
-            if key not in keys:
-                raise ctx.fail(f"unknown key {str(key)!r}", _join(path, str(key)), key_line,
-                               _unknown_key_hint(key, keys, path))
-
-    def has(self, key: str) -> bool:
-        return key in self.node.items
-
-    def get(self, key: str) -> YNode | None:
-        item = self.node.items.get(key)
-        if item is None:
-            return None
-        field = _join(self.path, key)
-        self.ctx.lines[field] = item[0] if item[0] is not None else item[1].line
-        return item[1]
-
-    def line_of(self, key: str) -> int | None:
-        item = self.node.items.get(key)
-        if item is None:
-            return self.line
-        return item[0] if item[0] is not None else item[1].line
-
-    def missing(self, key: str, example: str) -> ScenarioError:
-        return self.ctx.fail(f"missing required field '{key}'", _join(self.path, key), self.line,
-                             f"add '{example}'" + (f" under '{self.path}'" if self.path else ""))
-
-    def number(self, key: str, default: Any = _REQUIRED, *, low: float | None = None,
-               low_open: bool = False, high: float | None = None, example: str | None = None) -> float:
-        item = self.node.items.get(key)    # get() and line_of() in one look-up: the loader's commonest call
-        node = None if item is None else item[1]
-        if node is None or (isinstance(node, YScalar) and node.value is None and default is None):
-            if item is not None:
-                self.ctx.lines[_join(self.path, key)] = item[0] if item[0] is not None else node.line
-            if default is _REQUIRED:
-                raise self.missing(key, example or f"{key}: <number>")
-            return default
-        field = _join(self.path, key)
-        line = item[0] if item[0] is not None else node.line
-        self.ctx.lines[field] = line
-        return _number(self.ctx, node, field, line, low=low, low_open=low_open, high=high)
-
-    def integer(self, key: str, default: Any, *, low: int, high: int) -> int:
-        node = self.get(key)
-        if node is None:
-            if default is _REQUIRED:
-                raise self.missing(key, f"{key}: <whole number>")
-            return default
-        field, line = _join(self.path, key), self.line_of(key)
-        value = node.value if isinstance(node, YScalar) else None
-        if isinstance(value, numbers.Real) and not isinstance(value, numbers.Integral) and math.isfinite(value) \
-                and float(value).is_integer():
-            value = int(value)
-        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-            raise self.ctx.fail(f"expected a whole number, got {describe(node)}", field, line,
-                                f"write a whole number between {low} and {high}")
-        if not low <= value <= high:
-            raise self.ctx.fail(f"must be between {low} and {high}, got {value}", field, line,
-                                f"write a whole number from {low} to {high}")
-        return int(value)
-
-    def string(self, key: str, default: Any, *, nonempty: bool = True) -> str:
-        node = self.get(key)
-        if node is None or (isinstance(node, YScalar) and node.value is None):  # 'description:' = absent
-            return default
-        field, line = _join(self.path, key), self.line_of(key)
-        value = node.value if isinstance(node, YScalar) else None
-        if not isinstance(value, str):
-            raise self.ctx.fail(f"expected a string, got {describe(node)}", field, line,
-                                "quote it, e.g. " + f"{key}: \"text\"")
-        if nonempty and not value.strip():
-            raise self.ctx.fail("must not be empty", field, line, f"write a {key} or remove the line")
-        return value
-
-    def boolean(self, key: str, default: bool) -> bool:
-        node = self.get(key)
-        if node is None:
-            return default
-        value = node.value if isinstance(node, YScalar) else None
-        if not isinstance(value, bool):
-            raise self.ctx.fail(f"expected true or false, got {describe(node)}", _join(self.path, key),
-                                self.line_of(key), "write true or false")
-        return value
-
-    def choice(self, key: str, options: tuple[str, ...], default: Any) -> str:
-        node = self.get(key)
-        if node is None:
-            if default is _REQUIRED:
-                raise self.missing(key, f"{key}: {options[0]}")
-            return default
-        value = node.value if isinstance(node, YScalar) else None
-        if value not in options:
-            raise self.ctx.fail(f"unknown {key} {describe(node)}", _join(self.path, key), self.line_of(key),
-                                _did_you_mean(value if value is not None else "", options))
-        return value
-
-    def section(self, key: str, keys: tuple[str, ...], what: str) -> _Section | None:
-        node = self.get(key)
-        if node is None or (isinstance(node, YScalar) and node.value is None):
-            return None
-        return _Section(self.ctx, node, _join(self.path, key), keys, line=self.line_of(key), what=what)
-
-    def sequence(self, key: str, limit: int, what: str) -> list[YNode]:
-        node = self.get(key)
-        if node is None or (isinstance(node, YScalar) and node.value is None):
-            return []
-        field, line = _join(self.path, key), self.line_of(key)
-        if not isinstance(node, YSeq):
-            raise self.ctx.fail(f"expected a list of {what}, got {describe(node)}", field, line,
-                                "write one '- ...' entry per item")
-        if len(node.items) > limit:
-            raise self.ctx.fail(f"{len(node.items)} {what} is more than the limit of {limit}", field, line,
-                                "split the scenario, or thin it out (see SCENARIO_LIMITS)")
-        return node.items
-
-
-def _number(ctx: _Ctx, node: YNode, field: str, line: int | None, *, low: float | None = None,
-            low_open: bool = False, high: float | None = None) -> float:
-    """A finite float from a YAML number (ints allowed, bools refused), within bounds."""
-    line = node.line if node.line is not None else line
-    value = node.value if isinstance(node, YScalar) else None
-    if type(value) is float and -_MAX_ABS <= value <= _MAX_ABS:   # the common case, checked as below
-        if (low is None or (value > low if low_open else value >= low)) and (high is None or value <= high):
-            return value
-    if isinstance(value, str) and isinstance(node, YScalar) and node.plain and _NUMBER_WORD.fullmatch(value):
-        value = float(value)
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise ctx.fail(f"expected a number, got {describe(node)}", field, line,
-                       "write a plain number such as 1.5 (no quotes, no units)")
-    bound = SCENARIO_LIMITS["max_abs_value"]
-    if isinstance(value, numbers.Integral) and abs(value) > bound:  # also ints too big for a float
-        shown = str(value) if len(str(value)) < 30 else f"a {len(str(abs(value)))}-digit number"
-        raise ctx.fail(f"{shown} is beyond the supported magnitude of {bound:g}", field, line,
-                       "scenario values are metres, seconds and degrees of a ground robot; check the value")
-    number = float(value)
-    if not math.isfinite(number):
-        raise ctx.fail(f"must be a finite number, got {describe(YScalar(number, line))}", field, line,
-                       "write an ordinary number")
-    if abs(number) > bound:
-        raise ctx.fail(f"{number!r} is beyond the supported magnitude of {bound:g}", field, line,
-                       "scenario values are metres, seconds and degrees of a ground robot; check the value")
-    if low is not None and (number < low or (low_open and number == low)):
-        need = f"> {low:g}" if low_open else f">= {low:g}"
-        raise ctx.fail(f"must be {need}, got {number!r}", field, line,
-                       "sizes, times and rates must be positive" if low_open else f"write a value {need}")
-    if high is not None and number > high:
-        raise ctx.fail(f"must be <= {high:g}, got {number!r}", field, line,
-                       f"write a value from {low:g} to {high:g}" if low is not None else f"write at most {high:g}")
-    return number
-
-
-# --------------------------------------------------------------------------- reading by declaration
-
-def _read(ctx: _Ctx, sec: _Section, decl: K.Section, values: dict[str, Any] | None = None) -> dict[str, Any]:
-    """The values of ``decl``'s keys (by dataclass field), each read and checked as declared, then
-    the section's rules. Keys already in ``values`` are not read again."""
-    values = {} if values is None else values
-    for key in decl.keys:
-        if key.field not in values:
-            values[key.field] = _READ[key.kind](ctx, sec, key)
-    for rule in decl.rules:
-        if rule.check is not None:
-            problem = rule.check(values, sec.node.items)
-            if problem is not None:
-                key, message, fix = problem
-                raise ctx.fail(message, _join(sec.path, key) if key else (sec.path or None),
-                               sec.line_of(key) if key else sec.line, fix)
-    return values
-
-
-def _build_section(ctx: _Ctx, sec: _Section, decl: K.Section) -> Any:
-    return decl.cls(**_read(ctx, sec, decl))
-
-
-def _read_number(ctx: _Ctx, sec: _Section, key: K.Number) -> Any:
-    return sec.number(key.name, key.default, low=key.low, low_open=key.low_open, high=key.le,
-                      example=key.example or None)
-
-
-def _read_integer(ctx: _Ctx, sec: _Section, key: K.Integer) -> Any:
-    return sec.integer(key.name, key.default, low=key.ge, high=key.le)
-
-
-def _read_text(ctx: _Ctx, sec: _Section, key: K.Text) -> Any:
-    value = sec.string(key.name, key.default, nonempty=key.nonempty)
-    if value is _REQUIRED:
-        raise sec.missing(key.name, key.example or f"{key.name}: <text>")
-    if isinstance(value, str) and value is not key.default:
-        field, line = _join(sec.path, key.name), sec.line_of(key.name)
-        if key.name_rules:
-            _check_name(ctx, value, field, line, file_name=key.file_name)
-        if key.path and "\x00" in value:
-            raise ctx.fail(f"{value!r} holds a NUL byte (\\x00), which no file name can", field, line,
-                           "remove the \\0 (or the escape that wrote it) from the path")
-    return value
-
-
-def _read_flag(ctx: _Ctx, sec: _Section, key: K.Flag) -> Any:
-    return sec.boolean(key.name, key.default)
-
-
-def _read_choice(ctx: _Ctx, sec: _Section, key: K.Choice) -> Any:
-    return sec.choice(key.name, key.options, key.default)
-
-
-def _read_sub(ctx: _Ctx, sec: _Section, key: K.Sub) -> Any:
-    decl = key.section
-    sub = sec.section(key.name, decl.names, decl.what)
-    if sub is None:
-        if key.default is _REQUIRED:
-            raise sec.missing(key.name, key.example)
-        return key.default
-    return _build_section(ctx, sub, decl)
-
-
-def _read_point(ctx: _Ctx, sec: _Section, key: K.Point) -> Any:
-    node = sec.get(key.name)
-    if node is None or (key.nullable and isinstance(node, YScalar) and node.value is None):
-        if key.default is _REQUIRED:
-            raise sec.missing(key.name, key.example or f"{key.name}: [0.0, 0.0]")
-        return key.default
-    return _point(ctx, node, _join(sec.path, key.name), sec.line_of(key.name))
-
-
-def _read_points(ctx: _Ctx, sec: _Section, key: K.Points) -> Any:
-    node = sec.get(key.name)
-    field, line = _join(sec.path, key.name), sec.line_of(key.name)
-    if node is None or (isinstance(node, YScalar) and node.value is None):
-        if key.default is _REQUIRED:
-            raise sec.missing(key.name, key.example or f"{key.name}: [[0, 0], [1, 0]]")
-        return key.default
-    if not isinstance(node, YSeq):
-        raise ctx.fail(f"expected a list of points [x, y], got {describe(node)}", field, line,
-                       f"write e.g. {key.example or key.name + ': [[0, 0], [1, 0]]'}")
-    if len(node.items) > key.max:
-        raise ctx.fail(f"{len(node.items)} points is more than the limit of {key.max}", field, line,
-                       "thin the points out")
-    if len(node.items) < key.min:
-        raise ctx.fail(f"needs at least {key.min} points, got {len(node.items)}", field, node.line or line,
-                       f"write e.g. {key.example or key.name + ': [[0, 0], [1, 0]]'}")
-    return tuple(_point(ctx, p, f"{field}[{k}]", p.line or line) for k, p in enumerate(node.items))
-
-
-def _read_rows(ctx: _Ctx, sec: _Section, key: K.Rows) -> Any:
-    """Rows of numbers such as the reference's [t, x, y], the first column strictly increasing."""
-    if not sec.has(key.name):
-        return key.default
-    rows = sec.sequence(key.name, key.max, "reference points" if key.name == "points" else key.name)
-    width, shown = len(key.columns), ", ".join(key.columns)
-    out = []
-    last_t = -math.inf
-    for i, row in enumerate(rows):
-        field = f"{_join(sec.path, key.name)}[{i}]"
-        line = row.line or sec.line_of(key.name)
-        if not isinstance(row, YSeq) or len(row.items) != width:
-            raise ctx.fail(f"expected a row [{shown}], got {describe(row)}"
-                           + (f" with {len(row.items)} values" if isinstance(row, YSeq) else ""), field, line,
-                           f"write each point as [{shown}] ({key.unit.replace('s', 'seconds', 1).replace('m', 'metres')})")
-        values = tuple(_number(ctx, v, f"{field}[{j}]", line) for j, v in enumerate(row.items))
-        t = values[0]
-        if t <= last_t:
-            raise ctx.fail(f"time {t!r} s does not increase (previous point at {last_t!r} s)", f"{field}[0]",
-                           line, "sort the points by time; times must be strictly increasing")
-        last_t = t
-        out.append(values)
-    return tuple(out)
-
-
-def _read_scale(ctx: _Ctx, sec: _Section, key: K.Scale) -> Any:
-    node = sec.get(key.name)
-    field, line = _join(sec.path, key.name), sec.line_of(key.name)
-    if node is None:
-        return key.default
-    if isinstance(node, YSeq):
-        if len(node.items) != 3:
-            raise ctx.fail(f"expected one number or three [sx, sy, sz], got {describe(node)}", field, line,
-                           "write e.g. scale: 0.001 (millimetres to metres)")
-        return tuple(_number(ctx, n, f"{field}[{k}]", line, low=0, low_open=True, high=key.le)
-                     for k, n in enumerate(node.items))
-    value = _number(ctx, node, field, line, low=0, low_open=True, high=key.le)
-    return (value, value, value)
-
-
-def _read_free(ctx: _Ctx, sec: _Section, key: K.Free) -> Any:
-    return _mapping(ctx, sec, key.name)
-
-
-_READ = {"number": _read_number, "integer": _read_integer, "text": _read_text, "flag": _read_flag,
-         "choice": _read_choice, "sub": _read_sub, "point": _read_point, "points": _read_points,
-         "rows": _read_rows, "scale": _read_scale, "free": _read_free}
 
 
 # --------------------------------------------------------------------------- sections
 
 def _robot(ctx: _Ctx, top: _Section) -> Robot:
-    return _read_sub(ctx, top, SCENARIO["robot"])
+    robot = _read_sub(ctx, top, SCENARIO["robot"])
+    if robot.body.kind == "mjcf":
+        robot = replace(robot, body=_mjcf_file(ctx, robot.body))
+    return robot
+
+
+def _mjcf_file(ctx: _Ctx, body: Any) -> Any:
+    """An MJCF body's file: beside the scenario (the mesh path rules), there and readable; its
+    digest (a hash of the file's bytes) made part of the content. MuJoCo reads it at run time."""
+    import hashlib
+
+    from .mesh import MeshError, resolve_mesh_path
+
+    field = "robot.body.file"
+    line = ctx.lines.get(field, ctx.lines.get("robot.body", ctx.lines.get("robot")))
+    folder = Path(ctx.source).parent if ctx.source else Path.cwd()
+    fix = "write the MJCF file's path relative to the scenario's folder"
+    try:
+        path = resolve_mesh_path(folder, body.file, what="MJCF")
+    except MeshError as exc:
+        raise ctx.fail(str(exc), field, line, fix) from None
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        raise ctx.fail(f"{path} does not exist", field, line, fix) from None
+    except OSError as exc:
+        raise ctx.fail(f"{path} cannot be read: {exc.strerror or exc}", field, line, fix) from None
+    return replace(body, digest=hashlib.sha256(data).hexdigest()[:16])
 
 
 def _pose(ctx: _Ctx, node: YNode | None, path: str, line: int | None, what: str) -> Pose:
@@ -475,54 +172,7 @@ def _mission(ctx: _Ctx, top: _Section) -> Mission:
 
 
 def _obstacles(ctx: _Ctx, top: _Section) -> tuple[Obstacle, ...]:
-    items = top.sequence("obstacles", OBSTACLES.max, OBSTACLES.what)
-    given: dict[str, int] = {}
-    parsed: list[tuple[K.Element, _Section, str | None]] = []
-    for i, item in enumerate(items):
-        path = f"obstacles[{i}]"
-        line = item.line or top.line_of("obstacles")
-        if not isinstance(item, YMap):
-            raise ctx.fail(f"expected an obstacle mapping, got {describe(item)}", path, line,
-                           "write '- {type: box, x: 1.0, y: 2.0, length: 1.0, width: 1.0}'")
-        type_item = item.items.get("type")
-        if type_item is None:
-            raise ctx.fail("missing required field 'type'", f"{path}.type", line,
-                           "add 'type: box' or 'type: cylinder'")
-        kind = type_item[1].value if isinstance(type_item[1], YScalar) else None
-        element = OBSTACLES.element(kind) if isinstance(kind, str) else None
-        if element is None:
-            raise ctx.fail(f"unknown obstacle type {describe(type_item[1])}", f"{path}.type",
-                           type_item[0] or line, _did_you_mean(kind if kind is not None else "", OBSTACLE_TYPES))
-        keys = TYPE_KEYS[kind]
-        for key, (key_line, _) in item.items.items():
-            if key in keys:
-                continue
-            other = next((t for t, t_keys in TYPE_KEYS.items() if key in t_keys), None)
-            if other is not None:
-                raise ctx.fail(f"'{key}' does not apply to type: {kind} (it is a {other} key)", f"{path}.{key}",
-                               key_line or line, f"remove '{key}', or set type: {other}")
-        sec = _Section(ctx, item, path, keys, line=line)
-        name = _read_text(ctx, sec, element.section["name"])
-        if name is not None:
-            if name in given:
-                first = given[name]
-                raise ctx.fail(f"name {name!r} is already used by obstacles[{first}]", f"{path}.name",
-                               sec.line_of("name"), "obstacle names must be unique; rename one of them")
-            given[name] = i
-        parsed.append((element, sec, name))
-    taken = set(given)
-    counters = dict.fromkeys(OBSTACLE_TYPES, 0)
-    result: list[Obstacle] = []
-    for element, sec, name in parsed:
-        if name is None:  # generated: box1, box2, cyl1, person1 ... skipping names already given
-            while True:
-                counters[element.type] += 1
-                name = f"{element.prefix}{counters[element.type]}"
-                if name not in taken:
-                    break
-            taken.add(name)
-        result.append(_obstacle(ctx, sec, element, name))
-    return tuple(result)
+    return _read_elements(ctx, top, OBSTACLES, _obstacle)
 
 
 def _obstacle(ctx: _Ctx, sec: _Section, element: K.Element, name: str) -> Obstacle:
@@ -580,21 +230,17 @@ def _mesh(ctx: _Ctx, sec: _Section, decl: K.Section, values: dict[str, Any]) -> 
     try:
         path = resolve_mesh_path(folder, file)
         verts, tris = read_mesh(path)
+        reach = max(float(abs(verts[:, k]).max()) * scale[k] for k in range(3))   # m, scale included
+        if not reach <= _MAX_ABS:
+            raise MeshError(f"{Path(file).name}: a vertex lies {reach:g} m from the mesh's origin (scale "
+                            f"included), beyond the supported magnitude of {_MAX_ABS:g} m; check the file's "
+                            f"units and the scale (e.g. scale: 0.001 for millimetres)")
         outline, height = mesh_outline(verts, tris, scale, Path(file).name)
     except MeshError as exc:
         raise ctx.fail(str(exc), _join(sec.path, "file"), sec.line_of("file"),
                        "fix the file or the path (relative to the scenario's folder)") from None
     values.update(file=file, scale=scale, footprint=outline, height=height)
     return MeshObstacle(**_read(ctx, sec, decl, values))
-
-
-def _point(ctx: _Ctx, node: YNode, field: str, line: int | None) -> tuple[float, float]:
-    """An [x, y] pair."""
-    if not isinstance(node, YSeq) or len(node.items) != 2:
-        raise ctx.fail(f"expected a point [x, y], got {describe(node)}", field,
-                       node.line or line, "write two numbers in brackets, e.g. [1.0, 2.0]")
-    return (_number(ctx, node.items[0], f"{field}[0]", line),
-            _number(ctx, node.items[1], f"{field}[1]", line))
 
 
 def _motion(ctx: _Ctx, obs: _Section, decl: K.Section) -> Motion | None:
@@ -631,30 +277,6 @@ def _motion(ctx: _Ctx, obs: _Section, decl: K.Section) -> Motion | None:
     speed = _read_number(ctx, sec, decl["speed"])
     mode = _read_choice(ctx, sec, decl["mode"])
     return Motion(path=points, speed=speed, mode=mode, start=start)
-
-
-def _check_name(ctx: _Ctx, name: str, field: str, line: int | None, *, file_name: bool = False) -> None:
-    """Names are one-line labels; scenario names and families also name files (no path tricks)."""
-    limit = int(SCENARIO_LIMITS["max_name_length"])
-    if len(name) > limit:
-        raise ctx.fail(f"is {len(name)} characters long, more than {limit}", field, line, "shorten it")
-    if any(ch in name for ch in "\n\r\t\x00"):
-        raise ctx.fail("must be one line without tabs", field, line, "remove the line breaks")
-    if file_name and (any(ch in name for ch in "/\\") or name.strip() in (".", "..")):
-        raise ctx.fail(f"{name!r} cannot be used: scenario names and families become file and folder names",
-                       field, line, "use letters, digits, '-', '_' and '.', without '/' or '\\'")
-
-
-def _check_family(ctx: _Ctx, family: str, line: int | None) -> None:
-    """A family is a name, or a relative folder path such as ``examples/scenarios`` (what the pytest
-    plugin names the families of two folders with the same name): each part a name, no climbing."""
-    _check_name(ctx, family, "family", line)
-    parts = family.split("/")
-    if "\\" in family or any(not p.strip() or p.strip() in (".", "..") for p in parts):
-        raise ctx.fail(f"{family!r} cannot be used: a family is a name or a relative folder path "
-                       f"(scenario names and families become file and folder names)", "family",
-                       line, "use names of letters, digits, '-', '_' and '.', separated by '/' "
-                             "(e.g. examples/scenarios), without '..' or '\\'")
 
 
 def _simulation(ctx: _Ctx, top: _Section) -> Simulation:
@@ -696,41 +318,6 @@ def _marks(ctx: _Ctx, top: _Section) -> tuple[Mark, ...]:
     return tuple(marks)
 
 
-def _mapping(ctx: _Ctx, top: _Section, key: str) -> Mapping[str, Any] | None:
-    node = top.get(key)
-    if node is None or (isinstance(node, YScalar) and node.value is None):
-        return None
-    if not isinstance(node, YMap):
-        raise ctx.fail(f"expected a mapping, got {describe(node)}", key, top.line_of(key),
-                       f"write '{key}:' followed by indented 'key: value' lines")
-    return _free(ctx, node, key)
-
-
-_PLAIN_TYPES = (str, bool, int, float, type(None))
-
-
-def _free(ctx: _Ctx, node: YNode, field: str) -> Any:
-    """Free-form data (search, provenance, mark arguments) as plain Python values. Only strings,
-    numbers, booleans, null, lists and mappings: these cross to xdist workers and into JSON
-    unchanged (YAML dates and !!binary would not), so anything else is refused here."""
-    def check(n: YNode, path: str) -> None:
-        if isinstance(n, YScalar):
-            if not isinstance(n.value, _PLAIN_TYPES):
-                raise ctx.fail(f"{describe(n)} is not supported in free-form data", path, n.line,
-                               "quote it to keep it as text; free-form data holds text, numbers, true/false, null, lists and mappings")
-        elif isinstance(n, YSeq):
-            for i, item in enumerate(n.items):
-                check(item, f"{path}[{i}]")
-        else:
-            for key, (_, item) in n.items.items():
-                if not isinstance(key, _PLAIN_TYPES):
-                    raise ctx.fail(f"key {key!r} is not supported in free-form data", path, n.line,
-                                   "use text keys")
-                check(item, f"{path}.{key}")
-    check(node, field)
-    return to_plain(node)
-
-
 # --------------------------------------------------------------------------- semantic checks
 
 def _steps_per_tick(sim: Simulation) -> float:
@@ -770,8 +357,102 @@ def check_scenario(scenario: Scenario, *, _ctx: _Ctx | None = None) -> None:
                            f"({1.0 / sim.control_rate:g} s at {sim.control_rate:g} Hz)", field,
                            lines.get(field, lines.get("robot.latency")),
                            f"e.g. {key}: {round(ticks) / sim.control_rate:g}")
+        timeout = scenario.mission.timeout
+        if delay >= timeout:
+            field = f"robot.latency.{key}"
+            what = ("the planner would see nothing after the first observation" if key == "observation"
+                    else "no command would act before the episode ends: the robot never moves")
+            raise ctx.fail(f"a delay of {delay!r} s is not shorter than the timeout ({timeout!r} s): {what}",
+                           field, lines.get(field, lines.get("robot.latency")),
+                           f"shorten the delay below {timeout:g} s, or lengthen mission.timeout")
     if scenario.obstacles:
         _check_clear(scenario, ctx)
+        _check_speeds(scenario, ctx)
+    if scenario.terrain or scenario.robot.body.kind != "planar":
+        from .ground import body_problem, mission_problem
+        problem = body_problem(scenario) or mission_problem(scenario)
+        if problem is not None:
+            field, message, fix = problem
+            raise ctx.fail(message, field, lines.get(field, lines.get(field.split(".")[0])), fix)
+
+
+STEP_SHARE = 0.2   # of the obstacle's and the robot's smallest widths: the farthest a mover may go in a step
+
+
+def max_resolved_speed(scenario: Scenario, obs: Any, timestep: float | None = None) -> float:
+    """The fastest a moving obstacle may go (m/s) for contacts, checked after every physics step,
+    to see it cross the robot: the two may close in on each other by at most ``STEP_SHARE`` of the
+    sum of their smallest widths per step (the robot's own top speed counts), so that a crossing
+    overlaps at some step; at the limit only a graze shallower than ~1 % of the two widths together
+    can fall between two steps (round shapes). Above it a box at 100 m/s passed through the robot
+    unseen (issue 26)."""
+    reach, robot_speed = _closing(scenario, obs)
+    return reach / (timestep or scenario.simulation.timestep) - robot_speed
+
+
+def _closing(scenario: Scenario, obs: Any) -> tuple[float, float]:
+    """(how far the obstacle and the robot may close in per physics step, the robot's top speed)."""
+    from .geometry import convex_parts_local, outline_points
+
+    if isinstance(obs, BoxObstacle):
+        width = min(obs.length, obs.width)
+    elif isinstance(obs, CylinderObstacle):
+        width = 2.0 * obs.radius
+    else:                                    # polygon, mesh: the thinnest of its convex parts
+        width = min(_min_width(part) for part in convex_parts_local(tuple(outline_points(obs))))
+    fp = scenario.robot.footprint
+    robot_width = 2.0 * fp.radius if fp.shape == "circle" else min(fp.length, fp.width)
+    limits = scenario.robot.limits
+    robot_speed = math.hypot(limits.max_speed, limits.max_lateral_speed if scenario.robot.drive == "omni" else 0.0)
+    return STEP_SHARE * (width + robot_width), robot_speed
+
+
+def _min_width(points: Any) -> float:
+    """The width of a convex polygon across its thinnest direction (the least, over its edges, of
+    the farthest corner from the edge's line)."""
+    best = math.inf
+    n = len(points)
+    for i in range(n):
+        (ax, ay), (bx, by) = points[i], points[(i + 1) % n]
+        ex, ey = bx - ax, by - ay
+        length = math.hypot(ex, ey)
+        if length > 0.0:
+            best = min(best, max(abs(ex * (py - ay) - ey * (px - ax)) for px, py in points) / length)
+    return best
+
+
+def _check_speeds(scenario: Scenario, ctx: _Ctx) -> None:
+    """Moving obstacles no faster than the physics step can follow (``max_resolved_speed``)."""
+    for i, obs in enumerate(scenario.obstacles):
+        motion = getattr(obs, "motion", None)
+        if motion is None:
+            continue
+        speed = math.hypot(*motion.velocity) if motion.velocity is not None else motion.speed
+        limit = max_resolved_speed(scenario, obs)
+        if speed <= limit:
+            continue
+        key = "velocity" if motion.velocity is not None else "speed"
+        field = f"obstacles[{i}].motion.{key}"
+        dt, period = scenario.simulation.timestep, 1.0 / scenario.simulation.control_rate
+        reach, robot_speed = _closing(scenario, obs)
+        steps = math.ceil(period / (reach / (speed + robot_speed)) - 1e-9)   # per tick, to follow it
+        while not _decimal(steps):
+            steps += 1          # a step count whose timestep is a short decimal: 0.00125, not 0.00175439
+        raise ctx.fail(
+            f"{speed:g} m/s is faster than the simulation can follow at a timestep of {dt:g} s: "
+            f"{obs.name!r} would move {speed * dt:.3g} m per physics step and could pass through the "
+            f"robot between two steps unseen; at most {max(limit, 0.0):.3g} m/s at this timestep (it and "
+            f"the robot may close in by {STEP_SHARE:g} of their smallest widths per step)",
+            field, ctx.lines.get(field, ctx.lines.get(f"obstacles[{i}].motion", ctx.lines.get("obstacles"))),
+            f"slow it down, or give simulation.timestep: {period / steps:.10g} ({steps} steps per control tick)")
+
+
+def _decimal(n: int) -> bool:
+    """True if 1/n has a finite decimal expansion (n = 2^a 5^b)."""
+    for p in (2, 5):
+        while n % p == 0:
+            n //= p
+    return n == 1
 
 
 def _check_clear(scenario: Scenario, ctx: _Ctx) -> None:
@@ -846,12 +527,16 @@ def _build(root: YNode | None, ctx: _Ctx, name: str | None, family: str | None) 
         robot=_robot(ctx, top),
         mission=_mission(ctx, top),
         obstacles=_obstacles(ctx, top),
+        terrain=_read_elements(ctx, top, SCENARIO["terrain"]),
         simulation=_simulation(ctx, top),
         reference=_reference(ctx, top),
         search=_mapping(ctx, top, "search"),
         provenance=_mapping(ctx, top, "provenance"),
         source=ctx.source,
     )
+    if scenario.search is not None:     # the search's space, checked on plain runs too
+        read_search(ctx, top.get("search"), "search", top.line_of("search"),
+                    obstacles=tuple(o.name for o in scenario.obstacles), waypoints=len(scenario.mission.waypoints))
     check_scenario(scenario, _ctx=ctx)
     return scenario
 
@@ -972,3 +657,23 @@ _TOP_KEY = re.compile(r"^(?:---[ \t]*\n)?[\"']?([A-Za-z_][\w-]*)[\"']?[ \t]*:", 
 # --------------------------------------------------------------------------- dumping
 
 
+
+
+def field_line(source: str | os.PathLike | None, field: str) -> int | None:
+    """The line of a dotted field (``robot.body.file``) in the scenario file ``source``, for an
+    error found after loading (at run time); None when the file or the field is not there."""
+    if not source:
+        return None
+    try:
+        text = _decode(Path(source).read_bytes()[:int(SCENARIO_LIMITS["max_file_bytes"])], os.fspath(source))
+        node = parse_yaml(text, os.fspath(source), max_depth=int(SCENARIO_LIMITS["max_depth"]),
+                          max_nodes=int(SCENARIO_LIMITS["max_nodes"]))
+    except (OSError, ScenarioError):
+        return None
+    line = None
+    for key in field.split("."):
+        if not isinstance(node, YMap) or key not in node.items:
+            break
+        key_line, node = node.items[key]
+        line = key_line or node.line
+    return line

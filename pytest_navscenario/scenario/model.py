@@ -20,7 +20,7 @@ from typing import Any, Literal, Mapping, Union
 
 from .keys import (REQUIRED, SCENARIO_LIMITS, Choice, Element, Elements, Flag, Integer, Listed, Number, Point, Points,
                    Rows, Rule, Scale, Sub, Text, section)
-from .terrain import Body, Lidar3D, PlanarBody, TerrainElement
+from .terrain import BODY, LIDAR3D, Body, Lidar3D, PlanarBody, TerrainElement
 
 SCHEMA_VERSION = 1
 DRIVES = ("omni", "diff")
@@ -44,7 +44,7 @@ class Pose:
         return math.radians(self.yaw)
 
 
-POSE = section(Pose, "mission.start", "a planar pose", [
+POSE = section(Pose, "pose", "a planar pose", [
     Number("x", "m", "position along x", example="x: 0.0"),
     Number("y", "m", "position along y", example="y: 0.0"),
     Number("yaw", "deg", "heading, counter-clockwise from +x"),
@@ -186,6 +186,7 @@ _HEIGHT = Number("height", "m", "its height, for the 3-D model (below the lidar 
 _MOTION = Sub("motion", "", "makes it move (absent: static)", section=MOTION, default=None)
 _VISIBLE = Flag("visible_to_lidar", "", "false: the lidar and the safety layer do not see it (glass, "
                 "thin wires); the robot still collides with it")
+_Z = Number("z", "m", "its base's height above the floor (none: standing on the ground)", nullable=True)
 
 
 def _placed_by_path(sec: Any, required: list[str]) -> dict[str, Any]:
@@ -207,11 +208,11 @@ BOX = section(BoxObstacle, "obstacles[] (box)", "a box centred on (x, y)", [
     _NAME, _X, _Y,
     Number("length", "m", "its size along its own x axis", gt=0, example="length: 1.0"),
     Number("width", "m", "its size across", gt=0, example="width: 1.0"),
-    _YAW, _HEIGHT, _MOTION, _VISIBLE,
+    _YAW, _HEIGHT, _MOTION, _VISIBLE, _Z,
 ], rules=[_PATH_PLACES])
 CYLINDER = section(CylinderObstacle, "obstacles[] (cylinder)", "an upright cylinder centred on (x, y)", [
     _NAME, _X, _Y, Number("radius", "m", "its radius", gt=0, example="radius: 0.5"),
-    _HEIGHT, _MOTION, _VISIBLE,
+    _HEIGHT, _MOTION, _VISIBLE, _Z,
 ], rules=[_PATH_PLACES])
 PERSON = CYLINDER.derive("obstacles[] (person)", "a cylinder with a person's size, walking at 1.3 m/s "
                          "by default; saved (dumped, frozen) as the cylinder it is",
@@ -227,7 +228,7 @@ POLYGON = section(PolygonObstacle, "obstacles[] (polygon)", "a prism on any simp
     Points("points", "m", "three or more corners [x, y] in order around the outline (a closing repeat of "
            "the first is dropped)", min=3, max=MAX_POLYGON_POINTS,
            example="points: [[0, 0], [2, 0], [2, 1], [0, 1]]"),
-    _YAW, _HEIGHT, _MOTION, _VISIBLE,
+    _YAW, _HEIGHT, _MOTION, _VISIBLE, _Z,
 ], rules=[_PATH_PLACES, Rule("a polygon's edges do not cross and it has an area", None)])
 MESH = section(MeshObstacle, "obstacles[] (mesh)", "a triangle mesh (.stl or .obj) beside the scenario, "
                "collided as its outline seen from above", [
@@ -238,11 +239,12 @@ MESH = section(MeshObstacle, "obstacles[] (mesh)", "a triangle mesh (.stl or .ob
          "inside it", path=True, example="file: parts/press.stl"),
     Scale("scale", "", "one number for all axes or [sx, sy, sz], e.g. 0.001 for millimetres", le=1000.0,
           default_doc="1"),
-    _YAW, _MOTION, _VISIBLE,
+    _YAW, _MOTION, _VISIBLE, _Z,
 ], rules=[_PATH_PLACES, Rule("the mesh file exists, is readable, well-formed and within the size "
                              "limits, and its outline is one piece", None)])
 
-OBSTACLES = Elements("obstacles", "", "the obstacles", max=_MAX_OBSTACLES, what="obstacles", default=(), types=(
+OBSTACLES = Elements("obstacles", "", "the obstacles", max=_MAX_OBSTACLES, what="obstacles", item="obstacle",
+                     default=(), example="{type: box, x: 1.0, y: 2.0, length: 1.0, width: 1.0}", types=(
     Element("box", BOX, "box", BOX.doc),
     Element("cylinder", CYLINDER, "cyl", CYLINDER.doc),
     Element("person", PERSON, "person", PERSON.doc),
@@ -343,6 +345,8 @@ LIDAR = section(Lidar, "robot.lidar", "a planar lidar at the robot's centre, ray
            "(none: dropout at every range)", ge=0, le=1.0, nullable=True),
     Number("spurious", "", "probability that a beam returns a spurious range short of the true one", ge=0,
            le=1.0),
+    Number("mount_height", "m", "the scan plane's height above the robot's base (the floor for the planar "
+           "body)", ge=0, le=10.0),
 ], what="the lidar settings (a mapping)", rules=[
     Rule("range_max is greater than range_min", _lidar_range),
 ])
@@ -424,6 +428,9 @@ ROBOT = section(Robot, "robot", "the robot: its outline, drive, limits, sensor a
     Sub("safety", "", "the collision safety layer", section=SAFETY),
     Sub("localisation", "", "the planner's localisation error", section=LOCALISATION),
     Sub("latency", "", "observation and command delays", section=LATENCY),
+    BODY,
+    Sub("lidar3d", "", "a multi-ring 3D lidar (absent: none; {} for one with the defaults)", section=LIDAR3D,
+        default=None),
 ], what="the robot settings (a mapping)")
 
 
@@ -620,5 +627,8 @@ def content_hash(scenario: Scenario) -> str:
     for element in body.get("terrain", []):   # terrain names are labels; a heightfield is its digest
         element.pop("name", None)
         element.pop("file", None)
+    robot_body = body.get("robot", {}).get("body")
+    if isinstance(robot_body, dict) and robot_body.get("kind") == "mjcf":
+        robot_body.pop("file", None)            # an MJCF body is its digest, wherever its file is
     text = json.dumps(body, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]

@@ -23,7 +23,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Literal, Union
+from typing import Any, Literal, Union
+
+from .keys import SCENARIO_LIMITS as _LIMITS
+from .keys import Choice, Element, Elements, Integer, Number, Rule, Text, Variant, section
 
 # ---------------------------------------------------------------- terrain elements
 
@@ -161,17 +164,18 @@ class WheeledBody:
     low-level controller in the harness turns the planner's velocity command into wheel torques
     within ``max_wheel_torque`` (N m per wheel) and ``max_wheel_speed`` (rad/s; None: the speed
     that gives limits.max_speed). ``track`` (lateral wheel spacing) and ``wheelbase`` (skid: axle
-    spacing) default to the footprint's size. The robot counts as tipped over when its roll or
+    spacing) default to the footprint's size (the wheels inside it). The robot counts as tipped over when its roll or
     pitch passes ``tip_angle`` degrees."""
     drive_wheels: Literal["diff", "skid"] = "diff"
     wheel_radius: float = 0.1            # m
     wheel_width: float = 0.05            # m
-    track: float | None = None           # m; None: the footprint's width
+    track: float | None = None           # m; None: the footprint's width less wheel_width (wheels inside it)
     wheelbase: float | None = None       # m, skid only; None: 0.6 x the footprint's length
     mass: float = 50.0                   # kg, chassis and wheels
     max_wheel_torque: float = 10.0       # N m per driven wheel
     max_wheel_speed: float | None = None  # rad/s; None: limits.max_speed / wheel_radius
-    clearance: float = 0.05              # m, chassis underside above the ground on a flat floor
+    clearance: float = 0.1               # m, chassis underside above the ground on a flat floor (0.05 with a
+                                         # 0.9 m footprint: a 6 deg approach angle, no 10 deg ramp)
     tip_angle: float = 45.0              # degrees of roll or pitch that count as tipped over
     kind: Literal["wheeled"] = field(default="wheeled", init=False)
 
@@ -196,11 +200,14 @@ class MjcfBody:
     """The user's own robot: an MJCF ``file`` beside the scenario (same path rules as meshes) whose
     ``base`` body (None: the first body with a free joint) is the robot, driven by ``controller``
     (``pkg.mod:Attr``, loaded like a subject), which turns each velocity command into the model's
-    actuator controls."""
+    actuator controls. ``digest`` is what the loader read from the file (a hash of its bytes): it
+    makes the model part of the content, wherever the file lives (files it includes are not
+    hashed)."""
     file: str
     controller: str
     base: str | None = None
     tip_angle: float = 45.0              # degrees of roll or pitch that count as tipped over
+    digest: str = ""                     # what the loader read from the file (a hash of its bytes)
     kind: Literal["mjcf"] = field(default="mjcf", init=False)
 
 
@@ -233,3 +240,134 @@ class Lidar3D:
     noise_per_metre: float = 0.0
     dropout_at_max: float | None = None
     spurious: float = 0.0
+
+
+# ---------------------------------------------------------------- YAML keys (scenario/keys.py form)
+# The declarations the loader, the JSON Schema and the reference page read. Ranges are the format's
+# limits; what an element means for the simulation is the terrain modules' business.
+
+_NAME = Text("name", "", "a label for messages (generated when absent: ramp1, steps1 ...)", default=None,
+             name_rules=True, default_doc="generated")
+_X = Number("x", "m", "its footprint's centre, along x", example="x: 0.0")
+_Y = Number("y", "m", "its footprint's centre, along y", example="y: 0.0")
+_LENGTH = Number("length", "m", "its size along its own x axis (the way it rises or runs)", gt=0,
+                 example="length: 2.0")
+_WIDTH = Number("width", "m", "its size across", gt=0, example="width: 1.0")
+_YAW = Number("yaw", "deg", "its rotation, counter-clockwise")
+_Z = Number("z", "m", "the height of its base above the floor", ge=0)
+_SEED = Integer("seed", "", "the random seed of its shape (the same seed, the same ground)", ge=0, le=2**63 - 1)
+
+
+def _heights(values: Any, given: Any) -> tuple[str, str, str] | None:
+    if values["max_height"] <= values["min_height"]:
+        return ("max_height", f"max_height ({values['max_height']!r} m) must be greater than min_height "
+                f"({values['min_height']!r} m)", "raise max_height")
+    return None
+
+
+RAMP = section(Ramp, "terrain[] (ramp)", "an inclined plane rising by rise along its own +x", [
+    _NAME, _X, _Y, _LENGTH, _WIDTH,
+    Number("rise", "m", "how much its high end (+x) is above its low end", gt=0, example="rise: 0.3"),
+    _YAW, _Z])
+STEPS = section(Steps, "terrain[] (steps)", "a flight of steps, count × run long", [
+    _NAME, _X, _Y,
+    Integer("count", "", "how many steps", ge=1, le=1000, example="count: 3"),
+    Number("rise", "m", "each step's height", gt=0, example="rise: 0.15"),
+    Number("run", "m", "each step's depth", gt=0, example="run: 0.3"),
+    _WIDTH, _YAW, _Z,
+    Choice("direction", "", "up: they climb along +x from z; down: they descend along +x below z, cut into "
+           "the ground", options=("up", "down"))])
+PLATFORM = section(Platform, "terrain[] (platform)", "a raised floor with drop edges on every side", [
+    _NAME, _X, _Y, _LENGTH, _WIDTH,
+    Number("height", "m", "its top above its base z", gt=0, example="height: 1.0"), _YAW, _Z])
+PIT = section(Pit, "terrain[] (pit)", "a hole in the floor with vertical walls", [
+    _NAME, _X, _Y, _LENGTH, _WIDTH, Number("depth", "m", "how deep it is", gt=0, example="depth: 0.5"), _YAW])
+ROUGH = section(Rough, "terrain[] (rough)", "a patch of smooth random bumps", [
+    _NAME, _X, _Y, _LENGTH, _WIDTH,
+    Number("amplitude", "m", "the bumps' largest height", gt=0, example="amplitude: 0.05"),
+    Number("wavelength", "m", "the bumps' typical spacing", gt=0, example="wavelength: 0.5"),
+    _SEED, _YAW, _Z])
+HEIGHTFIELD = section(Heightfield, "terrain[] (heightfield)", "a height grid read from a greyscale PNG or a "
+                      ".npy file beside the scenario", [
+    _NAME, _X, _Y,
+    Text("file", "", "a .png or .npy file, relative to the scenario's folder and inside it", path=True,
+         example="file: ground/yard.png"),
+    _LENGTH, _WIDTH,
+    Number("min_height", "m", "the height of the grid's lowest value above z"),
+    Number("max_height", "m", "the height of the grid's highest value above z"),
+    _YAW, _Z], rules=[Rule("max_height is greater than min_height", _heights),
+                      Rule("the height file exists, is readable and within the size limits", None)])
+
+TERRAIN = Elements("terrain", "", "ground that is not the flat floor: ramps, steps, platforms, pits, rough "
+                   "patches, height grids", max=int(_LIMITS["max_obstacles"]), what="terrain elements",
+                   item="terrain element", default=(),
+                   example="{type: ramp, x: 3.0, y: 0.0, length: 2.0, width: 1.5, rise: 0.3}", types=tuple(Element(name, decl, name, decl.doc) for name, decl in (
+                       ("ramp", RAMP), ("steps", STEPS), ("platform", PLATFORM), ("pit", PIT),
+                       ("rough", ROUGH), ("heightfield", HEIGHTFIELD))))
+
+_TIP = Number("tip_angle", "deg", "roll or pitch that counts as tipped over", gt=0, le=90.0)
+WHEELED_BODY = section(WheeledBody, "robot.body (wheeled)", "a wheeled robot riding the terrain on real wheel "
+                       "contacts", [
+    Choice("drive_wheels", "", "diff: two driven wheels on one axle and casters; skid: four driven wheels",
+           options=("diff", "skid")),
+    Number("wheel_radius", "m", "the wheels' radius", gt=0),
+    Number("wheel_width", "m", "the wheels' width", gt=0),
+    Number("track", "m", "lateral wheel spacing (none: the footprint's width)", gt=0, nullable=True),
+    Number("wheelbase", "m", "axle spacing, skid only (none: 0.6 × the footprint's length)", gt=0, nullable=True),
+    Number("mass", "kg", "chassis and wheels", gt=0),
+    Number("max_wheel_torque", "N m", "torque limit per driven wheel", gt=0),
+    Number("max_wheel_speed", "rad/s", "wheel speed limit (none: limits.max_speed / wheel_radius)", gt=0,
+           nullable=True),
+    Number("clearance", "m", "the chassis underside above a flat floor", ge=0),
+    _TIP])
+LEGGED_BODY = section(LeggedBody, "robot.body (legged)", "a walking robot declared by what it can cross", [
+    Number("max_step", "m", "the highest step it climbs", ge=0),
+    Number("max_slope", "deg", "the steepest slope it walks", ge=0, le=90.0),
+    Number("max_gap", "m", "the widest gap it crosses", ge=0),
+    Number("clearance", "m", "its body's underside above the ground", ge=0),
+    _TIP])
+MJCF_BODY = section(MjcfBody, "robot.body (mjcf)", "the user's own MJCF robot and controller", [
+    Text("file", "", "the MJCF file, relative to the scenario's folder and inside it", path=True,
+         example="file: robot/robot.xml"),
+    Text("controller", "", "pkg.mod:Attr of the controller turning velocity commands into actuator controls",
+         example="controller: mypkg.control:Controller"),
+    Text("base", "", "the robot's base body (none: the first body with a free joint)", default=None),
+    _TIP])
+PLANAR_BODY = section(PlanarBody, "robot.body (planar)", "today's body: planar joints, gravity off", [])
+
+BODY = Variant("body", "", "how the robot meets the ground: planar (the default), wheeled, legged or mjcf",
+               types=tuple(Element(name, decl, name, decl.doc) for name, decl in (
+                   ("planar", PLANAR_BODY), ("wheeled", WHEELED_BODY), ("legged", LEGGED_BODY),
+                   ("mjcf", MJCF_BODY))))
+
+
+def _lidar3d_ranges(values: Any, given: Any) -> tuple[str, str, str] | None:
+    if values["range_max"] <= values["range_min"]:
+        return ("range_max", f"range_max ({values['range_max']!r} m) must be greater than range_min "
+                f"({values['range_min']!r} m)", "raise range_max")
+    if values["fov_high"] < values["fov_low"]:
+        return ("fov_high", f"fov_high ({values['fov_high']!r} deg) must not be below fov_low "
+                f"({values['fov_low']!r} deg)", "swap them")
+    return None
+
+
+LIDAR3D = section(Lidar3D, "robot.lidar3d", "a spinning multi-ring lidar whose points are part of the "
+                  "observation", [
+    Integer("rings", "", "rings, spread evenly from fov_low to fov_high", ge=1, le=256),
+    Integer("beams", "", "beams per ring over 360 degrees", ge=1, le=int(_LIMITS["max_lidar_beams"])),
+    Number("fov_low", "deg", "the lowest ring's elevation", ge=-90.0, le=90.0),
+    Number("fov_high", "deg", "the highest ring's elevation", ge=-90.0, le=90.0),
+    Number("range_min", "m", "shortest range it reads", ge=0),
+    Number("range_max", "m", "longest range", gt=0),
+    Number("mount_x", "m", "mounting position on the base, forward"),
+    Number("mount_y", "m", "mounting position on the base, left"),
+    Number("mount_z", "m", "mounting height above the base's origin"),
+    Number("mount_pitch", "deg", "mounting tilt, positive looks down", ge=-90.0, le=90.0),
+    Number("noise_sigma", "m", "Gaussian noise on each range", ge=0),
+    Number("dropout", "", "probability that a beam reads as no return", ge=0, le=1.0),
+    Number("noise_per_metre", "m/m", "the noise's sigma grows by this per metre of range", ge=0, le=1.0),
+    Number("dropout_at_max", "", "dropout probability at range_max (none: dropout at every range)", ge=0,
+           le=1.0, nullable=True),
+    Number("spurious", "", "probability of a spurious return short of the true one", ge=0, le=1.0),
+], what="the 3D lidar settings (a mapping)", rules=[
+    Rule("range_max is greater than range_min, fov_high not below fov_low", _lidar3d_ranges)])

@@ -24,12 +24,14 @@ which is also how the frozen files are told apart.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 import time
 from collections import deque
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterable, Iterator, Sequence
+from typing import Any, Callable, Iterable, Iterator, Protocol, Sequence
 
+from ..core.interrupts import deferred, first_signal
 from ..scenario.model import Scenario
 from .space import FLAG_ON, SearchSpace, invalid_reason, offsets_strategy
 
@@ -37,7 +39,7 @@ STRATEGIES = ("evolve", "random", "hillclimb")
 DISTINCT_DISTANCE = 0.1    # kept for is_near_failure (fraction of each parameter's range)
 DEFAULT_SHRINK_BUDGET = "25%"   # of the search budget, for the whole shrink phase
 MIN_SHRINK_SIMS = 10       # a failure given a share of the shrink budget gets at least this many
-SEVERITY = ("collision", "subject-error", "safety-stop", "timeout")   # shrunk first .. last
+SEVERITY = ("collision", "fall", "subject-error", "safety-stop", "timeout")   # shrunk first .. last
 DEFAULT_STUCK_AFTER = 15.0  # s without new ground covered: the episode ends as a stuck timeout (the
                             # longest stall a robot recovered from over the shipped seeds and the
                             # example suites x 3 planners: 14.5 s; benchmarks/check_stuck.py)
@@ -91,11 +93,17 @@ class Candidate:
 
 @dataclass
 class Failure:
-    """A distinct failure: as found, and after shrinking toward the seed."""
+    """A distinct failure: as found, and after shrinking toward the seed.
+
+    ``status`` says how far the search got with it (and is written in its frozen file's
+    provenance): "found" (as found: the search was still running, or was cut short, before it was
+    done with it), "shrunk" (final: shrunk toward the seed) or "unshrunk" (final: kept as found,
+    ``note`` says why)."""
     found: Candidate
     shrunk: Candidate
     shrink_sims: int = 0
     note: str = ""                # e.g. "shrink cap reached", "did not reproduce"
+    status: str = "found"
 
 
 @dataclass
@@ -113,6 +121,9 @@ class SearchReport:
     shrink_sims: int = 0
     shrink_total: int = 0         # simulations the shrink phase was allowed (shrink_plan's total)
     discarded: dict[str, int] = field(default_factory=dict)   # reason -> count
+    # (simulations recorded by then, reason) of each discarded candidate: when the search spent
+    # its draws on invalid layouts (the search report's chart)
+    discard_log: list[tuple[int, str]] = field(default_factory=list)
     skipped: int = 0              # repeats of a simulated candidate, redrawn without simulating
     candidates: list[Candidate] = field(default_factory=list)  # search + shrink sims, in order
     failures: list[Failure] = field(default_factory=list)
@@ -225,12 +236,29 @@ def serial_evaluator(ctx: EvalContext, proposals: Sequence[tuple[tuple[float, ..
 Evaluator = Callable[[EvalContext, Sequence[tuple[tuple[float, ...], str]]], Iterable[Candidate]]
 
 
-class _Simulator:
-    """Numbers and records the candidates an evaluator returns; checks for a stop request."""
+class Recorder(Protocol):
+    """What ``run_search(..., recorder=...)`` tells while the search runs, so that what it found is
+    on disk at every moment (search/freeze.py: ``SearchRecorder``). Each call is made whole: a
+    Ctrl-C waits until it returns. The order: ``start``; per simulated candidate, first
+    ``failure`` if it is a new distinct failure, then ``simulated``; ``failure`` again whenever a
+    failure changes (shrunk, or final as found); ``finish`` last, also when the search was cut
+    short."""
 
-    def __init__(self, ctx: EvalContext, report: SearchReport, stop, evaluator: Evaluator | None = None):
+    def start(self, report: SearchReport) -> None: ...
+    def simulated(self, report: SearchReport, cand: Candidate) -> None: ...
+    def failure(self, report: SearchReport, index: int) -> None: ...
+    def finish(self, report: SearchReport) -> None: ...
+
+
+class _Simulator:
+    """Numbers and records the candidates an evaluator returns; checks for a stop request; tells
+    the recorder (if any) each shrink-phase candidate and each change of a failure."""
+
+    def __init__(self, ctx: EvalContext, report: SearchReport, stop, evaluator: Evaluator | None = None,
+                 recorder: "Recorder | None" = None):
         self.ctx, self.report, self.stop = ctx, report, stop
         self.evaluator = evaluator or serial_evaluator
+        self.recorder = recorder
         self.counts = {"search": 0, "shrink": 0}
 
     def start(self, proposals: Sequence[tuple[tuple[float, ...], str]], phase: str) -> Iterator[Candidate]:
@@ -260,7 +288,19 @@ class _Simulator:
                 self.report.first_failure = cand.sim
         else:
             self.report.shrink_sims += 1
+            self.tell_recorder("simulated", cand)   # search-phase ones: once their failure is known
         return cand
+
+    def set_failure(self, index: int, failure: Failure) -> None:
+        """Replace failure ``index`` (shrunk, or kept as found) and tell the recorder."""
+        self.report.failures[index] = failure
+        self.tell_recorder("failure", index)
+
+    def tell_recorder(self, event: str, *args: Any) -> None:
+        """``recorder.<event>(report, *args)``, whole: an interrupt waits until it has written."""
+        if self.recorder is not None:
+            with deferred():
+                getattr(self.recorder, event)(self.report, *args)
 
     def simulate(self, offsets: Sequence[float], phase: str, origin: str) -> Candidate:
         return next(iter(self.run([(tuple(offsets), origin)], phase)))
@@ -301,7 +341,7 @@ def _search_loop(strategy: Any, sim: _Simulator, budget: int, on_result: Callabl
         while asking and len(in_flight) <= max(0, int(getattr(strategy, "lag", 0))) and planned < budget:
             sim.check_stop()
             try:
-                with _interrupts_deferred():
+                with deferred():
                     proposals = strategy.ask(budget - planned)[: budget - planned]
             except GaveUp:   # the strategy set stop_reason; what is in flight still counts
                 proposals = []
@@ -320,38 +360,6 @@ def _search_loop(strategy: Any, sim: _Simulator, budget: int, on_result: Callabl
             if report.sims_used < budget:
                 sim.check_stop()
         strategy.tell(results)
-
-
-@contextlib.contextmanager
-def _interrupts_deferred() -> Iterator[None]:
-    """Hold Ctrl-C and SIGTERM until the block ends (a strategy drawing with Hypothesis, ~30 ms):
-    an interrupt that lands inside Hypothesis's engine before it is set up comes out as an
-    AssertionError from Hypothesis, failing the search instead of cutting it short (seen under
-    --nav-ray). Main thread only (where Python runs signal handlers); elsewhere a no-op."""
-    import signal
-    import threading
-
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    got: list[int] = []
-    saved = {}
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        try:
-            saved[sig] = signal.signal(sig, lambda s, _frame: got.append(s))
-        except (ValueError, OSError):
-            pass
-    try:
-        yield
-    finally:
-        for sig, handler in saved.items():
-            signal.signal(sig, handler)
-        if got:   # deliver the first one now, to the handler that was in place
-            handler = saved.get(got[0])
-            if callable(handler):
-                handler(got[0], None)
-            elif handler == signal.SIG_DFL:
-                signal.raise_signal(got[0])
 
 
 # -- shrinking --------------------------------------------------------------------------------
@@ -439,7 +447,7 @@ def shrink_all(space: SearchSpace, sim: "_Simulator", caps: Sequence[int], progr
         if caps[i] <= 0:
             continue
         sim.check_stop()
-        report.failures[i] = shrink_failure(space, sim, report.failures[i].found, caps[i])
+        sim.set_failure(i, shrink_failure(space, sim, report.failures[i].found, caps[i]))
         if progress is not None:
             progress(report)
 
@@ -456,7 +464,7 @@ def shrink_failure(space: SearchSpace, sim: _Simulator, found: Candidate, cap: i
     """Reduce ``found`` toward the seed with at most ``cap`` simulations: first drop inserted
     obstacles and restore removed ones, one at a time, then Hypothesis's shrinker on the offset
     vector. The result fails with the same cause signature as ``found``."""
-    failure = Failure(found=found, shrunk=found)
+    failure = Failure(found=found, shrunk=found, status="unshrunk")
     if cap <= 0 or not any(found.offsets):
         return failure
     best, used = [found], [0]
@@ -486,8 +494,14 @@ def shrink_failure(space: SearchSpace, sim: _Simulator, found: Candidate, cap: i
     except _NoExample:
         failure.note = "did not reproduce when re-simulated: kept as found"
     failure.shrunk = best[0]
+    failure.status = shrink_status(failure.note)
     failure.shrink_sims = used[0]
     return failure
+
+
+def shrink_status(note: str) -> str:
+    """A shrunk failure's status from its shrink's note: kept as found if it did not reproduce."""
+    return "unshrunk" if note.startswith("did not reproduce") else "shrunk"
 
 
 class _NoExample(Exception):
@@ -582,7 +596,8 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
                progress: Callable[[SearchReport], None] | None = None,
                stop: Callable[[], bool] | None = None, space: SearchSpace | None = None,
                subject: str = "", episode_seed: int | None = None,
-               stuck_after: float | None = DEFAULT_STUCK_AFTER, evaluator: Evaluator | None = None) -> SearchReport:
+               stuck_after: float | None = DEFAULT_STUCK_AFTER, evaluator: Evaluator | None = None,
+               recorder: Recorder | None = None) -> SearchReport:
     """Search for failures of ``subject_factory()`` planners around ``seed``.
 
     Exactly ``budget`` simulations of valid candidates (fewer only if interrupted or if the
@@ -600,6 +615,8 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
     while the search goes on, with a cap no larger than the plan's, ``_early_shrink``) and
     ``discard()`` (give up what is still in flight when the search ends early), as the
     worker-process one in search/parallel.py does; the result does not depend on the evaluator.
+    ``recorder`` (``Recorder``) is told every candidate and failure as the search goes, so that a
+    search killed at any moment has written what it found (search/freeze.py: ``SearchRecorder``).
     Deterministic given ``seed_value`` (and a deterministic subject).
     """
     from .strategies import GaveUp, make_strategy
@@ -611,7 +628,8 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
                           subject_version=None, strategy=strategy, seed_value=seed_value, budget=budget,
                           shrink_budget=str(shrink_budget), params=[p.name for p in space.params],
                           episode_seed=episode_seed)
-    sim = _Simulator(EvalContext(space, subject_factory, episode_seed, stuck_after), report, stop, evaluator)
+    sim = _Simulator(EvalContext(space, subject_factory, episode_seed, stuck_after), report, stop, evaluator,
+                     recorder)
     signatures: set[tuple] = set()
 
     start_shrink = getattr(evaluator, "start_shrink", None)   # parallel.py: shrink while searching
@@ -621,18 +639,24 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
         if cand.failed and cand.signature not in signatures:   # distinct: a new cause signature
             signatures.add(cand.signature)
             report.failures.append(Failure(found=cand, shrunk=cand))
+            sim.tell_recorder("failure", len(report.failures) - 1)   # on disk before it is logged
             if start_shrink is not None and early_cap > 0 and any(cand.offsets) \
                     and len(report.failures) <= early_count:
                 start_shrink(sim.ctx, cand, early_cap)
+        sim.tell_recorder("simulated", cand)
         if progress is not None:
             progress(report)
 
     t0 = time.perf_counter()
     try:
+        sim.tell_recorder("start")
         _search_loop(make_strategy(strategy, space, report, budget, seed_value), sim, budget, on_result)
         report.shrink_total = shrink.total(budget, len(report.failures))
         caps = shrink_plan(report.failures, report.shrink_total, shrink)
         _note_unshrunk(report, caps, shrink)
+        for i, cap in enumerate(caps):   # kept as found: final now
+            if cap <= 0:
+                sim.set_failure(i, dataclasses.replace(report.failures[i], status="unshrunk"))
         shrink_failures = getattr(evaluator, "shrink_failures", None)   # parallel.py: all at once
         if shrink_failures is not None:
             shrink_failures(sim, caps, progress)
@@ -642,14 +666,15 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
         pass  # stop() said so, or the strategy gave up (stop_reason says why)
     except KeyboardInterrupt:
         report.interrupted = True
-        report.stop_reason = "interrupted (Ctrl-C)"
+        report.stop_reason = f"interrupted ({first_signal() or 'Ctrl-C'})"
     finally:
         discard = getattr(evaluator, "discard", None)   # jobs still in flight if it ended early
         if discard is not None:
             discard()
-    if report.interrupted:
-        for f in report.failures:
-            if f.shrink_sims == 0 and not f.note and any(f.found.offsets):
-                f.note = "not shrunk: the search was interrupted"
-    report.wall_time = time.perf_counter() - t0
+        if report.interrupted:
+            for f in report.failures:
+                if f.shrink_sims == 0 and not f.note and any(f.found.offsets):
+                    f.note = "not shrunk: the search was interrupted"
+        report.wall_time = time.perf_counter() - t0
+        sim.tell_recorder("finish")   # also when something failed: what was found stays on disk
     return report

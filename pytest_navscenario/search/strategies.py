@@ -89,6 +89,7 @@ class _Admission:
         if reason is not None:
             k = reason.split(":")[0]
             self.report.discarded[k] = self.report.discarded.get(k, 0) + 1
+            self.report.discard_log.append((self.report.sims_used, k))
             return self._miss()
         self.invalid_run = 0
         self.seen.add(key)

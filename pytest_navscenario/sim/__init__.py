@@ -19,10 +19,10 @@ from __future__ import annotations
 from ..core.lazy import lazy_exports
 
 _EXPORTS = {name: "world" for name in (
-    "compiled_world", "clear_model_cache", "build_spec", "model_xml", "World", "steps_per_tick",
+    "compiled_world", "clear_model_cache", "build_spec", "World", "steps_per_tick",
     "wrap_angle", "LIDAR_HEIGHT", "ROBOT_HEIGHT", "ROBOT_MASS", "TRACKING_TAU", "FORCE_HEADROOM",
     "MODEL_CACHE_SIZE", "TWO_PI")}
-_EXPORTS.update(simulate="episode", SimResult="episode", Episode="episode", STILL="episode",
+_EXPORTS.update(model_xml="body_world", any_world="body_world", simulate="episode", SimResult="episode", Episode="episode", STILL="episode",
                 validate_command="command", lidar_angles="lidar",
                 SafetyLayer="safety", TickDeadline="deadline", PlannerTimeout="deadline",
                 Trajectory="trajectory", Collision="trajectory", SafetyStop="trajectory",

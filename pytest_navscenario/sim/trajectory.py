@@ -19,6 +19,7 @@ class Collision:
     robot_speed: float = 0.0      # m/s, the robot's speed at the contact
     robot_moving: bool = True     # False: the robot stood still and was hit (sim/moving.py)
     obstacle_speed: float = 0.0   # m/s, the obstacle's speed at the contact (0: static)
+    terrain: bool = False         # True: the chassis hit a terrain face ("obstacle" names the element)
 
 
 @dataclass(frozen=True)
@@ -26,6 +27,24 @@ class SafetyStop:
     time: float
     obstacle: str          # the obstacle the predicted sweep would have hit
     speed: float           # robot speed (m/s) when halted
+
+
+@dataclass(frozen=True)
+class TerrainEvent:
+    """The robot lost its footing or could not go on over the terrain: ``kind`` "fell" (off an edge
+    or into a hole: ``drop`` metres), "tipped" (roll or pitch past the body's limit) or "stuck"
+    (driven but not moving: ``detail`` says what held it). ``element`` names the terrain element
+    ("platform 'dock'"; "" on the plain floor); (x, y, z) is where the base was."""
+    kind: str
+    time: float
+    element: str
+    x: float
+    y: float
+    z: float
+    drop: float = 0.0          # m, fell
+    roll: float = 0.0          # degrees, at the event
+    pitch: float = 0.0         # degrees
+    detail: str = ""
 
 
 @dataclass(frozen=True)
@@ -48,6 +67,11 @@ class Trajectory:
     angles: np.ndarray       # (beams,) rad, beam directions in the robot frame
     waypoint_times: tuple[float, ...] = ()  # when each intermediate waypoint was passed
     believed: np.ndarray | None = None      # (m, 3) the pose the planner believed at each tick (drift)
+    # a body that rides the ground (None for the planar body): physics-rate base height (m) and
+    # attitude (rad) of the chassis
+    z: np.ndarray | None = None             # (n,)
+    roll: np.ndarray | None = None          # (n,)
+    pitch: np.ndarray | None = None         # (n,)
 
     @property
     def duration(self) -> float:
@@ -61,6 +85,7 @@ class Trajectory:
 
 
 _TRAJ_ARRAYS = ("t", "pose", "velocity", "tick_t", "command", "ranges", "angles")
+_ATTITUDE = ("z", "roll", "pitch")
 
 
 def trajectory_to_dict(traj: Trajectory) -> dict[str, Any]:
@@ -69,6 +94,10 @@ def trajectory_to_dict(traj: Trajectory) -> dict[str, Any]:
     out["waypoint_times"] = list(traj.waypoint_times)
     if traj.believed is not None:
         out["believed"] = np.asarray(traj.believed).tolist()
+    for name in _ATTITUDE:
+        value = getattr(traj, name)
+        if value is not None:
+            out[name] = np.asarray(value).tolist()
     return out
 
 
@@ -84,5 +113,7 @@ def trajectory_from_dict(data: dict[str, Any]) -> Trajectory:
         "angles": np.asarray(data["angles"], dtype=float),
     }
     believed = data.get("believed")
+    attitude = {name: np.asarray(data[name], dtype=float) for name in _ATTITUDE if data.get(name) is not None}
     return Trajectory(**arrays, waypoint_times=tuple(data.get("waypoint_times", ())),
-                      believed=None if believed is None else np.asarray(believed, dtype=float).reshape(-1, 3))
+                      believed=None if believed is None else np.asarray(believed, dtype=float).reshape(-1, 3),
+                      **attitude)

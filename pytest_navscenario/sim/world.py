@@ -126,30 +126,31 @@ def _add_robot(spec: mujoco.MjSpec, scenario: Scenario) -> None:
         act.forcerange = [-limit, limit]
 
 
-def _add_obstacles(spec: mujoco.MjSpec, scenario: Scenario) -> None:
+def _add_obstacles(spec: mujoco.MjSpec, scenario: Scenario, bases: list[float] | None = None) -> None:
     """One geom per obstacle standing on z = 0 (a polygon or mesh: one convex prism geom per convex
     part, named ``<name>/<k>``): static ones on the world body, a moving one on its own mocap body
     (kinematic: the loop writes its position, MuJoCo moves its geoms and detects their contacts like
     any other; mocap_pos order = moving obstacles' order)."""
-    for obs, gname in zip(scenario.obstacles, _geom_names(scenario)):
+    for j, (obs, gname) in enumerate(zip(scenario.obstacles, _geom_names(scenario))):
         h = obs.height
+        z0 = 0.0 if bases is None else bases[j]
         yaw = getattr(obs, "yaw_rad", 0.0)
         quat = [math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0)]
         if getattr(obs, "motion", None) is not None:
-            parent = spec.worldbody.add_body(name=f"moving:{gname}", mocap=True, pos=[obs.x, obs.y, 0.0],
+            parent = spec.worldbody.add_body(name=f"moving:{gname}", mocap=True, pos=[obs.x, obs.y, z0],
                                              quat=quat)
             pos, quat, rgba = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.9, 0.5, 0.2, 1]
         else:
-            parent, pos, rgba = spec.worldbody, [obs.x, obs.y, 0.0], [0.6, 0.6, 0.6, 1]
+            parent, pos, rgba = spec.worldbody, [obs.x, obs.y, z0], [0.6, 0.6, 0.6, 1]
         unseen = not getattr(obs, "visible_to_lidar", True)
         if unseen:
             rgba = [0.6, 0.85, 0.95, 0.4]
         common = dict(contype=2, conaffinity=1, rgba=rgba, quat=quat, group=UNSEEN_GROUP if unseen else 0)
         if isinstance(obs, BoxObstacle):
-            parent.add_geom(name=gname, type=mujoco.mjtGeom.mjGEOM_BOX, pos=[pos[0], pos[1], h / 2.0],
+            parent.add_geom(name=gname, type=mujoco.mjtGeom.mjGEOM_BOX, pos=[pos[0], pos[1], pos[2] + h / 2.0],
                             size=[obs.length / 2.0, obs.width / 2.0, h / 2.0], **common)
         elif isinstance(obs, CylinderObstacle):
-            parent.add_geom(name=gname, type=mujoco.mjtGeom.mjGEOM_CYLINDER, pos=[pos[0], pos[1], h / 2.0],
+            parent.add_geom(name=gname, type=mujoco.mjtGeom.mjGEOM_CYLINDER, pos=[pos[0], pos[1], pos[2] + h / 2.0],
                             size=[obs.radius, h / 2.0, 0.0], **common)
         elif isinstance(obs, (PolygonObstacle, MeshObstacle)):
             parts = convex_parts_local(tuple(outline_points(obs)))
@@ -294,11 +295,13 @@ def _cache_key(scenario: Scenario) -> Any:
     obstacles = scenario.obstacles
     if any(getattr(o, "motion", None) is not None for o in obstacles):
         obstacles = tuple(o if o.motion is None else replace(o, motion=_MOVES) for o in obstacles)
-    return (robot.footprint, robot.limits, robot.safety, obstacles, scenario.simulation.timestep)
+    return (robot.footprint, robot.limits, robot.safety, obstacles, scenario.simulation.timestep,
+            robot.body, scenario.terrain)
 
 
 def compiled_world(scenario: Scenario) -> World:
-    """The compiled World for a scenario, from a small LRU cache."""
+    """The compiled World for a scenario of the planar body, from a small LRU cache (a body that
+    rides the ground: ``body_world.compiled_body_world``)."""
     key = _cache_key(scenario)
     world = _CACHE.get(key)
     if world is not None:

@@ -36,6 +36,7 @@ import time
 from typing import Any
 
 from ..core.errors import PlannerProtocolError, SubjectLoadError
+from ..core.processes import end_group
 from .protocol import Command, Observation
 from ..scenario.model import Scenario
 
@@ -84,7 +85,9 @@ class ExternalProcess:
         return self.proc is not None and self.proc.poll() is None
 
     def stop(self, grace: float = 1.0) -> None:
-        """Ask politely (shutdown message, close stdin), then terminate, then kill."""
+        """Ask politely (shutdown message, close stdin), then end its whole process group: the
+        program was started in a session of its own, so whatever it started (as a launch file
+        starts nodes) is in that group too; SIGTERM, then SIGKILL (core/processes.end_group)."""
         proc, self.proc = self.proc, None
         if proc is None:
             return
@@ -97,12 +100,13 @@ class ExternalProcess:
         try:
             proc.wait(timeout=grace)
         except subprocess.TimeoutExpired:
-            proc.terminate()
-            try:
-                proc.wait(timeout=grace)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+            pass
+        end_group(proc.pid, grace)
+        try:
+            proc.wait(timeout=grace)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
         for stream in (proc.stdout, proc.stderr, proc.stdin):
             try:
                 if stream:
@@ -190,6 +194,11 @@ class ExternalProcess:
 
 
 _PROCESSES: dict[tuple[str, ...], ExternalProcess] = {}
+
+
+def running_pids() -> set[int]:
+    """The pids of the exec: planner programs this process runs (not a planner's leftovers)."""
+    return {p.proc.pid for p in _PROCESSES.values() if p.proc is not None}
 
 
 def _shutdown_all() -> None:

@@ -8,7 +8,8 @@ samples unless said otherwise; NaN means "not defined for this episode"):
   position. Coarse bounds from the robot centre prune pairs, the exact box-box distance is
   computed for the rest (see paths.py). A reported collision overrides it with 0 at the hit.
 * min_obstacle_gap: narrowest obstacle-obstacle gap of the scenario (paths.min_obstacle_gap).
-* path_length: sum of the steps of the centre; shortest_path_length: paths.reference_path, the
+* path_length: sum of the steps of the centre (over the ground: with its height, for a body that
+  rides it); shortest_path_length: paths.reference_path, the
   shortest collision-free path from the start through each waypoint's tolerance disc (a
   waypoint counts as passed anywhere within mission.waypoint_tolerance, as in the simulation)
   to the goal point; path_efficiency = shortest / (driven + still to go), where "still to go"
@@ -24,6 +25,8 @@ samples unless said otherwise; NaN means "not defined for this episode"):
   (degrees, wrapped to [0, 180]) of the last pose.
 * smoothness: mean |jerk| (m/s^3) of the planar motion, from the measured velocity turned
   into the world frame, by finite differences; angular_smoothness: mean |d wz / dt| (rad/s^2).
+* max_pitch, max_roll (degrees), climb (m above the start): a body that rides the ground; NaN for
+  the planar body.
 * reference_mean/max_deviation: with ``scenario.reference`` (inline (t, x, y) rows or a CSV
   file with header ``t,x,y``, relative to the scenario file's folder): the simulated position
   interpolated at each reference time inside the simulated time span, distance to the
@@ -83,7 +86,11 @@ def compute_metrics(scenario: Scenario, trajectory: Trajectory, *,
         clear_x, clear_y = _position_at(t, xy, clear_t)
     gap, gap_a, gap_b = min_obstacle_gap(scenario)
 
-    path_length = float(np.sqrt(np.diff(xy[:, 0]) ** 2 + np.diff(xy[:, 1]) ** 2).sum()) if len(xy) > 1 else 0.0
+    z = getattr(trajectory, "z", None)
+    if z is not None and len(z) == len(xy) and len(xy) > 1:   # over the ground: up and down slopes count
+        path_length = float(np.sqrt(np.diff(xy[:, 0]) ** 2 + np.diff(xy[:, 1]) ** 2 + np.diff(z) ** 2).sum())
+    else:
+        path_length = float(np.sqrt(np.diff(xy[:, 0]) ** 2 + np.diff(xy[:, 1]) ** 2).sum()) if len(xy) > 1 else 0.0
     sp = shortest_path(scenario)
     ref = reference_path(scenario)   # through the waypoints' tolerance discs (= sp without waypoints)
     shortest = ref.length if ref is not None else NAN
@@ -110,7 +117,18 @@ def compute_metrics(scenario: Scenario, trajectory: Trajectory, *,
         goal_position_error=goal_err, goal_yaw_error=yaw_err,
         smoothness=jerk, angular_smoothness=ang_acc,
         reference_mean_deviation=ref_mean, reference_max_deviation=ref_max,
+        **attitude(trajectory),
     )
+
+
+def attitude(trajectory: Trajectory) -> dict[str, float]:
+    """max_pitch and max_roll (degrees, largest magnitude) and climb (m above the start) of a body
+    that rides the ground; NaN for the planar body (no attitude recorded)."""
+    pitch, roll, z = (getattr(trajectory, k, None) for k in ("pitch", "roll", "z"))
+    if pitch is None or roll is None or z is None or not len(z):
+        return {}
+    return {"max_pitch": float(np.degrees(np.abs(pitch).max())), "max_roll": float(np.degrees(np.abs(roll).max())),
+            "climb": float(np.max(z) - z[0])}
 
 
 def remaining_length(scenario: Scenario, trajectory: Trajectory, xy: np.ndarray) -> float:

@@ -1,8 +1,10 @@
 """The oracle: which outcome an episode had and one line saying why.
 
 A pure function of the scenario, the recorded trajectory and the events the simulation
-reported (collision, safety stop, planner failure). Precedence, first match wins:
-subject-error, collision, safety-stop, timeout, success. Success needs the goal reached
+reported (collision, safety stop, planner failure, a terrain event). Precedence, first match
+wins: subject-error, collision, fall, safety-stop, timeout, success. On terrain a collision may be
+the chassis against a terrain face; a fall is falling off an edge or into a hole, or tipping over;
+being stuck on terrain (driven but held by a step or a slope) is a timeout with that cause. Success needs the goal reached
 (after every waypoint, the runner decides that) within ``mission.timeout``.
 """
 from __future__ import annotations
@@ -11,7 +13,7 @@ import math
 
 import numpy as np
 
-from ..sim.trajectory import Collision, SafetyStop, SubjectFailure, Trajectory
+from ..sim.trajectory import Collision, SafetyStop, SubjectFailure, TerrainEvent, Trajectory
 from .result import Outcome
 from ..scenario.model import Scenario
 
@@ -20,7 +22,8 @@ MAX_MESSAGE = 300  # characters of a planner's own error message kept in the one
 
 def classify(scenario: Scenario, trajectory: Trajectory, *, collision: Collision | None,
              safety_stop: SafetyStop | None, subject_failure: SubjectFailure | None,
-             goal_reached: bool, stuck_after: float | None = None) -> tuple[Outcome, str]:
+             goal_reached: bool, stuck_after: float | None = None,
+             terrain_event: TerrainEvent | None = None) -> tuple[Outcome, str]:
     """Return ``(outcome, message)`` for one episode; the message is one line for a failure report.
     ``stuck_after``: the episode was ended early because the robot was stuck that long (a timeout)."""
     if subject_failure is not None:
@@ -29,6 +32,8 @@ def classify(scenario: Scenario, trajectory: Trajectory, *, collision: Collision
             f"{_one_line(subject_failure.message)}")
     if collision is not None:
         return Outcome.COLLISION, _collision_message(collision)
+    if terrain_event is not None and terrain_event.kind in ("fell", "tipped"):
+        return Outcome.FALL, terrain_message(terrain_event)
     if safety_stop is not None:
         return Outcome.SAFETY_STOP, (
             f"safety stop at t={safety_stop.time:.2f} s: predicted to hit "
@@ -37,6 +42,9 @@ def classify(scenario: Scenario, trajectory: Trajectory, *, collision: Collision
     timeout = scenario.mission.timeout
     if goal_reached and duration <= timeout:
         return Outcome.SUCCESS, f"success in {duration:.1f} s"
+    if terrain_event is not None and terrain_event.kind == "stuck" and not goal_reached:
+        return Outcome.TIMEOUT, (f"timeout: {terrain_message(terrain_event)}; episode ended early at "
+                                 f"{duration:.1f} s of {timeout:.1f} s")
     if stuck_after is not None and not goal_reached:
         pose = np.asarray(trajectory.pose)
         where = (f" at ({float(pose[-1, 0]):.2f}, {float(pose[-1, 1]):.2f})" if len(pose) else "")
@@ -46,9 +54,30 @@ def classify(scenario: Scenario, trajectory: Trajectory, *, collision: Collision
     return Outcome.TIMEOUT, _timeout_message(scenario, trajectory, goal_reached)
 
 
+def terrain_message(event: TerrainEvent) -> str:
+    """One line for a terrain event: "fell off platform 'dock' at t=6.2 s, 1.2 m drop", "tipped over
+    on ramp 'bank' at t=3.1 s (roll 52 deg)", "stuck on terrain at t=8.0 s at (4.55, 0.00): cannot
+    climb the 0.15 m step of platform 'kerb'"."""
+    where = f"at ({event.x:.2f}, {event.y:.2f})"
+    if event.kind == "fell":
+        what = f"fell {event.element}" if event.element else "fell off an edge"
+        return f"{what} at t={event.time:.1f} s, {event.drop:.1f} m drop, {where}"
+    if event.kind == "tipped":
+        on = f" on {event.element}" if event.element else ""
+        angle = (f"roll {abs(event.roll):.0f} deg" if abs(event.roll) >= abs(event.pitch)
+                 else f"pitch {abs(event.pitch):.0f} deg")
+        return f"tipped over{on} at t={event.time:.1f} s ({angle}) {where}"
+    of = f" of {event.element}" if event.element else ""
+    return f"stuck on terrain at t={event.time:.1f} s {where}: {event.detail}{of}"
+
+
 def _collision_message(collision: Collision) -> str:
     """Where, and who moved: a robot standing still that a moving obstacle walked into reads
     differently from one that drove into something (both are collisions)."""
+    if getattr(collision, "terrain", False):
+        return (f"collision with the face of {collision.obstacle} at t={collision.time:.2f} s "
+                f"(depth {max(collision.depth, 0.0) * 1000:.0f} mm) at ({collision.x:.2f}, {collision.y:.2f}): "
+                f"the chassis drove into terrain it cannot climb")
     text = (f"collision with '{collision.obstacle}' at t={collision.time:.2f} s "
             f"(depth {max(collision.depth, 0.0) * 1000:.0f} mm) at ({collision.x:.2f}, {collision.y:.2f})")
     moving = getattr(collision, "obstacle_speed", 0.0) > 0.0

@@ -8,13 +8,14 @@ from typing import Any
 
 
 from ..scenario.model import Scenario
-from ..sim.trajectory import Collision, SafetyStop, SubjectFailure, Trajectory
+from ..sim.trajectory import Collision, SafetyStop, SubjectFailure, TerrainEvent, Trajectory
 
 
 class Outcome(str, enum.Enum):
     """Outcome categories, in precedence order (the first that applies wins)."""
     SUBJECT_ERROR = "subject-error"  # the planner raised, returned NaN/wrong shape, or was too slow
-    COLLISION = "collision"          # any robot-obstacle contact
+    COLLISION = "collision"          # any robot-obstacle contact, or the chassis against a terrain face
+    FALL = "fall"                    # the robot fell (off an edge, into a hole) or tipped over (terrain)
     SAFETY_STOP = "safety-stop"      # the safety layer halted the robot
     TIMEOUT = "timeout"              # the goal was not reached in time
     SUCCESS = "success"              # goal (after all waypoints) reached within tolerance, in time
@@ -50,6 +51,9 @@ class Metrics:
     angular_smoothness: float         # mean |angular acceleration|, rad/s^2
     reference_mean_deviation: float = float("nan")  # only with a scenario reference trajectory
     reference_max_deviation: float = float("nan")
+    max_pitch: float = float("nan")     # degrees, largest |pitch| of the chassis (a body riding the ground)
+    max_roll: float = float("nan")      # degrees, largest |roll|
+    climb: float = float("nan")         # m, the most the robot rose above its start
 
     def as_dict(self) -> dict[str, Any]:
         """The fields by name (all plain floats and strings: no deep copy needed, ~7x faster than
@@ -76,6 +80,8 @@ class EpisodeResult:
     subject_failure: SubjectFailure | None = None
     wall_time: float = 0.0                      # s, the whole run_scenario call (+ a feasibility check before it)
     timings: dict[str, float] = field(default_factory=dict)  # s: physics, rays, planner, harness
+    terrain_event: TerrainEvent | None = None   # fell, tipped over or stuck on terrain
+    left_running: tuple[str, ...] = ()          # processes the planner started and left running ("pid N: cmd")
 
     @property
     def passed(self) -> bool:

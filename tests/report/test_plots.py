@@ -124,8 +124,8 @@ def test_bar_chart_from_a_comparison(tmp_path):
     assert_picture(save_figure(fig, tmp_path / "bars.png"), min_size=(500, 400))
     ax = fig.axes[0]
     heights = sorted(round(p.get_height()) for p in ax.patches)
-    # per family (boxes, corridor, all) x (A, B) x (success up, safety-stop down)
-    assert len(ax.patches) == 12
+    # per family (boxes, corridor, all) x (A, B) x (success up; safety-stop, timeout, collision down)
+    assert len(ax.patches) == 24
     assert heights[0] == -50 and heights[-1] == 67   # corridor A safety-stop, boxes success
     assert [t.get_text().split("\n")[0] for t in ax.get_xticklabels()] == ["boxes", "corridor", "(all)"]
 
@@ -157,3 +157,106 @@ def test_bar_chart_says_when_nothing_could_be_compared():
     cmp = compare_records(suite(BASE), [rec("scenarios/x/new.yaml::new", "success")])
     ax = bars_figure(cmp).axes[0]
     assert not ax.patches and "no comparable scenario pairs" in ax.texts[0].get_text()
+
+
+def test_bar_chart_shows_timeouts_and_every_other_way_of_failing():
+    """Issue 23 item 11: a family whose runs all timed out under A showed as 0 % / 0 %."""
+    from pytest_navscenario.report.compare import compare_records
+    from pytest_navscenario.report.plots import bars_figure
+    from test_compare import rec
+
+    nodes = [f"scenarios/corridor/c{i}.yaml::c{i}" for i in range(4)]
+    a = [rec(n, "timeout") for n in nodes]
+    b = [rec(n, "success", subject="new") for n in nodes[:3]] + [rec(nodes[3], "collision", subject="new")]
+    ax = bars_figure(compare_records(a, b)).axes[0]
+    hatched = {(p.get_hatch(), round(p.get_height())) for p in ax.patches if p.get_hatch()}
+    assert ("..", -100) in hatched            # A: all four timed out
+    assert ("xx", -25) in hatched             # B: one collision
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "timeout" in legend and "collision" in legend
+    texts = [t.get_text() for t in ax.texts]
+    assert "100%" in texts and "25%" in texts
+
+
+def dwelling_timeout() -> EpisodeResult:
+    """Drives 3 m up in 3 s, then circles 0.3 m around one spot for 27 s, and times out there
+    (a moving person's way ends beside the gap between the two boxes, whose name labels sit
+    near the gap's label)."""
+    from pytest_navscenario.scenario.model import Motion
+
+    scenario = Scenario(
+        mission=Mission(start=Pose(0, 0, 90), goal=Pose(0, 10, 90), timeout=30.0),
+        obstacles=(BoxObstacle("box_left", -1.0, 5.2, 0.6, 0.6), BoxObstacle("box_right", 1.0, 5.2, 0.6, 0.6),
+                   BoxObstacle("navsearch_inserted_1", 0.0, 4.55, 0.3, 0.3),
+                   CylinderObstacle("walker", -3.0, 5.0, 0.25,
+                                    motion=Motion(path=((-3.0, 5.0), (0.3, 5.0)), speed=1.0))),
+        name="dwell", family="tests")
+    t = np.linspace(0.0, 30.0, 3001)
+    y = np.where(t < 3, t, 3.0 + 0.3 * np.sin((t - 3) * 0.9))
+    x = np.where(t < 3, 0.0, 0.3 * (1 - np.cos((t - 3) * 0.9)))
+    pose = np.stack([x, y, np.full_like(t, math.pi / 2)], axis=1)
+    vel = np.zeros((len(t), 3))
+    vel[1:, 0] = np.hypot(np.diff(x), np.diff(y)) / np.diff(t)
+    traj = Trajectory(t=t, pose=pose, velocity=vel, tick_t=t[::10], command=vel[::10],
+                      ranges=np.zeros((301, 8), np.float32), angles=np.linspace(0, 6, 8))
+    metrics = Metrics(
+        min_clearance=0.6, min_clearance_obstacle="navsearch_inserted_1", min_clearance_time=20.0,
+        min_clearance_x=float(x[2000]), min_clearance_y=float(y[2000]), min_obstacle_gap=1.4,
+        min_gap_obstacles="box_left|box_right", path_length=30.0, shortest_path_length=10.0,
+        path_efficiency=0.1, max_deviation=0.6, mean_deviation=0.3, duration=30.0, mean_speed=0.5,
+        goal_position_error=6.7, goal_yaw_error=0.0, smoothness=0.1, angular_smoothness=0.1)
+    return EpisodeResult(scenario=scenario, outcome=Outcome("timeout"), metrics=metrics, trajectory=traj,
+                         seed=0, subject="dwa", message="timeout after 30.0 s, 6.70 m from the goal")
+
+
+def test_a_timeout_marks_where_the_robot_ended():
+    from pytest_navscenario.report.plots import trajectory_figure
+
+    result = dwelling_timeout()
+    ax = trajectory_figure(result).axes[0]
+    ends = [line for line in ax.get_lines() if line.get_label().startswith("end: timeout at t=30.0 s")]
+    assert len(ends) == 1
+    assert (ends[0].get_xdata()[0], ends[0].get_ydata()[0]) == pytest.approx(tuple(result.trajectory.pose[-1, :2]))
+
+
+def test_time_labels_do_not_pile_up_where_the_robot_dwells():
+    import re
+
+    from pytest_navscenario.report.plots import trajectory_figure
+
+    ax = trajectory_figure(dwelling_timeout()).axes[0]
+    stamps = [t.get_text() for t in ax.texts if re.fullmatch(r"\d+(\.\d+)?s", t.get_text())]
+    assert len(stamps) <= 2, stamps          # one while driving up, at most one where it circled
+    dots = [line for line in ax.get_lines() if line.get_marker() == "o" and line.get_markersize() == 2.5]
+    assert len(dots) == len(stamps)          # no stamp without its dot, no dot without its stamp
+
+
+def _overlap(a, b) -> float:
+    w = min(a[2], b[2]) - max(a[0], b[0])
+    h = min(a[3], b[3]) - max(a[1], b[1])
+    return w * h if w > 0 and h > 0 else 0.0
+
+
+@pytest.mark.parametrize("make", [dwelling_timeout, lambda: make_episode("collision"),
+                                  lambda: make_episode("safety-stop")])
+def test_labels_overlap_neither_each_other_nor_the_markers(make):
+    """"gap 1.40 m" over an inserted box's name or a person's end disc, a moving obstacle's time
+    over the minimum clearance, a stamp over the end marker: the placer keeps every label clear."""
+    from pytest_navscenario.report.labels import text_boxes
+    from pytest_navscenario.report.plots import trajectory_figure
+
+    result = make()
+    ax = trajectory_figure(result).axes[0]
+    boxes = text_boxes(ax)
+    assert any(text.startswith("gap ") for text, _ in boxes)
+    for i, (ta, a) in enumerate(boxes):
+        for tb, b in boxes[i + 1:]:
+            assert _overlap(a, b) < 1.0, (ta, tb)
+    markers = [line for line in ax.get_lines() if line.get_marker() in ("s", "X", "8", "*", "o")
+               and line.get_markersize() >= 8]
+    assert markers
+    for line in markers:
+        px, py = ax.transData.transform((line.get_xdata()[0], line.get_ydata()[0]))
+        r = line.get_markersize() / 2
+        for text, box in boxes:
+            assert _overlap(box, (px - r, py - r, px + r, py + r)) < 1.0, (text, line.get_label())

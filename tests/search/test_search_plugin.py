@@ -35,6 +35,11 @@ def project(pytester, monkeypatch):
     return pytester
 
 
+def candidates(log: Path) -> list[dict]:
+    """The candidate records of a search log (its start and end records left out)."""
+    return [r for r in map(json.loads, log.read_text().splitlines()) if r["record"] == "candidate"]
+
+
 def run(pytester, *args):
     return pytester.runpytest_inprocess("-p", "pytest_navscenario.plugin", SUBJECT, *args)
 
@@ -48,7 +53,7 @@ def test_search_freezes_failures_that_fail_again_when_collected(project):
                                  "crate vs straight_planner:Straight 1.0 (evolve, search seed 3): 6/6 sims*"])
     frozen = sorted((out / "crate").glob("crate-*.yaml"))
     assert frozen, result.stdout.str()
-    log = [json.loads(line) for line in (out / "crate" / "search-log.jsonl").read_text().splitlines()]
+    log = candidates(out / "crate" / "search-log.jsonl")
     assert sum(r["phase"] == "search" for r in log) == 6 and all("params" in r and "outcome" in r for r in log)
     cases = list(ET.parse(project.path / "suite.xml").getroot().iter("testcase"))
     assert len(cases) == 6
@@ -96,9 +101,9 @@ def test_ctrl_c_keeps_what_was_found(project):
     assert "CUT SHORT: interrupted (Ctrl-C)" in out and "Interrupted: navsearch crate was cut short" in out, out
     sims = int(re.search(r"\): (\d+)/50 sims", out).group(1))  # the summary line
     assert 0 < sims < 50
-    log = (project.path / "scenarios" / "regressions" / "crate" / "search-log.jsonl").read_text().splitlines()
+    log = candidates(project.path / "scenarios" / "regressions" / "crate" / "search-log.jsonl")
     assert len(log) == sims
-    failures = [r for r in map(json.loads, log) if r["outcome"] != "success"]
+    failures = [r for r in log if r["outcome"] != "success"]
     frozen = list((project.path / "scenarios" / "regressions" / "crate").glob("crate-*.yaml"))
     assert bool(frozen) == bool(failures)
     assert not list((project.path / "scenarios" / "regressions" / "crate").glob(".*tmp"))
@@ -149,10 +154,11 @@ def test_shrink_budget_is_a_share_and_the_summary_and_log_say_how_sims_were_spen
     search, shrink, total = map(int, re.search(r"(\d+) sims searching \+ (\d+) shrinking \(shrink budget "
                                                r"(\d+)\)", line).groups())
     assert (search, total) == (8, 12) and 0 < shrink <= 12, line
-    log = [json.loads(x) for x in (project.path / "scenarios" / "regressions" / "crate" /
-                                   "search-log.jsonl").read_text().splitlines()]
-    assert {(r["search_sims"], r["shrink_sims"], r["shrink_budget"]) for r in log} == {(8, shrink, 12)}
-    assert sum(r["phase"] == "shrink" for r in log) == shrink
+    records = [json.loads(x) for x in (project.path / "scenarios" / "regressions" / "crate" /
+                                       "search-log.jsonl").read_text().splitlines()]
+    end = records[-1]
+    assert end["record"] == "end" and (end["search_sims"], end["shrink_sims"], end["shrink_budget"]) == (8, shrink, 12)
+    assert sum(r.get("phase") == "shrink" for r in records) == shrink
 
 
 def test_the_summary_says_when_failures_were_frozen_unshrunk(project):
@@ -194,7 +200,7 @@ def test_the_old_per_failure_shrink_budget_still_works(project):
 def test_the_summary_says_which_run_the_lowest_clearance_came_from():
     """Issue 23 item 4: "best clearance 0.029 m" beside frozen failures of 0.26-0.55 m read as a
     failure's; the summary says it is the lowest of any run and whether that run passed."""
-    from pytest_navscenario.plugin.search import lowest_clearance_text
+    from pytest_navscenario.plugin.search_report import lowest_clearance_text
     from pytest_navscenario.search.engine import Candidate, Failure, SearchReport
 
     def cand(sim, outcome, clearance, phase="search"):
@@ -207,3 +213,47 @@ def test_the_summary_says_which_run_the_lowest_clearance_came_from():
     assert lowest_clearance_text(report) == "lowest clearance of any run 0.029 m (sim 2, a run that passed)"
     report.candidates[1].clearance = 0.4
     assert lowest_clearance_text(report) == "lowest clearance of any run 0.260 m (sim 1, a safety-stop)"
+
+
+def test_a_search_draws_its_failures_and_writes_its_html_report(project):
+    """Issue 23 item 3: --nav-plots and --nav-html were ignored by a search ("0 scenario run(s)")."""
+    out = project.path / "scenarios" / "regressions" / "crate"
+    result = run(project, "--navsearch", "crate", "--budget", "8", "--navsearch-seed", "3",
+                 "--navsearch-shrink-budget", "0", "--nav-plots=failed", "--nav-html=search.html")
+    assert result.ret == 0, result.stdout.str()
+    frozen = sorted(out.glob("crate-*.yaml"))
+    assert frozen
+    pictures = sorted(out.glob("crate-*.png"))
+    assert [p.stem for p in pictures] == [p.stem for p in frozen]     # one beside each frozen file
+    assert all(p.stat().st_size > 20_000 for p in pictures)
+    result.stdout.fnmatch_lines([f"  pictures of {len(frozen)} failure(s) in scenarios/regressions/crate/ *"])
+    page = (project.path / "search.html").read_text()
+    assert "scenario run(s)" not in page and "navsearch report: crate" in page
+    assert f"{len(frozen)} distinct failure(s) frozen" in page
+    for path in frozen:
+        assert f"pytest scenarios/regressions/crate/{path.name} --nav-subject=straight_planner:Straight" in page
+    assert page.count('<section class="failure"') == len(frozen)
+    assert page.count("data:image/png;base64,") == len(frozen) + 1                  # + the progress chart
+    assert "crate vs straight_planner:Straight 1.0: progress" in page
+    assert "Discarded before simulation" in page and "lowest clearance of any run" in page
+    assert 'class="nav-view"' in page                                               # the time slider
+
+    # without --nav-plots (its default is for scenario items) a search draws nothing
+    for p in pictures:
+        p.unlink()
+    quiet = run(project, "--navsearch", "crate", "--budget", "8", "--navsearch-seed", "3",
+                "--navsearch-shrink-budget", "0")
+    assert quiet.ret == 0 and not list(out.glob("*.png"))
+
+
+def test_the_search_report_shows_a_failure_probability_column_when_rows_have_one(tmp_path):
+    """The page's data has room for what a search may learn about a failure beyond one run."""
+    from pytest_navscenario.report.search_page import FailureRow, Progress, SearchSection, build_search_html
+
+    row = FailureRow(file="scenarios/regressions/s/s-1.yaml", new=True, outcome="timeout", message="m",
+                     culprit="box", clearance=0.2, found_at=3, reproduce="pytest x")
+    section = SearchSection(title="s vs dwa", facts=[("budget", "8")], progress=Progress(), failures=[row])
+    assert "fails in" not in build_search_html([section])
+    row.probability, row.interval = 0.6, (0.31, 0.83)
+    page = build_search_html([section])
+    assert "<th>fails in</th>" in page and "60% <small>[31&ndash;83]</small>" in page

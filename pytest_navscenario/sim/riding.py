@@ -1,0 +1,185 @@
+"""What a robot riding the ground meets: the ground height under a point (fast, per tick), the
+pose a body rests in on it, and the watch that tells a fall, a tip-over or being stuck on terrain
+from the base's state each tick (``episode.RidingEpisode`` runs it). A classification of what the
+physics did: nothing here moves the robot.
+"""
+from __future__ import annotations
+
+import math
+from collections import deque
+
+import numpy as np
+
+from ..scenario import ground
+from ..scenario.crossing import SPACING, Capability, walk
+from .trajectory import TerrainEvent
+
+ON_GROUND = 0.08          # m: a base this close above the ground under it stands on it
+STUCK_TIME = 3.0          # s of being driven without moving that make the robot stuck on terrain
+STUCK_COMMAND = 0.1       # m/s: a setpoint at least this fast counts as driving
+STUCK_MOVING = 0.25       # of the setpoint's speed: slower than this counts as not moving
+LOOK_AHEAD = 0.3          # m beyond the footprint's front where a stuck robot's step is measured
+FEATURE = Capability(max_step=0.01, max_slope=5.0, max_gap=0.0)   # what counts as a step or a slope there
+
+
+def resting_pose(scenario, x: float, y: float, yaw: float) -> tuple[float, float, float]:
+    """(z, roll, pitch) of a body resting on the ground at (x, y, yaw): the plane through the ground
+    under the footprint's corners and centre (least squares), raised until no corner is below the
+    ground, so a robot starting on a ramp starts on it, not above it."""
+    fp = scenario.robot.footprint
+    hl, hw = (fp.length / 2, fp.width / 2) if fp.shape == "box" else (fp.radius, fp.radius)
+    local = np.array([(hl, hw), (-hl, hw), (-hl, -hw), (hl, -hw), (0.0, 0.0), (hl, 0.0), (-hl, 0.0),
+                      (0.0, hw), (0.0, -hw)])
+    c, s = math.cos(yaw), math.sin(yaw)
+    g = ground.ground_height(scenario, x + c * local[:, 0] - s * local[:, 1], y + s * local[:, 0] + c * local[:, 1])
+    a = np.column_stack([np.ones(len(local)), local])
+    (z0, gx, gy), *_ = np.linalg.lstsq(a, g, rcond=None)
+    z0 += max(0.0, float((g - a @ np.array([z0, gx, gy])).max()))
+    return float(z0), float(math.atan(gy)), float(-math.atan(gx))
+
+
+class GroundProbe:
+    """The ground height at one point, fast (plain floats; called a few times a tick): the same
+    answer as ``scenario.ground.ground_height``."""
+
+    def __init__(self, scenario):
+        self.scenario = scenario
+        self.rows = []
+        for p in ground.pieces(scenario.terrain):
+            el = scenario.terrain[p.element]
+            x, y, c, s = ground.frame(el)
+            slope = (p.top1 - p.top0) / (p.u1 - p.u0)
+            self.rows.append((x, y, c, s, p.u0, p.u1, el.width / 2, p.top0, slope, p.cut, p.element))
+        self.grids = bool(ground.grid_elements(scenario.terrain))
+
+    def height(self, px: float, py: float) -> float:
+        if self.grids:
+            return float(ground.ground_height(self.scenario, px, py))
+        solid, floor = -math.inf, 0.0
+        for x, y, c, s, u0, u1, hw, top0, slope, cut, _ in self.rows:
+            dx, dy = px - x, py - y
+            u = c * dx + s * dy
+            if u < u0 - 1e-9 or u > u1 + 1e-9 or abs(-s * dx + c * dy) > hw + 1e-9:
+                continue
+            h = top0 + slope * (u - u0)
+            if cut:
+                floor = h if h < floor else floor
+            elif h > solid:
+                solid = h
+        return solid if solid > floor else floor
+
+    def element(self, px: float, py: float) -> int | None:
+        """The element whose top is the ground at (px, py) (None: the floor)."""
+        best, best_h = None, -math.inf
+        for x, y, c, s, u0, u1, hw, top0, slope, cut, i in self.rows:
+            dx, dy = px - x, py - y
+            u = c * dx + s * dy
+            if u0 - 1e-9 <= u <= u1 + 1e-9 and abs(-s * dx + c * dy) <= hw + 1e-9:
+                h = top0 + slope * (u - u0)
+                if best is None or h > best_h or (cut and h < 0.0 and best_h <= 0.0):
+                    best, best_h = i, h
+        if best is None and self.grids:
+            return ground.element_at(self.scenario, px, py)
+        return best
+
+
+class TerrainStop(Exception):
+    """Raised by ``TerrainWatch.check``: the episode ends on ``event``."""
+
+    def __init__(self, event: TerrainEvent):
+        super().__init__(event.kind)
+        self.event = event
+        self.reason = "stuck-terrain" if event.kind == "stuck" else event.kind
+
+
+class TerrainWatch:
+    """Per tick, from the base's state: a fall (the base dropped more than the body's
+    ``drop_limit`` below the ground it last stood on), a tip-over (roll or pitch past its
+    ``tip_angle``) or being stuck on terrain (driven at STUCK_COMMAND or more for STUCK_TIME
+    seconds and getting less than STUCK_MOVING of the way those setpoints asked for: rocking back
+    and forth at the foot of a slope counts). Each raises EpisodeOver with the event
+    kept in ``event``. A classification of what the physics did: nothing here moves the robot."""
+
+    def __init__(self, scenario, body, tick_dt: float, probe: GroundProbe):
+        self.scenario, self.body, self.probe = scenario, body, probe
+        self.drop_limit = float(body.drop_limit)
+        self.tip = math.radians(body.tip_angle)
+        self.stuck_ticks = max(1, round(STUCK_TIME / tick_dt))
+        self.level = None           # the ground height it last stood on, and where
+        self.level_at = (0.0, 0.0)
+        self.pushing = 0            # ticks driven in a row
+        self.tick_dt = tick_dt
+        self.trail: deque = deque(maxlen=self.stuck_ticks + 1)   # (x, y, setpoint speed) of those ticks
+        self.event: TerrainEvent | None = None
+        fp = scenario.robot.footprint
+        self.front = fp.length / 2 if fp.shape == "box" else fp.radius
+
+    def check(self, t: float, state: tuple[float, ...], setpoint: tuple[float, float, float],
+              touching: bool) -> None:
+        x, y, z, roll, pitch, yaw, vx, vy, vz, wz = state
+        g = self.probe.height(x, y)
+        if self.level is None or z - g < ON_GROUND:
+            self.level, self.level_at = g, (x, y)
+        elif self.level - z > self.drop_limit:
+            self._end(TerrainEvent("fell", t, self._fell_from(x, y), x, y, z, drop=self.level - g,
+                                   roll=math.degrees(roll), pitch=math.degrees(pitch)))
+        if abs(roll) > self.tip or abs(pitch) > self.tip:
+            el = self.probe.element(x, y)
+            self._end(TerrainEvent("tipped", t, self._name(el), x, y, z, roll=math.degrees(roll),
+                                   pitch=math.degrees(pitch)))
+        speed = abs(setpoint[0]) + abs(setpoint[1])
+        if speed < STUCK_COMMAND:
+            self.pushing = 0
+            self.trail.clear()
+            return
+        self.pushing += 1
+        self.trail.append((x, y, speed))
+        if self.pushing >= self.stuck_ticks:
+            x0, y0, _ = self.trail[0]
+            asked = sum(v for _, _, v in self.trail) * self.tick_dt
+            if math.hypot(x - x0, y - y0) < STUCK_MOVING * asked:
+                self._stuck(t, x, y, z, roll, pitch, yaw, setpoint, touching)
+
+    def _name(self, element: int | None) -> str:
+        return "" if element is None else ground.describe_element(self.scenario.terrain[element])
+
+    def _fell_from(self, x: float, y: float) -> str:
+        """"off platform 'dock'" (the raised element it stood on), "into pit 'p'" (the hole it is
+        over), or "" (an edge of the plain floor)."""
+        below = self.probe.element(x, y)
+        if below is not None and self.probe.height(x, y) < 0.0:
+            return "into " + self._name(below)
+        above = self.probe.element(*self.level_at)
+        return "off " + self._name(above) if above is not None else ""
+
+    def _stuck(self, t, x, y, z, roll, pitch, yaw, setpoint, touching) -> None:
+        """What holds the robot: the first step or slope along its way (the ground from under its
+        centre to LOOK_AHEAD past its front, walked with FEATURE: ``scenario/crossing.py``), the
+        slope it is on, or its chassis resting on the ground (high-centred)."""
+        ahead = 1.0 if setpoint[0] >= 0 else -1.0
+        c, s = math.cos(yaw), math.sin(yaw)
+        d = ahead * np.arange(int((self.front + LOOK_AHEAD) / SPACING) + 1) * SPACING
+        px, py = x + c * d, y + s * d
+        h = ground.ground_height(self.scenario, px, py).tolist()
+        _, barrier = walk(h, SPACING, h[0], FEATURE)
+        slope = math.degrees(max(abs(pitch), abs(roll)))
+        if barrier is not None and barrier.kind != "drop":
+            k = min(barrier.index + 1, len(h) - 1)
+            el = self.probe.element(float(px[k]), float(py[k]))
+            if barrier.kind == "step":
+                detail = f"cannot climb the {barrier.height:.2f} m step"
+            else:
+                angle = math.degrees(math.atan2(barrier.height, barrier.width + SPACING))
+                detail = f"cannot climb the {angle:.0f} deg slope"
+        elif slope > 3.0:
+            el = self.probe.element(x, y)
+            detail = f"cannot climb the {slope:.0f} deg slope"
+        else:
+            el = self.probe.element(x, y)
+            detail = "high-centred: its chassis rests on the ground" if touching else "its wheels slip"
+        self._end(TerrainEvent("stuck", t, self._name(el), x, y, z, roll=math.degrees(roll),
+                               pitch=math.degrees(pitch), detail=detail))
+
+    def _end(self, event: TerrainEvent) -> None:
+        self.event = event
+        raise TerrainStop(event)
