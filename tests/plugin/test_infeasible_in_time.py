@@ -4,6 +4,8 @@ scenario (its file, line and field), never a planner failure; the search discard
 (counted by reason), like a blocked start. Real pytest runs, real searches."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 import pytest_navscenario.plugin.payload  # noqa: F401  (numpy: in-process runs cannot import it afresh)
@@ -14,30 +16,11 @@ from pytest_navscenario.verdict.movers import mover_through
 
 PLUGIN = ["-p", "pytest_navscenario.plugin", "--nav-plots=none"]
 
-LONG = """\
-version: 1
-mission:
-  start: {x: 0, y: 0}
-  goal: {x: 50, y: 0}
-  timeout: 30
-robot:
-  limits: {max_speed: 1.0, max_lateral_speed: 0.5}
-"""
 
-THROUGH_WALL = """\
-version: 1
-mission:
-  start: {x: 0, y: 0}
-  goal: {x: 6, y: 0}
-obstacles:
-  - {type: box, name: wall, x: 3, y: 2, length: 0.2, width: 2}
-  - type: cylinder
-    name: person
-    radius: 0.25
-    motion:
-      path: [[1, 2], [5, 2]]
-      speed: 1.0
-"""
+# scenario texts kept as .txt: as .yaml the project's own test run would collect them as scenarios
+DATA = Path(__file__).resolve().parents[1] / "data" / "infeasible"
+LONG = (DATA / "long.txt").read_text()                   # 50 m to drive in 30 s at 1.1 m/s
+THROUGH_WALL = (DATA / "through_wall.txt").read_text()   # a person walking through a wall
 
 
 def test_a_route_too_long_for_its_timeout_is_an_error_naming_the_field(pytester: pytest.Pytester, monkeypatch):
