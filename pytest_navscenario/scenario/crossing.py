@@ -131,7 +131,7 @@ def body_capability(scenario) -> Capability | None:
     if body.drive_wheels == "skid":
         step = WHEELED_WHEEL_STEP * r
     else:
-        caster = max(0.02, min(body.clearance, r / 2))      # sim/bodies/wheeled.py's casters
-        step = WHEELED_CASTER_STEP * caster
+        from .chassis import wheeled_layout
+        step = WHEELED_CASTER_STEP * wheeled_layout(body, scenario.robot.footprint).caster_radius
     return Capability(min(step, float(body.clearance)), min(torque, WHEELED_SLOPE[body.drive_wheels]),
                       WHEELED_GAP * r)

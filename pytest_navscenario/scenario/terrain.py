@@ -164,8 +164,9 @@ class WheeledBody:
     low-level controller in the harness turns the planner's velocity command into wheel torques
     within ``max_wheel_torque`` (N m per wheel) and ``max_wheel_speed`` (rad/s; None: the speed
     that gives limits.max_speed). ``track`` (lateral wheel spacing) and ``wheelbase`` (skid: axle
-    spacing) default to the footprint's size (the wheels inside it). The robot counts as tipped over when its roll or
-    pitch passes ``tip_angle`` degrees."""
+    spacing) default to the footprint's size (the wheels inside it); the mass centre sits
+    ``com_height`` above the ground (None: at the wheels' axle). The robot counts as tipped over when
+    its roll or pitch passes ``tip_angle`` degrees (scenario/chassis.py: the layout)."""
     drive_wheels: Literal["diff", "skid"] = "diff"
     wheel_radius: float = 0.1            # m
     wheel_width: float = 0.05            # m
@@ -177,6 +178,7 @@ class WheeledBody:
     clearance: float = 0.1               # m, chassis underside above the ground on a flat floor (0.05 with a
                                          # 0.9 m footprint: a 6 deg approach angle, no 10 deg ramp)
     tip_angle: float = 45.0              # degrees of roll or pitch that count as tipped over
+    com_height: float | None = None      # m, the mass centre above the ground; None: the wheels' axle
     kind: Literal["wheeled"] = field(default="wheeled", init=False)
 
 
@@ -319,7 +321,9 @@ WHEELED_BODY = section(WheeledBody, "robot.body (wheeled)", "a wheeled robot rid
     Number("max_wheel_speed", "rad/s", "wheel speed limit (none: limits.max_speed / wheel_radius)", gt=0,
            nullable=True),
     Number("clearance", "m", "the chassis underside above a flat floor", ge=0),
-    _TIP])
+    _TIP,
+    Number("com_height", "m", "the mass centre above the ground (none: the wheels' axle, batteries and "
+           "drives low between the wheels)", gt=0, nullable=True)])
 LEGGED_BODY = section(LeggedBody, "robot.body (legged)", "a walking robot declared by what it can cross", [
     Number("max_step", "m", "the highest step it climbs", ge=0),
     Number("max_slope", "deg", "the steepest slope it walks", ge=0, le=90.0),
