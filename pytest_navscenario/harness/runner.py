@@ -62,7 +62,6 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
     Raises SubjectLoadError if the planner cannot be made, SimulationDivergedError if the physics
     blows up.
     """
-    from ..verdict import metrics, oracle   # written by the metrics module's owner
     from ..sim.episode import simulate
 
     t0 = time.perf_counter()
@@ -74,6 +73,15 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
     ep_seed = effective_seed(scenario.simulation.seed, seed)
     facts = simulate(scenario, instance, ep_seed, tick_limit=tick_limit, stuck_after=stuck_after)
     name, version = subject_identity(instance, spec)  # after reset: a planner may name itself there
+    return verdict(scenario, facts, ep_seed, name, version, stuck_after, t0)
+
+
+def verdict(scenario: Scenario, facts: Any, ep_seed: int, name: str, version: str | None,
+            stuck_after: float | None, t0: float) -> EpisodeResult:
+    """The EpisodeResult of an episode's raw facts (``sim.SimResult``): the oracle's outcome and
+    message, the metrics; ``wall_time`` counted from ``t0``."""
+    from ..verdict import metrics, oracle
+
     t1 = time.perf_counter()
     outcome, message = oracle.classify(
         scenario, facts.trajectory, collision=facts.collision, safety_stop=facts.safety_stop,
