@@ -57,6 +57,7 @@ class Lockstep:
         try:
             running = self._start()
             steps = {i: self.episodes[i].steps() for i in running}
+            self._form_cohorts(running)
             while running:
                 running = self._tick(running, steps, deadline)
         finally:
@@ -107,10 +108,40 @@ class Lockstep:
             self.episodes[i].t_planner += share
         return started
 
+    def _form_cohorts(self, running: list[int]) -> None:
+        """Group the started episodes that can observe together (cohort.py); the rest observe alone."""
+        from .cohort import Cohort, cohort_key
+
+        groups: dict[tuple, list[int]] = {}
+        self.alone: set[int] = set()
+        for i in running:
+            key = cohort_key(self.episodes[i])
+            if key is None:
+                self.alone.add(i)
+            else:
+                groups.setdefault(key, []).append(i)
+        self.cohorts = []
+        self.cohort_of: dict[int, tuple[int, int]] = {}     # batch index -> (cohort number, position)
+        for members in groups.values():
+            if len(members) == 1:
+                self.alone.update(members)
+                continue
+            self.cohorts.append((Cohort(members, [self.episodes[i] for i in members]),
+                                 {i: j for j, i in enumerate(members)}))
+            for j, i in enumerate(members):
+                self.cohort_of[i] = (len(self.cohorts) - 1, j)
+
     def _tick(self, running: list[int], steps: dict, deadline: TickDeadline | None) -> list[int]:
         """One control tick of the running episodes; those still running after it."""
-        live, observations, states = [], [], []
+        seen: list[tuple[int, tuple, Any]] = []
+        now = set(running)
+        for cohort, position in self.cohorts:
+            mine = [position[i] for i in cohort.members if i in now]
+            if mine:
+                seen += cohort.observe(mine, self._finish, self._fail)
         for i in running:
+            if i not in self.alone:
+                continue
             ep = self.episodes[i]
             try:
                 state, obs = ep.observe()
@@ -123,13 +154,16 @@ class Lockstep:
             except Exception as exc:
                 self._fail(i, exc)
                 continue
-            live.append(i)
-            observations.append(obs)
-            states.append(state)
-        if not live:
+            seen.append((i, state, obs))
+        if not seen:
             return []
+        seen.sort(key=lambda item: item[0])
+        live = [i for i, _, _ in seen]
+        states = [state for _, state, _ in seen]
+        observations = [obs for _, _, obs in seen]
         answers = self._act(live, observations)
         still = []
+        physics: dict[int, list] = {}       # cohort number -> (position, setpoint) to step together
         for i, answer, state, obs in zip(live, answers, states, observations):
             ep = self.episodes[i]
             try:
@@ -143,6 +177,10 @@ class Lockstep:
                 if ep.faults is not None:
                     setpoint = ep.faults.applied(setpoint)
                 ep.record(state[0], setpoint)
+                where = self.cohort_of.get(i)
+                if where is not None:
+                    physics.setdefault(where[0], []).append((where[1], setpoint))
+                    continue
                 MUJOCO_WARNINGS.clear()
                 steps[i][2](setpoint)
             except EpisodeOver as over:
@@ -152,6 +190,9 @@ class Lockstep:
                 self._fail(i, exc)
                 continue
             still.append(i)
+        for c, items in physics.items():
+            still += self.cohorts[c][0].step(items, self._finish, self._fail)
+        still.sort()
         return still
 
     def _act(self, live: list[int], observations: list[Any]) -> list[Any]:
