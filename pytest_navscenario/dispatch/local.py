@@ -200,8 +200,8 @@ class ProcessExecutor:
             done_ok = slot.future.done() and not slot.future.cancelled() and slot.future.exception() is None
             if done_ok:
                 continue
-            if slot.key in started:
-                slot.attempts += 1
+            if slot.key in started:   # a batch job is not run again whole (dispatch/batches.py)
+                slot.attempts += MAX_ATTEMPTS if getattr(slot.job, "alone_after_death", False) else 1
             if slot.attempts < MAX_ATTEMPTS:
                 slot.future = pool.submit(_pool_run, slot.key, slot.job)
             slot.generation = self._generation

@@ -22,7 +22,7 @@ from ..subjects.protocol import SingleFromBatch, is_batch_planner
 from ..verdict.result import EpisodeResult
 from .runner import effective_seed, run_scenario, verdict
 
-DEFAULT_BATCH = 8      # episodes a batch: a search generation's size
+DEFAULT_BATCH = 16     # episodes a batch: the two generations of 8 a search has in flight
 NO_PROTOCOL = "the subject does not implement the batch protocol (reset_batch/act_batch)"
 
 

@@ -61,6 +61,12 @@ OPTIONS = (
      "reports stay in this process, so it costs less than pytest-xdist's N pytest workers; "
      "-n N on a run of scenario files only (no Python test files) does the same. Items report "
      "one per scenario in the usual order with the results of a serial run."),
+    ("--nav-batch", "nav_batch",
+     "episodes run together in lockstep, with one planner call per control tick for all of them, "
+     "when the subject implements the batch protocol (reset_batch/act_batch; the built-in dwa does): "
+     "a search's generations and shrinks, each worker's share of a suite (--nav-workers, -n, "
+     "--nav-ray). 'auto' (default): batches of 16; N: at most N; 1 or off: every episode alone. "
+     "Results are the same either way, bit for bit; the summary says how episodes were batched."),
 )
 
 
@@ -92,7 +98,8 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     # a metavar shows the accepted values ({a,b}) or a unit (N, SECONDS, PATH, DIR, SPEC, NAME)
     metavars = {"nav_subject": "SPEC", "nav_seed": "N", "nav_results": "PATH", "nav_artifacts": "DIR",
                 "nav_summary": "{yes,no}", "nav_tick_limit": "SECONDS", "nav_repeat": "N",
-                "nav_reset_timeout": "SECONDS", "nav_ray": "ADDRESS", "nav_workers": "N"}
+                "nav_reset_timeout": "SECONDS", "nav_ray": "ADDRESS", "nav_workers": "N",
+                "nav_batch": "N"}
     for opt, ini, text in OPTIONS:
         group.addoption(opt, dest=ini, default=None, metavar=metavars[ini], help=text + f" [ini: {ini}]")
     parser.addini("nav_subject", helps["nav_subject"], default="")
@@ -107,6 +114,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
                   default=DEFAULT_RESET_TIMEOUT)
     parser.addini("nav_ray", helps["nav_ray"], default="")
     parser.addini("nav_workers", helps["nav_workers"], default="")
+    parser.addini("nav_batch", helps["nav_batch"], default="auto")
     parser.addini("nav_scenario_glob",
                   "file name patterns of scenario files (space separated); files matching them are "
                   "collected when they are a YAML mapping with 'version' and 'mission' keys "
@@ -130,12 +138,14 @@ class Settings:
     scenario_paths: tuple[Path, ...]
     reset_timeout: float = DEFAULT_RESET_TIMEOUT   # s an exec: planner may take to answer reset
     ray: str | None = None            # --nav-ray: "auto" or "HOST:PORT"; None: no Ray
+    batch: int = 16                   # --nav-batch: episodes a batch at most (1: no batches)
 
 
 _EXPECTED = {"nav_seed": "a whole number >= 0", "nav_summary": "yes or no (true or false)",
              "nav_tick_limit": "seconds >= 0 (0: no limit)",
              "nav_repeat": "a whole number of runs per scenario from 1 to 10000",
-             "nav_reset_timeout": "seconds > 0"}
+             "nav_reset_timeout": "seconds > 0",
+             "nav_batch": "auto, a whole number of episodes >= 1, or off"}
 
 
 def option_value(config: pytest.Config, name: str, expected: str = "") -> tuple[str, str, Path]:
@@ -235,7 +245,30 @@ def read_settings(config: pytest.Config) -> Settings:
                                 f"reset, got {raw!r} (e.g. --nav-reset-timeout=30)")
     return Settings(subject_spec=subject, seed=seed, results=results, artifacts=artifacts,
                     summary=summary, tick_limit=tick_limit, repeat=repeat, globs=globs,
-                    scenario_paths=paths, reset_timeout=reset_timeout, ray=read_ray_address(config))
+                    scenario_paths=paths, reset_timeout=reset_timeout, ray=read_ray_address(config),
+                    batch=read_batch(config))
+
+
+DEFAULT_BATCH = 16   # = harness.batch.DEFAULT_BATCH (not imported: plugin load stays light)
+
+
+def read_batch(config: pytest.Config) -> int:
+    """--nav-batch / ini nav_batch: episodes a batch at most (``auto``: DEFAULT_BATCH; 1 or off: no
+    batches). UsageError otherwise."""
+    raw, where, _ = _value(config, "nav_batch")
+    value = raw.strip().lower()
+    if value in ("", "auto"):
+        return DEFAULT_BATCH
+    if value in ("off", "no", "none", "false"):
+        return 1
+    try:
+        n = int(value)
+    except ValueError:
+        n = 0
+    if not 1 <= n <= 100_000:
+        raise pytest.UsageError(f"{where}: expected auto, a whole number of episodes per batch >= 1, or off "
+                                f"(1 and off: every episode alone), got {raw!r} (e.g. --nav-batch=32)")
+    return n
 
 
 _HOST_PORT = re.compile(r"^(ray://)?[A-Za-z0-9_.\-]+:[0-9]{1,5}$|^(ray://)?\[[0-9A-Fa-f:]+\]:[0-9]{1,5}$")

@@ -124,6 +124,7 @@ class SearchReport:
     wall_time: float = 0.0
     episode_seed: int | None = None   # the run's base seed (--nav-seed) every episode used
     first_failure: int = 0            # simulation number of the first failing candidate (0: none)
+    batching: str = ""                # how the simulations ran in batches (search/batched.py), or ""
 
     @property
     def discarded_total(self) -> int:
@@ -695,6 +696,9 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
         discard = getattr(evaluator, "discard", None)   # jobs still in flight if it ended early
         if discard is not None:
             discard()
+    batching = getattr(evaluator, "batching", None)
+    if batching is not None:
+        report.batching = batching.describe()
     if report.interrupted:
         for f in report.failures:
             if f.shrink_sims == 0 and not f.note and any(f.found.offsets):
