@@ -19,6 +19,7 @@ from typing import Any, Sequence
 from .jobs import EpisodeError, EpisodeJob, Impassable, Pending, _subject_for, compact
 
 
+EXEC_ALONE = "an exec: subject is a process of its own"
 LOST = ("WorkerDied", "RayTaskLost")   # a batch job that lost its worker: its episodes run again alone
 
 
@@ -143,6 +144,9 @@ def submit_batched(executor: Any, jobs: Sequence[Any], size: int, batching: Any 
     for c, p in zip(chunks, executor.submit(submitted)):
         if len(c) == 1:
             out[c[0]] = p
+            if batching is not None:
+                key = _key(jobs[c[0]])
+                batching.note_alone(EXEC_ALONE if key is None else "nothing to batch it with")
             continue
         shared = _Shared(executor, [jobs[i] for i in c], p, batching)
         for k, i in enumerate(c):
