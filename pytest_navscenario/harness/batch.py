@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Any, Iterator, Sequence
 
 from ..scenario.model import Scenario
 from ..subjects.loading import make_planner, subject_identity
@@ -63,14 +63,21 @@ def batch_planner_of(instance: Any) -> Any | None:
     return inner if is_batch_planner(inner) else None
 
 
-def run_batch(scenarios: Sequence[Scenario], planner: Any = None, *, seeds: Sequence[int | None] | None = None,
-              tick_limit: float | None = None, reset_timeout: float | None = None,
-              stuck_after: float | None = None, batch: int = DEFAULT_BATCH, engine: Any = None,
-              batching: Batching | None = None, call_factory: bool = False) -> list[EpisodeResult | Exception]:
+def run_batch(scenarios: Sequence[Scenario], planner: Any = None, **kw: Any) -> list[EpisodeResult | Exception]:
     """Each scenario's EpisodeResult (or the exception its episode raised, e.g. a divergence or a
     subject that cannot be made), in order: ``run_scenario(scenarios[i], planner, seed=seeds[i],
     ...)`` for each, with the episodes that can be batched run ``batch`` at a time (see the
-    module docstring).
+    module docstring). The keyword arguments are ``iter_batch``'s."""
+    return list(iter_batch(scenarios, planner, **kw))
+
+
+def iter_batch(scenarios: Sequence[Scenario], planner: Any = None, *, seeds: Sequence[int | None] | None = None,
+               tick_limit: float | None = None, reset_timeout: float | None = None,
+               stuck_after: float | None = None, batch: int = DEFAULT_BATCH, engine: Any = None,
+               batching: Batching | None = None, call_factory: bool = False) -> Iterator[EpisodeResult | Exception]:
+    """``run_batch``'s results, in order, each as soon as it is known: an episode run alone right
+    after it ran, a batch's once the batch ended (so that what an interrupt cuts short loses no
+    finished episode).
 
     ``planner`` as for run_scenario (a spec, a class or factory, an object), or with
     ``call_factory`` a zero-argument factory whose planners are passed as objects, as the search
@@ -81,41 +88,45 @@ def run_batch(scenarios: Sequence[Scenario], planner: Any = None, *, seeds: Sequ
     n = len(scenarios)
     seeds = list(seeds) if seeds is not None else [None] * n
     report = batching if batching is not None else Batching()
-    out: list[Any] = [None] * n
     if not n:
-        return []
+        return
     try:
         first = _make(planner, call_factory)
     except Exception as exc:
-        return [exc] * n
+        yield from [exc] * n
+        return
     bp = batch_planner_of(first[0]) if batch > 1 else None
     if bp is None:
         report.note_alone(NO_PROTOCOL if batch > 1 else "batches are off (batch size 1)", n)
         for i, sc in enumerate(scenarios):
             made = first[0] if i == 0 else None
-            out[i] = _alone(sc, planner, call_factory, made, seeds[i], tick_limit, reset_timeout, stuck_after)
-        return out
+            yield _alone(sc, planner, call_factory, made, seeds[i], tick_limit, reset_timeout, stuck_after)
+        return
     eng = engine or batch_engine()
+    out: dict[int, Any] = {}
     chunk: list[int] = []
     spare = [first]          # the planner made to look at the subject serves the first batch
-
-    def flush() -> None:
-        if chunk:
-            _run_chunk(chunk, scenarios, seeds, planner, call_factory, spare, eng, tick_limit, stuck_after,
-                       out, report)
-            chunk.clear()
+    done = 0                 # results given out so far
 
     for i, sc in enumerate(scenarios):
         why = eng.unsupported(sc)
         if why is not None:
             report.note_alone(why)
             out[i] = _alone(sc, planner, call_factory, None, seeds[i], tick_limit, reset_timeout, stuck_after)
-            continue
-        chunk.append(i)
-        if len(chunk) >= batch:
-            flush()
-    flush()
-    return out
+        else:
+            chunk.append(i)
+            if len(chunk) >= batch:
+                _run_chunk(chunk, scenarios, seeds, planner, call_factory, spare, eng, tick_limit, stuck_after,
+                           out, report)
+                chunk = []
+        while done in out:
+            yield out.pop(done)
+            done += 1
+    if chunk:
+        _run_chunk(chunk, scenarios, seeds, planner, call_factory, spare, eng, tick_limit, stuck_after, out, report)
+    while done in out:
+        yield out.pop(done)
+        done += 1
 
 
 def _make(planner: Any, call_factory: bool) -> tuple[Any, str]:

@@ -21,7 +21,7 @@ import threading
 from typing import Any, Iterator, Sequence
 
 from .engine import (Candidate, EvalContext, Failure, SearchReport, _Simulator, _Stop, evaluate_candidates,
-                     shrink_failure, shrink_order)
+                     iter_candidates, shrink_failure, shrink_order)
 
 Proposals = Sequence[tuple[tuple[float, ...], str]]
 
@@ -29,7 +29,23 @@ Proposals = Sequence[tuple[tuple[float, ...], str]]
 class _Queued:
     def __init__(self, ctx: EvalContext, proposals: Proposals):
         self.ctx, self.proposals = ctx, list(proposals)
-        self.results: list[Candidate] | None = None
+        self.results: list[Candidate] = []
+        self.source: _Source | None = None     # set when the batch holding it starts
+
+
+class _Source:
+    """The candidates of the generations simulated together, handed to each as they come."""
+
+    def __init__(self, candidates: Iterator[Candidate], jobs: list[_Queued]):
+        self.candidates, self.jobs = candidates, jobs
+
+    def pull(self) -> bool:
+        """The next candidate into its generation's results; False when there is none."""
+        for job in self.jobs:
+            if len(job.results) < len(job.proposals):
+                job.results.append(next(self.candidates))
+                return True
+        return False
 
 
 class batch_evaluator:   # noqa: N801  (used like a function: evaluator=batch_evaluator())
@@ -48,27 +64,31 @@ class batch_evaluator:   # noqa: N801  (used like a function: evaluator=batch_ev
         return self._results(job)
 
     def _results(self, job: _Queued) -> Iterator[Candidate]:
-        if job.results is None:
-            self._flush(job)
-        yield from job.results or ()
+        if job.source is None:
+            self._start(job)
+        k = 0
+        while k < len(job.proposals):
+            while len(job.results) <= k:
+                job.source.pull()
+            yield job.results[k]
+            k += 1
 
-    def _flush(self, first: _Queued) -> None:
-        """Simulate the queued generations, from ``first`` on, up to the batch size (at least
-        ``first`` whole), together."""
+    def _start(self, first: _Queued) -> None:
+        """Start simulating the queued generations, from ``first`` on, up to the batch size (at
+        least ``first`` whole), together; each gets its candidates as they come."""
         size = max(1, first.ctx.batch)
         take, n = [], 0
         for job in self._queue:
-            if job.results is not None or job.ctx is not first.ctx:
+            if job.source is not None or job.ctx is not first.ctx:
                 continue
             if take and n + len(job.proposals) > size:
                 break
             take.append(job)
             n += len(job.proposals)
-        cands = evaluate_candidates(first.ctx, [p for job in take for p in job.proposals], self.batching)
-        at = 0
+        source = _Source(iter_candidates(first.ctx, [p for job in take for p in job.proposals], self.batching), take)
         for job in take:
-            job.results, at = cands[at:at + len(job.proposals)], at + len(job.proposals)
-        self._queue = [job for job in self._queue if job.results is None]
+            job.source = source
+        self._queue = [job for job in self._queue if job.source is None]
 
     def discard(self) -> None:
         """The search ended early: forget the generations not simulated."""

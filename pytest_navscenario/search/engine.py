@@ -216,20 +216,29 @@ def evaluate_candidates(ctx: EvalContext, proposals: Sequence[tuple[tuple[float,
     """``evaluate_candidate`` for each proposal, in order, the episodes run ``ctx.batch`` at a time
     in lockstep when the subject answers the batch protocol (harness/batch.py): the same
     candidates, bit for bit, wall times aside. ``batching`` (a harness.batch.Batching) counts how."""
-    from ..harness.batch import run_batch
+    return list(iter_candidates(ctx, proposals, batching))
+
+
+def iter_candidates(ctx: EvalContext, proposals: Sequence[tuple[tuple[float, ...], str]],
+                    batching: Any = None) -> Iterator[Candidate]:
+    """``evaluate_candidates``'s candidates, each as soon as its episode is known (harness/batch.
+    iter_batch: alone, one by one; in a batch, when the batch ends)."""
+    from ..harness.batch import iter_batch
 
     scenarios = [ctx.space.apply(offsets) for offsets, _ in proposals]
     t0 = time.perf_counter()
-    try:
-        results = run_batch(scenarios, ctx.subject_factory, seeds=[ctx.episode_seed] * len(scenarios),
-                            stuck_after=ctx.stuck_after, batch=ctx.batch, call_factory=True, batching=batching)
-    except KeyboardInterrupt:
-        raise
-    except Exception as exc:   # the harness itself failed: every candidate records it
-        results = [exc] * len(scenarios)
-    share = (time.perf_counter() - t0) / max(1, len(scenarios))
-    return [_candidate(ctx, offsets, origin, sc, res, time.perf_counter() - share)
-            for (offsets, origin), sc, res in zip(proposals, scenarios, results)]
+    results = iter_batch(scenarios, ctx.subject_factory, seeds=[ctx.episode_seed] * len(scenarios),
+                         stuck_after=ctx.stuck_after, batch=ctx.batch, call_factory=True, batching=batching)
+    for (offsets, origin), sc in zip(proposals, scenarios):
+        try:
+            res = next(results)
+        except KeyboardInterrupt:
+            raise
+        except Exception as exc:   # the harness itself failed: every candidate left records it
+            results = iter([exc] * len(scenarios))
+            res = exc
+        yield _candidate(ctx, offsets, origin, sc, res, t0)
+        t0 = time.perf_counter()
 
 
 def _candidate(ctx: EvalContext, offsets: Sequence[float], origin: str, scenario: Scenario, res: Any,
@@ -261,7 +270,7 @@ def serial_evaluator(ctx: EvalContext, proposals: Sequence[tuple[tuple[float, ..
     """The default evaluator: one candidate after the other, in proposal order (with ``ctx.batch``
     > 1, the generation in one batch)."""
     if ctx.batch > 1:
-        yield from evaluate_candidates(ctx, proposals)
+        yield from iter_candidates(ctx, proposals)
         return
     for offsets, origin in proposals:
         yield evaluate_candidate(ctx, offsets, origin)

@@ -22,7 +22,8 @@ def lane():
 
 
 def fingerprint(report):
-    return _fingerprint(report) + ([(c.message, c.metrics, c.scenario_hash) for c in report.candidates],
+    return _fingerprint(report) + ([(c.message, repr(sorted(c.metrics.items())), c.scenario_hash)   # NaN-proof
+                                    for c in report.candidates],
                                    [(f.shrink_sims, f.note, f.shrunk.sim) for f in report.failures])
 
 
