@@ -69,13 +69,25 @@ class LockstepEngine:
 _ENGINES: dict[str, Any] = {}
 
 
+ENGINE_NAMES = ("cpu", "warp")
+
+
 def batch_engine(name: str = "cpu") -> BatchEngine:
-    """The engine called ``name`` (only "cpu" today)."""
+    """The engine called ``name``: "cpu" (``LockstepEngine``) or "warp" (MuJoCo Warp on the default
+    Warp device, sim/warp_engine.py; ValueError saying how to install it when it is missing)."""
     engine = _ENGINES.get(name)
     if engine is None:
-        if name != "cpu":
-            raise ValueError(f"unknown batch engine {name!r}; available: cpu")
-        engine = _ENGINES[name] = LockstepEngine()
+        if name == "cpu":
+            engine = LockstepEngine()
+        elif name == "warp":
+            from .warp_engine import WarpEngine, missing
+            why = missing()
+            if why is not None:
+                raise ValueError(f"the warp batch engine cannot run: {why}")
+            engine = WarpEngine()
+        else:
+            raise ValueError(f"unknown batch engine {name!r}; available: {', '.join(ENGINE_NAMES)}")
+        _ENGINES[name] = engine
     return engine
 
 
