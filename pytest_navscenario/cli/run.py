@@ -43,6 +43,24 @@ def add_arguments_run(p: argparse.ArgumentParser) -> None:
                         "tick, when the subject implements the batch protocol (the built-in dwa does): "
                         "auto (default: batches of 16), N (at most N), 1 or off (each alone); the "
                         "results are the same either way")
+    p.add_argument("--batch-engine", default="cpu", choices=("cpu", "warp"),
+                   help="what steps a batch: cpu (default: MuJoCo in this process, each trajectory "
+                        "bit-identical to running it alone) or warp (MuJoCo Warp on the GPU, or Warp's "
+                        "CPU kernels without one: the optional extra pytest-navscenario[gpu]; "
+                        "trajectories within a tolerance of the CPU's, not bit for bit; scenarios it "
+                        "cannot simulate (terrain, bodies that ride the ground, 3D lidars) run alone "
+                        "on the CPU, said in the last line). See docs/how-to/gpu-batches.md")
+
+
+def _engine(name: str):
+    """The batch engine called ``name`` (sim/batch.py); NavScenarioError saying how to install
+    the warp engine's extra when it is missing."""
+    from ..sim.batch import batch_engine
+    try:
+        return batch_engine(name)
+    except ValueError as exc:
+        from ..core.errors import NavScenarioError
+        raise NavScenarioError(f"--batch-engine {name}: {exc}") from None
 
 
 def _batch_size(raw: str) -> int:
@@ -118,7 +136,7 @@ def run_run(args: argparse.Namespace) -> int:
 
     batching = Batching()
     results = run_batch(scenarios, args.subject, seeds=[args.seed] * len(files), tick_limit=tick_limit,
-                        batch=batch, batching=batching)
+                        batch=batch, batching=batching, engine=_engine(args.batch_engine))
     failed = errors = 0
     records = []
     for scenario, path, result in zip(scenarios, files, results):
@@ -140,7 +158,9 @@ def run_run(args: argparse.Namespace) -> int:
     else:
         passed = len(files) - failed - errors
         print(f"{len(files)} scenario(s): {passed} passed, {failed} failed" + (f", {errors} error(s)" if errors else "")
-              + f"; batches (--batch {args.batch}): {batching.describe()}")
+              + f"; batches (--batch {args.batch}"
+              + (f", --batch-engine {args.batch_engine}" if args.batch_engine != "cpu" else "")
+              + f"): {batching.describe()}")
     return 2 if errors else (1 if failed else 0)
 
 
