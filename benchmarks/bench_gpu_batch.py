@@ -62,6 +62,18 @@ def run(engine, scenarios, ticks: int | None):
     return results, time.perf_counter() - w0, time.process_time() - c0
 
 
+def where_time_went(results, wall: float) -> str:
+    """The batch's wall time split: the device (physics, contacts, rays and read-back), the
+    planner's calls, and the rest (the host's per-episode work: observations, safety, records)."""
+    done = [r for r in results if not isinstance(r, Exception)]
+    device = sum(r.timings.get("physics", 0.0) + r.timings.get("rays", 0.0) for r in done)
+    planner = sum(r.timings.get("planner", 0.0) for r in done)
+    ticks = max((r.ticks for r in done), default=0)
+    per_tick = f", {1000 * device / ticks:.2f} ms of device time a tick" if ticks else ""
+    return (f"wall {wall:.2f} s: device {device:.2f} s{per_tick}, planner {planner:.2f} s, "
+            f"host bookkeeping {max(0.0, wall - device - planner):.2f} s")
+
+
 def agreement_rows(cpu, warp, names):
     rows, errors = [], []
     for name, a, b in zip(names, cpu, warp):
@@ -115,21 +127,23 @@ def main(argv: list[str] | None = None) -> int:
     _, wall, _ = run(warp, variants(args.seed, 1, args.jitter), 2)
     print(f"warm-up (Warp's kernels loaded or compiled): {wall:.1f} s")
 
-    print(f"{'size':>6} {'warp ep/s':>10} {'warp wall s':>11} {'warp CPU s':>10} {'cpu ep/s':>9} "
-          f"{'warp/cpu':>8}  agreement with the CPU engine")
+    print(f"{'size':>6} {'warp ep/s':>10} {'warp wall s':>11} {'warp CPU s':>10} {'cpu ep/s':>9} {'cpu CPU s':>10} "
+          f"{'warp/cpu':>8}  agreement with the CPU engine (ep/s: wall; warp/cpu: wall time ratio)")
     for n in sizes:
         scenarios = variants(args.seed, n, args.jitter)
         res_w, wall_w, cpu_w = run(warp, scenarios, args.ticks)
         line = f"{n:>6} {n / wall_w:>10.2f} {wall_w:>11.2f} {cpu_w:>10.2f}"
+        split = where_time_went(res_w, wall_w)
         if n <= args.cpu_max:
-            res_c, wall_c, _ = run(cpu, scenarios, args.ticks)
+            res_c, wall_c, cpu_c = run(cpu, scenarios, args.ticks)
             rows, errors = agreement_rows(res_c, res_w, [s.name for s in scenarios])
-            line += f" {n / wall_c:>9.2f} {wall_c / wall_w:>8.2f}  {summary(rows)}"
+            line += f" {n / wall_c:>9.2f} {cpu_c:>10.2f} {wall_c / wall_w:>8.2f}  {summary(rows)}"
             if errors:
                 line += f"; {len(errors)} error(s): {errors[0]}"
         else:
-            line += f" {'-':>9} {'-':>8}  (above --cpu-max)"
+            line += f" {'-':>9} {'-':>10} {'-':>8}  (above --cpu-max)"
         print(line, flush=True)
+        print(f"{'':>6} {split}", flush=True)
 
     if args.agreement == "shipped":
         names, scenarios, refused = [], [], []

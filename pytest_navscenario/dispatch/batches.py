@@ -43,6 +43,7 @@ class BatchJob:
     jobs: tuple[EpisodeJob, ...]
     size: int
     alone_after_death: bool = True      # dispatch/local.py: a worker death splits it, no retry
+    engine: str = "cpu"                 # the batch engine (sim/batch.py: "cpu" or "warp")
 
     def run(self) -> tuple[list[Any], dict[str, Any]]:
         from ..harness.batch import Batching, run_batch
@@ -66,7 +67,8 @@ class BatchJob:
         batching = Batching()
         results = run_batch([self.jobs[k].scenario for k in todo], _subject_for(first),
                             seeds=[self.jobs[k].seed for k in todo], tick_limit=first.tick_limit,
-                            reset_timeout=first.reset_timeout, batch=self.size, batching=batching)
+                            reset_timeout=first.reset_timeout, batch=self.size, batching=batching,
+                            engine=self.engine)
         for k, res in zip(todo, results):
             if isinstance(res, BaseException):
                 outcomes[k] = _error(res)
@@ -123,7 +125,8 @@ class _Shared:
                 self.pending.cancel()
 
 
-def submit_batched(executor: Any, jobs: Sequence[Any], size: int, batching: Any = None) -> list[Pending]:
+def submit_batched(executor: Any, jobs: Sequence[Any], size: int, batching: Any = None,
+                   engine: str = "cpu") -> list[Pending]:
     """``executor.submit(jobs)``, with consecutive jobs of one subject and the same limits sent as
     batch jobs of up to ``size`` episodes (see the module docstring); one Pending per job, in
     order. ``batching`` (a harness.batch.Batching) counts how the batch jobs ran, as their results
@@ -140,7 +143,8 @@ def submit_batched(executor: Any, jobs: Sequence[Any], size: int, batching: Any 
         else:
             chunks[-1].append(i)
         last = key
-    submitted = [jobs[c[0]] if len(c) == 1 else BatchJob(tuple(jobs[i] for i in c), size) for c in chunks]
+    submitted = [jobs[c[0]] if len(c) == 1 else BatchJob(tuple(jobs[i] for i in c), size, engine=engine)
+                 for c in chunks]
     for c, p in zip(chunks, executor.submit(submitted)):
         if len(c) == 1:
             out[c[0]] = p

@@ -82,7 +82,8 @@ def iter_batch(scenarios: Sequence[Scenario], planner: Any = None, *, seeds: Seq
     ``planner`` as for run_scenario (a spec, a class or factory, an object), or with
     ``call_factory`` a zero-argument factory whose planners are passed as objects, as the search
     does (``run_scenario(scenario, factory())``). ``seeds``: each episode's base seed (None: the
-    scenario's own). ``batching`` (if given) is added to."""
+    scenario's own). ``engine``: a ``sim.batch.BatchEngine`` or its name ("cpu", "warp"; None:
+    "cpu"). ``batching`` (if given) is added to."""
     from ..sim.batch import batch_engine
 
     n = len(scenarios)
@@ -102,7 +103,7 @@ def iter_batch(scenarios: Sequence[Scenario], planner: Any = None, *, seeds: Seq
             made = first[0] if i == 0 else None
             yield _alone(sc, planner, call_factory, made, seeds[i], tick_limit, reset_timeout, stuck_after)
         return
-    eng = engine or batch_engine()
+    eng = batch_engine(engine) if isinstance(engine, str) else (engine or batch_engine())
     out: dict[int, Any] = {}
     chunk: list[int] = []
     spare = [first]          # the planner made to look at the subject serves the first batch

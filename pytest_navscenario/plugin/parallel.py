@@ -317,7 +317,8 @@ def pytest_runtestloop(session: pytest.Session) -> Any:
         for start in range(0, len(items), step):
             chunk = [i for i in items[start:start + step] if not _skipped(i)]
             jobs = [i.episode_job(keep) for i in chunk]
-            for item, pending in zip(chunk, submit_batched(executor, jobs, size, state.batching)):
+            for item, pending in zip(chunk, submit_batched(executor, jobs, size, state.batching,
+                                                       state.settings.batch_engine)):
                 item.nav_pending = pending
     return (yield)
 
@@ -334,7 +335,9 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
     batching = getattr(state, "batching", None) if state is not None else None
     if batching is None or not (batching.batched or batching.alone):
         return
-    terminalreporter.write_line(f"navscenario: batches (--nav-batch {state.settings.batch}): {batching.describe()}")
+    engine = state.settings.batch_engine
+    flags = f"--nav-batch {state.settings.batch}" + (f", --nav-batch-engine {engine}" if engine != "cpu" else "")
+    terminalreporter.write_line(f"navscenario: batches ({flags}): {batching.describe()}")
 
 
 @pytest.hookimpl(tryfirst=True)

@@ -364,7 +364,8 @@ class NavSearchItem(pytest.Item):
                             strategy=s.strategy, shrink_budget=s.shrink_budget, space=job.space,
                             subject=subject, episode_seed=core.settings.seed, stuck_after=s.stuck_after,
                             progress=None if state.is_worker else _Progress(self.config, job.name, s.budget),
-                            evaluator=evaluator, recorder=recorder, batch=batch)
+                            evaluator=evaluator, recorder=recorder, batch=batch,
+                            engine=core.settings.batch_engine)
         self.navsearch_payload = report_to_payload(report)
         if report.interrupted and report.stop_reason.startswith("interrupted"):
             from ..core.interrupts import first_signal

@@ -190,6 +190,7 @@ class EvalContext:
     episode_seed: int | None = None
     stuck_after: float | None = DEFAULT_STUCK_AFTER
     batch: int = 1        # candidates simulated together (harness/batch.py) by evaluate_candidates
+    engine: str = "cpu"   # the batch engine that steps them (sim/batch.py: "cpu" or "warp")
 
 
 _ROUTES: dict[int, Any] = {}
@@ -236,7 +237,8 @@ def iter_candidates(ctx: EvalContext, proposals: Sequence[tuple[tuple[float, ...
     scenarios = [ctx.space.apply(offsets) for offsets, _ in proposals]
     t0 = time.perf_counter()
     results = iter_batch(scenarios, ctx.subject_factory, seeds=[ctx.episode_seed] * len(scenarios),
-                         stuck_after=ctx.stuck_after, batch=ctx.batch, call_factory=True, batching=batching)
+                         stuck_after=ctx.stuck_after, batch=ctx.batch, call_factory=True, batching=batching,
+                         engine=ctx.engine)
     for (offsets, origin), sc in zip(proposals, scenarios):
         try:
             res = next(results)
@@ -648,7 +650,7 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
                stop: Callable[[], bool] | None = None, space: SearchSpace | None = None,
                subject: str = "", episode_seed: int | None = None,
                stuck_after: float | None = DEFAULT_STUCK_AFTER, evaluator: Evaluator | None = None,
-               recorder: Recorder | None = None, batch: int = 1) -> SearchReport:
+               recorder: Recorder | None = None, batch: int = 1, engine: str = "cpu") -> SearchReport:
     """Search for failures of ``subject_factory()`` planners around ``seed``.
 
     Exactly ``budget`` simulations of valid candidates (fewer only if interrupted or if the
@@ -671,6 +673,8 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
     ``batch`` > 1 simulates each generation's candidates together, in lockstep, when the subject
     answers the batch protocol (harness/batch.py): the same search, faster; search/batched.py's
     ``batch_evaluator`` also batches the generations in flight together and the failures' shrinks.
+    ``engine`` names the batch engine ("cpu"; "warp": MuJoCo Warp, sim/warp_engine.py, whose
+    trajectories agree with the CPU's within a tolerance, not bit for bit).
     Deterministic given ``seed_value`` (and a deterministic subject).
     """
     from .strategies import GaveUp, make_strategy
@@ -682,7 +686,7 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
                           subject_version=None, strategy=strategy, seed_value=seed_value, budget=budget,
                           shrink_budget=str(shrink_budget), params=[p.name for p in space.params],
                           episode_seed=episode_seed)
-    sim = _Simulator(EvalContext(space, subject_factory, episode_seed, stuck_after, batch), report, stop,
+    sim = _Simulator(EvalContext(space, subject_factory, episode_seed, stuck_after, batch, engine), report, stop,
                      evaluator, recorder)
     signatures: set[tuple] = set()
 

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import logging
 from time import perf_counter
 from typing import Any, Sequence
 
@@ -30,6 +31,8 @@ import mujoco
 import mujoco_warp as mjw
 import numpy as np
 import warp as wp
+
+log = logging.getLogger(__name__)
 
 CONTACTS_PER_WORLD = 64      # contact slots per world (the robot against the obstacles near it)
 CONSTRAINTS_PER_WORLD = 256  # constraint rows per world (a pyramidal contact of condim 3 has 4)
@@ -349,10 +352,13 @@ class DeviceWorlds:
             try:
                 with wp.ScopedCapture(device=self.device) as capture:
                     self._tick_launches()
-                self.graph = capture.graph
-            except Exception:
+            except Exception as exc:    # nothing captured ran: this tick and the next ones launch
+                log.warning("MuJoCo Warp tick not captured as a CUDA graph (%s: %s); launching its kernels "
+                            "one by one", type(exc).__name__, exc)
                 self.use_graph = False
-                raise
+                self._tick_launches()
+                return
+            self.graph = capture.graph
         wp.capture_launch(self.graph)
 
     def rays(self) -> tuple[np.ndarray, np.ndarray]:

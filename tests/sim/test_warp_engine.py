@@ -158,3 +158,41 @@ def test_run_batch_on_the_warp_engine_runs_alone_what_it_refuses_and_says_why():
     assert [type(r).__name__ for r in results] == ["EpisodeResult"] * 3
     assert (batching.batched, batching.batches, batching.alone) == (2, 1, 1)
     assert "rides the ground, which the warp engine does not simulate" in batching.describe()
+
+
+# ---------------------------------------------------------------- the options that choose it
+
+def test_nav_batch_engine_accepts_cpu_and_warp_only(pytester):
+    pytester.makefile(".yaml", boxes="version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 1, y: 0}, timeout: 5}\n")
+    result = pytester.runpytest("--nav-batch-engine=gpu", "-p", "no:cacheprovider")
+    result.stderr.fnmatch_lines(["*--nav-batch-engine*expected cpu or warp, got 'gpu' (e.g. --nav-batch-engine=warp)*"])
+    assert result.ret != 0
+
+
+def test_navscenario_run_with_an_unknown_or_missing_engine_says_so(capsys, monkeypatch):
+    from pytest_navscenario import cli
+
+    files = [os.path.join(ROOT, "scenarios", f"{n}.yaml") for n in ("boxes1", "boxes2")]
+    with pytest.raises(SystemExit):
+        cli.main(["run", *files, "--batch-engine", "gpu"])
+    assert "invalid choice: 'gpu'" in capsys.readouterr().err
+    from pytest_navscenario.sim import batch as batch_module
+    from pytest_navscenario.sim import warp_engine
+
+    monkeypatch.setattr(batch_module, "_ENGINES", {})
+    monkeypatch.setattr(warp_engine, "missing", lambda: "mujoco-warp not installed: " + warp_engine.INSTALL_HINT)
+    assert cli.main(["run", *files, "--batch-engine", "warp"]) == 2
+    assert "--batch-engine warp: the warp batch engine cannot run: mujoco-warp not installed" in capsys.readouterr().err
+
+
+@pytest.mark.heavy
+@NEEDS_WARP
+def test_navscenario_run_on_the_warp_engine_gives_the_cpu_outcomes(capsys):
+    from pytest_navscenario import cli
+
+    files = [os.path.join(ROOT, "scenarios", f"{n}.yaml") for n in ("boxes1", "boxes2")]
+    assert cli.main(["run", *files, "--seed", "0", "--batch-engine", "warp"]) == 0
+    out = capsys.readouterr().out
+    assert out.count("outcome: success") == 2
+    assert out.rstrip().endswith("2 scenario(s): 2 passed, 0 failed; batches (--batch auto, --batch-engine warp): "
+                                 "2 episode(s) in 1 batch(es)")
