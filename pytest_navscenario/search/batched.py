@@ -116,8 +116,8 @@ class batch_evaluator:   # noqa: N801  (used like a function: evaluator=batch_ev
             for cand in scratch.candidates:
                 cand.metrics["subject"], cand.metrics["subject_version"] = scratch.subject, scratch.subject_version
                 sim.record(cand, "shrink")
-            report.failures[i] = Failure(found=found, shrunk=failure.shrunk, shrink_sims=failure.shrink_sims,
-                                         note=failure.note)
+            sim.set_failure(i, Failure(found=found, shrunk=failure.shrunk, shrink_sims=failure.shrink_sims,
+                                       note=failure.note, status=failure.status))   # main's status, recorder
             if progress is not None:
                 progress(report)
 
