@@ -61,8 +61,9 @@ def compare(a: Any, b: Any, name: str = "") -> Agreement:
         position = yaw = 0.0
     end_a = float(ta.t[-1]) if len(ta.t) else 0.0
     end_b = float(tb.t[-1]) if len(tb.t) else 0.0
-    return Agreement(name or a.scenario.name if hasattr(a, "scenario") else name, _outcome(a), _outcome(b),
-                     end_a, end_b, position, yaw)
+    if not name:
+        name = getattr(getattr(a, "scenario", None), "name", "") or ""
+    return Agreement(name, _outcome(a), _outcome(b), end_a, end_b, position, yaw)
 
 
 def _outcome(result: Any) -> str:
