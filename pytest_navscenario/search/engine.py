@@ -706,7 +706,7 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
         if discard is not None:
             discard()
     batching = getattr(evaluator, "batching", None)
-    if batching is not None:
+    if batching is not None and batching.batched:
         report.batching = batching.describe()
     if report.interrupted:
         for f in report.failures:
