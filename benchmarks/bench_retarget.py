@@ -94,7 +94,7 @@ def search_outcomes(a: argparse.Namespace, suite: str) -> dict[str, str]:
     for log in sorted((a.work / f"frozen-{suite}").glob("*/search-log.jsonl")):
         for line in log.read_text().splitlines():
             rec = json.loads(line)
-            if rec["phase"] == "search":
+            if rec.get("record", "candidate") == "candidate" and rec["phase"] == "search":
                 found[rec["scenario_hash"]] = rec["outcome"]
     return found
 

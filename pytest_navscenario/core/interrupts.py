@@ -6,12 +6,20 @@ the planner's code. ``install()`` replaces Python's default SIGINT handler and t
 action with handlers that raise ``UserInterrupt`` (a KeyboardInterrupt, so every caller handles it
 as before); ``from_the_user(exc)`` then tells the two apart. Without the handlers (a library user's
 script) every KeyboardInterrupt counts as the user's: it stops the run, as it always did.
+
+Once the first interrupt has been raised the run is stopping and saving what it found (frozen
+failures, the search log, the results and JUnit files): a second Ctrl-C or SIGTERM is held (noted,
+not raised), so that it cannot abort the saving half way; a third one acts at once (Ctrl-C raises,
+SIGTERM ends the process), for a run whose saving hangs. ``deferred()`` holds interrupts for the
+length of a block that must not be cut in two (a file write, a Hypothesis draw) and delivers the
+first one after it.
 """
 from __future__ import annotations
 
+import contextlib
 import signal
 import threading
-from typing import Any, Callable
+from typing import Any, Callable, Iterator
 
 
 class UserInterrupt(KeyboardInterrupt):
@@ -29,13 +37,77 @@ class PlannerExit(Exception):
         self.original = original
 
 
+_RECEIVED: list[int] = []   # the interrupts received while the handlers of install() were active
+
+
 def _on_sigint(signum: int, frame: Any) -> None:
-    raise UserInterrupt("interrupted by Ctrl-C (SIGINT)")
+    _received(signum, "interrupted by Ctrl-C (SIGINT)")
 
 
 def _on_sigterm(signum: int, frame: Any) -> None:
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # a second SIGTERM kills at once
-    raise UserInterrupt("interrupted by SIGTERM")
+    _received(signum, "interrupted by SIGTERM")
+
+
+def _received(signum: int, message: str) -> None:
+    """The first interrupt raises; the second is held (the run is stopping and saving what it
+    found); from the third on, the default action: Ctrl-C raises, SIGTERM ends the process."""
+    _RECEIVED.append(signum)
+    if len(_RECEIVED) == 2:
+        return
+    if len(_RECEIVED) > 2 and signum == signal.SIGTERM:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        signal.raise_signal(signal.SIGTERM)
+    raise UserInterrupt(message)
+
+
+def stopping() -> bool:
+    """True once a user's Ctrl-C or SIGTERM has been raised in this process (the run is ending)."""
+    return bool(_RECEIVED)
+
+
+def held() -> int:
+    """How many interrupts were held (received after the first, while the run was saving)."""
+    return max(0, min(len(_RECEIVED), 2) - 1)
+
+
+def first_signal() -> str:
+    """The name of the interrupt that stopped the run ("Ctrl-C" or "SIGTERM"); "" if none did."""
+    if not _RECEIVED:
+        return ""
+    return "SIGTERM" if _RECEIVED[0] == signal.SIGTERM else "Ctrl-C"
+
+
+@contextlib.contextmanager
+def deferred() -> Iterator[None]:
+    """Hold Ctrl-C and SIGTERM until the block ends, then deliver the first one received to the
+    handler that was in place (a block cut in two by an interrupt would leave a half-done state:
+    a Hypothesis engine not yet set up, a file not yet renamed into place). Main thread only (where
+    Python runs signal handlers); elsewhere a no-op."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    got: list[int] = []
+    saved = {}
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        try:
+            saved[sig] = signal.signal(sig, lambda s, _frame: got.append(s))
+        except (ValueError, OSError):
+            pass
+    try:
+        yield
+    finally:
+        for sig, handler in saved.items():
+            signal.signal(sig, handler)
+        if got:   # deliver the first one now, to the handler that was in place
+            handler = saved.get(got[0])
+            try:
+                if callable(handler):
+                    handler(got[0], None)
+                elif handler == signal.SIG_DFL:
+                    signal.raise_signal(got[0])
+            finally:   # more than one: the run is stopping, the others count as held
+                if handler in (_on_sigint, _on_sigterm):
+                    _RECEIVED.extend(got[1:2])
 
 
 def install(sigterm: bool = True) -> Callable[[], None] | None:
@@ -51,7 +123,11 @@ def install(sigterm: bool = True) -> Callable[[], None] | None:
         signal.signal(signal.SIGTERM, _on_sigterm)
         undo.append((signal.SIGTERM, signal.SIG_DFL))
 
+    if undo:
+        _RECEIVED.clear()
+
     def restore() -> None:
+        _RECEIVED.clear()
         for signum, handler in undo:
             if signal.getsignal(signum) in (_on_sigint, _on_sigterm):
                 signal.signal(signum, handler)

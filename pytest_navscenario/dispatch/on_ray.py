@@ -135,6 +135,7 @@ class RayExecutor:
         self.ray = ray = import_ray()
         self.address = address
         self._owned = False
+        self._reaper: Any = None     # reaper.Reaper: ends the local instance's processes if we cannot
         self._open: dict[int, Any] = {}
         self._next = 0
         if ray.is_initialized():
@@ -143,11 +144,19 @@ class RayExecutor:
                 raise RaySetupError(f"--nav-ray={address}: this process is already connected to Ray at "
                                     f"{here}; use that address or --nav-ray=auto")
         elif address == "auto":
+            from .reaper import start_reaper
+
             paths = os.pathsep.join(p for p in sys.path if p and os.path.isdir(p))
-            with _own_sigterm():
-                ray.init(address="local", num_cpus=num_cpus, include_dashboard=False, log_to_driver=False,
-                         logging_level=logging.WARNING,
-                         runtime_env={"env_vars": {"PYTHONPATH": paths + os.pathsep + "${PYTHONPATH}"}})
+            self._reaper = start_reaper()   # first: it notes Ray's processes as they start
+            try:
+                with _own_sigterm():
+                    ray.init(address="local", num_cpus=num_cpus, include_dashboard=False, log_to_driver=False,
+                             logging_level=logging.WARNING,
+                             runtime_env={"env_vars": {"PYTHONPATH": paths + os.pathsep + "${PYTHONPATH}"}})
+            except BaseException:
+                if self._reaper is not None:
+                    self._reaper.stop()
+                raise
             self._owned = True
         else:
             _reachable(address)
@@ -241,9 +250,14 @@ class RayExecutor:
                 except Exception:
                     pass
         self._open.clear()
-        if self._owned and self.ray.is_initialized():
-            self.ray.shutdown()
-        self._owned = False
+        try:
+            if self._owned and self.ray.is_initialized():
+                self.ray.shutdown()
+        finally:
+            self._owned = False
+            reaper, self._reaper = self._reaper, None
+            if reaper is not None:   # whatever ray.shutdown left running (its agents linger)
+                reaper.stop()
 
 
 def _subject_label(subject: Any) -> str:

@@ -14,6 +14,8 @@ from typing import Any
 
 import numpy as np
 
+from ..core import processes
+from ..subjects.external import running_pids
 from ..subjects.loading import make_planner, subject_identity
 from ..verdict.result import EpisodeResult
 from ..scenario.model import Scenario
@@ -65,6 +67,7 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
     from ..sim.episode import simulate
 
     t0 = time.perf_counter()
+    before = processes.children()
     instance, spec = make_planner(planner)
     if tick_limit and hasattr(instance, "tick_timeout"):  # adapters that enforce the limit themselves
         instance.tick_timeout = tick_limit
@@ -73,13 +76,16 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
     ep_seed = effective_seed(scenario.simulation.seed, seed)
     facts = simulate(scenario, instance, ep_seed, tick_limit=tick_limit, stuck_after=stuck_after)
     name, version = subject_identity(instance, spec)  # after reset: a planner may name itself there
-    return verdict(scenario, facts, ep_seed, name, version, stuck_after, t0)
+    del instance    # a planner that ends its helpers when it is dropped has done so before the check
+    left = processes.note_left_behind(before, scenario.name or "the episode", ours=running_pids())
+    return verdict(scenario, facts, ep_seed, name, version, stuck_after, t0, left)
 
 
 def verdict(scenario: Scenario, facts: Any, ep_seed: int, name: str, version: str | None,
-            stuck_after: float | None, t0: float) -> EpisodeResult:
+            stuck_after: float | None, t0: float, left: Any = ()) -> EpisodeResult:
     """The EpisodeResult of an episode's raw facts (``sim.SimResult``): the oracle's outcome and
-    message, the metrics; ``wall_time`` counted from ``t0``."""
+    message, the metrics; ``wall_time`` counted from ``t0``; ``left``: the processes it left
+    running (core/processes.py)."""
     from ..verdict import metrics, oracle
 
     t1 = time.perf_counter()
@@ -95,4 +101,5 @@ def verdict(scenario: Scenario, facts: Any, ep_seed: int, name: str, version: st
         scenario=scenario, outcome=outcome, metrics=figures, trajectory=facts.trajectory, seed=ep_seed,
         subject=name, subject_version=version, message=message, collision=facts.collision,
         safety_stop=facts.safety_stop, subject_failure=facts.subject_failure,
-        wall_time=t2 - t0, timings=timings, terrain_event=facts.terrain_event)
+        wall_time=t2 - t0, timings=timings, terrain_event=facts.terrain_event,
+        left_running=tuple(f"pid {p.pid}: {p.command}" for p in left))

@@ -67,6 +67,12 @@ OPTIONS = (
      "a search's generations and shrinks, each worker's share of a suite (--nav-workers, -n, "
      "--nav-ray). 'auto' (default): batches of 16; N: at most N; 1 or off: every episode alone. "
      "Results are the same either way, bit for bit; the summary says how episodes were batched."),
+    ("--nav-isolate", "nav_isolate",
+     "yes: run the episodes in a worker process even without -n or --nav-workers, so that a "
+     "planner that ends its process (os._exit, a crash in C code, the out-of-memory killer) fails "
+     "only the item it was running (WorkerDied, after 3 tries) and the run goes on and writes its "
+     "results; costs the worker's start, about a second. no (default): a serial run simulates in "
+     "this process. With -n N, --nav-workers N or --nav-ray the episodes are isolated anyway."),
 )
 
 
@@ -99,7 +105,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     metavars = {"nav_subject": "SPEC", "nav_seed": "N", "nav_results": "PATH", "nav_artifacts": "DIR",
                 "nav_summary": "{yes,no}", "nav_tick_limit": "SECONDS", "nav_repeat": "N",
                 "nav_reset_timeout": "SECONDS", "nav_ray": "ADDRESS", "nav_workers": "N",
-                "nav_batch": "N"}
+                "nav_batch": "N", "nav_isolate": "{yes,no}"}
     for opt, ini, text in OPTIONS:
         group.addoption(opt, dest=ini, default=None, metavar=metavars[ini], help=text + f" [ini: {ini}]")
     parser.addini("nav_subject", helps["nav_subject"], default="")
@@ -115,6 +121,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addini("nav_ray", helps["nav_ray"], default="")
     parser.addini("nav_workers", helps["nav_workers"], default="")
     parser.addini("nav_batch", helps["nav_batch"], default="auto")
+    parser.addini("nav_isolate", helps["nav_isolate"], type="bool", default=False)
     parser.addini("nav_scenario_glob",
                   "file name patterns of scenario files (space separated); files matching them are "
                   "collected when they are a YAML mapping with 'version' and 'mission' keys "
@@ -142,6 +149,7 @@ class Settings:
 
 
 _EXPECTED = {"nav_seed": "a whole number >= 0", "nav_summary": "yes or no (true or false)",
+             "nav_isolate": "yes or no (true or false)",
              "nav_tick_limit": "seconds >= 0 (0: no limit)",
              "nav_repeat": "a whole number of runs per scenario from 1 to 10000",
              "nav_reset_timeout": "seconds > 0",
@@ -200,14 +208,7 @@ def read_settings(config: pytest.Config) -> Settings:
             raise pytest.UsageError(f"{where}: {raw!r} exists and is not a folder; give a folder "
                                     f"(created if missing) or 'none' to disable artifacts")
 
-    raw, where, _ = _value(config, "nav_summary")
-    flag = raw.strip().lower()
-    if flag in ("yes", "true", "on", "1"):
-        summary = True
-    elif flag in ("no", "false", "off", "0"):
-        summary = False
-    else:
-        raise pytest.UsageError(f"{where}: expected yes or no, got {raw!r}")
+    summary = read_yes_no(config, "nav_summary")
 
     raw, where, _ = _value(config, "nav_tick_limit")
     if raw.strip().lower() in ("none", "off", "no", ""):
@@ -269,6 +270,17 @@ def read_batch(config: pytest.Config) -> int:
         raise pytest.UsageError(f"{where}: expected auto, a whole number of episodes per batch >= 1, or off "
                                 f"(1 and off: every episode alone), got {raw!r} (e.g. --nav-batch=32)")
     return n
+
+
+def read_yes_no(config: pytest.Config, name: str) -> bool:
+    """A yes/no option (true/false, on/off, 1/0 too); UsageError otherwise."""
+    raw, where, _ = _value(config, name)
+    flag = raw.strip().lower()
+    if flag in ("yes", "true", "on", "1"):
+        return True
+    if flag in ("no", "false", "off", "0"):
+        return False
+    raise pytest.UsageError(f"{where}: expected yes or no, got {raw!r}")
 
 
 _HOST_PORT = re.compile(r"^(ray://)?[A-Za-z0-9_.\-]+:[0-9]{1,5}$|^(ray://)?\[[0-9A-Fa-f:]+\]:[0-9]{1,5}$")

@@ -126,6 +126,7 @@ class SearchState:
     is_worker: bool
     done: list[dict[str, Any]] = field(default_factory=list)   # controller: summary entries
     junit_items: list[Any] = field(default_factory=list)
+    recorders: dict[str, Any] = field(default_factory=dict)   # seed name -> its search's SearchRecorder
     html_error: str = ""
 
 
@@ -355,14 +356,19 @@ class NavSearchItem(pytest.Item):
         if evaluator is None and batch > 1:   # --nav-batch: generations and shrinks in batches
             from ..search.batched import batch_evaluator
             evaluator = batch_evaluator()
+        recorder = None
+        if not state.is_worker:   # this process writes: each failure and log line as found
+            from ..search.freeze import SearchRecorder
+            recorder = state.recorders[job.seed.name] = SearchRecorder(job.space, s.out, root=self.config.rootpath)
         report = run_search(job.seed, factory, budget=s.budget, seed_value=s.seed,
                             strategy=s.strategy, shrink_budget=s.shrink_budget, space=job.space,
                             subject=subject, episode_seed=core.settings.seed, stuck_after=s.stuck_after,
                             progress=None if state.is_worker else _Progress(self.config, job.name, s.budget),
-                            evaluator=evaluator, batch=batch)
+                            evaluator=evaluator, recorder=recorder, batch=batch)
         self.navsearch_payload = report_to_payload(report)
         if report.interrupted and report.stop_reason.startswith("interrupted"):
-            self.session.shouldstop = (f"navsearch {job.name} was cut short by Ctrl-C after "
+            from ..core.interrupts import first_signal
+            self.session.shouldstop = (f"navsearch {job.name} was cut short by {first_signal() or 'Ctrl-C'} after "
                                        f"{report.sims_used} of {report.budget} simulations; "
                                        f"failures found so far were kept")
 
@@ -502,7 +508,9 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) ->
 
 
 def pytest_runtest_logreport(report: pytest.TestReport) -> None:
-    """Controller: write the frozen failures and the search log of a finished search."""
+    """Controller: a finished search's summary entry, its generated suite and the JUnit file (its
+    frozen failures and log were written while it ran, by its SearchRecorder). An interrupt that
+    comes while this writes waits until it is done."""
     payload = getattr(report, "navsearch", None)
     if payload is None or report.when != "call":
         return
@@ -512,16 +520,29 @@ def pytest_runtest_logreport(report: pytest.TestReport) -> None:
     state = config.stash.get(STATE_KEY, None)
     if state is None:
         return
+    from ..core.interrupts import deferred
+
+    with deferred():
+        _finish_search(payload, state, config)
+
+
+def _finish_search(payload: dict[str, Any], state: SearchState, config: pytest.Config) -> None:
     from ..search.freeze import freeze_failures, write_search_log
 
     job = next(j for j in state.jobs.values() if j.seed.name == payload["seed_name"])
     search = payload_to_report(payload, job.space)
     entry: dict[str, Any] = {"report": search, "job": job, "files": [], "log": None, "error": "", "suite": None}
-    try:
-        entry["files"] = freeze_failures(search, job.space, state.settings.out, root=config.rootpath)
-        entry["log"] = write_search_log(search, job.space, state.settings.out)
-    except Exception as exc:  # never lose the summary: say what could not be written
-        entry["error"] = f"could not write the frozen failures under {state.settings.out}: {type(exc).__name__}: {exc}"
+    recorder = state.recorders.pop(job.seed.name, None)
+    if recorder is not None:
+        entry["files"], entry["log"] = recorder.files, recorder.log_path
+        entry["error"] = recorder.error
+    else:   # the search ran elsewhere (an xdist worker): write what it found now
+        try:
+            entry["files"] = freeze_failures(search, job.space, state.settings.out, root=config.rootpath)
+            entry["log"] = write_search_log(search, job.space, state.settings.out)
+        except Exception as exc:  # never lose the summary: say what could not be written
+            entry["error"] = (f"could not write the frozen failures under {state.settings.out}: "
+                              f"{type(exc).__name__}: {exc}")
     if state.settings.suite is not None:
         _write_suite(entry, state.settings.suite, config)
     from .search_report import failure_rows, wanted
@@ -529,6 +550,13 @@ def pytest_runtest_logreport(report: pytest.TestReport) -> None:
         entry["rows"] = failure_rows(config, entry)
     state.done.append(entry)
     state.junit_items.append((search, job.space))
+    if state.settings.junit is not None:   # after every search: an interrupted session keeps it too
+        from ..search.freeze import write_junit
+        try:
+            write_junit(state.junit_items, state.settings.junit)
+        except Exception as exc:
+            entry["error"] += ("; " if entry["error"] else "") + (
+                f"could not write the JUnit file {state.settings.junit}: {type(exc).__name__}: {exc}")
 
 
 def _write_suite(entry: dict[str, Any], folder: Path, config: pytest.Config) -> None:
@@ -545,9 +573,6 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
     state = session.config.stash.get(STATE_KEY, None)
     if state is None or state.is_worker:
         return
-    if state.settings.junit is not None and state.junit_items:
-        from ..search.freeze import write_junit
-        write_junit(state.junit_items, state.settings.junit)
     from .search_report import write_html
     try:
         write_html(session.config, state.done)
@@ -573,6 +598,10 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
         tr.write_line(f"JUnit file of the generated suite: {state.settings.junit}")
     if state.html_error:
         tr.write_line(f"ERROR {state.html_error}", red=True)
+    from ..core.interrupts import held
+    if held():
+        tr.write_line("a second interrupt came while what was found was being saved: it was held until "
+                      "everything was written (a third one stops at once)")
 
 
 def _rel(config: pytest.Config, path: Path) -> str:

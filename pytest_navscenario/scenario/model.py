@@ -44,7 +44,7 @@ class Pose:
         return math.radians(self.yaw)
 
 
-POSE = section(Pose, "mission.start", "a planar pose", [
+POSE = section(Pose, "pose", "a planar pose", [
     Number("x", "m", "position along x", example="x: 0.0"),
     Number("y", "m", "position along y", example="y: 0.0"),
     Number("yaw", "deg", "heading, counter-clockwise from +x"),
@@ -92,6 +92,8 @@ MOTION = section(Motion, "obstacles[].motion", "how an obstacle moves: along a p
     Rule("'velocity' does not go with 'path', 'speed' or 'mode'; without it, 'path' is required", None,
          _motion_schema),
     Rule("a path has some length (its points are not all the same)", None),
+    Rule("no faster than the physics step can follow: it and the robot close in by at most a fifth of their "
+         "smallest widths per step (loader.max_resolved_speed)", None),
 ])
 
 
@@ -627,5 +629,8 @@ def content_hash(scenario: Scenario) -> str:
     for element in body.get("terrain", []):   # terrain names are labels; a heightfield is its digest
         element.pop("name", None)
         element.pop("file", None)
+    robot_body = body.get("robot", {}).get("body")
+    if isinstance(robot_body, dict) and robot_body.get("kind") == "mjcf":
+        robot_body.pop("file", None)            # an MJCF body is its digest, wherever its file is
     text = json.dumps(body, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]

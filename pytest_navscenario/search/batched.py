@@ -21,7 +21,7 @@ import threading
 from typing import Any, Iterator, Sequence
 
 from .engine import (Candidate, EvalContext, Failure, SearchReport, _Simulator, _Stop, evaluate_candidates,
-                     iter_candidates, shrink_failure, shrink_order)
+                     iter_candidates, shrink_failure, shrink_order, shrink_status)
 
 Proposals = Sequence[tuple[tuple[float, ...], str]]
 
@@ -116,8 +116,8 @@ class batch_evaluator:   # noqa: N801  (used like a function: evaluator=batch_ev
             for cand in scratch.candidates:
                 cand.metrics["subject"], cand.metrics["subject_version"] = scratch.subject, scratch.subject_version
                 sim.record(cand, "shrink")
-            report.failures[i] = Failure(found=found, shrunk=failure.shrunk, shrink_sims=failure.shrink_sims,
-                                         note=failure.note)
+            sim.set_failure(i, Failure(found=found, shrunk=failure.shrunk, shrink_sims=failure.shrink_sims,
+                                       note=failure.note, status=shrink_status(failure.note)))
             if progress is not None:
                 progress(report)
 

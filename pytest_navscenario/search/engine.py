@@ -24,12 +24,14 @@ which is also how the frozen files are told apart.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 import time
 from collections import deque
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterable, Iterator, Sequence
+from typing import Any, Callable, Iterable, Iterator, Protocol, Sequence
 
+from ..core.interrupts import deferred, first_signal
 from ..scenario.model import Scenario
 from .space import FLAG_ON, SearchSpace, invalid_reason, offsets_strategy
 
@@ -91,11 +93,17 @@ class Candidate:
 
 @dataclass
 class Failure:
-    """A distinct failure: as found, and after shrinking toward the seed."""
+    """A distinct failure: as found, and after shrinking toward the seed.
+
+    ``status`` says how far the search got with it (and is written in its frozen file's
+    provenance): "found" (as found: the search was still running, or was cut short, before it was
+    done with it), "shrunk" (final: shrunk toward the seed) or "unshrunk" (final: kept as found,
+    ``note`` says why)."""
     found: Candidate
     shrunk: Candidate
     shrink_sims: int = 0
     note: str = ""                # e.g. "shrink cap reached", "did not reproduce"
+    status: str = "found"
 
 
 @dataclass
@@ -279,12 +287,29 @@ def serial_evaluator(ctx: EvalContext, proposals: Sequence[tuple[tuple[float, ..
 Evaluator = Callable[[EvalContext, Sequence[tuple[tuple[float, ...], str]]], Iterable[Candidate]]
 
 
-class _Simulator:
-    """Numbers and records the candidates an evaluator returns; checks for a stop request."""
+class Recorder(Protocol):
+    """What ``run_search(..., recorder=...)`` tells while the search runs, so that what it found is
+    on disk at every moment (search/freeze.py: ``SearchRecorder``). Each call is made whole: a
+    Ctrl-C waits until it returns. The order: ``start``; per simulated candidate, first
+    ``failure`` if it is a new distinct failure, then ``simulated``; ``failure`` again whenever a
+    failure changes (shrunk, or final as found); ``finish`` last, also when the search was cut
+    short."""
 
-    def __init__(self, ctx: EvalContext, report: SearchReport, stop, evaluator: Evaluator | None = None):
+    def start(self, report: SearchReport) -> None: ...
+    def simulated(self, report: SearchReport, cand: Candidate) -> None: ...
+    def failure(self, report: SearchReport, index: int) -> None: ...
+    def finish(self, report: SearchReport) -> None: ...
+
+
+class _Simulator:
+    """Numbers and records the candidates an evaluator returns; checks for a stop request; tells
+    the recorder (if any) each shrink-phase candidate and each change of a failure."""
+
+    def __init__(self, ctx: EvalContext, report: SearchReport, stop, evaluator: Evaluator | None = None,
+                 recorder: "Recorder | None" = None):
         self.ctx, self.report, self.stop = ctx, report, stop
         self.evaluator = evaluator or serial_evaluator
+        self.recorder = recorder
         self.counts = {"search": 0, "shrink": 0}
 
     def start(self, proposals: Sequence[tuple[tuple[float, ...], str]], phase: str) -> Iterator[Candidate]:
@@ -314,7 +339,19 @@ class _Simulator:
                 self.report.first_failure = cand.sim
         else:
             self.report.shrink_sims += 1
+            self.tell_recorder("simulated", cand)   # search-phase ones: once their failure is known
         return cand
+
+    def set_failure(self, index: int, failure: Failure) -> None:
+        """Replace failure ``index`` (shrunk, or kept as found) and tell the recorder."""
+        self.report.failures[index] = failure
+        self.tell_recorder("failure", index)
+
+    def tell_recorder(self, event: str, *args: Any) -> None:
+        """``recorder.<event>(report, *args)``, whole: an interrupt waits until it has written."""
+        if self.recorder is not None:
+            with deferred():
+                getattr(self.recorder, event)(self.report, *args)
 
     def simulate(self, offsets: Sequence[float], phase: str, origin: str) -> Candidate:
         return next(iter(self.run([(tuple(offsets), origin)], phase)))
@@ -355,7 +392,7 @@ def _search_loop(strategy: Any, sim: _Simulator, budget: int, on_result: Callabl
         while asking and len(in_flight) <= max(0, int(getattr(strategy, "lag", 0))) and planned < budget:
             sim.check_stop()
             try:
-                with _interrupts_deferred():
+                with deferred():
                     proposals = strategy.ask(budget - planned)[: budget - planned]
             except GaveUp:   # the strategy set stop_reason; what is in flight still counts
                 proposals = []
@@ -374,38 +411,6 @@ def _search_loop(strategy: Any, sim: _Simulator, budget: int, on_result: Callabl
             if report.sims_used < budget:
                 sim.check_stop()
         strategy.tell(results)
-
-
-@contextlib.contextmanager
-def _interrupts_deferred() -> Iterator[None]:
-    """Hold Ctrl-C and SIGTERM until the block ends (a strategy drawing with Hypothesis, ~30 ms):
-    an interrupt that lands inside Hypothesis's engine before it is set up comes out as an
-    AssertionError from Hypothesis, failing the search instead of cutting it short (seen under
-    --nav-ray). Main thread only (where Python runs signal handlers); elsewhere a no-op."""
-    import signal
-    import threading
-
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    got: list[int] = []
-    saved = {}
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        try:
-            saved[sig] = signal.signal(sig, lambda s, _frame: got.append(s))
-        except (ValueError, OSError):
-            pass
-    try:
-        yield
-    finally:
-        for sig, handler in saved.items():
-            signal.signal(sig, handler)
-        if got:   # deliver the first one now, to the handler that was in place
-            handler = saved.get(got[0])
-            if callable(handler):
-                handler(got[0], None)
-            elif handler == signal.SIG_DFL:
-                signal.raise_signal(got[0])
 
 
 # -- shrinking --------------------------------------------------------------------------------
@@ -493,7 +498,7 @@ def shrink_all(space: SearchSpace, sim: "_Simulator", caps: Sequence[int], progr
         if caps[i] <= 0:
             continue
         sim.check_stop()
-        report.failures[i] = shrink_failure(space, sim, report.failures[i].found, caps[i])
+        sim.set_failure(i, shrink_failure(space, sim, report.failures[i].found, caps[i]))
         if progress is not None:
             progress(report)
 
@@ -510,7 +515,7 @@ def shrink_failure(space: SearchSpace, sim: _Simulator, found: Candidate, cap: i
     """Reduce ``found`` toward the seed with at most ``cap`` simulations: first drop inserted
     obstacles and restore removed ones, one at a time, then Hypothesis's shrinker on the offset
     vector. The result fails with the same cause signature as ``found``."""
-    failure = Failure(found=found, shrunk=found)
+    failure = Failure(found=found, shrunk=found, status="unshrunk")
     if cap <= 0 or not any(found.offsets):
         return failure
     best, used = [found], [0]
@@ -540,8 +545,14 @@ def shrink_failure(space: SearchSpace, sim: _Simulator, found: Candidate, cap: i
     except _NoExample:
         failure.note = "did not reproduce when re-simulated: kept as found"
     failure.shrunk = best[0]
+    failure.status = shrink_status(failure.note)
     failure.shrink_sims = used[0]
     return failure
+
+
+def shrink_status(note: str) -> str:
+    """A shrunk failure's status from its shrink's note: kept as found if it did not reproduce."""
+    return "unshrunk" if note.startswith("did not reproduce") else "shrunk"
 
 
 class _NoExample(Exception):
@@ -637,7 +648,7 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
                stop: Callable[[], bool] | None = None, space: SearchSpace | None = None,
                subject: str = "", episode_seed: int | None = None,
                stuck_after: float | None = DEFAULT_STUCK_AFTER, evaluator: Evaluator | None = None,
-               batch: int = 1) -> SearchReport:
+               recorder: Recorder | None = None, batch: int = 1) -> SearchReport:
     """Search for failures of ``subject_factory()`` planners around ``seed``.
 
     Exactly ``budget`` simulations of valid candidates (fewer only if interrupted or if the
@@ -658,6 +669,8 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
     ``batch`` > 1 simulates each generation's candidates together, in lockstep, when the subject
     answers the batch protocol (harness/batch.py): the same search, faster; search/batched.py's
     ``batch_evaluator`` also batches the generations in flight together and the failures' shrinks.
+    ``recorder`` (``Recorder``) is told every candidate and failure as the search goes, so that a
+    search killed at any moment has written what it found (search/freeze.py: ``SearchRecorder``).
     Deterministic given ``seed_value`` (and a deterministic subject).
     """
     from .strategies import GaveUp, make_strategy
@@ -669,7 +682,8 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
                           subject_version=None, strategy=strategy, seed_value=seed_value, budget=budget,
                           shrink_budget=str(shrink_budget), params=[p.name for p in space.params],
                           episode_seed=episode_seed)
-    sim = _Simulator(EvalContext(space, subject_factory, episode_seed, stuck_after, batch), report, stop, evaluator)
+    sim = _Simulator(EvalContext(space, subject_factory, episode_seed, stuck_after, batch), report, stop, evaluator,
+                     recorder)
     signatures: set[tuple] = set()
 
     start_shrink = getattr(evaluator, "start_shrink", None)   # parallel.py: shrink while searching
@@ -679,18 +693,24 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
         if cand.failed and cand.signature not in signatures:   # distinct: a new cause signature
             signatures.add(cand.signature)
             report.failures.append(Failure(found=cand, shrunk=cand))
+            sim.tell_recorder("failure", len(report.failures) - 1)   # on disk before it is logged
             if start_shrink is not None and early_cap > 0 and any(cand.offsets) \
                     and len(report.failures) <= early_count:
                 start_shrink(sim.ctx, cand, early_cap)
+        sim.tell_recorder("simulated", cand)
         if progress is not None:
             progress(report)
 
     t0 = time.perf_counter()
     try:
+        sim.tell_recorder("start")
         _search_loop(make_strategy(strategy, space, report, budget, seed_value), sim, budget, on_result)
         report.shrink_total = shrink.total(budget, len(report.failures))
         caps = shrink_plan(report.failures, report.shrink_total, shrink)
         _note_unshrunk(report, caps, shrink)
+        for i, cap in enumerate(caps):   # kept as found: final now
+            if cap <= 0:
+                sim.set_failure(i, dataclasses.replace(report.failures[i], status="unshrunk"))
         shrink_failures = getattr(evaluator, "shrink_failures", None)   # parallel.py: all at once
         if shrink_failures is not None:
             shrink_failures(sim, caps, progress)
@@ -700,17 +720,18 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
         pass  # stop() said so, or the strategy gave up (stop_reason says why)
     except KeyboardInterrupt:
         report.interrupted = True
-        report.stop_reason = "interrupted (Ctrl-C)"
+        report.stop_reason = f"interrupted ({first_signal() or 'Ctrl-C'})"
     finally:
         discard = getattr(evaluator, "discard", None)   # jobs still in flight if it ended early
         if discard is not None:
             discard()
-    batching = getattr(evaluator, "batching", None)
-    if batching is not None and batching.batched:
-        report.batching = batching.describe()
-    if report.interrupted:
-        for f in report.failures:
-            if f.shrink_sims == 0 and not f.note and any(f.found.offsets):
-                f.note = "not shrunk: the search was interrupted"
-    report.wall_time = time.perf_counter() - t0
+        batching = getattr(evaluator, "batching", None)
+        if batching is not None and batching.batched:
+            report.batching = batching.describe()
+        if report.interrupted:
+            for f in report.failures:
+                if f.shrink_sims == 0 and not f.note and any(f.found.offsets):
+                    f.note = "not shrunk: the search was interrupted"
+        report.wall_time = time.perf_counter() - t0
+        sim.tell_recorder("finish")   # also when something failed: what was found stays on disk
     return report

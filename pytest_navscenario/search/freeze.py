@@ -3,13 +3,21 @@
 Layout under the regressions folder (``--navsearch-out`` / ini ``navsearch_out``)::
 
     <out>/<seed name>/<seed name>-<content hash>.yaml   one per distinct (shrunk) failure
-    <out>/<seed name>/search-log.jsonl                   every simulated candidate of the last search
+    <out>/<seed name>/search-log.jsonl                   every search's simulated candidates, appended
 
 A frozen file's name comes from ``scenario.content_hash()``, so the same failure found again
 maps to the same file: it is not duplicated (the first file, and its provenance, are kept).
 Failures whose shrunk layouts fail the same way (the same cause signature, fitness.py) are
 frozen once: no near-copies.
-Every file is written atomically, so an interrupted run never leaves half a file.
+
+``SearchRecorder`` writes while the search runs (``run_search(..., recorder=...)``): each
+distinct failure the moment it is found (provenance ``status: found``), replaced by its final
+form once shrunk (``shrunk``, or ``unshrunk`` when kept as found), and each simulated candidate as
+one appended line of the log, after the file of the failure it found. So a search killed at any
+moment (SIGKILL, a crash, a power cut after the last fsync) has on disk every failure it had
+found. Every frozen file is written atomically, so no run ever leaves half a file; the log is
+appended one whole line per write, and each search's lines carry its own id between a start
+and an end record, so two searches writing into one folder keep both.
 """
 from __future__ import annotations
 
@@ -91,25 +99,33 @@ def standalone_scenario(scenario: Scenario, seed: Scenario, *, name: str, descri
 
 
 def save_standalone(scenario: Scenario, seed: Scenario, path: Path) -> None:
-    """Write ``scenario`` to ``path`` atomically, its mesh files copied beside it."""
+    """Write ``scenario`` to ``path`` atomically, its mesh and heightfield files copied beside it."""
     from ..scenario.dump import save_scenario
+    from ..scenario.modeline import ensure_project_schema
 
     path.parent.mkdir(parents=True, exist_ok=True)
     save_scenario(_with_mesh_copies(scenario, seed, path.parent), path)
+    ensure_project_schema(path)     # the schema its modeline names, so an editor reads it at once
+
+
+def _now() -> str:
+    return _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()
 
 
 def frozen_scenario(report: SearchReport, failure: Failure, space: SearchSpace, *, date: str | None = None,
                     subject: str | None = None, root: str | Path | None = None) -> Scenario:
-    """The shrunk failure as a standalone scenario with its provenance (no ``search:`` block)."""
+    """The failure in its current form (shrunk once it is) as a standalone scenario with its
+    provenance (no ``search:`` block); ``status`` says which form (engine.Failure)."""
     cand = failure.shrunk
     seed = space.seed
     scenario = candidate_scenario(cand, space)
     provenance = candidate_provenance(report, cand, space, subject=subject, root=root)
     provenance.update({
+        "status": failure.status,
         "found_offsets": space.as_mapping(failure.found.offsets),
         "found_at_simulation": failure.found.sim,
         "shrink_simulations": failure.shrink_sims,
-        "date": date or _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat(),
+        "date": date or _now(),
     })
     if failure.note:
         provenance["note"] = failure.note
@@ -155,43 +171,228 @@ def freeze_failures(report: SearchReport, space: SearchSpace, out_dir: str | Pat
 
 def _with_mesh_copies(scenario: Scenario, seed: Scenario, folder: Path) -> Scenario:
     """The frozen scenario with its mesh files copied beside it (``meshes/<stem>-<hash><suffix>``,
-    named by their content so equal files are stored once): a mesh path must stay inside the
-    scenario's folder, and the frozen file lives elsewhere than its seed."""
+    named by their content so equal files are stored once), and its heightfield files
+    (``heightmaps/``): a file's path must stay inside the scenario's folder, and the frozen file
+    lives elsewhere than its seed."""
     import hashlib
     import shutil
 
     from ..scenario.model import MeshObstacle
 
-    if not any(isinstance(o, MeshObstacle) for o in scenario.obstacles):
+    grids = [el for el in scenario.terrain if el.kind == "heightfield"]
+    if not any(isinstance(o, MeshObstacle) for o in scenario.obstacles) and not grids:
         return scenario
     base = Path(seed.source).parent if seed.source else Path.cwd()
-    obstacles = []
-    for obs in scenario.obstacles:
-        if isinstance(obs, MeshObstacle):
-            src = base / obs.file
-            digest = hashlib.sha256(src.read_bytes()).hexdigest()[:12]
-            rel = Path("meshes") / f"{src.stem}-{digest}{src.suffix.lower()}"
-            if not (folder / rel).exists():
-                (folder / rel.parent).mkdir(parents=True, exist_ok=True)
-                shutil.copyfile(src, folder / rel)
-            obs = replace(obs, file=rel.as_posix())
-        obstacles.append(obs)
-    return replace(scenario, obstacles=tuple(obstacles))
+
+    def copied(file: str, kind: str) -> str:
+        src = base / file
+        digest = hashlib.sha256(src.read_bytes()).hexdigest()[:12]
+        rel = Path(kind) / f"{src.stem}-{digest}{src.suffix.lower()}"
+        if not (folder / rel).exists():
+            (folder / rel.parent).mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(src, folder / rel)
+        return rel.as_posix()
+
+    obstacles = tuple(replace(o, file=copied(o.file, "meshes")) if isinstance(o, MeshObstacle) else o
+                      for o in scenario.obstacles)
+    # heightfield files likewise (heightmaps/): the grid's digest is the file's content, so the
+    # frozen scenario hashes as the one that failed
+    terrain = tuple(replace(el, file=copied(el.file, "heightmaps")) if el.kind == "heightfield" else el
+                    for el in scenario.terrain)
+    return replace(scenario, obstacles=obstacles, terrain=terrain)
 
 
-def log_records(report: SearchReport, space: SearchSpace) -> list[dict[str, Any]]:
-    head = {"seed": report.seed_name, "subject": report.subject, "strategy": report.strategy,
-            "search_seed": report.seed_value, "budget": report.budget, "search_sims": report.sims_used,
-            "shrink_sims": report.shrink_sims, "shrink_budget": report.shrink_total}
-    return [{**head, **c.to_dict(space)} for c in report.candidates]
+def new_search_id() -> str:
+    """An id for one search's lines in a shared log: its start time (UTC) and a random part."""
+    import secrets
+    return _dt.datetime.now(_dt.timezone.utc).strftime("%Y%m%dT%H%M%SZ") + "-" + secrets.token_hex(3)
 
 
-def write_search_log(report: SearchReport, space: SearchSpace, out_dir: str | Path) -> Path:
-    """Every simulated candidate (search and shrink phases) as JSON Lines, beside the frozen files."""
-    path = Path(out_dir) / space.seed.name / LOG_NAME
-    text = "".join(json.dumps(r, sort_keys=True, allow_nan=False) + "\n" for r in log_records(report, space))
-    atomic_write_text(path, text)
-    return path
+def _head(report: SearchReport, search_id: str) -> dict[str, Any]:
+    return {"search": search_id, "seed": report.seed_name, "subject": report.subject,
+            "strategy": report.strategy, "search_seed": report.seed_value, "budget": report.budget}
+
+
+def start_record(report: SearchReport, search_id: str) -> dict[str, Any]:
+    """The log's first line of a search: what was searched, with what, from when."""
+    return {"record": "start", **_head(report, search_id), "date": _now(), "shrink_budget": report.shrink_budget,
+            "nav_seed": report.episode_seed or 0, "params": list(report.params)}
+
+
+def candidate_record(report: SearchReport, cand: Candidate, space: SearchSpace, search_id: str) -> dict[str, Any]:
+    """One simulated candidate as a log line."""
+    return {"record": "candidate", **_head(report, search_id), **cand.to_dict(space)}
+
+
+def end_record(report: SearchReport, search_id: str) -> dict[str, Any]:
+    """The log's last line of a search: how the simulations were spent and why it ended."""
+    return {"record": "end", **_head(report, search_id), "search_sims": report.sims_used,
+            "shrink_sims": report.shrink_sims, "shrink_budget": report.shrink_total,
+            "failures": len(report.failures), "interrupted": report.interrupted,
+            "stop_reason": report.stop_reason, "wall_time": round(report.wall_time, 3)}
+
+
+def log_records(report: SearchReport, space: SearchSpace, search_id: str = "") -> list[dict[str, Any]]:
+    """A finished search's whole log: its start record, every candidate, its end record."""
+    search_id = search_id or new_search_id()
+    return ([start_record(report, search_id)] + [candidate_record(report, c, space, search_id)
+                                                 for c in report.candidates] + [end_record(report, search_id)])
+
+
+def _line(record: dict[str, Any]) -> bytes:
+    return (json.dumps(record, sort_keys=True, allow_nan=False) + "\n").encode("utf-8")
+
+
+class _AppendLog:
+    """A JSON Lines file opened for appending: each ``write`` is one ``os.write`` of whole lines
+    (with O_APPEND, so two processes appending at once interleave whole lines, never bytes)."""
+
+    def __init__(self, path: Path):
+        import os
+
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self.path = path
+        self.fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o666)
+        if os.fstat(self.fd).st_size and not _ends_with_newline(path):   # a line cut by a kill: end it
+            os.write(self.fd, b"\n")
+
+    def write(self, *records: dict[str, Any]) -> None:
+        import os
+
+        data = b"".join(_line(r) for r in records)
+        while data:
+            data = data[os.write(self.fd, data):]
+
+    def close(self) -> None:
+        import os
+
+        if self.fd >= 0:
+            os.close(self.fd)
+            self.fd = -1
+
+
+def _ends_with_newline(path: Path) -> bool:
+    with open(path, "rb") as fh:
+        fh.seek(-1, 2)
+        return fh.read(1) == b"\n"
+
+
+def write_search_log(report: SearchReport, space: SearchSpace, out_dir: str | Path, search_id: str = "") -> Path:
+    """Append a finished search's log (start record, every simulated candidate of the search and
+    shrink phases, end record) to ``out_dir/<seed>/search-log.jsonl``, beside the frozen files."""
+    log = _AppendLog(Path(out_dir) / space.seed.name / LOG_NAME)
+    try:
+        log.write(*log_records(report, space, search_id))
+    finally:
+        log.close()
+    return log.path
+
+
+def read_search_log(path: str | Path) -> dict[str, list[dict[str, Any]]]:
+    """The records of a search log, by search id in the order the searches started (each list
+    from its start record to its end record; a search killed before its end has none). A line
+    cut short by a kill is skipped."""
+    searches: dict[str, list[dict[str, Any]]] = {}
+    for line in Path(path).read_text(encoding="utf-8").splitlines():
+        try:
+            record = json.loads(line)
+        except ValueError:
+            continue
+        searches.setdefault(str(record.get("search", "")), []).append(record)
+    return searches
+
+
+class SearchRecorder:
+    """Writes a search's frozen failures and its log while it runs (``run_search(...,
+    recorder=SearchRecorder(space, out))``; see the module docstring). Errors writing (a full disk,
+    a folder without write permission) do not stop the search: the first is kept in ``error`` and
+    nothing more is written. After ``finish``, ``files`` lists the frozen files (FrozenFile, one per
+    distinct file, in the order of the failures) and ``log_path`` the log."""
+
+    def __init__(self, space: SearchSpace, out_dir: str | Path, *, subject: str | None = None,
+                 root: str | Path | None = None):
+        self.space, self.subject, self.root = space, subject, root
+        self.folder = Path(out_dir) / space.seed.name
+        self.log_path: Path | None = None
+        self.search_id = new_search_id()
+        self.error = ""
+        self.files: list[FrozenFile] = []
+        self._log: _AppendLog | None = None
+        self._mine: dict[int, Path] = {}          # failure index -> the file this search wrote for it
+        self._held: dict[Path, int] = {}          # path -> the failure whose file it is (ours or kept)
+        self._kept: dict[int, Path] = {}          # failure index -> a file of an earlier search it maps to
+        self._causes: dict[tuple, int] = {}       # cause signature -> the failure frozen for it
+
+    # -- Recorder ------------------------------------------------------------------------------
+    def start(self, report: SearchReport) -> None:
+        def go() -> None:
+            self._log = _AppendLog(self.folder / LOG_NAME)
+            self.log_path = self._log.path
+            self._log.write(start_record(report, self.search_id))
+        self._guard(go)
+
+    def simulated(self, report: SearchReport, cand: Candidate) -> None:
+        if self._log is not None:
+            self._guard(lambda: self._log.write(candidate_record(report, cand, self.space, self.search_id)))
+
+    def failure(self, report: SearchReport, index: int) -> None:
+        self._guard(lambda: self._sync(report, index))
+
+    def finish(self, report: SearchReport) -> None:
+        def go() -> None:
+            for i in range(len(report.failures)):   # anything not yet on disk (after an error)
+                self._sync(report, i)
+            if self._log is not None:
+                self._log.write(end_record(report, self.search_id))
+        self._guard(go)
+        if self._log is not None:
+            self._log.close()
+        self.files = self._frozen(report)
+
+    # -- files -----------------------------------------------------------------------------------
+    def _guard(self, write) -> None:
+        if self.error:
+            return
+        try:
+            write()
+        except Exception as exc:   # never lose the search: say what could not be written
+            self.error = f"could not write under {self.folder}: {type(exc).__name__}: {exc}"
+
+    def _sync(self, report: SearchReport, index: int) -> None:
+        """Put failure ``index`` on disk in its current form: write its file, unless another
+        failure's file holds that layout or way of failing (frozen once) or an earlier search's
+        file holds that layout (kept as it was); then remove the file this search wrote for an
+        earlier form of it (the new form is on disk first, so a kill in between loses nothing)."""
+        failure = report.failures[index]
+        scenario = frozen_scenario(report, failure, self.space, subject=self.subject, root=self.root)
+        path = self.folder / f"{scenario.name}.yaml"
+        cause = tuple(failure.shrunk.signature)
+        old_mine, old_kept = self._mine.pop(index, None), self._kept.pop(index, None)
+        others = {self._held.get(path, index), self._causes.get(cause, index) if cause else index} - {index}
+        if not others:
+            if path == old_mine or not path.exists():
+                save_standalone(scenario, self.space.seed, path)
+                self._mine[index] = path
+            else:
+                self._kept[index] = path
+            self._held[path] = index
+            if cause:
+                self._causes.setdefault(cause, index)
+        for old in (old_mine, old_kept):
+            if old is not None and old != path:
+                self._held.pop(old, None)
+                if old == old_mine:
+                    old.unlink(missing_ok=True)
+
+    def _frozen(self, report: SearchReport) -> list[FrozenFile]:
+        out, seen = [], set()
+        for i, failure in enumerate(report.failures):
+            path = self._mine.get(i) or self._kept.get(i)
+            if path is None or path in seen:
+                continue
+            seen.add(path)
+            out.append(FrozenFile(path, i in self._mine, failure.shrunk.outcome, failure.shrunk.clearance))
+        return out
 
 
 def write_junit(items: Iterable[tuple[SearchReport, SearchSpace]], path: str | Path) -> Path:

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from typing import Any, Iterator, Sequence
 
 from .engine import (Candidate, EvalContext, Failure, SearchReport, _Simulator, evaluate_candidate,
-                     evaluate_candidates, shrink_failure, shrink_order)
+                     evaluate_candidates, shrink_failure, shrink_order, shrink_status)
 
 _CONTEXTS: dict[str, EvalContext] = {}   # worker side: the first copy of each context received
 _MAX_CONTEXTS = 4
@@ -205,8 +205,8 @@ class executor_evaluator:   # noqa: N801  (used like a function: evaluator=execu
             index, note, used, cands = outcome[i] if isinstance(outcome[i], tuple) else self._take(outcome[i])
             for cand in cands:
                 sim.record(cand, "shrink")
-            report.failures[i] = Failure(found=found, shrunk=cands[index] if index >= 0 else found,
-                                         shrink_sims=used, note=note)
+            sim.set_failure(i, Failure(found=found, shrunk=cands[index] if index >= 0 else found,
+                                       shrink_sims=used, note=note, status=shrink_status(note)))
             if progress is not None:
                 progress(report)
         self._shrinks = []

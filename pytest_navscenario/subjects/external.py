@@ -11,7 +11,9 @@ harness -> planner
    "scenario": {...the scenario as in YAML (scenario_to_dict): metres, seconds, degrees...}}
   {"type": "observation", "tick": 0, "time": 0.0, "pose": [x, y, yaw_rad],
    "velocity": [vx, vy, wz], "ranges": [...], "angles": [beam angles, rad, robot frame],
-   "goal": [x, y, yaw_rad], "waypoints": [[x, y], ...]}
+   "goal": [x, y, yaw_rad], "waypoints": [[x, y], ...], "attitude": [roll_rad, pitch_rad],
+   "points": [[x, y, z], ...]}     (points: 3D lidar returns, sensor frame, mm precision; only
+                                    with robot.lidar3d)
   {"type": "shutdown"}
 planner -> harness
   {"type": "ready", "name": "optional", "version": "optional"}   (answer to reset)
@@ -36,6 +38,7 @@ import time
 from typing import Any
 
 from ..core.errors import PlannerProtocolError, SubjectLoadError
+from ..core.processes import end_group
 from .protocol import Command, Observation
 from ..scenario.model import Scenario
 
@@ -62,6 +65,8 @@ class ExternalProcess:
 
     # -- life cycle -------------------------------------------------------------------------
     def start(self) -> None:
+        if _CLOSING[0]:
+            raise PlannerProtocolError("external planner not started again: this process is ending")
         try:
             self.proc = subprocess.Popen(
                 self.argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
@@ -84,7 +89,9 @@ class ExternalProcess:
         return self.proc is not None and self.proc.poll() is None
 
     def stop(self, grace: float = 1.0) -> None:
-        """Ask politely (shutdown message, close stdin), then terminate, then kill."""
+        """Ask politely (shutdown message, close stdin), then end its whole process group: the
+        program was started in a session of its own, so whatever it started (as a launch file
+        starts nodes) is in that group too; SIGTERM, then SIGKILL (core/processes.end_group)."""
         proc, self.proc = self.proc, None
         if proc is None:
             return
@@ -97,12 +104,13 @@ class ExternalProcess:
         try:
             proc.wait(timeout=grace)
         except subprocess.TimeoutExpired:
-            proc.terminate()
-            try:
-                proc.wait(timeout=grace)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+            pass
+        end_group(proc.pid, grace)
+        try:
+            proc.wait(timeout=grace)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
         for stream in (proc.stdout, proc.stderr, proc.stdin):
             try:
                 if stream:
@@ -192,7 +200,19 @@ class ExternalProcess:
 _PROCESSES: dict[tuple[str, ...], ExternalProcess] = {}
 
 
+def running_pids() -> set[int]:
+    """The pids of the exec: planner programs this process runs (not a planner's leftovers)."""
+    return {p.proc.pid for p in _PROCESSES.values() if p.proc is not None}
+
+
+_CLOSING = [False]   # set by _shutdown_all: the process is ending, no program is started again
+
+
 def _shutdown_all() -> None:
+    """Stop every exec: planner program of this process, for good: an episode still running in
+    another thread (a pool worker stopping while its episode runs) must not start one again, or it
+    would outlive the process."""
+    _CLOSING[0] = True
     for proc in list(_PROCESSES.values()):
         proc.stop(grace=0.5)
     _PROCESSES.clear()
@@ -256,7 +276,7 @@ class ExternalPlanner:
             {"type": "observation", "tick": obs.tick, "time": obs.time,
              "pose": obs.pose.tolist(), "velocity": obs.velocity.tolist(),
              "ranges": obs.ranges.tolist(), "angles": obs.angles.tolist(), "goal": obs.goal.tolist(),
-             "waypoints": obs.waypoints.tolist()},
+             "waypoints": obs.waypoints.tolist(), **_terrain_fields(obs)},
             self.tick_timeout, f"the observation of tick {obs.tick}")
         if reply.get("type") != "command":
             raise PlannerProtocolError(f"external planner answered an observation with {reply.get('type')!r}, expected 'command'")
@@ -295,3 +315,15 @@ def exec_factory(command: str, *, cwd: str | None = None,
 
     factory.__name__ = f"exec:{command}"
     return factory
+
+
+def _terrain_fields(obs: Observation) -> dict[str, Any]:
+    """The observation's attitude, and its 3D lidar points rounded to the millimetre (a float32's
+    full repr would triple the line) when a 3D lidar is fitted."""
+    out: dict[str, Any] = {}
+    if obs.attitude is not None:
+        out["attitude"] = [float(a) for a in obs.attitude]
+    if obs.points is not None:
+        import numpy as np
+        out["points"] = np.round(np.asarray(obs.points, dtype=float), 3).tolist()
+    return out

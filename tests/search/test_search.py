@@ -165,7 +165,7 @@ def test_bad_arguments(seed):
 
 
 def test_frozen_files_round_trip_and_are_not_duplicated(seed, found, tmp_path):
-    from pytest_navscenario.search.freeze import freeze_failures, write_search_log
+    from pytest_navscenario.search.freeze import freeze_failures, read_search_log, write_search_log
     from pytest_navscenario.scenario.loader import load_scenario
     from pytest_navscenario.scenario.model import content_hash
 
@@ -180,8 +180,13 @@ def test_frozen_files_round_trip_and_are_not_duplicated(seed, found, tmp_path):
     second = freeze_failures(found, space, tmp_path, subject="straight")
     assert [f.path for f in second] == [f.path for f in first] and not any(f.new for f in second)
     assert len(list((tmp_path / "crate").glob("*.yaml"))) == len(first)
-    log = write_search_log(found, space, tmp_path).read_text().splitlines()
-    assert len(log) == found.sims_used + found.shrink_sims
+    log = write_search_log(found, space, tmp_path)
+    write_search_log(found, space, tmp_path)        # a second search into the same folder: appended
+    searches = list(read_search_log(log).values())
+    assert len(searches) == 2 and searches[0][0]["search"] != searches[1][0]["search"]
+    for records in searches:
+        assert [r["record"] for r in records] == ["start"] + ["candidate"] * (found.sims_used + found.shrink_sims) + ["end"]
+        assert (records[-1]["search_sims"], records[-1]["shrink_sims"]) == (found.sims_used, found.shrink_sims)
 
 
 def test_empty_space_is_refused(seed):

@@ -78,8 +78,8 @@ def test_insertion_and_removal_are_parameters_zero_is_the_seed(lane):
 
 
 @pytest.mark.parametrize("search, message", [
-    ({"insert": -1}, "whole number >= 0"),
-    ({"insert": 1.5}, "whole number >= 0"),
+    ({"insert": -1}, "must be between 0 and 100"),       # the documented limits (search_keys.py)
+    ({"insert": 1.5}, "expected a whole number"),
     ({"insert_size": [0.8, 0.2]}, "0 < lo <= hi"),
     ({"insert_size": [0.1, 0.2, 0.3]}, "exactly two numbers"),
     ({"insert_margin": -1}, "must be >= 0"),
@@ -594,7 +594,7 @@ def test_an_interrupt_while_a_strategy_draws_is_held_until_it_has_drawn():
     import signal
     import time
 
-    from pytest_navscenario.search.engine import _interrupts_deferred
+    from pytest_navscenario.core.interrupts import deferred as _interrupts_deferred
 
     old = signal.signal(signal.SIGINT, signal.default_int_handler)
     drawn = []

@@ -35,6 +35,11 @@ def project(pytester, monkeypatch):
     return pytester
 
 
+def candidates(log: Path) -> list[dict]:
+    """The candidate records of a search log (its start and end records left out)."""
+    return [r for r in map(json.loads, log.read_text().splitlines()) if r["record"] == "candidate"]
+
+
 def run(pytester, *args):
     return pytester.runpytest_inprocess("-p", "pytest_navscenario.plugin", SUBJECT, *args)
 
@@ -48,7 +53,7 @@ def test_search_freezes_failures_that_fail_again_when_collected(project):
                                  "crate vs straight_planner:Straight 1.0 (evolve, search seed 3): 6/6 sims*"])
     frozen = sorted((out / "crate").glob("crate-*.yaml"))
     assert frozen, result.stdout.str()
-    log = [json.loads(line) for line in (out / "crate" / "search-log.jsonl").read_text().splitlines()]
+    log = candidates(out / "crate" / "search-log.jsonl")
     assert sum(r["phase"] == "search" for r in log) == 6 and all("params" in r and "outcome" in r for r in log)
     cases = list(ET.parse(project.path / "suite.xml").getroot().iter("testcase"))
     assert len(cases) == 6
@@ -96,9 +101,9 @@ def test_ctrl_c_keeps_what_was_found(project):
     assert "CUT SHORT: interrupted (Ctrl-C)" in out and "Interrupted: navsearch crate was cut short" in out, out
     sims = int(re.search(r"\): (\d+)/50 sims", out).group(1))  # the summary line
     assert 0 < sims < 50
-    log = (project.path / "scenarios" / "regressions" / "crate" / "search-log.jsonl").read_text().splitlines()
+    log = candidates(project.path / "scenarios" / "regressions" / "crate" / "search-log.jsonl")
     assert len(log) == sims
-    failures = [r for r in map(json.loads, log) if r["outcome"] != "success"]
+    failures = [r for r in log if r["outcome"] != "success"]
     frozen = list((project.path / "scenarios" / "regressions" / "crate").glob("crate-*.yaml"))
     assert bool(frozen) == bool(failures)
     assert not list((project.path / "scenarios" / "regressions" / "crate").glob(".*tmp"))
@@ -149,10 +154,11 @@ def test_shrink_budget_is_a_share_and_the_summary_and_log_say_how_sims_were_spen
     search, shrink, total = map(int, re.search(r"(\d+) sims searching \+ (\d+) shrinking \(shrink budget "
                                                r"(\d+)\)", line).groups())
     assert (search, total) == (8, 12) and 0 < shrink <= 12, line
-    log = [json.loads(x) for x in (project.path / "scenarios" / "regressions" / "crate" /
-                                   "search-log.jsonl").read_text().splitlines()]
-    assert {(r["search_sims"], r["shrink_sims"], r["shrink_budget"]) for r in log} == {(8, shrink, 12)}
-    assert sum(r["phase"] == "shrink" for r in log) == shrink
+    records = [json.loads(x) for x in (project.path / "scenarios" / "regressions" / "crate" /
+                                       "search-log.jsonl").read_text().splitlines()]
+    end = records[-1]
+    assert end["record"] == "end" and (end["search_sims"], end["shrink_sims"], end["shrink_budget"]) == (8, shrink, 12)
+    assert sum(r.get("phase") == "shrink" for r in records) == shrink
 
 
 def test_the_summary_says_when_failures_were_frozen_unshrunk(project):

@@ -1,0 +1,162 @@
+"""A search killed at any moment keeps what it had found (issue 26, item 2).
+
+Fault injection with real signals: a search is started as its own pytest process, killed with
+SIGKILL at moments drawn at random (a fixed generator, so a failure reproduces), and what is on
+disk afterwards is checked against the search's own log, which is written as the search goes:
+every distinct failure the log shows found before the kill has a frozen file, every frozen file
+loads, every log line parses, and no process of the run (pytest, the forkserver, its workers, the
+resource tracker) outlives it. Then two interrupts in quick succession: the second one, coming
+while the first one's saving runs, is held, so the files, the summary and the JUnit file are
+all written and no traceback is printed.
+"""
+from __future__ import annotations
+
+import json
+import os
+import random
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from test_search import SEED_YAML
+from test_search_parallel import SLOW
+
+from pytest_navscenario.scenario.loader import load_scenario
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture
+def project(tmp_path: Path) -> Path:
+    (tmp_path / "straight_planner.py").write_text(SLOW)
+    (tmp_path / "scenarios").mkdir()
+    (tmp_path / "scenarios" / "crate.yaml").write_text(SEED_YAML.replace("name: crate\n", ""))
+    (tmp_path / "pytest.ini").write_text("[pytest]\nnav_scenario_paths = scenarios\n")
+    return tmp_path
+
+
+def start_search(project: Path, *args: str) -> subprocess.Popen:
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(project), str(ROOT), os.environ.get("PYTHONPATH", "")]))
+    return subprocess.Popen(
+        [sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "--nav-subject=straight_planner:SlowStraight",
+         "--navsearch", "crate", "--budget", "60", "--navsearch-shrink-budget", "100%", *args],
+        cwd=project, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True)
+
+
+def wait_for_progress(proc: subprocess.Popen) -> str:
+    """The output up to the first progress line (the search has started simulating)."""
+    seen, deadline = "", time.monotonic() + 120
+    assert proc.stdout is not None
+    while time.monotonic() < deadline:
+        line = proc.stdout.readline()
+        seen += line
+        if not line or re.search(r"navsearch crate: \d+/60 sims", line):
+            return seen
+    return seen
+
+
+def processes_in_session(sid: int) -> list[str]:
+    """Processes of session ``sid`` still alive (zombies, already dead, left out)."""
+    alive = []
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            stat = Path(f"/proc/{entry}/stat").read_text().rsplit(")", 1)[1].split()
+            if int(stat[3]) == sid and stat[0] != "Z":
+                alive.append(f"{entry}: {Path(f'/proc/{entry}/cmdline').read_text().replace(chr(0), ' ')[:120]}")
+        except (OSError, IndexError, ValueError):
+            continue
+    return alive
+
+
+def assert_nothing_left(sid: int) -> None:
+    deadline = time.monotonic() + 30
+    while processes_in_session(sid) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert processes_in_session(sid) == []
+
+
+def assert_every_failure_found_is_frozen(folder: Path) -> int:
+    """Each distinct failure of the search's log has a frozen file that loads; returns how many."""
+    lines = (folder / "search-log.jsonl").read_text().splitlines()
+    records = [json.loads(line) for line in lines]          # every line whole: each is one write
+    assert records and records[0]["record"] == "start"
+    seen, found = set(), []
+    for r in records:
+        if r["record"] == "candidate" and r["phase"] == "search" and r["outcome"] not in ("success", "harness-error"):
+            if tuple(r["signature"]) not in seen:
+                seen.add(tuple(r["signature"]))
+                found.append(r["sim"])
+    frozen = {}
+    for path in folder.glob("crate-*.yaml"):
+        scenario = load_scenario(path)                       # loads: never half a file
+        assert scenario.provenance["status"] in ("found", "shrunk", "unshrunk")
+        frozen[scenario.provenance["found_at_simulation"]] = scenario
+    assert sorted(frozen) == sorted(found)
+    assert not any(p.name.endswith(".tmp") and not p.name.startswith(".") for p in folder.iterdir())
+    return len(found)
+
+
+@pytest.mark.parametrize("mode, kills", [
+    ([], 1), (["-n", "2"], 1),                      # each kill ~3-6 s; more of them in the heavy run
+    pytest.param([], 6, marks=pytest.mark.heavy), pytest.param(["-n", "2"], 6, marks=pytest.mark.heavy)],
+    ids=["serial", "n2", "serial-6-kills", "n2-6-kills"])
+def test_a_search_killed_at_random_moments_keeps_every_failure_it_had_found(project: Path, mode: list[str],
+                                                                            kills: int):
+    rnd = random.Random(2611 + kills)
+    for kill in range(kills):
+        out = f"out{kill}"
+        proc = start_search(project, *mode, "--navsearch-out", out)
+        seen = wait_for_progress(proc)
+        time.sleep(rnd.uniform(0.0, 4.0))   # searching, shrinking (from ~3 s on) or writing
+        proc.kill()
+        seen += proc.communicate(timeout=60)[0]
+        assert proc.returncode == -signal.SIGKILL, seen[-3000:]
+        assert_nothing_left(proc.pid)
+        shown = [int(n) for n in re.findall(r"sims, (\d+) distinct failure", seen)]
+        found = assert_every_failure_found_is_frozen(project / out / "crate")
+        assert found >= max(shown, default=0)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, pytest.param(signal.SIGTERM, marks=pytest.mark.heavy)],
+                         ids=["ctrl-c", "sigterm"])
+def test_a_second_interrupt_while_saving_does_not_stop_the_saving(project: Path, sig: int):
+    proc = start_search(project, "-n", "2", "--navsearch-junit", "suite.xml")
+    seen = wait_for_progress(proc)
+    time.sleep(1.0)
+    for _ in range(2):                  # Ctrl-C reaches the whole group, SIGTERM only pytest (kill)
+        os.killpg(proc.pid, sig) if sig == signal.SIGINT else proc.send_signal(sig)
+        time.sleep(0.05)
+    out = seen + proc.communicate(timeout=60)[0]
+    assert proc.returncode == pytest.ExitCode.INTERRUPTED, out[-3000:]
+    assert "Traceback" not in out and "interrupts.py" not in out, out[-3000:]
+    name = "Ctrl-C" if sig == signal.SIGINT else "SIGTERM"
+    assert f"CUT SHORT: interrupted ({name})" in out and "no result" not in out, out[-3000:]
+    assert "a second interrupt came while what was found was being saved" in out, out[-3000:]
+    assert (project / "suite.xml").is_file()
+    folder = project / "scenarios" / "regressions" / "crate"
+    assert assert_every_failure_found_is_frozen(folder) >= 1
+    assert json.loads((folder / "search-log.jsonl").read_text().splitlines()[-1])["record"] == "end"
+    assert_nothing_left(proc.pid)
+
+
+@pytest.mark.heavy
+def test_a_search_on_a_local_ray_instance_killed_leaves_nothing_running(project: Path):
+    """--nav-ray=auto starts Ray's processes under the run; killed with SIGKILL, the run cannot stop
+    them, and Ray's dashboard and runtime-env agents were measured lingering 1.5-2 minutes: the
+    watcher the run starts with them ends them."""
+    pytest.importorskip("ray")
+    proc = start_search(project, "--nav-ray=auto")
+    seen = wait_for_progress(proc)
+    assert "navsearch crate:" in seen, seen[-3000:]
+    time.sleep(1.0)
+    proc.kill()
+    proc.communicate(timeout=60)
+    assert_nothing_left(proc.pid)
+    assert assert_every_failure_found_is_frozen(project / "scenarios" / "regressions" / "crate") >= 1
