@@ -21,14 +21,15 @@ from ..verdict.result import EpisodeResult
 from ..scenario.model import Scenario
 
 
-def check_feasibility(scenario: Scenario) -> tuple[str | None, float]:
-    """(``impassable_reason(scenario)``, the seconds it took). Its shortest path is the one the
-    episode's metrics need (cached per process): the time belongs to the episode's evaluation."""
+def check_feasibility(scenario: Scenario) -> tuple[Any, float]:
+    """(``feasibility.infeasible(scenario)``: None, or why the scenario is no test with the field to
+    fix, the seconds it took). Its shortest path is the one the episode's metrics need (cached per
+    process): the time belongs to the episode's evaluation."""
     from ..verdict import feasibility
 
     t0 = time.perf_counter()
-    reason = feasibility.impassable_reason(scenario)
-    return reason, time.perf_counter() - t0
+    found = feasibility.infeasible(scenario)
+    return found, time.perf_counter() - t0
 
 
 def add_check_time(result: EpisodeResult, seconds: float) -> EpisodeResult:
@@ -84,8 +85,8 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
 def verdict(scenario: Scenario, facts: Any, ep_seed: int, name: str, version: str | None,
             stuck_after: float | None, t0: float, left: Any = ()) -> EpisodeResult:
     """The EpisodeResult of an episode's raw facts (``sim.SimResult``): the oracle's outcome and
-    message, the metrics; ``wall_time`` counted from ``t0``; ``left``: the processes the planner
-    left running (``processes.note_left_behind``)."""
+    message, the metrics; ``wall_time`` counted from ``t0``; ``left``: the processes it left
+    running (core/processes.py)."""
     from ..verdict import metrics, oracle
 
     t1 = time.perf_counter()

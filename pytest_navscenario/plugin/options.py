@@ -61,12 +61,6 @@ OPTIONS = (
      "reports stay in this process, so it costs less than pytest-xdist's N pytest workers; "
      "-n N on a run of scenario files only (no Python test files) does the same. Items report "
      "one per scenario in the usual order with the results of a serial run."),
-    ("--nav-isolate", "nav_isolate",
-     "yes: run the episodes in a worker process even without -n or --nav-workers, so that a "
-     "planner that ends its process (os._exit, a crash in C code, the out-of-memory killer) fails "
-     "only the item it was running (WorkerDied, after 3 tries) and the run goes on and writes its "
-     "results; costs the worker's start, about a second. no (default): a serial run simulates in "
-     "this process. With -n N, --nav-workers N or --nav-ray the episodes are isolated anyway."),
     ("--nav-batch", "nav_batch",
      "episodes run together in lockstep, with one planner call per control tick for all of them, "
      "when the subject implements the batch protocol (reset_batch/act_batch; the built-in dwa does): "
@@ -79,6 +73,12 @@ OPTIONS = (
      "without one; needs the optional extra pytest-navscenario[gpu]; trajectories within a "
      "tolerance of the CPU's, not bit for bit; scenarios it cannot simulate, such as terrain and "
      "3D lidars, run alone on the CPU and the summary says so). See docs/how-to/gpu-batches.md."),
+    ("--nav-isolate", "nav_isolate",
+     "yes: run the episodes in a worker process even without -n or --nav-workers, so that a "
+     "planner that ends its process (os._exit, a crash in C code, the out-of-memory killer) fails "
+     "only the item it was running (WorkerDied, after 3 tries) and the run goes on and writes its "
+     "results; costs the worker's start, about a second. no (default): a serial run simulates in "
+     "this process. With -n N, --nav-workers N or --nav-ray the episodes are isolated anyway."),
 )
 
 
@@ -111,7 +111,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     metavars = {"nav_subject": "SPEC", "nav_seed": "N", "nav_results": "PATH", "nav_artifacts": "DIR",
                 "nav_summary": "{yes,no}", "nav_tick_limit": "SECONDS", "nav_repeat": "N",
                 "nav_reset_timeout": "SECONDS", "nav_ray": "ADDRESS", "nav_workers": "N",
-                "nav_isolate": "{yes,no}", "nav_batch": "N", "nav_batch_engine": "{cpu,warp}"}
+                "nav_batch": "N", "nav_isolate": "{yes,no}", "nav_batch_engine": "{cpu,warp}"}
     for opt, ini, text in OPTIONS:
         group.addoption(opt, dest=ini, default=None, metavar=metavars[ini], help=text + f" [ini: {ini}]")
     parser.addini("nav_subject", helps["nav_subject"], default="")
@@ -126,9 +126,9 @@ def pytest_addoption(parser: pytest.Parser) -> None:
                   default=DEFAULT_RESET_TIMEOUT)
     parser.addini("nav_ray", helps["nav_ray"], default="")
     parser.addini("nav_workers", helps["nav_workers"], default="")
-    parser.addini("nav_isolate", helps["nav_isolate"], type="bool", default=False)
     parser.addini("nav_batch", helps["nav_batch"], default="auto")
     parser.addini("nav_batch_engine", helps["nav_batch_engine"], default="cpu")
+    parser.addini("nav_isolate", helps["nav_isolate"], type="bool", default=False)
     parser.addini("nav_scenario_glob",
                   "file name patterns of scenario files (space separated); files matching them are "
                   "collected when they are a YAML mapping with 'version' and 'mission' keys "

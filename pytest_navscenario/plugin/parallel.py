@@ -311,7 +311,8 @@ def pytest_runtestloop(session: pytest.Session) -> Any:
         keep = keep_trajectory(session.config)
         # in chunks, so the first episodes run while this process checks the later items
         items = [i for i in session.items if hasattr(i, "episode_job")]
-        size = batch_size(state.settings.batch, len(items), getattr(executor, "workers", 1))
+        size = (batch_size(state.settings.batch, len(items), getattr(executor, "workers", 1))
+                if state.subject.answers_batches() else 1)
         state.batching = Batching() if size > 1 else None
         step = max(SUBMIT_CHUNK, size)
         for start in range(0, len(items), step):

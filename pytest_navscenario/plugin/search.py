@@ -352,14 +352,14 @@ class NavSearchItem(pytest.Item):
         s, job = state.settings, state.jobs[self.job_name]
         subject = core.subject.spec or core.subject.label
         factory, evaluator = search_subject_and_evaluator(self.config)   # -n N / --nav-ray: workers
-        recorder = None
-        if not state.is_worker:   # this process writes: each failure and log line as found
-            from ..search.freeze import SearchRecorder
-            recorder = state.recorders[job.seed.name] = SearchRecorder(job.space, s.out, root=self.config.rootpath)
         batch = core.settings.batch
         if evaluator is None and batch > 1:   # --nav-batch: generations and shrinks in batches
             from ..search.batched import batch_evaluator
             evaluator = batch_evaluator()
+        recorder = None
+        if not state.is_worker:   # this process writes: each failure and log line as found
+            from ..search.freeze import SearchRecorder
+            recorder = state.recorders[job.seed.name] = SearchRecorder(job.space, s.out, root=self.config.rootpath)
         report = run_search(job.seed, factory, budget=s.budget, seed_value=s.seed,
                             strategy=s.strategy, shrink_budget=s.shrink_budget, space=job.space,
                             subject=subject, episode_seed=core.settings.seed, stuck_after=s.stuck_after,

@@ -21,7 +21,7 @@ import threading
 from typing import Any, Iterator, Sequence
 
 from .engine import (Candidate, EvalContext, Failure, SearchReport, _Simulator, _Stop, evaluate_candidates,
-                     iter_candidates, shrink_failure, shrink_order)
+                     iter_candidates, shrink_failure, shrink_order, shrink_status)
 
 Proposals = Sequence[tuple[tuple[float, ...], str]]
 
@@ -117,7 +117,7 @@ class batch_evaluator:   # noqa: N801  (used like a function: evaluator=batch_ev
                 cand.metrics["subject"], cand.metrics["subject_version"] = scratch.subject, scratch.subject_version
                 sim.record(cand, "shrink")
             sim.set_failure(i, Failure(found=found, shrunk=failure.shrunk, shrink_sims=failure.shrink_sims,
-                                       note=failure.note, status=failure.status))   # main's status, recorder
+                                       note=failure.note, status=shrink_status(failure.note)))
             if progress is not None:
                 progress(report)
 

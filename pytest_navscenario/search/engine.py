@@ -668,13 +668,13 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
     while the search goes on, with a cap no larger than the plan's, ``_early_shrink``) and
     ``discard()`` (give up what is still in flight when the search ends early), as the
     worker-process one in search/parallel.py does; the result does not depend on the evaluator.
-    ``recorder`` (``Recorder``) is told every candidate and failure as the search goes, so that a
-    search killed at any moment has written what it found (search/freeze.py: ``SearchRecorder``).
     ``batch`` > 1 simulates each generation's candidates together, in lockstep, when the subject
     answers the batch protocol (harness/batch.py): the same search, faster; search/batched.py's
     ``batch_evaluator`` also batches the generations in flight together and the failures' shrinks.
     ``engine`` names the batch engine ("cpu"; "warp": MuJoCo Warp, sim/warp_engine.py, whose
     trajectories agree with the CPU's within a tolerance, not bit for bit).
+    ``recorder`` (``Recorder``) is told every candidate and failure as the search goes, so that a
+    search killed at any moment has written what it found (search/freeze.py: ``SearchRecorder``).
     Deterministic given ``seed_value`` (and a deterministic subject).
     """
     from .strategies import GaveUp, make_strategy
@@ -687,7 +687,8 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
                           shrink_budget=str(shrink_budget), params=[p.name for p in space.params],
                           episode_seed=episode_seed)
     sim = _Simulator(EvalContext(space, subject_factory, episode_seed, stuck_after, batch, engine), report, stop,
-                     evaluator, recorder)
+                     evaluator,
+                     recorder)
     signatures: set[tuple] = set()
 
     start_shrink = getattr(evaluator, "start_shrink", None)   # parallel.py: shrink while searching
@@ -730,7 +731,7 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
         if discard is not None:
             discard()
         batching = getattr(evaluator, "batching", None)
-        if batching is not None:
+        if batching is not None and batching.batched:
             report.batching = batching.describe()
         if report.interrupted:
             for f in report.failures:

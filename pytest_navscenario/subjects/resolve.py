@@ -22,6 +22,7 @@ class Subject:
     _factory: Callable[[], Any] | None = field(default=None, repr=False)
     # folders a 'package.module:Attribute' spec's module is also looked up in (the rootdir)
     project: tuple[str, ...] = ()
+    _batches: bool | None = field(default=None, repr=False)   # answers the batch protocol (check())
 
     @property
     def label(self) -> str:
@@ -62,7 +63,28 @@ class Subject:
         from .external import check_start
         from .loading import make_planner
         planner, _ = make_planner(self.runner_arg, project=self.project)
+        self._batches = _answers_batches(planner)
         check_start(planner, keep_running)
+
+    def answers_batches(self) -> bool:
+        """True if its planners answer the batch protocol (subjects/protocol.py): known from
+        ``check``, or from the class a spec names (nothing is made); False for an ``exec:``
+        program and for a subject this process cannot load (the nodes of a Ray cluster may)."""
+        if self._batches is None:
+            if self.spec is not None and self.spec.strip().startswith("exec:"):
+                self._batches = False
+            else:
+                try:
+                    factory = self.factory
+                except Exception:
+                    return False
+                self._batches = isinstance(factory, type) and _answers_batches(factory)
+        return self._batches
+
+
+def _answers_batches(planner: Any) -> bool:
+    from .protocol import SingleFromBatch, is_batch_planner
+    return is_batch_planner(planner.planner if isinstance(planner, SingleFromBatch) else planner)
 
 
 def resolve_subject(config: pytest.Config, spec: str | None, origin: str) -> Subject:

@@ -53,9 +53,11 @@ def test_the_failures_shrink_side_by_side(lane):
 
 def test_a_subject_without_the_batch_protocol_searches_alone(lane):
     kw = dict(budget=10, seed_value=1, shrink_budget="50%")
-    batched = run_search(lane, Straight, batch=16, evaluator=batch_evaluator(), **kw)
+    evaluator = batch_evaluator()
+    batched = run_search(lane, Straight, batch=16, evaluator=evaluator, **kw)
     assert fingerprint(batched) == fingerprint(run_search(lane, Straight, **kw))
-    assert "alone (" in batched.batching and "does not implement the batch protocol" in batched.batching
+    assert batched.batching == "" and evaluator.batching.batched == 0     # no summary line: nothing batched
+    assert "does not implement the batch protocol" in evaluator.batching.describe()
 
 
 def test_stopping_while_shrinking_keeps_the_failures(lane):
