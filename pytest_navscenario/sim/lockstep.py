@@ -143,47 +143,26 @@ class Lockstep:
             if mine:
                 seen += cohort.observe(mine, self._finish, self._fail)
         for i in running:
-            if i not in self.alone:
-                continue
-            ep = self.episodes[i]
-            try:
-                state, obs = ep.observe()
-                if ep.faults is not None:
-                    obs = ep.faults.observation(ep.tick, state, obs)
-                steps[i][0](state)
-            except EpisodeOver as over:
-                self._finish(i, over.reason)
-                continue
-            except Exception as exc:
-                self._fail(i, exc)
-                continue
-            seen.append((i, state, obs))
+            if i in self.alone:
+                item = self._observe(i, steps)
+                if item is not None:
+                    seen.append(item)
         if not seen:
             return []
         seen.sort(key=lambda item: item[0])
         live = [i for i, _, _ in seen]
-        states = [state for _, state, _ in seen]
-        observations = [obs for _, _, obs in seen]
-        answers = self._act(live, observations)
+        answers = self._act(live, [obs for _, _, obs in seen])
         still = []
         physics: dict[int, list] = {}       # cohort number -> (position, setpoint) to step together
-        for i, answer, state, obs in zip(live, answers, states, observations):
-            ep = self.episodes[i]
+        for (i, state, obs), answer in zip(seen, answers):
+            setpoint = self._setpoint(i, answer, state, obs)
+            if setpoint is None:
+                continue
+            where = self.cohort_of.get(i)
+            if where is not None:
+                physics.setdefault(where[0], []).append((where[1], setpoint))
+                continue
             try:
-                if type(answer) is _Failed:       # the call failed: every episode of it
-                    ep._planner_failed(obs, answer.message, answer.traceback)
-                cmd = validate_command(answer)
-                if type(cmd) is str:
-                    ep._planner_failed(obs, cmd.replace("planner.act returned", "planner.act_batch returned "
-                                                        "for this episode", 1))
-                setpoint = ep.drive.setpoint(*cmd)
-                if ep.faults is not None:
-                    setpoint = ep.faults.applied(setpoint)
-                ep.record(state[0], setpoint)
-                where = self.cohort_of.get(i)
-                if where is not None:
-                    physics.setdefault(where[0], []).append((where[1], setpoint))
-                    continue
                 MUJOCO_WARNINGS.clear()
                 steps[i][2](setpoint)
             except EpisodeOver as over:
@@ -197,6 +176,46 @@ class Lockstep:
             still += self.cohorts[c][0].step(items, self._finish, self._fail)
         still.sort()
         return still
+
+    def _observe(self, i: int, steps: dict) -> tuple[int, tuple, Any] | None:
+        """Episode ``i`` observes on its own (``Episode.observe``, its faults, its safety check):
+        (i, true state, what the planner sees), or None when that ended it."""
+        ep = self.episodes[i]
+        try:
+            state, obs = ep.observe()
+            if ep.faults is not None:
+                obs = ep.faults.observation(ep.tick, state, obs)
+            steps[i][0](state)
+        except EpisodeOver as over:
+            self._finish(i, over.reason)
+            return None
+        except Exception as exc:
+            self._fail(i, exc)
+            return None
+        return i, state, obs
+
+    def _setpoint(self, i: int, answer: Any, state: tuple, obs: Any) -> tuple[float, float, float] | None:
+        """Episode ``i``'s actuator setpoint from the planner's ``answer`` (validated, within its
+        drive's limits, through its command faults), recorded; None when the answer ended it."""
+        ep = self.episodes[i]
+        try:
+            if type(answer) is _Failed:       # the call failed: every episode of it
+                ep._planner_failed(obs, answer.message, answer.traceback)
+            cmd = validate_command(answer)
+            if type(cmd) is str:
+                ep._planner_failed(obs, cmd.replace("planner.act returned", "planner.act_batch returned "
+                                                    "for this episode", 1))
+            setpoint = ep.drive.setpoint(*cmd)
+            if ep.faults is not None:
+                setpoint = ep.faults.applied(setpoint)
+            ep.record(state[0], setpoint)
+        except EpisodeOver as over:
+            self._finish(i, over.reason)
+            return None
+        except Exception as exc:
+            self._fail(i, exc)
+            return None
+        return setpoint
 
     def _act(self, live: list[int], observations: list[Any]) -> list[Any]:
         """One ``act_batch`` call under the deadline (the limit times the call's episodes): the

@@ -16,8 +16,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from .episode import EpisodeOver
-from .lockstep import Lockstep, _Failed
-from .command import validate_command
+from .lockstep import Lockstep
 from .moving import describe_collision
 from .trajectory import Collision
 from .warp_worlds import DeviceWorlds, group_key
@@ -87,46 +86,15 @@ class WarpLockstep(Lockstep):
     def _tick(self, running: list[int], steps: dict, deadline: Any) -> list[int]:
         """One control tick: observe and check on the host, one planner call, the physics of
         every group with a running episode on the device, the records on the host."""
-        seen: list[tuple[int, tuple, Any]] = []
-        for i in running:
-            ep = self.episodes[i]
-            try:
-                state, obs = ep.observe()
-                if ep.faults is not None:
-                    obs = ep.faults.observation(ep.tick, state, obs)
-                steps[i][0](state)
-            except EpisodeOver as over:
-                self._finish(i, over.reason)
-                continue
-            except Exception as exc:
-                self._fail(i, exc)
-                continue
-            seen.append((i, state, obs))
+        seen = [item for item in (self._observe(i, steps) for i in running) if item is not None]
         if not seen:
             return []
-        live = [i for i, _, _ in seen]
-        answers = self._act(live, [obs for _, _, obs in seen])
+        answers = self._act([i for i, _, _ in seen], [obs for _, _, obs in seen])
         setpoints: dict[int, tuple] = {}
         for (i, state, obs), answer in zip(seen, answers):
-            ep = self.episodes[i]
-            try:
-                if type(answer) is _Failed:
-                    ep._planner_failed(obs, answer.message, answer.traceback)
-                cmd = validate_command(answer)
-                if type(cmd) is str:
-                    ep._planner_failed(obs, cmd.replace("planner.act returned", "planner.act_batch returned "
-                                                        "for this episode", 1))
-                setpoint = ep.drive.setpoint(*cmd)
-                if ep.faults is not None:
-                    setpoint = ep.faults.applied(setpoint)
-                ep.record(state[0], setpoint)
-            except EpisodeOver as over:
-                self._finish(i, over.reason)
-                continue
-            except Exception as exc:
-                self._fail(i, exc)
-                continue
-            setpoints[i] = setpoint
+            setpoint = self._setpoint(i, answer, state, obs)
+            if setpoint is not None:
+                setpoints[i] = setpoint
         still = []
         for group in self.groups:
             moving = [i for i in group.members if i in setpoints]
