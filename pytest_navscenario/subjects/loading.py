@@ -10,7 +10,7 @@ from typing import Any, Iterable
 from ..core.errors import SubjectLoadError
 from ..core.user_code import load_object, look_in_project, spec_module
 from ..core.interrupts import from_the_user
-from .protocol import PlannerFactory
+from .protocol import PlannerFactory, SingleFromBatch, is_batch_planner
 
 
 BUILTIN_SUBJECTS = {
@@ -72,8 +72,8 @@ def make_planner(planner: Any = None, *, project: Iterable[str | os.PathLike] = 
     if isinstance(planner, str):
         spec = planner
         factory = load_subject(spec, project=project)
-    elif hasattr(planner, "act") and not isinstance(planner, type):
-        return planner, _spec_of(planner)
+    elif (hasattr(planner, "act") or is_batch_planner(planner)) and not isinstance(planner, type):
+        return _single(planner), _spec_of(planner)
     elif callable(planner):
         spec, factory = _spec_of(planner), planner
     else:
@@ -87,13 +87,23 @@ def make_planner(planner: Any = None, *, project: Iterable[str | os.PathLike] = 
             raise
         raise SubjectLoadError(f"subject {spec!r}: calling it to make a planner raised "
                                f"{type(exc).__name__}: {exc}") from exc
+    instance = _single(instance)
     missing = [m for m in ("reset", "act") if not callable(getattr(instance, m, None))]
     if missing:
         raise SubjectLoadError(
             f"subject {spec!r}: the object it makes ({type(instance).__name__}) has no "
             f"{' and no '.join(m + '()' for m in missing)} method; a planner needs reset(scenario) "
-            f"and act(observation) -> (vx, vy, wz) (see pytest_navscenario/planner.py)")
+            f"and act(observation) -> (vx, vy, wz), or the batch protocol's reset_batch(scenarios) "
+            f"and act_batch(ids, observations) (see docs/reference/planner-protocol.md)")
     return instance, spec
+
+
+def _single(planner: Any) -> Any:
+    """``planner`` itself, or, for one with only the batch methods, the adapter that runs it alone."""
+    if is_batch_planner(planner) and not (callable(getattr(planner, "reset", None))
+                                          and callable(getattr(planner, "act", None))):
+        return SingleFromBatch(planner)
+    return planner
 
 
 def _spec_of(obj: Any) -> str:
