@@ -2,8 +2,8 @@
 it was trained on and the action it answers, run as a planner (and as a batch planner: one
 inference call per tick for a whole batch of episodes).
 
-How a subject spec names a model file (``is_model_spec``): it ends in ``.onnx`` and is not of the
-form ``package.module:Attribute`` (``models/nav.onnx``, ``./nav.onnx``, ``nav.onnx``,
+How a subject spec names a model file (``is_model_spec``): it ends in ``.onnx`` and is neither of
+the form ``package.module:Attribute`` nor an ``exec:`` command (``models/nav.onnx``, ``./nav.onnx``, ``nav.onnx``,
 ``/abs/nav.onnx``). A prefix such as ``onnx:`` was not used because ``onnx`` is a real package, so
 ``onnx:policy.onnx`` is also a valid ``package.module:Attribute`` (attribute ``policy.onnx`` of
 the ``onnx`` package): which one was meant would depend on what is installed. A file suffix can
@@ -28,4 +28,5 @@ _PYTHON_SPEC = re.compile(r"^[A-Za-z_]\w*(\.[A-Za-z_]\w*)*:[A-Za-z_]\w*(\.[A-Za-
 def is_model_spec(spec: str) -> bool:
     """True if the subject spec ``spec`` names a model file (see the module docstring)."""
     text = spec.strip()
-    return text.lower().endswith(MODEL_SUFFIXES) and not _PYTHON_SPEC.match(text)
+    return (text.lower().endswith(MODEL_SUFFIXES) and not _PYTHON_SPEC.match(text)
+            and not text.startswith("exec:"))
