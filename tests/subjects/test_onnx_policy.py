@@ -322,3 +322,33 @@ def test_a_shape_that_only_shows_when_run_is_found_at_load(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         load_error(path, "for input rows of shape [2, 24] the model answered shape [1, 3]")
+
+
+# ------------------------------------------------------------------------------------ the template
+
+def test_the_template_command_writes_a_declaration_that_fits_the_model(tmp_path, capsys):
+    from pytest_navscenario.cli.main import main
+    from pytest_navscenario.subjects.policies.declaration import read_declaration
+
+    path = write_policy(tmp_path, "ppo", mlp_model(random_mlp(72, [16], 2)), None)
+    assert main(["policy-template", str(path)]) == 0
+    written = tmp_path / "ppo.policy.yaml"
+    assert f"wrote {written}" in capsys.readouterr().out
+    decl = read_declaration(written.read_text(), str(written))
+    assert decl.width == 72 and [f.kind for f in decl.observation] == ["lidar", "target", "velocity",
+                                                                        "previous_command"]
+    assert decl.action.components == (0, 2) and decl.input == "obs" and decl.name == "ppo"
+    assert recorded(path, "corridor").answers           # the model runs with it as written
+    assert main(["policy-template", str(path)]) == 2    # not overwritten
+    assert "exists already: not overwritten (--force overwrites it" in capsys.readouterr().err
+    assert main(["policy-template", str(path), "--print"]) == 0
+    assert capsys.readouterr().out == written.read_text()
+
+
+def test_the_template_refuses_a_model_whose_output_is_not_a_command(tmp_path, capsys):
+    from pytest_navscenario.cli.main import main
+
+    path = write_policy(tmp_path, "five", mlp_model(random_mlp(20, [4], 5)), None)
+    assert main(["policy-template", str(path)]) == 2
+    assert "has shape [batch, 5]: 5 values, but a command is 3 (vx, vy, wz) or 2 (vx, wz) values" in \
+        capsys.readouterr().err

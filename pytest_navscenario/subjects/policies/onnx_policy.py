@@ -172,7 +172,7 @@ def _load(spec: str, path: str) -> LoadedModel:
     shape = list(inp.shape)
     if len(shape) not in (1, 2) or (isinstance(shape[-1], int) and shape[-1] != width):
         raise SubjectLoadError(
-            f"subject {where}: input {inp.name!r} has shape {_shape(shape)}, but the declaration's observation "
+            f"subject {where}: input {inp.name!r} has shape {shape_text(shape)}, but the declaration's observation "
             f"has {width} values: {decl.layout()} (fix: declare the fields the policy was trained on, in "
             f"order, so that they add up to the model's input; the model should take [batch, {width}])")
     batched_rank = len(shape) == 2
@@ -183,10 +183,10 @@ def _load(spec: str, path: str) -> LoadedModel:
     out_shape = list(out.shape)
     if len(out_shape) != len(shape) or (isinstance(out_shape[-1], int) and out_shape[-1] != n_out):
         raise SubjectLoadError(
-            f"subject {where}: output {out.name!r} has shape {_shape(out_shape)}, but the declaration's action "
+            f"subject {where}: output {out.name!r} has shape {shape_text(out_shape)}, but the declaration's action "
             f"has {n_out} values ({', '.join(COMPONENTS[c] for c in decl.action.components)}) (fix: "
             f"action.components in the declaration; the model should answer "
-            f"{_shape([shape[0], n_out] if batched_rank else [n_out])})")
+            f"{shape_text([shape[0], n_out] if batched_rank else [n_out])})")
     from .features import Featurizer
     model = LoadedModel(path=path, session=session, input_name=inp.name, output_name=out.name, decl=decl,
                         featurizer=Featurizer(decl, dtype), fixed_batch=fixed, batched_rank=batched_rank,
@@ -196,7 +196,7 @@ def _load(spec: str, path: str) -> LoadedModel:
     if fixed is not None:
         how = "once per episode per tick" if fixed == 1 else f"on slices of {fixed} episodes"
         warnings.warn(PolicyWarning(
-            f"{spec}: the model's input {inp.name!r} has a fixed batch dimension ({_shape(shape)}), so it is "
+            f"{spec}: the model's input {inp.name!r} has a fixed batch dimension ({shape_text(shape)}), so it is "
             f"called {how}, not once per tick for a whole batch; export it with a dynamic batch dimension "
             f"(e.g. torch.onnx.export(..., dynamic_axes={{'{inp.name}': {{0: 'batch'}}, '{out.name}': "
             f"{{0: 'batch'}}}})) to run a batch in one call"), stacklevel=2)
@@ -221,18 +221,18 @@ def _trial(model: LoadedModel, where: str, width: int, n_out: int) -> None:
     got = np.asarray(got)
     if got.shape != (n, n_out):
         raise SubjectLoadError(
-            f"subject {where}: for input rows of shape {_shape([n, width])} the model answered shape "
-            f"{_shape(list(got.shape))}; the declaration's action needs {_shape([n, n_out])}: one row of "
+            f"subject {where}: for input rows of shape {shape_text([n, width])} the model answered shape "
+            f"{shape_text(list(got.shape))}; the declaration's action needs {shape_text([n, n_out])}: one row of "
             f"{n_out} values per input row (fix: action.components, or export the model so that its "
             f"output follows the input's batch dimension)")
 
 
-def _shape(shape: Sequence[Any]) -> str:
+def shape_text(shape: Sequence[Any]) -> str:
     return "[" + ", ".join(str(d) if d is not None else "?" for d in shape) + "]"
 
 
 def _shapes(infos: Iterable[Any]) -> str:
-    return ", ".join(f"{i.name!r} {_shape(i.shape)}" for i in infos)
+    return ", ".join(f"{i.name!r} {shape_text(i.shape)}" for i in infos)
 
 
 class OnnxPolicy:
