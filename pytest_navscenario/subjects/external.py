@@ -63,6 +63,8 @@ class ExternalProcess:
 
     # -- life cycle -------------------------------------------------------------------------
     def start(self) -> None:
+        if _CLOSING[0]:
+            raise PlannerProtocolError("external planner not started again: this process is ending")
         try:
             self.proc = subprocess.Popen(
                 self.argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
@@ -201,7 +203,14 @@ def running_pids() -> set[int]:
     return {p.proc.pid for p in _PROCESSES.values() if p.proc is not None}
 
 
+_CLOSING = [False]   # set by _shutdown_all: the process is ending, no program is started again
+
+
 def _shutdown_all() -> None:
+    """Stop every exec: planner program of this process, for good: an episode still running in
+    another thread (a pool worker stopping while its episode runs) must not start one again, or it
+    would outlive the process."""
+    _CLOSING[0] = True
     for proc in list(_PROCESSES.values()):
         proc.stop(grace=0.5)
     _PROCESSES.clear()

@@ -216,6 +216,9 @@ def test_check_jsonschema_refuses_them_in_ci_as_the_docs_say(tmp_path):
 
 
 def _write_part(path: Path) -> None:
+    """The files the probes name, beside the probe: a tetrahedron STL (``path``) and the small MJCF
+    robot of the body tests as robot.xml."""
+    (path.parent / "robot.xml").write_text((Path(__file__).parents[1] / "data" / "mjcf" / "cart.xml").read_text())
     v = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
     faces = [(0, 2, 1), (0, 1, 3), (1, 2, 3), (2, 0, 3)]
     with open(path, "wb") as fh:
@@ -314,7 +317,8 @@ RUN_ONLY = ("must be greater than", "must not be below", "physics steps", "whole
             "not shorter than the timeout", "overlaps obstacle", "so at most that many can be removed",
             "could pass the limit", "is not an obstacle or mission part of this seed", "has no length",
             "does not increase", "does not exist", "unknown mesh format", "leaves the scenario's folder",
-            "is an absolute path", "is not a file", "cannot be read")
+            "is an absolute path", "is not a file", "cannot be read",
+            "is faster than the simulation can follow")   # a mover's speed against its size, the robot's, the timestep
 
 
 def _probes(key: K.Key) -> list[Any]:

@@ -88,11 +88,11 @@ terrain:
 
 def test_the_impassable_verdict_is_a_setup_error_not_a_planner_failure(pytester, monkeypatch):
     monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
+    pytester.makepyfile(straight_planner=(Path(__file__).parents[1] / "search" / "straight_planner.py").read_text())
     pytester.makefile(".yaml", walled=WALLED, stairs=WALLED + "  - {type: steps, name: stairs, x: 8.25, y: 0, "
                                                               "count: 5, rise: 0.17, run: 0.3, width: 3}\n")
     result = pytester.runpytest_subprocess("-p", "pytest_navscenario.plugin", "--nav-plots=none",
-                                           "--nav-subject=tests.search.straight_planner:Straight",
-                                           "-p", "no:cacheprovider")
+                                           "--nav-subject=straight_planner:Straight", "-p", "no:cacheprovider")
     result.assert_outcomes(passed=1, errors=1)
     result.stdout.fnmatch_lines(["*ERROR at setup of*walled*",
                                  "*no planner can pass this scenario*platform 'upper' (0.85 m step)*"])
