@@ -5,6 +5,7 @@ Resolution order: the ``pytest_navscenario_make_subject`` hook (a conftest.py), 
 """
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -65,6 +66,21 @@ class Subject:
         check_start(planner, keep_running)
 
 
+def _model_path(spec: str, project: tuple[str, ...]) -> str:
+    """A model spec found only in the rootdir becomes its absolute path, so that every process and
+    every command that re-runs it (workers, reproduce lines) finds it; any other spec is kept."""
+    from .policies import is_model_spec
+
+    if not is_model_spec(spec):
+        return spec
+    from .policies.onnx_policy import model_places
+
+    places = model_places(spec, project=project)
+    if os.path.exists(places[0]):
+        return spec
+    return next((os.path.abspath(p) for p in places[1:] if os.path.exists(p)), spec)
+
+
 def resolve_subject(config: pytest.Config, spec: str | None, origin: str) -> Subject:
     """Ask the hook first, then use ``spec`` (from option/ini), else the built-in default. A
     spec's module is looked up on sys.path, then in the rootdir (core/user_code.py)."""
@@ -83,5 +99,5 @@ def resolve_subject(config: pytest.Config, spec: str | None, origin: str) -> Sub
                 f"return a zero-argument factory or class, a 'package.module:Attribute' string, or None")
         return Subject(spec=None, origin="hook", _factory=provided)
     if spec:
-        return Subject(spec=spec, origin=origin, project=project)
+        return Subject(spec=_model_path(spec.strip(), project), origin=origin, project=project)
     return Subject(spec=DEFAULT_SUBJECT, origin="built-in default", project=project)

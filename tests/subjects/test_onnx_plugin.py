@@ -3,7 +3,10 @@ scenarios (serial and on two workers) and a failure search, in real pytest runs 
 from __future__ import annotations
 
 import json
+import os
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -62,3 +65,17 @@ def test_a_search_runs_against_an_onnx_policy_with_one_option(project):
     text = result.stdout.str()
     assert result.ret in (0, 1), text
     result.stdout.fnmatch_lines(["*navsearch summary*", "boxes1 vs models/nav.onnx sha256:* 6/6 sims*"])
+
+
+def test_a_model_named_in_the_ini_is_found_in_the_rootdir_from_a_subfolder(project):
+    """pytest started in a subfolder: the ini's relative path is looked up in the rootdir too, and
+    every episode (and the reproduce line) gets the path that was found."""
+    project.makeini("[pytest]\nnav_scenario_paths = scenarios\nnav_subject = models/nav.onnx\n")
+    out = subprocess.run([sys.executable, "-m", "pytest", *PLUGIN, "corridor.yaml", "boxes2.yaml"],
+                         cwd=project.path / "scenarios", capture_output=True, text=True,
+                         env={**os.environ, "PYTEST_DISABLE_PLUGIN_AUTOLOAD": "1"})
+    text = out.stdout + out.stderr
+    model = project.path / "models" / "nav.onnx"
+    assert f"subject {model} (ini nav_subject)" in text, text
+    assert "1 failed, 1 passed" in text, text                 # boxes2 is a safety stop, as from the rootdir
+    assert f"--nav-subject={model}" in text, text

@@ -42,12 +42,7 @@ def locate_model(spec: str, *, cwd: str | None = None, project: Iterable[str | o
     """The absolute path of the model a spec names: an absolute path as it is, a relative one in
     ``cwd`` (the current folder when None), then in each ``project`` folder (pytest's rootdir, as
     for a ``package.module:Attribute`` subject's module). SubjectLoadError when it is in none."""
-    path = os.path.expanduser(spec.strip())
-    if os.path.isabs(path):
-        places = [path]
-    else:
-        places = [os.path.join(cwd or os.getcwd(), path)]
-        places += [os.path.join(os.fspath(p), path) for p in project if p]
+    places = model_places(spec, cwd=cwd, project=project)
     for place in places:
         if os.path.isdir(place):
             raise SubjectLoadError(f"subject {spec!r}: {place} is a folder, not an ONNX model file")
@@ -59,6 +54,14 @@ def locate_model(spec: str, *, cwd: str | None = None, project: Iterable[str | o
     looked = ", then ".join(dict.fromkeys(os.path.abspath(p) for p in places))
     raise SubjectLoadError(f"subject {spec!r}: no such model file (looked for {looked}); give its "
                            f"path relative to the folder you run in, or an absolute path")
+
+
+def model_places(spec: str, *, cwd: str | None = None, project: Iterable[str | os.PathLike] = ()) -> list[str]:
+    """Where a model spec is looked for, in order (see locate_model)."""
+    path = os.path.expanduser(spec.strip())
+    if os.path.isabs(path):
+        return [path]
+    return [os.path.join(cwd or os.getcwd(), path)] + [os.path.join(os.fspath(p), path) for p in project if p]
 
 
 @dataclass
