@@ -23,6 +23,8 @@ class Subject:
     _factory: Callable[[], Any] | None = field(default=None, repr=False)
     # folders a 'package.module:Attribute' spec's module is also looked up in (the rootdir)
     project: tuple[str, ...] = ()
+    # what loading it said the user should know (a planner's ``notes``), for pytest's header
+    notes: tuple[str, ...] = ()
 
     @property
     def label(self) -> str:
@@ -63,6 +65,7 @@ class Subject:
         from .external import check_start
         from .loading import make_planner
         planner, _ = make_planner(self.runner_arg, project=self.project)
+        self.notes = tuple(str(n) for n in getattr(planner, "notes", None) or ())
         check_start(planner, keep_running)
 
 

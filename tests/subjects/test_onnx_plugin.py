@@ -79,3 +79,14 @@ def test_a_model_named_in_the_ini_is_found_in_the_rootdir_from_a_subfolder(proje
     assert f"subject {model} (ini nav_subject)" in text, text
     assert "1 failed, 1 passed" in text, text                 # boxes2 is a safety stop, as from the rootdir
     assert f"--nav-subject={model}" in text, text
+
+
+def test_a_model_with_a_fixed_batch_of_one_says_so_in_the_header(project):
+    from onnx_models import mlp_model, random_mlp
+
+    write_policy(project.path / "models", "fixed", mlp_model(random_mlp(24, [8], 3), batch=1), DECLARATION_24)
+    result = project.runpytest_subprocess(*PLUGIN, "--nav-subject=models/fixed.onnx", "scenarios/corridor.yaml")
+    result.stdout.fnmatch_lines([
+        "navscenario: subject note: models/fixed.onnx: the model's input 'obs' has a fixed batch dimension "
+        "([[]1, 24]), so it is called once per episode per tick, not once per tick for a whole batch; export it "
+        "with a dynamic batch dimension*"])

@@ -77,6 +77,7 @@ class LoadedModel:
     batched_rank: bool                # the input has a batch dimension (rank 2), else rank 1
     name: str
     version: str
+    notes: tuple[str, ...] = ()       # what the user should know (shown in pytest's header)
 
     def infer(self, rows: Any) -> Any:
         """The model's output rows for input rows (n, width): one call when the batch dimension is
@@ -198,11 +199,13 @@ def _load(spec: str, path: str) -> LoadedModel:
     _trial(model, where, width, n_out)
     if fixed is not None:
         how = "once per episode per tick" if fixed == 1 else f"on slices of {fixed} episodes"
-        warnings.warn(PolicyWarning(
-            f"{spec}: the model's input {inp.name!r} has a fixed batch dimension ({shape_text(shape)}), so it is "
-            f"called {how}, not once per tick for a whole batch; export it with a dynamic batch dimension "
-            f"(e.g. torch.onnx.export(..., dynamic_axes={{'{inp.name}': {{0: 'batch'}}, '{out.name}': "
-            f"{{0: 'batch'}}}})) to run a batch in one call"), stacklevel=2)
+        what = "has a fixed batch dimension" if batched_rank else "has no batch dimension"
+        note = (f"{spec}: the model's input {inp.name!r} {what} ({shape_text(shape)}), so it is called {how}, "
+                f"not once per tick for a whole batch; export it with a dynamic batch dimension (e.g. "
+                f"torch.onnx.export(..., dynamic_axes={{'{inp.name}': {{0: 'batch'}}, '{out.name}': "
+                f"{{0: 'batch'}}}})) to run a batch in one call")
+        model.notes = (note,)
+        warnings.warn(PolicyWarning(note), stacklevel=2)
     return model
 
 
@@ -248,6 +251,7 @@ class OnnxPolicy:
         self.model = model
         self.name = model.name
         self.version = model.version
+        self.notes = model.notes
         self._episodes: list[Any] = []
 
     def reset(self, scenario: Scenario) -> None:
