@@ -216,7 +216,7 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) ->
     report = yield
     result = getattr(item, "nav_result", None)
     if call.when == "call" and result is not None:
-        from .payload import episode_to_payload, trajectories_requested
+        from .payload import clouds_requested, episode_to_payload, trajectories_requested
         from .state import get_state
 
         state = get_state(item.config)
@@ -226,7 +226,7 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) ->
         spec = state.subject.spec if state.subject.origin != "hook" else None
         report.nav = episode_to_payload(result, nodeid=item.nodeid, path=item.rel_path,  # type: ignore[attr-defined]
                                         with_trajectory=with_traj, repeat=item.repeat,  # type: ignore[attr-defined]
-                                        subject_spec=spec)
+                                        subject_spec=spec, with_cloud=clouds_requested(item.config))
         item.nav_result = None  # type: ignore[attr-defined]  # the payload has it; free the arrays
     return report
 

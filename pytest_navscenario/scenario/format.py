@@ -34,7 +34,7 @@ SCENARIO = section(Scenario, "", "a navigation test case: robot, mission, obstac
         default=None),
     Free("provenance", "", "written by the search: where a frozen failure came from", default=None),
 ], what="a mapping of scenario fields", rules=[
-    Rule("obstacle names are unique", None),
+    Rule("obstacle names are unique, and so are terrain element names", None),
     Rule("1 / (timestep × control_rate) is a whole number of physics steps, and timeout / timestep at most "
          "10⁷ steps", None),
     Rule("latencies are whole multiples of the control period and shorter than the timeout", None),

@@ -245,9 +245,15 @@ def _read(ctx: _Ctx, sec: _Section, decl: K.Section, values: dict[str, Any] | No
     """The values of ``decl``'s keys (by dataclass field), each read and checked as declared, then
     the section's rules. Keys already in ``values`` are not read again."""
     values = {} if values is None else values
+    items = sec.node.items
     for key in decl.keys:
-        if key.field not in values:
-            values[key.field] = _READ[key.kind](ctx, sec, key)
+        field = key.field
+        if field in values:
+            continue
+        if key.name not in items and key.default is not _REQUIRED:
+            values[field] = key.default             # absent: its default (most keys of most files)
+        else:
+            values[field] = _READ[key.kind](ctx, sec, key)
     for rule in decl.rules:
         if rule.check is not None:
             problem = rule.check(values, sec.node.items)
@@ -416,7 +422,7 @@ def _read_elements(ctx: _Ctx, top: _Section, key: K.Elements, build: Any = None)
                 raise ctx.fail(f"'{name}' does not apply to type: {kind} (it is a {other} key)", f"{path}.{name}",
                                key_line or line, f"remove '{name}', or set type: {other}")
         sec = _Section(ctx, item, path, keys, line=line)
-        name = _read_text(ctx, sec, element.section["name"])
+        name = _read_text(ctx, sec, element.section.by_name["name"]) if "name" in item.items else None
         if name is not None:
             if name in given:
                 first = given[name]

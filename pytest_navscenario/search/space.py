@@ -251,8 +251,29 @@ def _apply_obstacles(space: SearchSpace, scenario: Scenario, parts) -> Scenario:
         if d and d.get("removed", 0.0) >= FLAG_ON and removed < space.limits.remove:
             removed += 1
             continue
-        out.append(_mutate_obstacle(obs, d, space.min_size) if d else obs)
+        out.append(_followable(_mutate_obstacle(obs, d, space.min_size), scenario, d) if d else obs)
     return replace(scenario, obstacles=tuple(out))
+
+
+def _followable(obs: Any, scenario: Scenario, d: Mapping[str, float]) -> Any:
+    """A moving obstacle whose speed (or size) the candidate changed, no faster than the physics
+    step can follow (the loader refuses faster ones: ``loader.max_resolved_speed``); unchanged when
+    it already is, or when even MIN_SPEED is too fast (then the loader's check discards it)."""
+    motion = getattr(obs, "motion", None)
+    if motion is None or not ("speed" in d or "size" in d):
+        return obs
+    from ..scenario.loader import max_resolved_speed
+    limit = math.floor(max_resolved_speed(scenario, obs) * 10**POSITION_DECIMALS) / 10**POSITION_DECIMALS
+    if motion.velocity is not None:
+        speed = math.hypot(*motion.velocity)
+        if speed <= limit or limit < MIN_SPEED:
+            return obs
+        scale = limit / speed
+        velocity = tuple(math.trunc(v * scale * 10**POSITION_DECIMALS) / 10**POSITION_DECIMALS for v in motion.velocity)
+        return replace(obs, motion=replace(motion, velocity=velocity))
+    if motion.speed <= limit or limit < MIN_SPEED:
+        return obs
+    return replace(obs, motion=replace(motion, speed=limit))
 
 
 def _apply_inserted(space: SearchSpace, scenario: Scenario, parts) -> Scenario:

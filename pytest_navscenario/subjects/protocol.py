@@ -68,6 +68,12 @@ class Observation:
     goal: np.ndarray              # (3,) x, y, yaw (rad) of the final goal
     waypoints: np.ndarray         # (k, 2) remaining intermediate waypoints, in order (k may be 0)
     obstacles: tuple[Obstacle, ...]  # static map, for planners that use one (YAML units)
+    # Added with terrain (issue 25); planners that ignore them work as before.
+    points: np.ndarray | None = None  # (N, 3) float32 3D lidar returns (m) in the sensor's frame
+                                      # (x forward, z up; robot.lidar3d's mount), ring by ring; None
+                                      # without robot.lidar3d
+    attitude: np.ndarray | None = None  # (2,) roll, pitch (rad) of the robot's base (an IMU; pitch
+                                        # positive nose down); (0, 0) for the planar body
 
     @property
     def target(self) -> np.ndarray:

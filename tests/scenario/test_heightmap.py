@@ -150,3 +150,81 @@ def test_rough_ground_too_fine_for_the_grid_limit_says_what_to_change():
     assert info.value.field == "wavelength"
     with pytest.raises(ScenarioError, match=r"terrain\[r\].wavelength: a rough patch 200 x 5 m .* 3201 x 81"):
         height_grid(Rough("r", 0, 0, length=200.0, width=5.0, amplitude=0.1, wavelength=0.5))
+
+
+LOADED = """version: 1
+robot: {body: {type: wheeled}, drive: diff}
+mission: {start: {x: -8, y: 0}, goal: {x: -6, y: 0}}
+terrain:
+  - type: heightfield
+    name: yard
+    x: 0
+    y: 0
+    file: {file}
+    length: {length}
+    width: 2
+  - {type: rough, name: bumps, x: 20, y: 0, length: 4, width: 4, amplitude: 0.1, wavelength: {wavelength}}
+"""
+
+
+@pytest.mark.parametrize("file, content, length, wavelength, field, line, words", [
+    ("missing.npy", None, 2, 1.0, "terrain[0].file", 9, "does not exist"),
+    ("h.npy", np.array([[0.0, np.nan], [1.0, 2.0]]), 2, 1.0, "terrain[0].file", 9, "not finite"),
+    ("h.npy", np.zeros((3, 41)), 0.05, 1.0, "terrain[0].length", 10, "give length and width in the proportion"),
+    ("../out.npy", np.zeros((3, 3)), 2, 1.0, "terrain[0].file", 9, "leaves the scenario's folder"),
+    ("h.npy", np.zeros((3, 3)), 2, 0.001, "terrain[1].wavelength", 12, "make the patch smaller"),
+])
+def test_the_loader_names_file_line_and_field_of_a_bad_height_grid(tmp_path, file, content, length, wavelength,
+                                                                   field, line, words):
+    from pytest_navscenario.scenario.loader import load_scenario
+
+    folder = tmp_path / "s"
+    folder.mkdir()
+    if content is not None:
+        np.save((folder / file).resolve() if not file.startswith("..") else tmp_path / "out.npy", content)
+    path = folder / "yard.yaml"
+    path.write_text(LOADED.replace("{file}", file).replace("{length}", str(length))
+                    .replace("{wavelength}", str(wavelength)))
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    err = info.value
+    assert (err.path, err.line, err.field) == (str(path), line, field), str(err)
+    assert words in err.message
+
+
+def test_a_loaded_heightfield_carries_its_grid_in_the_content_hash(tmp_path):
+    from pytest_navscenario.scenario.loader import load_scenario
+    from pytest_navscenario.scenario.model import content_hash
+
+    np.save(tmp_path / "h.npy", np.arange(9.0).reshape(3, 3))
+    path = tmp_path / "yard.yaml"
+    path.write_text(LOADED.replace("{file}", "h.npy").replace("{length}", "2").replace("{wavelength}", "1.0"))
+    first = load_scenario(path)
+    assert first.terrain[0].digest == load_heightfield(tmp_path, "h.npy", 2, 2)[1]
+    np.save(tmp_path / "h.npy", np.arange(9.0).reshape(3, 3) * 2)
+    heightmap.clear_grid_cache()
+    assert content_hash(load_scenario(path)) != content_hash(first)
+    (tmp_path / "moved").mkdir()
+    np.save(tmp_path / "moved" / "g.npy", np.arange(9.0).reshape(3, 3) * 2)
+    moved = tmp_path / "moved" / "yard.yaml"
+    moved.write_text(path.read_text().replace("h.npy", "g.npy"))
+    assert content_hash(load_scenario(moved)) == content_hash(load_scenario(path))   # wherever the file is
+
+
+def test_a_frozen_failure_takes_its_heightfield_file_along(tmp_path):
+    """A failure frozen from a seed with a heightfield loads in its own folder and hashes the same."""
+    from pytest_navscenario.scenario.loader import load_scenario
+    from pytest_navscenario.scenario.model import content_hash
+    from pytest_navscenario.search.freeze import save_standalone
+
+    (tmp_path / "seeds" / "ground").mkdir(parents=True)
+    np.save(tmp_path / "seeds" / "ground" / "h.npy", np.arange(9.0).reshape(3, 3))
+    seed_path = tmp_path / "seeds" / "yard.yaml"
+    seed_path.write_text(LOADED.replace("{file}", "ground/h.npy").replace("{length}", "2")
+                         .replace("{wavelength}", "1.0"))
+    seed = load_scenario(seed_path)
+    out = tmp_path / "regressions" / "yard-1.yaml"
+    save_standalone(seed, seed, out)
+    frozen = load_scenario(out)
+    assert frozen.terrain[0].file.startswith("heightmaps/h-") and (out.parent / frozen.terrain[0].file).is_file()
+    assert content_hash(frozen) == content_hash(seed)

@@ -216,9 +216,15 @@ def test_check_jsonschema_refuses_them_in_ci_as_the_docs_say(tmp_path):
 
 
 def _write_part(path: Path) -> None:
-    """The files the probes name, beside the probe: a tetrahedron STL (``path``) and the small MJCF
-    robot of the body tests as robot.xml."""
+    """The files the probes name, beside the probe: a tetrahedron STL (``path``), the small MJCF
+    robot of the body tests as robot.xml, and the heightfield file their heightfield elements read
+    (the declared example's path)."""
     (path.parent / "robot.xml").write_text((Path(__file__).parents[1] / "data" / "mjcf" / "cart.xml").read_text())
+    import numpy as np
+    from PIL import Image
+    for grid in (path.parent / "ground" / "yard.png", path.parent / "ground.png"):
+        grid.parent.mkdir(exist_ok=True)
+        Image.fromarray(np.arange(25, dtype=np.uint8).reshape(5, 5)).save(grid)
     v = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
     faces = [(0, 2, 1), (0, 1, 3), (1, 2, 3), (2, 0, 3)]
     with open(path, "wb") as fh:
@@ -318,7 +324,9 @@ RUN_ONLY = ("must be greater than", "must not be below", "physics steps", "whole
             "could pass the limit", "is not an obstacle or mission part of this seed", "has no length",
             "does not increase", "does not exist", "unknown mesh format", "leaves the scenario's folder",
             "is an absolute path", "is not a file", "cannot be read",
-            "is faster than the simulation can follow")   # a mover's speed against its size, the robot's, the timestep
+            "is faster than the simulation can follow",   # a mover's speed against its size, the robot's, the timestep
+            # a heightfield's file and its stretch, a rough patch's grid (scenario/heightmap.py)
+            "unknown heightfield format", "in the proportion of its columns and rows", "needs a grid of")
 
 
 def _probes(key: K.Key) -> list[Any]:
