@@ -25,7 +25,7 @@ EPILOG = ("Run 'navscenario COMMAND --help' for a command's arguments. Whole sui
 # name -> (module, one-line purpose for the command list)
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "run": ("pytest_navscenario.cli.run",
-            "run one scenario against a planner; print outcome and metrics"),
+            "run scenario files against a planner; print outcomes and metrics"),
     "check-planner": ("pytest_navscenario.cli.run",
                       "check that a planner keeps the protocol: reset/act signatures, finite "
                       "commands, read-only observations, determinism, tick time"),
@@ -45,9 +45,10 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
 
 # name -> the description at the top of the subcommand's own --help
 DESCRIPTIONS: dict[str, str] = {
-    "run": "Run one scenario file against a planner in the simulation and print the outcome, the "
-           "oracle's message and the metrics. Exit status: 0 on success, 1 on a failing outcome, "
-           "2 when the scenario or the planner cannot be loaded.",
+    "run": "Run scenario files against a planner in the simulation and print each outcome, the "
+           "oracle's message and the metrics (several files: in batches, with one planner call a tick "
+           "for all, when the planner implements the batch protocol). Exit status: 0 on success, 1 on "
+           "a failing outcome, 2 when a scenario or the planner cannot be loaded (or an episode raised).",
     "check-planner": "Run a planner for a few real ticks and report protocol mistakes in plain words: "
                      "missing or mis-declared reset(scenario) / act(obs), exceptions, act() answers "
                      "that are not three finite numbers (vx, vy, wz), writes into the observation's "

@@ -19,8 +19,8 @@ import uuid
 from dataclasses import dataclass
 from typing import Any, Iterator, Sequence
 
-from .engine import (Candidate, EvalContext, Failure, SearchReport, _Simulator, evaluate_candidate, shrink_failure,
-                     shrink_order, shrink_status)
+from .engine import (Candidate, EvalContext, Failure, SearchReport, _Simulator, evaluate_candidate,
+                     evaluate_candidates, shrink_failure, shrink_order, shrink_status)
 
 _CONTEXTS: dict[str, EvalContext] = {}   # worker side: the first copy of each context received
 _MAX_CONTEXTS = 4
@@ -52,6 +52,26 @@ def _context(token: str, ctx: EvalContext) -> EvalContext:
             _CONTEXTS.clear()
         cached = _CONTEXTS[token] = ctx
     return cached
+
+
+@dataclass(frozen=True)
+class CandidateBatchJob:
+    """Several candidates simulated together in a worker (``engine.evaluate_candidates``: in
+    lockstep when the subject answers the batch protocol): one worker's share of a generation."""
+    ctx: EvalContext
+    proposals: tuple[tuple[tuple[float, ...], str], ...]
+    token: str
+
+    def run(self) -> list[Candidate]:
+        cands = evaluate_candidates(_context(self.token, self.ctx), self.proposals)
+        for cand in cands:
+            cand.scenario = None
+        return cands
+
+    def restore(self, cands: list[Candidate]) -> list[Candidate]:
+        for cand, (offsets, _) in zip(cands, self.proposals):
+            cand.scenario = self.ctx.space.apply(offsets)
+        return cands
 
 
 @dataclass(frozen=True)
@@ -131,6 +151,13 @@ class executor_evaluator:   # noqa: N801  (used like a function: evaluator=execu
     def __call__(self, ctx: EvalContext, proposals: Sequence[tuple[tuple[float, ...], str]]) -> Iterator[Candidate]:
         """Submit the generation now; the iterator waits for each candidate in proposal order."""
         token = self._token_for(ctx)
+        if ctx.batch > 1 and len(proposals) > 1:   # each worker's share as one batch
+            workers = max(1, int(getattr(self.executor, "workers", 1)))
+            size = min(ctx.batch, -(-len(proposals) // workers))
+            chunks = [tuple((tuple(o), origin) for o, origin in proposals[i:i + size])
+                      for i in range(0, len(proposals), size)]
+            pending = self._submit([CandidateBatchJob(ctx, chunk, token) for chunk in chunks])
+            return (cand for p in pending for cand in self._take(p))
         pending = self._submit([CandidateJob(ctx, tuple(offsets), origin, token) for offsets, origin in proposals])
         return (self._take(p) for p in pending)
 

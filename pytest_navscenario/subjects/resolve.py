@@ -25,6 +25,7 @@ class Subject:
     project: tuple[str, ...] = ()
     # what loading it said the user should know (a planner's ``notes``), for pytest's header
     notes: tuple[str, ...] = ()
+    _batches: bool | None = field(default=None, repr=False)   # answers the batch protocol (check())
 
     @property
     def label(self) -> str:
@@ -66,7 +67,32 @@ class Subject:
         from .loading import make_planner
         planner, _ = make_planner(self.runner_arg, project=self.project)
         self.notes = tuple(str(n) for n in getattr(planner, "notes", None) or ())
+        self._batches = _answers_batches(planner)
         check_start(planner, keep_running)
+
+    def answers_batches(self) -> bool:
+        """True if its planners answer the batch protocol (subjects/protocol.py): known from
+        ``check``, or from the class a spec names (nothing is made); True for a model file (an
+        ONNX policy answers it), False for an ``exec:`` program and for a subject this process
+        cannot load (the nodes of a Ray cluster may)."""
+        if self._batches is None:
+            from .policies import is_model_spec
+            if self.spec is not None and self.spec.strip().startswith("exec:"):
+                self._batches = False
+            elif self.spec is not None and is_model_spec(self.spec):
+                self._batches = True           # an ONNX policy always answers it (policies/)
+            else:
+                try:
+                    factory = self.factory
+                except Exception:
+                    return False
+                self._batches = isinstance(factory, type) and _answers_batches(factory)
+        return self._batches
+
+
+def _answers_batches(planner: Any) -> bool:
+    from .protocol import SingleFromBatch, is_batch_planner
+    return is_batch_planner(planner.planner if isinstance(planner, SingleFromBatch) else planner)
 
 
 def _model_path(spec: str, project: tuple[str, ...]) -> str:
