@@ -6,6 +6,7 @@ Resolution order: the ``pytest_navscenario_make_subject`` hook (a conftest.py), 
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -65,7 +66,9 @@ class Subject:
         ``keep_running`` leaves it up for this process's episodes (False when workers run them)."""
         from .external import check_start
         from .loading import make_planner
-        planner, _ = make_planner(self.runner_arg, project=self.project)
+        with warnings.catch_warnings():   # a PolicyWarning is kept as a note, shown in the header
+            warnings.simplefilter("ignore", _policy_warning())
+            planner, _ = make_planner(self.runner_arg, project=self.project)
         self.notes = tuple(str(n) for n in getattr(planner, "notes", None) or ())
         self._batches = _answers_batches(planner)
         check_start(planner, keep_running)
@@ -88,6 +91,11 @@ class Subject:
                     return False
                 self._batches = isinstance(factory, type) and _answers_batches(factory)
         return self._batches
+
+
+def _policy_warning() -> type[Warning]:
+    from .policies import PolicyWarning
+    return PolicyWarning
 
 
 def _answers_batches(planner: Any) -> bool:

@@ -90,3 +90,4 @@ def test_a_model_with_a_fixed_batch_of_one_says_so_in_the_header(project):
         "navscenario: subject note: models/fixed.onnx: the model's input 'obs' has a fixed batch dimension "
         "([[]1, 24]), so it is called once per episode per tick, not once per tick for a whole batch; export it "
         "with a dynamic batch dimension*"])
+    assert "PolicyWarning" not in result.stdout.str() + result.stderr.str()    # said once, in the header

@@ -22,7 +22,7 @@ from pytest_navscenario import load_scenario, run_scenario  # noqa: E402
 from pytest_navscenario.core.errors import SubjectLoadError  # noqa: E402
 from pytest_navscenario.subjects.loading import load_subject  # noqa: E402
 from pytest_navscenario.subjects.policies import is_model_spec  # noqa: E402
-from pytest_navscenario.subjects.policies.onnx_policy import PolicyWarning  # noqa: E402
+from pytest_navscenario.subjects.policies import PolicyWarning  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 SEEDS = ROOT / "scenarios"

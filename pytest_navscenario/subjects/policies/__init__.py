@@ -21,6 +21,11 @@ import re
 
 MODEL_SUFFIXES = (".onnx",)
 
+
+class PolicyWarning(UserWarning):
+    """Something about a learned policy the user should know (e.g. a fixed batch of one); pytest
+    shows it as a note in its header instead."""
+
 # `package.module:Attribute` exactly as core/user_code reads it: dotted identifiers on both sides
 _PYTHON_SPEC = re.compile(r"^[A-Za-z_]\w*(\.[A-Za-z_]\w*)*:[A-Za-z_]\w*(\.[A-Za-z_]\w*)*$")
 

@@ -17,14 +17,11 @@ from typing import Any, Iterable, Sequence
 
 from ...core.errors import SubjectLoadError
 from ...scenario.model import Scenario
+from . import PolicyWarning
 from .declaration import COMPONENTS, Declaration, declaration_path, find_declaration, model_digest
 
 EXTRA_HINT = "pip install 'pytest-navscenario[onnx]' (or: pip install onnxruntime)"
 _FLOAT_TYPES = {"tensor(float)": "float32", "tensor(double)": "float64", "tensor(float16)": "float16"}
-
-
-class PolicyWarning(UserWarning):
-    """Something about a learned policy the user should know (e.g. a fixed batch of one)."""
 
 
 def import_onnxruntime(spec: str) -> Any:
