@@ -21,14 +21,15 @@ from ..verdict.result import EpisodeResult
 from ..scenario.model import Scenario
 
 
-def check_feasibility(scenario: Scenario) -> tuple[str | None, float]:
-    """(``impassable_reason(scenario)``, the seconds it took). Its shortest path is the one the
-    episode's metrics need (cached per process): the time belongs to the episode's evaluation."""
+def check_feasibility(scenario: Scenario) -> tuple[Any, float]:
+    """(``feasibility.infeasible(scenario)``: None, or why the scenario is no test with the field to
+    fix, the seconds it took). Its shortest path is the one the episode's metrics need (cached per
+    process): the time belongs to the episode's evaluation."""
     from ..verdict import feasibility
 
     t0 = time.perf_counter()
-    reason = feasibility.impassable_reason(scenario)
-    return reason, time.perf_counter() - t0
+    found = feasibility.infeasible(scenario)
+    return found, time.perf_counter() - t0
 
 
 def add_check_time(result: EpisodeResult, seconds: float) -> EpisodeResult:

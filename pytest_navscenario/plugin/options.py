@@ -99,6 +99,17 @@ def ini_value(config: pytest.Config, name: str, expected: str = "") -> object:
         raise pytest.UsageError(f"ini option {name}: {exc}{hint}") from None
 
 
+def ini_is_set(config: pytest.Config, name: str) -> bool:
+    """Whether the ini file or ``-o name=...`` sets ``name`` (``getini`` cannot tell a set value
+    from the default). pytest 9.2 deprecates ``config.inicfg`` (a PytestRemovedIn10Warning on
+    every read); the same mapping is ``config._inicfg`` from pytest 9.0, ``config.inicfg`` before."""
+    values = getattr(config, "_inicfg", None)
+    if values is None:
+        values = config.inicfg                                  # pytest 8
+    overrides = getattr(config.option, "override_ini", None) or []
+    return name in values or any(str(o).split("=", 1)[0].strip() == name for o in overrides)
+
+
 def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("navscenario", "navigation scenarios (pytest-navscenario)")
     helps = {ini: text for _, ini, text in OPTIONS}

@@ -85,7 +85,7 @@ class _Section:
         self.ctx, self.path, self.keys = ctx, path, keys
         if not isinstance(node, YMap):
             raise ctx.fail(f"expected {what}, got {describe(node) if node is not None else 'nothing'}",
-                           path or None, node.line if node is not None and node.line else line,
+                           path or None, line if line is not None else (node.line if node is not None else None),
                            f"write it as 'key: value' lines with keys from: {', '.join(keys)}")
         self.node = node
         self.line = line if line is not None else node.line

@@ -414,8 +414,11 @@ def invalid_reason(scenario: Scenario) -> str | None:
     A polygon whose corners were moved into a self-intersecting outline, obstacles covering the
     start or goal footprint (a moving obstacle: the start, where it stands at t = 0; it may cross
     the goal), anything else the loader's checks across keys refuse (a waypoint inside an
-    obstacle: ``loader-refuses:<field>``), or no collision-free path for the footprint at all
-    (``paths.path_exists``). A candidate that passes loads again when frozen.
+    obstacle: ``loader-refuses:<field>``), no collision-free path for the footprint at all
+    (``paths.path_exists``), a shortest way that cannot be driven within the timeout at the robot's
+    top speed (``too-slow``), or a moving obstacle whose motion crosses a static one
+    (``mover-through:<name>``): the same checks as a hand-written scenario's at setup
+    (verdict/feasibility.py). A candidate that passes loads again when frozen.
     """
     from ..scenario.geometry import footprint_polygon, obstacle_polygon, polygon_problem
 
@@ -440,6 +443,13 @@ def invalid_reason(scenario: Scenario) -> str | None:
     from ..verdict.paths import path_exists
     if not path_exists(scenario):
         return "no-path"
+    from ..verdict.feasibility import too_slow
+    if too_slow(scenario) is not None:     # no planner reaches the goal in time: not a failure to find
+        return "too-slow"
+    from ..verdict.movers import mover_through
+    crossing = mover_through(scenario)
+    if crossing is not None:               # a person through a wall: the simulation of the impossible
+        return f"mover-through:{crossing.mover}"
     return None
 
 

@@ -225,16 +225,24 @@ def _fit_scans(data: BagData, smap, settings: FitSettings, notes: list[str]) -> 
 
 
 def _check_moves(data: BagData, scenario: Scenario) -> None:
-    """A seed whose start already satisfies its goal tests nothing: the robot did not move."""
+    """A seed whose start already satisfies its goal tests nothing: the robot did not move, or drove
+    a loop back to where it started (with no waypoints to follow it)."""
     from ...verdict.feasibility import trivially_passed
 
-    if trivially_passed(scenario) is not None:
-        od = data.odom
-        moved = float(np.hypot(*(od[:, 1:3].max(axis=0) - od[:, 1:3].min(axis=0))))
-        raise BagImportError(f"{data.path}: the robot hardly moved in the window (t={od[0, 0]:.1f}..{od[-1, 0]:.1f} s, "
-                             f"{len(od)} poses within {moved:.2f} m) and no recorded goal lies farther: the seed's "
-                             f"start would already be at its goal; choose a window where the robot drives "
-                             f"(--start/--end, --at), or check {data.odom_topic}")
+    if trivially_passed(scenario) is None:
+        return
+    od = data.odom
+    extent = float(np.hypot(*(od[:, 1:3].max(axis=0) - od[:, 1:3].min(axis=0))))
+    window = f"t={od[0, 0]:.1f}..{od[-1, 0]:.1f} s"
+    if extent <= 2 * scenario.mission.goal_tolerance.position:
+        raise BagImportError(f"{data.path}: the robot hardly moved in the window ({window}, {len(od)} poses within "
+                             f"{extent:.2f} m) and no recorded goal lies farther: the seed's start would already be "
+                             f"at its goal; choose a window where the robot drives (--start/--end, --at), or check "
+                             f"{data.odom_topic}")
+    raise BagImportError(f"{data.path}: the robot drove a loop in the window ({window}, {extent:.1f} m across) and "
+                         f"ended where it started, with no recorded goal elsewhere: the seed's start would already "
+                         f"be at its goal; end the window before it comes back (--end), or keep the loop as "
+                         f"waypoints (--path-as waypoints or both)")
 
 
 def _fit(data: BagData, grid, settings: FitSettings, notes: list[str], what: str,
