@@ -158,7 +158,11 @@ def _run_chunk(chunk, scenarios, seeds, planner, call_factory, spare, engine, ti
     verdict of each episode."""
     from ..sim.batch import BatchEpisode
 
+    from ..core import processes
+    from ..subjects.external import running_pids
+
     t0 = time.perf_counter()
+    before = processes.children()
     try:
         instance, spec = spare.pop() if spare else _make(planner, call_factory)
     except Exception as exc:
@@ -171,11 +175,16 @@ def _run_chunk(chunk, scenarios, seeds, planner, call_factory, spare, engine, ti
                 for i, s in zip(chunk, ep_seeds)]
     facts = engine.run(requests, bp)
     name, version = subject_identity(instance, spec)     # after reset: a planner may name itself there
+    del instance, bp    # a planner that ends its helpers when it is dropped has done so before the check
+    # processes the batch's planner left running: reported once, with the batch's first episode
+    left = processes.note_left_behind(before, f"the batch of {scenarios[chunk[0]].name or 'episodes'}",
+                                      ours=running_pids())
     share = (time.perf_counter() - t0) / len(chunk)
     for i, s, f in zip(chunk, ep_seeds, facts):
         if isinstance(f, Exception):
             out[i] = f
             continue
-        out[i] = verdict(scenarios[i], f, s, name, version, stuck_after, time.perf_counter() - share)
+        out[i] = verdict(scenarios[i], f, s, name, version, stuck_after, time.perf_counter() - share, left)
+        left = ()
     report.batched += len(chunk)
     report.batches += 1

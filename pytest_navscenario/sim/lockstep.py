@@ -29,6 +29,9 @@ def _tick_limit(requests: Sequence[Any]) -> float | None:
     return limits.pop() if limits else None
 
 
+COHORTS = True     # episodes that can observe and step together do (cohort.py); False: each its own steps
+
+
 class _Failed:
     """What every episode of a failed planner call gets instead of a command."""
 
@@ -115,7 +118,7 @@ class Lockstep:
         groups: dict[tuple, list[int]] = {}
         self.alone: set[int] = set()
         for i in running:
-            key = cohort_key(self.episodes[i])
+            key = cohort_key(self.episodes[i]) if COHORTS else None
             if key is None:
                 self.alone.add(i)
             else:
