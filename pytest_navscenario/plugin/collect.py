@@ -366,6 +366,14 @@ class ScenarioItem(pytest.Item):
             cmd = f"cd {shlex.quote(str(self.config.rootpath))} && {cmd}"
         return cmd
 
+    def _repr_failure_py(self, excinfo: pytest.ExceptionInfo[BaseException], style: Any = None) -> Any:
+        """An error of ours at setup (a scenario no planner can pass) reads as its message, as one
+        in the call does (pytest reports setup errors through this, not ``repr_failure``), not as a
+        traceback through pytest's and pluggy's frames."""
+        if isinstance(excinfo.value, NavScenarioError) and not isinstance(excinfo.value, ScenarioFailed):
+            return self.repr_failure(excinfo, style)
+        return super()._repr_failure_py(excinfo, style)
+
     def repr_failure(self, excinfo: pytest.ExceptionInfo[BaseException], style: Any = None) -> Any:
         exc = excinfo.value
         if isinstance(exc, ScenarioFailed):

@@ -155,10 +155,20 @@ def ground_height(scenario, px, py) -> np.ndarray:
 
 
 def grid_low(element: TerrainElement, scenario) -> float:
-    """The lowest surface of a grid element (rough ground, heightfield)."""
-    from .heightmap import height_grid
+    """The lowest surface of a grid element (rough ground, heightfield); cached (asked for with
+    every height on it)."""
+    key = (element, getattr(scenario, "source", None))
+    low = _GRID_LOW.get(key)
+    if low is None:
+        from .heightmap import height_grid
 
-    return float(element.z + np.asarray(height_grid(element, scenario).heights).min())
+        if len(_GRID_LOW) >= 256:
+            _GRID_LOW.clear()
+        low = _GRID_LOW[key] = float(element.z + np.asarray(height_grid(element, scenario).heights).min())
+    return low
+
+
+_GRID_LOW: dict = {}
 
 
 def element_at(scenario, x: float, y: float, margin: float = 0.0) -> int | None:

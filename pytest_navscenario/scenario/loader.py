@@ -559,7 +559,8 @@ def _build(root: YNode | None, ctx: _Ctx, name: str | None, family: str | None) 
     )
     if scenario.search is not None:     # the search's space, checked on plain runs too
         read_search(ctx, top.get("search"), "search", top.line_of("search"),
-                    obstacles=tuple(o.name for o in scenario.obstacles), waypoints=len(scenario.mission.waypoints))
+                    obstacles=tuple(o.name for o in scenario.obstacles), waypoints=len(scenario.mission.waypoints),
+                    terrain=tuple(el.name for el in scenario.terrain))
     check_scenario(scenario, _ctx=ctx)
     return scenario
 

@@ -104,6 +104,7 @@ def save_standalone(scenario: Scenario, seed: Scenario, path: Path) -> None:
     from ..scenario.modeline import ensure_project_schema
 
     path.parent.mkdir(parents=True, exist_ok=True)
+    scenario = _with_body_copy(scenario, seed, path.parent)
     save_scenario(_with_mesh_copies(scenario, seed, path.parent), path)
     ensure_project_schema(path)     # the schema its modeline names, so an editor reads it at once
 
@@ -420,3 +421,26 @@ def write_junit(items: Iterable[tuple[SearchReport, SearchSpace]], path: str | P
                                 f"seed {report.seed_value})", cases))
     atomic_write_text(path, to_xml_report_string(suites))
     return Path(path)
+
+
+def _with_body_copy(scenario: Scenario, seed: Scenario, folder: Path) -> Scenario:
+    """The frozen scenario with its MJCF robot copied beside it (``bodies/<stem>-<hash>/``, named
+    by the robot file's content digest, with the files it names in the same layout), as meshes are:
+    the frozen file lives elsewhere than its seed, and the robot must lie in its folder."""
+    import shutil
+
+    from ..scenario.mjcf_files import mjcf_files
+
+    body = scenario.robot.body
+    if body.kind != "mjcf":
+        return scenario
+    base = (Path(seed.source).parent if seed.source else Path.cwd()) / body.file
+    src_dir = base.resolve().parent
+    rel_dir = Path("bodies") / f"{base.stem}-{body.digest or 'robot'}"
+    for file in mjcf_files(base):
+        target = folder / rel_dir / file.relative_to(src_dir)
+        if not target.exists():
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(file, target)
+    moved = (rel_dir / base.name).as_posix()
+    return replace(scenario, robot=replace(scenario.robot, body=replace(body, file=moved)))

@@ -231,6 +231,9 @@ def _write_part(path: Path) -> None:
         fh.write(b"\0" * 80 + struct.pack("<I", len(faces)))
         for a, b, c in faces:
             fh.write(struct.pack("<3f", 0, 0, 0) + b"".join(struct.pack("<3f", *v[i]) for i in (a, b, c)) + b"\0\0")
+    # an MJCF body's file (robot.body.file: the loader reads its bytes; MuJoCo reads it at run time)
+    (path.parent / "robot.xml").write_text("<mujoco><worldbody><body><freejoint/><geom size='0.1'/></body>"
+                                           "</worldbody></mujoco>\n")
 
 
 # ------------------------------------------------------------------ every key: the same verdict
@@ -321,7 +324,7 @@ def _places(folder: Path):
 # and the reference page's "checks that need a run"): the loader's messages for them.
 RUN_ONLY = ("must be greater than", "must not be below", "physics steps", "whole number of control periods",
             "not shorter than the timeout", "overlaps obstacle", "so at most that many can be removed",
-            "could pass the limit", "is not an obstacle or mission part of this seed", "has no length",
+            "could pass the limit", "or mission part of this seed", "has no length",
             "does not increase", "does not exist", "unknown mesh format", "leaves the scenario's folder",
             "is an absolute path", "is not a file", "cannot be read",
             "is faster than the simulation can follow",   # a mover's speed against its size, the robot's, the timestep

@@ -36,7 +36,7 @@ SEED = textwrap.dedent("""\
     ("remove: 7", "search.remove", "the seed has 2 obstacle(s)"),
     ("insert_size: [0.5, 500]", "search.insert_size", "more than the limit of 100 m"),
     ("insert_margin: 1e9", "search.insert_margin", "beyond the supported magnitude"),
-    ("frozen: [crat]", "search.frozen[0]", "'crat' is not an obstacle or mission part"),
+    ("frozen: [crat]", "search.frozen[0]", "'crat' is not an obstacle, terrain element or mission part"),
     ("obstacle_yw: 5", "search.obstacle_yw", "did you mean 'obstacle_yaw'"),
     ("motion_start: [1, 5]", "search.motion_start", "do not contain 0"),
 ])

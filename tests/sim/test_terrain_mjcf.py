@@ -130,3 +130,28 @@ def test_the_robots_geoms_are_hidden_from_the_lidar_and_the_model_saves(tmp_path
     assert np.all(res.trajectory.ranges[0] > 1.0)                       # it does not see itself
     xml = model_xml(sc)
     assert '<body name="chassis"' in xml and 'name="left"' in xml        # the user's names, kept
+
+
+def test_a_frozen_failure_carries_its_robot_and_the_files_it_names(tmp_path):
+    """A failure frozen away from its seed (navsearch's output folder) has the MJCF robot and its
+    mesh copied beside it, loads, and runs."""
+    from pytest_navscenario.search.freeze import save_standalone, standalone_scenario
+
+    seed_dir = tmp_path / "seeds"
+    (seed_dir / "robot" / "parts").mkdir(parents=True)
+    mesh = Path(__file__).parents[2] / "scenarios" / "meshes" / "lathe.stl"
+    shutil.copy(mesh, seed_dir / "robot" / "parts" / "mast.stl")
+    (seed_dir / "robot" / "cart.xml").write_text(CART.read_text().replace(
+        "<default>", '<compiler meshdir="parts"/>\n  <asset><mesh name="mast" file="mast.stl" scale="0.01 0.01 0.01"/>'
+                     '</asset>\n  <default>', 1).replace(
+        '<geom name="mast" type="cylinder" size="0.03 0.15" pos="0 0 0.25"',
+        '<geom name="mast" type="mesh" mesh="mast" pos="0 0 0.15"'))
+    seed = load_scenario(write(seed_dir, CART_BODY.replace("cart.xml", "robot/cart.xml"), RAMP))
+    frozen = standalone_scenario(seed, seed, name="frozen-1", description="a frozen failure", provenance={})
+    out = tmp_path / "navsearch" / "seed" / "frozen-1.yaml"
+    save_standalone(frozen, seed, out)
+    again = load_scenario(out)
+    assert again.robot.body.file.startswith("bodies/cart-") and again.robot.body.digest == seed.robot.body.digest
+    copied = out.parent / again.robot.body.file
+    assert copied.is_file() and (copied.parent / "parts" / "mast.stl").is_file()
+    assert simulate(again, Straight(), 0, max_ticks=3).ticks == 3
