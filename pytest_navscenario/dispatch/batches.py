@@ -55,12 +55,12 @@ class BatchJob:
         for k, job in enumerate(self.jobs):
             if job.check_feasible:
                 try:
-                    reason, checked[k] = check_feasibility(job.scenario)
+                    found, checked[k] = check_feasibility(job.scenario)
                 except Exception as exc:
                     outcomes[k] = _error(exc)
                     continue
-                if reason is not None:
-                    outcomes[k] = Impassable(reason)
+                if found is not None:
+                    outcomes[k] = Impassable(str(found), found.field)
                     continue
             todo.append(k)
         batching = Batching()

@@ -128,7 +128,10 @@ class executor_evaluator:   # noqa: N801  (used like a function: evaluator=execu
     """An evaluator that runs each generation on ``executor`` (see the module docstring)."""
 
     def __init__(self, executor: Any):
+        from ..harness.batch import Batching
+
         self.executor = executor
+        self.batching = Batching()     # the candidates sent to the workers as batches (the summary line)
         self._ctx: EvalContext | None = None
         self._token = ""
         self._open: dict[int, Any] = {}              # id -> Pending: submitted, result not yet taken
@@ -151,12 +154,14 @@ class executor_evaluator:   # noqa: N801  (used like a function: evaluator=execu
     def __call__(self, ctx: EvalContext, proposals: Sequence[tuple[tuple[float, ...], str]]) -> Iterator[Candidate]:
         """Submit the generation now; the iterator waits for each candidate in proposal order."""
         token = self._token_for(ctx)
-        if ctx.batch > 1 and len(proposals) > 1:   # each worker's share as one batch
+        if ctx.batch > 1 and len(proposals) > 1 and _answers_batches(ctx):   # each worker's share as a batch
             workers = max(1, int(getattr(self.executor, "workers", 1)))
             size = min(ctx.batch, -(-len(proposals) // workers))
             chunks = [tuple((tuple(o), origin) for o, origin in proposals[i:i + size])
                       for i in range(0, len(proposals), size)]
             pending = self._submit([CandidateBatchJob(ctx, chunk, token) for chunk in chunks])
+            self.batching.batched += len(proposals)
+            self.batching.batches += len(chunks)
             return (cand for p in pending for cand in self._take(p))
         pending = self._submit([CandidateJob(ctx, tuple(offsets), origin, token) for offsets, origin in proposals])
         return (self._take(p) for p in pending)
@@ -217,6 +222,30 @@ class executor_evaluator:   # noqa: N801  (used like a function: evaluator=execu
             p.cancel()
         self._open.clear()
         self._shrinks = []
+
+
+_BATCHES: dict[int, bool] = {}
+
+
+def _answers_batches(ctx: EvalContext) -> bool:
+    """True if the context's subject makes planners that answer the batch protocol, as far as this
+    process can tell without making one (a class, or a spec naming one); False otherwise, and for an
+    exec: program or a subject this process cannot load (then each candidate is its own job)."""
+    factory = ctx.subject_factory
+    key = id(factory)
+    if key not in _BATCHES:
+        from ..subjects.protocol import is_batch_planner
+        spec = getattr(factory, "spec", None)
+        try:
+            if isinstance(spec, str):
+                from ..subjects.loading import load_subject
+                factory = None if spec.strip().startswith("exec:") else load_subject(spec, cwd=getattr(factory, "cwd", None))
+            answer = isinstance(factory, type) and is_batch_planner(factory)
+        except Exception:
+            answer = False
+        _BATCHES.clear()
+        _BATCHES[key] = answer
+    return _BATCHES[key]
 
 
 def _stripped(cand: Candidate) -> Candidate:

@@ -93,7 +93,7 @@ def test_a_batch_that_kills_its_worker_fails_only_that_episode(tmp_path, monkeyp
 
 
 def test_workers_run_their_share_in_batches_with_the_results_of_an_unbatched_run(pytester: pytest.Pytester):
-    write_suite(pytester.path / "suite", short_timeout="1.0")
+    write_suite(pytester.path / "suite", short_timeout="1.6")
     off = pytester.runpytest(*COMMON, "--nav-workers", "2", "--nav-batch", "off", "--nav-results=off.jsonl",
                              "--junitxml=off.xml")
     on = pytester.runpytest(*COMMON, "--nav-workers", "2", "--nav-results=on.jsonl", "--junitxml=on.xml")

@@ -85,6 +85,10 @@ def test_the_search_plugin_batches_and_writes_what_an_unbatched_run_writes(proje
     batched = project.runpytest(*args, "--navsearch-out", "batched")
     assert alone.ret == batched.ret == 0, batched.stdout.str()
     assert_same_search_output(project.path / "alone", project.path / "batched")
+    workers = project.runpytest(*args, "-n", "2", "--navsearch-out", "workers")   # each worker's share a batch
+    assert workers.ret == 0, workers.stdout.str()
+    assert re.search(r"batches \(--nav-batch\): \d+ episode\(s\) in \d+ batch\(es\)", workers.stdout.str())
+    assert_same_search_output(project.path / "alone", project.path / "workers")
     assert re.search(r"batches \(--nav-batch\): \d+ episode\(s\) in \d+ batch\(es\)", batched.stdout.str())
     assert "batches (--nav-batch)" not in alone.stdout.str()
     bad = project.runpytest(*args, "--nav-batch", "some")
