@@ -37,6 +37,8 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
                  "build a seed scenario from a map_server occupancy grid"),
     "import": ("pytest_navscenario.ros.world_import",
                "import an Aerialist test or a Gazebo SDF world as a scenario"),
+    "policy-template": ("pytest_navscenario.cli.policy",
+                        "write the declaration a learned policy (.onnx) needs beside its model, to edit"),
     "schema": ("pytest_navscenario.cli.schema",
                "write the JSON Schema of the scenario format (editor completion and checks, CI)"),
 }
@@ -72,6 +74,12 @@ DESCRIPTIONS: dict[str, str] = {
               "keys and mark mistakes as they are typed; check-jsonschema checks files in CI. Keep it at "
               ".navscenario/scenario-v1.json in your project: the modeline that starts every scenario "
               "file the tool writes names that path (see docs/reference/scenario-format.md).",
+    "policy-template": "Write MODEL.policy.yaml beside an ONNX policy: the declaration of the observation it was "
+                       "trained on (lidar beams, target, velocity, previous command; clipping and "
+                       "normalisation) and of the action it answers (vx, vy, wz or vx, wz; clipping and "
+                       "scaling), with every field explained and a layout that adds up to the model's input "
+                       "width. The layout is a guess: edit it to your training environment's, then run "
+                       "'navscenario check-planner MODEL.onnx'. Needs the onnx extra (onnxruntime).",
     "import": "Import another tool's world as a scenario: an Aerialist test definition or a Gazebo "
               "SDF world (static boxes and cylinders; anything not carried over is listed). Poses "
               "are x,y,yaw in metres and degrees, e.g. --start -2.25,3,90.",

@@ -20,8 +20,9 @@ from ..subjects.loading import BUILTIN_SUBJECTS, DEFAULT_SUBJECT
 HUNG_TICK = 10.0   # = harness.conformance.HUNG_TICK (not imported: `run --help` stays light)
 
 _SUBJECT_HELP = (f"planner under test: a built-in name ({', '.join(sorted(BUILTIN_SUBJECTS))}), "
-                 f"'package.module:Attribute' (a class or zero-argument factory) or "
-                 f"'exec:PROGRAM ARGS' (an external process); default {DEFAULT_SUBJECT}")
+                 f"'package.module:Attribute' (a class or zero-argument factory), "
+                 f"'exec:PROGRAM ARGS' (an external process) or a learned policy's model file "
+                 f"'path/to/policy.onnx'; default {DEFAULT_SUBJECT}")
 
 
 def add_arguments_run(p: argparse.ArgumentParser) -> None:

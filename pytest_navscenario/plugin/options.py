@@ -25,7 +25,8 @@ DEFAULT_RESET_TIMEOUT = 10.0   # = subjects.external.RESET_TIMEOUT (not imported
 OPTIONS = (
     ("--nav-subject", "nav_subject",
      "planner under test: 'package.module:Attribute' (a class or zero-argument factory) or a "
-     "built-in name (dwa, potential-field), or exec:PROGRAM [ARGS] for an external planner. "
+     "built-in name (dwa, potential-field), exec:PROGRAM [ARGS] for an external planner, or the "
+     "path of a learned policy's .onnx file (with its declaration NAME.policy.yaml beside it). "
      "Default: the built-in 'dwa'."),
     ("--nav-seed", "nav_seed",
      "base seed (integer >= 0) mixed into each scenario's own noise seed; 0 (default) runs each "

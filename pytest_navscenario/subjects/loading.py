@@ -1,7 +1,8 @@
 """Loading a subject under test: a built-in planner name (``dwa``), ``package.module:Attribute``
 (a class or a zero-argument factory returning a fresh planner; the harness calls it once per
-episode) or ``exec:PROGRAM [ARGS]`` (an external process). Each is checked against the planner
-protocol (see protocol.py) before any episode runs."""
+episode), ``exec:PROGRAM [ARGS]`` (an external process) or a model file ``path/to/policy.onnx``
+(a learned policy, see policies/). Each is checked against the planner protocol (see
+protocol.py) before any episode runs."""
 from __future__ import annotations
 
 import os
@@ -10,6 +11,7 @@ from typing import Any, Iterable
 from ..core.errors import SubjectLoadError
 from ..core.user_code import load_object, look_in_project, spec_module
 from ..core.interrupts import from_the_user
+from .policies import is_model_spec
 from .protocol import PlannerFactory, SingleFromBatch, is_batch_planner
 
 
@@ -21,10 +23,11 @@ DEFAULT_SUBJECT = "dwa"
 
 
 def load_subject(spec: str, *, cwd: str | None = None, project: Iterable[str | os.PathLike] = ()) -> PlannerFactory:
-    """Resolve ``package.module:Attribute``, a built-in name such as ``dwa``, or
+    """Resolve ``package.module:Attribute``, a built-in name such as ``dwa``,
     ``exec:PROGRAM [ARGS]`` (an external planner, see external.py; resolved and started in
-    ``cwd`` when given) to a planner factory. A module that is not on sys.path is also looked
-    up in the ``project`` folders (pytest's rootdir, the CLI's current folder): see
+    ``cwd`` when given) or a model file such as ``models/nav.onnx`` (policies/: found in ``cwd``,
+    then in the ``project`` folders) to a planner factory. A module that is not on sys.path is
+    also looked up in the ``project`` folders (pytest's rootdir, the CLI's current folder): see
     core/user_code.py for the order and which one wins.
 
     Raises SubjectLoadError with what is wrong and how to fix it.
@@ -33,11 +36,15 @@ def load_subject(spec: str, *, cwd: str | None = None, project: Iterable[str | o
     if spec.startswith("exec:"):
         from .external import exec_factory
         return exec_factory(spec[len("exec:"):].strip(), cwd=cwd)
+    if is_model_spec(spec):
+        from .policies.onnx_policy import onnx_factory
+        return onnx_factory(spec, cwd=cwd, project=project)
     target = BUILTIN_SUBJECTS.get(spec, spec)
     if ":" not in target:
         raise SubjectLoadError(
             f"subject {spec!r} is not of the form 'package.module:Attribute' "
-            f"(built-in subjects: {', '.join(sorted(BUILTIN_SUBJECTS))})")
+            f"(built-in subjects: {', '.join(sorted(BUILTIN_SUBJECTS))}; an external program: exec:PROGRAM; "
+            f"a learned policy: the path of its .onnx file)")
     obj = load_object(target, what="subject", project=project)
     if not callable(obj):
         raise SubjectLoadError(
@@ -52,7 +59,7 @@ def locate_subject(spec: str | None, project: Iterable[str | os.PathLike]) -> No
     if not spec:
         return
     module = spec_module(BUILTIN_SUBJECTS.get(spec.strip(), spec))
-    if module is not None and not spec.strip().startswith("exec:"):
+    if module is not None and not spec.strip().startswith("exec:") and not is_model_spec(spec):
         look_in_project(module, project)
 
 
