@@ -329,7 +329,9 @@ RUN_ONLY = ("must be greater than", "must not be below", "physics steps", "whole
             "is an absolute path", "is not a file", "cannot be read",
             "is faster than the simulation can follow",   # a mover's speed against its size, the robot's, the timestep
             # a heightfield's file and its stretch, a rough patch's grid (scenario/heightmap.py)
-            "unknown heightfield format", "in the proportion of its columns and rows", "needs a grid of")
+            "unknown heightfield format", "in the proportion of its columns and rows", "needs a grid of",
+            # an obstacle's z against the ground under it (scenario/ground.obstacle_problem)
+            "above the ground under it", "lies under the ground", "the planar body's world is a flat floor")
 
 
 def _probes(key: K.Key) -> list[Any]:
