@@ -85,7 +85,8 @@ class EpisodeError:
     pickled: bytes | None      # the exception itself when it survives pickling unchanged
 
     @classmethod
-    def capture(cls, exc: BaseException) -> "EpisodeError":
+    def capture(cls, exc: BaseException, text: str | None = None) -> "EpisodeError":
+        """The EpisodeError of ``exc``; ``text``: its traceback (default: the one being handled)."""
         pickled: bytes | None
         try:
             pickled = pickle.dumps(exc)
@@ -94,7 +95,9 @@ class EpisodeError:
                 pickled = None
         except Exception:
             pickled = None
-        return cls(type(exc).__name__, str(exc), traceback.format_exc(), worker_name(), pickled)
+        if text is None:
+            text = traceback.format_exc()
+        return cls(type(exc).__name__, str(exc), text, worker_name(), pickled)
 
     def exception(self) -> BaseException:
         exc: BaseException

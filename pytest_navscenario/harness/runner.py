@@ -65,7 +65,6 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
     Raises SubjectLoadError if the planner cannot be made, SimulationDivergedError if the physics
     blows up.
     """
-    from ..verdict import metrics, oracle   # written by the metrics module's owner
     from ..sim.episode import simulate
 
     t0 = time.perf_counter()
@@ -80,6 +79,16 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
     name, version = subject_identity(instance, spec)  # after reset: a planner may name itself there
     del instance    # a planner that ends its helpers when it is dropped has done so before the check
     left = processes.note_left_behind(before, scenario.name or "the episode", ours=running_pids())
+    return verdict(scenario, facts, ep_seed, name, version, stuck_after, t0, left)
+
+
+def verdict(scenario: Scenario, facts: Any, ep_seed: int, name: str, version: str | None,
+            stuck_after: float | None, t0: float, left: Any = ()) -> EpisodeResult:
+    """The EpisodeResult of an episode's raw facts (``sim.SimResult``): the oracle's outcome and
+    message, the metrics; ``wall_time`` counted from ``t0``; ``left``: the processes it left
+    running (core/processes.py)."""
+    from ..verdict import metrics, oracle
+
     t1 = time.perf_counter()
     outcome, message = oracle.classify(
         scenario, facts.trajectory, collision=facts.collision, safety_stop=facts.safety_stop,

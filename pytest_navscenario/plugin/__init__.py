@@ -161,6 +161,7 @@ def pytest_report_header(config: pytest.Config) -> list[str]:
     limit = f"{s.tick_limit:g} s" if s.tick_limit else "none"
     lines = [f"navscenario: subject {state.subject.label}, seed {s.seed} (--nav-seed), "
              f"tick limit {limit}"]
+    lines += [f"navscenario: subject note: {note}" for note in state.subject.notes]
     if s.repeat > 1:
         lines.append(f"navscenario: {s.repeat} runs per scenario with different noise seeds "
                      f"(--nav-repeat; scenarios without sensor noise repeat identically)")

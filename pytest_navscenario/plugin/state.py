@@ -26,6 +26,7 @@ class NavState:
     scenario_folders: set[str] = field(default_factory=set)   # folders holding collected scenarios
     executor: Any = None          # controller with --nav-ray: where episodes run (dispatch/)
     executor_notes: list[str] = field(default_factory=list)       # header lines about it
+    batching: Any = None          # controller with an executor: harness.batch.Batching of the items
 
 
 STATE_KEY = pytest.StashKey[NavState]()

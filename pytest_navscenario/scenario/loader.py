@@ -391,9 +391,10 @@ def check_scenario(scenario: Scenario, *, _ctx: _Ctx | None = None) -> None:
     if scenario.obstacles:
         _check_clear(scenario, ctx)
         _check_speeds(scenario, ctx)
-    if scenario.terrain or scenario.robot.body.kind != "planar":
-        from .ground import body_problem, mission_problem
-        problem = body_problem(scenario) or mission_problem(scenario)
+    if scenario.terrain or scenario.robot.body.kind != "planar" or any(o.z is not None for o in scenario.obstacles):
+        from .ground import body_problem, mission_problem, obstacle_problem, terrain_problem
+        problem = (body_problem(scenario) or terrain_problem(scenario) or mission_problem(scenario)
+                   or obstacle_problem(scenario))
         if problem is not None:
             field, message, fix = problem
             parts = field.split(".")

@@ -46,6 +46,9 @@ class _Ctx:
     def __init__(self, source: str | None):
         self.source = source
         self.lines: dict[str, int | None] = {}
+        #: names of the typed lists read so far (obstacles, then terrain) -> "obstacles[i]": one
+        #: name space, so that a name (in ``search: frozen``, a message) means one thing
+        self.element_names: dict[str, str] = {}
 
     def fail(self, message: str, field: str | None, line: int | None, hint: str | None = None) -> ScenarioError:
         return ScenarioError(message, path=self.source, line=line, field=field, hint=hint)
@@ -424,13 +427,14 @@ def _read_elements(ctx: _Ctx, top: _Section, key: K.Elements, build: Any = None)
         sec = _Section(ctx, item, path, keys, line=line)
         name = _read_text(ctx, sec, element.section.by_name["name"]) if "name" in item.items else None
         if name is not None:
-            if name in given:
-                first = given[name]
-                raise ctx.fail(f"name {name!r} is already used by {key.name}[{first}]", f"{path}.name",
-                               sec.line_of("name"), f"{key.item} names must be unique; rename one of them")
+            if name in given or name in ctx.element_names:
+                first = f"{key.name}[{given[name]}]" if name in given else ctx.element_names[name]
+                raise ctx.fail(f"name {name!r} is already used by {first}", f"{path}.name",
+                               sec.line_of("name"), "names of obstacles and terrain elements must be unique; "
+                               "rename one of them")
             given[name] = i
         parsed.append((element, sec, name))
-    taken = set(given)
+    taken = set(given) | set(ctx.element_names)
     counters = dict.fromkeys(types, 0)
     result = []
     for element, sec, name in parsed:
@@ -443,6 +447,7 @@ def _read_elements(ctx: _Ctx, top: _Section, key: K.Elements, build: Any = None)
             taken.add(name)
         result.append(build(ctx, sec, element, name) if build is not None
                       else element.section.cls(**_read(ctx, sec, element.section, {"name": name})))
+    ctx.element_names.update((item.name, f"{key.name}[{i}]") for i, item in enumerate(result))
     return tuple(result)
 
 

@@ -228,6 +228,12 @@ class Episode:
     def start(self) -> None:
         """The robot at the start pose (a collision there ends the episode), the planner reset (the
         tick limit is for act only: reset may build maps)."""
+        self.place()
+        self._reset_planner()
+
+    def place(self) -> None:
+        """The robot at the start pose, its contacts checked: a collision there ends the episode
+        before the planner is reset (a batch resets its planner after every episode's place)."""
         m, d, start = self.model, self.data, self.scenario.mission.start
         self.qpos[:] = (start.x, start.y, start.yaw_rad)
         if self.moving is not None:
@@ -241,6 +247,8 @@ class Episode:
             if self.collision is not None:
                 self.collision = describe_collision(self.collision, self.scenario, self.qvel_buf[0])
                 raise EpisodeOver("collision")
+
+    def _reset_planner(self) -> None:
         t0 = perf_counter()
         try:
             call_planner(self.planner.reset, self.scenario, None)

@@ -36,6 +36,7 @@ PARTS_GROUP = 3            # geom group of a non-convex obstacle's convex parts:
 UNSEEN_GROUP = 4           # geom group of obstacles with visible_to_lidar: false (glass): the lidar skips it
 
 TWO_PI = 2.0 * math.pi
+CONTACT_SENSOR = "robot_contacts"   # the planar robot's contact count (sensordata[0])
 
 log = logging.getLogger(__name__)
 MUJOCO_WARNINGS: deque[str] = deque(maxlen=5)   # the last texts our handler received
@@ -232,6 +233,11 @@ def build_spec(scenario: Scenario) -> mujoco.MjSpec:
     _add_obstacles(spec, scenario)
     if scenario.robot.lidar3d is not None:   # the floor a 3D lidar sees (it touches nothing)
         add_floor_plane(spec, contype=0, conaffinity=0)
+    # the robot's contacts at every step, for the batch engine's physics (sim/cohort.py: a
+    # tick stepped in one mujoco.rollout call is looked at only when it had a contact); a
+    # sensor never changes the dynamics
+    spec.add_sensor(name=CONTACT_SENSOR, type=mujoco.mjtSensor.mjSENS_CONTACT,
+                    objtype=mujoco.mjtObj.mjOBJ_GEOM, objname="footprint", intprm=[1, 0, 1])
     return spec
 
 

@@ -228,3 +228,45 @@ def test_a_frozen_failure_takes_its_heightfield_file_along(tmp_path):
     frozen = load_scenario(out)
     assert frozen.terrain[0].file.startswith("heightmaps/h-") and (out.parent / frozen.terrain[0].file).is_file()
     assert content_hash(frozen) == content_hash(seed)
+
+
+def _npy_header_only(path: Path, shape: tuple) -> None:
+    """An .npy file whose header promises ``shape`` (float64) and whose data is 64 bytes."""
+    header = "{'descr': '<f8', 'fortran_order': False, 'shape': %r, }" % (shape,)
+    header = header.ljust(118) + "\n"
+    path.write_bytes(b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode() + b"\x00" * 64)
+
+
+def test_an_npy_whose_header_promises_a_huge_array_is_refused_before_its_data_is_read(tmp_path):
+    """A 200-byte file claiming 60000 x 60000 made numpy allocate 26.8 GiB (a MemoryError traceback
+    at collection); one claiming 600 x 600 over 64 bytes is a truncated file."""
+    _npy_header_only(tmp_path / "liar.npy", (60000, 60000))
+    with pytest.raises(HeightmapError, match=r"liar.npy is 60000 x 60000 samples, more than the limit of 1024"):
+        load_heightfield(tmp_path, "liar.npy", 2, 2)
+    import pickle
+    (tmp_path / "p.npy").write_bytes(pickle.dumps(np.zeros((4, 4))))
+    with pytest.raises(HeightmapError, match=r"p.npy cannot be read as a NumPy .npy array: it is a Python pickle"):
+        load_heightfield(tmp_path, "p.npy", 2, 2)
+    _npy_header_only(tmp_path / "short.npy", (600, 600))
+    with pytest.raises(HeightmapError, match=r"short.npy .*holds 64 bytes of data where its header promises 2880000"):
+        load_heightfield(tmp_path, "short.npy", 2, 2)
+
+
+def test_values_at_the_ends_of_the_float_range_map_to_the_heights_without_overflow(tmp_path):
+    """(v - low) / (high - low) overflowed for +-1e308: NaN heights, and MuJoCo refused the model."""
+    np.save(tmp_path / "h.npy", np.array([[-1e308, 0.0], [0.0, 1e308]]))
+    grid = height_grid(Heightfield("h", 0, 0, file="h.npy", length=2, width=2, max_height=1.0),
+                       _scenario(tmp_path))
+    assert np.isfinite(grid.heights).all()
+    assert sorted(grid.heights.ravel().tolist()) == pytest.approx([0.0, 0.5, 0.5, 1.0])
+
+
+def test_reading_a_png_leaves_pillows_own_limit_alone_and_warns_nothing(tmp_path, recwarn):
+    """A planner reading a large map image with Pillow in the same process must not meet our
+    limit: the size is checked from the PNG's header instead."""
+    before = Image.MAX_IMAGE_PIXELS
+    Image.new("L", (2500, 2500)).save(tmp_path / "big.png")
+    with pytest.raises(HeightmapError, match="2500 x 2500 samples, more than the limit of 1024"):
+        load_heightfield(tmp_path, "big.png", 2, 2)
+    assert Image.MAX_IMAGE_PIXELS == before
+    assert not [w for w in recwarn if "DecompressionBomb" in type(w.message).__name__]

@@ -29,3 +29,16 @@ def interrupted_after_five():
     if CALLS[0] > 5:
         raise KeyboardInterrupt
     return Straight()
+
+
+class StraightBatch(Straight):
+    """The straight driver with the batch protocol too (issue 27): one call a tick for a batch."""
+    name = "straight-batch"
+    calls = []          # the size of every act_batch call, for the tests
+
+    def reset_batch(self, scenarios):
+        self.count = len(scenarios)
+
+    def act_batch(self, ids, observations):
+        StraightBatch.calls.append(len(ids))
+        return [self.act(obs) for obs in observations]

@@ -495,3 +495,9 @@ def test_every_name_of_the_old_flat_sim_module_still_resolves():
     assert sim.simulate is simulate and sim.lidar_angles is lidar_angles
     with pytest.raises(AttributeError, match="see its modules episode, world, lidar"):
         sim.no_such_name  # noqa: B018
+
+
+def test_an_exception_answered_for_a_command_reads_as_if_act_had_raised_it():
+    """A batch planner fails one episode of a call by answering an exception in its place (issue 27)."""
+    assert validate_command(ValueError("this scenario's lidar is too narrow")) == \
+        "planner.act raised ValueError: this scenario's lidar is too narrow"
