@@ -106,11 +106,12 @@ def look_ahead(cap: Capability, move: float, spacing: float = SPACING) -> int:
 
 # The wheeled body's limits are estimates from its wheels, measured in MuJoCo with a straight
 # drive (benchmarks/measure_wheeled_limits.py; default body: 50 kg, 10 N m, wheels of 0.1 m): it
-# climbed steps of 0.044 m (diff: its ball casters, 0.05 m, meet a step first) and 0.081 m (skid),
-# slopes of 17.5 deg (diff: the casters carry load, the driven wheels lose grip) and 32.5 deg
-# (skid), and crossed gaps of 0.09-0.13 m. The estimates below stay under those figures.
-WHEELED_CASTER_STEP = 0.8     # of the caster's radius (diff)
-WHEELED_WHEEL_STEP = 0.7      # of the wheel's radius (skid)
+# climbed steps of 0.036 m (diff: its ball casters, 0.05 m, meet a step first; 0.047 m with
+# 0.15 m wheels and 0.075 m casters) and 0.064 m (skid), slopes of 17.2 deg (diff: the casters
+# carry load, the driven wheels lose grip) and 34.4 deg (skid), and crossed gaps of 0.17-0.18 m.
+# The estimates below stay under those figures (tests/verdict/test_traversable.py checks them).
+WHEELED_CASTER_STEP = 0.55    # of the caster's radius (diff)
+WHEELED_WHEEL_STEP = 0.55     # of the wheel's radius (skid)
 WHEELED_SLOPE = {"diff": 15.0, "skid": 30.0}   # degrees, at most the torque's limit
 WHEELED_GAP = 0.5             # of the wheel's radius
 
