@@ -119,10 +119,15 @@ WHEELED_GAP = 0.5             # of the wheel's radius
 def body_capability(scenario) -> Capability | None:
     """What the scenario's body can cross: a legged body's declared limits, a wheeled body's
     estimated ones (see WHEELED_*), None for a body that declares none (planar: no terrain;
-    mjcf: its limits are the user's model's, unknown here)."""
+    mjcf: its declared ones, None when undeclared: the harness cannot estimate them from a model)."""
     body = scenario.robot.body
     if body.kind == "legged":
         return Capability(float(body.max_step), float(body.max_slope), float(body.max_gap))
+    if body.kind == "mjcf":
+        if body.max_step is None or body.max_slope is None:
+            return None
+        return Capability(float(body.max_step), float(body.max_slope),
+                          float(body.max_gap) if body.max_gap is not None else 0.0)
     if body.kind != "wheeled":
         return None
     r = float(body.wheel_radius)

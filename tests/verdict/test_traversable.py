@@ -140,3 +140,16 @@ def test_the_wheeled_bodys_estimated_step_and_slope_are_crossed_in_the_simulatio
     rise = 3.0 * math.tan(math.radians(cap.max_slope))
     assert crosses([Ramp("r", 5.0, 0.0, length=3.0, width=3.0, rise=rise),
                     Platform("t", 9.5, 0.0, length=6.0, width=3.0, height=rise)]) == "goal"
+
+
+def test_an_mjcf_body_that_declares_its_limits_gets_the_same_barriers_as_a_legged_one():
+    """A user's own robot has no limits the harness can estimate; declared (max_step, max_slope and
+    optionally max_gap), the path search and the feasibility check use them as for a legged body."""
+    body = MjcfBody(file="robot.xml", controller="m:C", max_step=0.2, max_slope=30.0, max_gap=0.3)
+    assert body_capability(scene([], body)) == body_capability(scene([], LEGGED))
+    assert barriers(scene(upper_level(), body)) == barriers(scene(upper_level(), LEGGED))
+    reason = impassable_reason(scene(upper_level(), body))
+    assert ("the terrain the mjcf body cannot cross closes every way between them: in the way, platform 'upper' "
+            "(0.85 m step); its limits: a 0.2 m step, a 30 deg slope, a 0.3 m gap") in reason
+    no_gap = MjcfBody(file="robot.xml", controller="m:C", max_step=0.05, max_slope=15.0)
+    assert body_capability(scene([], no_gap)).max_gap == 0.0               # none declared: it crosses none
