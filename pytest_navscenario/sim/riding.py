@@ -11,7 +11,7 @@ from collections import deque
 import numpy as np
 
 from ..scenario import ground
-from ..scenario.crossing import SPACING, Capability, walk
+from ..scenario.crossing import SPACING, Capability, steep_ground, walk
 from .trajectory import TerrainEvent
 
 ON_GROUND = 0.08          # m: a base this close above the ground under it stands on it
@@ -160,6 +160,12 @@ class TerrainWatch:
         c, s = math.cos(yaw), math.sin(yaw)
         d = ahead * np.arange(int((self.front + LOOK_AHEAD) / SPACING) + 1) * SPACING
         px, py = x + c * d, y + s * d
+        steep = self._steep_ahead(x, y, c, s, d)
+        if steep is not None:
+            el = self.probe.element(*steep[:2])
+            self._end(TerrainEvent("stuck", t, self._name(el), x, y, z, roll=math.degrees(roll),
+                                   pitch=math.degrees(pitch),
+                                   detail=f"cannot walk the {steep[2]:.0f} deg slope across its way"))
         h = ground.ground_height(self.scenario, px, py).tolist()
         _, barrier = walk(h, SPACING, h[0], FEATURE)
         slope = math.degrees(max(abs(pitch), abs(roll)))
@@ -179,6 +185,32 @@ class TerrainWatch:
             detail = "high-centred: its chassis rests on the ground" if touching else "its wheels slip"
         self._end(TerrainEvent("stuck", t, self._name(el), x, y, z, roll=math.degrees(roll),
                                pitch=math.degrees(pitch), detail=detail))
+
+    def _steep_ahead(self, x, y, c, s, d) -> tuple[float, float, float] | None:
+        """(x, y, slope in degrees) of the first steep ground (``crossing.steep_ground``, for a
+        body that declares what it crosses: ``cap``) ahead of the centre or a foot, when it stands
+        off it and that ground is within max_slope along its way (across it or diagonally: a
+        slope straight ahead is described by the walk below); None otherwise."""
+        cap = getattr(self.body, "cap", None)
+        if cap is None or not self.scenario.terrain:
+            return None
+        feet = getattr(self.body, "feet", np.zeros((0, 2)))
+        ox = np.concatenate([[0.0], c * feet[:, 0] - s * feet[:, 1]])[:, None]
+        oy = np.concatenate([[0.0], s * feet[:, 0] + c * feet[:, 1]])[:, None]
+        px, py = x + ox + c * d, y + oy + s * d
+        steep = steep_ground(self.scenario, cap, px, py)
+        first = [int(np.argmax(row)) for row in steep if row.any() and not row[0]]
+        if not first or steep[:, 0].any():
+            return None
+        row = next(i for i, r in enumerate(steep) if r.any() and not r[0] and int(np.argmax(r)) == min(first))
+        k = min(min(first) + 2, steep.shape[1] - 1)
+        qx, qy, e = float(px[row, k]), float(py[row, k]), 0.005
+        h = ground.ground_height(self.scenario, np.array([qx + e, qx - e, qx, qx]), np.array([qy, qy, qy + e, qy - e]))
+        along = abs((h[0] - h[1]) * c + (h[2] - h[3]) * s) / (2 * e)
+        if math.degrees(math.atan(along)) > cap.max_slope:
+            return None                     # too steep along its way as well: a slope it cannot climb
+        slope = math.degrees(math.atan(math.hypot(h[0] - h[1], h[2] - h[3]) / (2 * e)))
+        return float(px[row, min(first)]), float(py[row, min(first)]), slope
 
     def _end(self, event: TerrainEvent) -> None:
         self.event = event
