@@ -40,9 +40,12 @@ def resting_pose(scenario, x: float, y: float, yaw: float) -> tuple[float, float
 
 class GroundProbe:
     """The ground height at one point, fast (plain floats; called a few times a tick): the same
-    answer as ``scenario.ground.ground_height``."""
+    answer as ``scenario.ground.ground_height`` (bit for bit where there are height grids: the
+    same operations in the same order; tests/sim/test_ground_probe.py)."""
 
     def __init__(self, scenario):
+        from ..scenario.heightmap import height_grid
+
         self.scenario = scenario
         self.rows = []
         for p in ground.pieces(scenario.terrain):
@@ -50,11 +53,24 @@ class GroundProbe:
             x, y, c, s = ground.frame(el)
             slope = (p.top1 - p.top0) / (p.u1 - p.u0)
             self.rows.append((x, y, c, s, p.u0, p.u1, el.width / 2, p.top0, slope, p.cut, p.element))
-        self.grids = bool(ground.grid_elements(scenario.terrain))
+        self.grids = []
+        for i in ground.grid_elements(scenario.terrain):
+            el = scenario.terrain[i]
+            grid = height_grid(el, scenario)
+            x, y, c, s = ground.frame(el)
+            rows, cols = grid.heights.shape
+            length, width = grid.extent
+            self.grids.append((x, y, c, s, el.length / 2 + 1e-9, el.width / 2 + 1e-9, float(el.z), grid.heights,
+                               length / 2.0, width / 2.0, float(grid.cell[0]), float(grid.cell[1]), rows, cols,
+                               ground.grid_low(el, scenario) < ground.FLOOR))
+        self.pieces = [(p, scenario.terrain[p.element]) for p in ground.pieces(scenario.terrain)]
+        self.exact = all(g[7].dtype == np.float64 for g in self.grids)   # else numpy's promotions differ
 
     def height(self, px: float, py: float) -> float:
         if self.grids:
-            return float(ground.ground_height(self.scenario, px, py))
+            if not self.exact:
+                return float(ground.ground_height(self.scenario, px, py))
+            return self._height_on_grids(float(px), float(py))
         solid, floor = -math.inf, 0.0
         for x, y, c, s, u0, u1, hw, top0, slope, cut, _ in self.rows:
             dx, dy = px - x, py - y
@@ -67,6 +83,48 @@ class GroundProbe:
             elif h > solid:
                 solid = h
         return solid if solid > floor else floor
+
+    def _height_on_grids(self, px: float, py: float) -> float:
+        """``ground.ground_height`` at one point, in plain floats with its operations (its
+        pieces' heights as ``ground._piece_height``, the grids' as ``HeightGrid.sample``)."""
+        floor, solid = ground.FLOOR, -math.inf
+        for piece, el in self.pieces:
+            x, y, c, s = ground.frame(el)
+            dx, dy = px - x, py - y
+            u, v = c * dx + s * dy, -s * dx + c * dy
+            if not (u >= piece.u0 - 1e-9 and u <= piece.u1 + 1e-9 and abs(v) <= el.width / 2 + 1e-9):
+                continue
+            if piece.top0 == piece.top1:
+                h = piece.top0
+            else:
+                h = piece.top0 + (piece.top1 - piece.top0) * (u - piece.u0) / (piece.u1 - piece.u0)
+            if piece.cut:
+                floor = min(floor, h)
+            else:
+                solid = _nanmax(solid, h)
+        for x, y, c, s, hl, hw, z, h, half_x, half_y, dx_cell, dy_cell, rows, cols, cuts in self.grids:
+            dx, dy = px - x, py - y
+            u, v = c * dx + s * dy, -s * dx + c * dy
+            if not (abs(u) <= hl and abs(v) <= hw):
+                continue
+            gu, gv = (u + half_x) / dx_cell, (v + half_y) / dy_cell
+            if 0 <= gu <= cols - 1 and 0 <= gv <= rows - 1:
+                col = min(max(math.floor(gu), 0), cols - 2)
+                row = min(max(math.floor(gv), 0), rows - 2)
+                fx, fy = min(max(gu - col, 0.0), 1.0), min(max(gv - row, 0.0), 1.0)
+                h00, h11 = h.item(row, col), h.item(row + 1, col + 1)
+                if fx >= fy:
+                    h10 = h.item(row, col + 1)
+                    g = h00 + (h10 - h00) * fx + (h11 - h10) * fy
+                else:
+                    h01 = h.item(row + 1, col)
+                    g = h00 + (h11 - h01) * fx + (h01 - h00) * fy
+            else:
+                g = math.nan
+            solid = _nanmax(solid, z + g)
+            if cuts:                                  # a grid dipping below the floor cuts it
+                floor = -math.inf
+        return _nanmax(solid, floor)
 
     def element(self, px: float, py: float) -> int | None:
         """The element whose top is the ground at (px, py) (None: the floor)."""
@@ -81,6 +139,11 @@ class GroundProbe:
         if best is None and self.grids:
             return ground.element_at(self.scenario, px, py)
         return best
+
+
+def _nanmax(a: float, b: float) -> float:
+    """``np.maximum`` of two floats: NaN if either is."""
+    return a if (a != a or a >= b) and b == b else b
 
 
 class TerrainStop(Exception):
