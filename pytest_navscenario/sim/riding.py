@@ -172,7 +172,8 @@ class TerrainWatch:
         self.level_at = (0.0, 0.0)
         self.pushing = 0            # ticks driven in a row
         self.tick_dt = tick_dt
-        self.trail: deque = deque(maxlen=self.stuck_ticks + 1)   # (x, y, setpoint speed) of those ticks
+        self.trail: deque = deque(maxlen=self.stuck_ticks + 1)   # (x, y) of those ticks
+        self.speeds: deque = deque(maxlen=self.stuck_ticks + 1)  # and their setpoint speeds
         self.event: TerrainEvent | None = None
         fp = scenario.robot.footprint
         self.front = fp.length / 2 if fp.shape == "box" else fp.radius
@@ -194,12 +195,14 @@ class TerrainWatch:
         if speed < STUCK_COMMAND:
             self.pushing = 0
             self.trail.clear()
+            self.speeds.clear()
             return
         self.pushing += 1
-        self.trail.append((x, y, speed))
+        self.trail.append((x, y))
+        self.speeds.append(speed)
         if self.pushing >= self.stuck_ticks:
-            x0, y0, _ = self.trail[0]
-            asked = sum(v for _, _, v in self.trail) * self.tick_dt
+            x0, y0 = self.trail[0]
+            asked = sum(self.speeds) * self.tick_dt         # in order: the same sum, without a generator
             if math.hypot(x - x0, y - y0) < STUCK_MOVING * asked:
                 self._stuck(t, x, y, z, roll, pitch, yaw, setpoint, touching)
 
