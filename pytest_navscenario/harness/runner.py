@@ -17,6 +17,7 @@ import numpy as np
 from ..subjects.loading import make_planner, subject_identity
 from ..verdict.result import EpisodeResult
 from ..scenario.model import Scenario
+from ..scenario.perturb import perturbed
 
 
 def check_feasibility(scenario: Scenario) -> tuple[str | None, float]:
@@ -72,14 +73,15 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
     if reset_timeout and hasattr(instance, "reset_timeout"):
         instance.reset_timeout = reset_timeout
     ep_seed = effective_seed(scenario.simulation.seed, seed)
-    facts = simulate(scenario, instance, ep_seed, tick_limit=tick_limit, stuck_after=stuck_after)
+    ran = perturbed(scenario, ep_seed)   # simulation.perturb: this episode's start and timing (else itself)
+    facts = simulate(ran, instance, ep_seed, tick_limit=tick_limit, stuck_after=stuck_after)
     name, version = subject_identity(instance, spec)  # after reset: a planner may name itself there
     t1 = time.perf_counter()
     outcome, message = oracle.classify(
-        scenario, facts.trajectory, collision=facts.collision, safety_stop=facts.safety_stop,
+        ran, facts.trajectory, collision=facts.collision, safety_stop=facts.safety_stop,
         subject_failure=facts.subject_failure, goal_reached=facts.goal_reached,
         stuck_after=stuck_after if facts.end == "stuck" else None, terrain_event=facts.terrain_event)
-    figures = metrics.compute_metrics(scenario, facts.trajectory, collision=facts.collision)
+    figures = metrics.compute_metrics(ran, facts.trajectory, collision=facts.collision)
     t2 = time.perf_counter()
     timings = dict(facts.timings)
     timings["metrics"] = t2 - t1
