@@ -76,6 +76,22 @@ def processes_in_session(sid: int) -> list[str]:
     return alive
 
 
+def delivered(pid: int, sig: int, timeout: float = 10.0) -> None:
+    """Wait until ``sig`` is no longer pending for process ``pid`` (its handler has it)."""
+    bit = 1 << (sig - 1)
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            status = Path(f"/proc/{pid}/status").read_text()
+        except OSError:
+            return
+        pending = {k: int(v, 16) for k, v in (line.split(":\t") for line in status.splitlines()
+                                                if line.startswith(("SigPnd", "ShdPnd")))}
+        if not any(v & bit for v in pending.values()):
+            return
+        time.sleep(0.002)
+
+
 def assert_nothing_left(sid: int) -> None:
     deadline = time.monotonic() + 30
     while processes_in_session(sid) and time.monotonic() < deadline:
@@ -141,7 +157,8 @@ def test_a_second_interrupt_while_saving_does_not_stop_the_saving(project: Path,
     time.sleep(1.0)
     for _ in range(2):                  # Ctrl-C reaches the whole group, SIGTERM only pytest (kill)
         os.killpg(proc.pid, sig) if sig == signal.SIGINT else proc.send_signal(sig)
-        time.sleep(0.05)
+        delivered(proc.pid, sig)        # two signals pending at once would be one: wait for the first,
+        time.sleep(0.1)                 # and for Python to run its handler (it runs once for both else)
     out = seen + proc.communicate(timeout=60)[0]
     assert proc.returncode == pytest.ExitCode.INTERRUPTED, out[-3000:]
     assert "Traceback" not in out and "interrupts.py" not in out, out[-3000:]
