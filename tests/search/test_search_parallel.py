@@ -80,9 +80,12 @@ def assert_same_search_output(first: Path, second: Path) -> None:
             assert without_timestamps(a[name]) == without_timestamps(b[name]), name   # byte for byte
 
 
-def test_one_search_on_two_processes_writes_what_a_serial_run_writes(project: pytest.Pytester):
+@pytest.mark.parametrize("noise", [[], ["--nav-sensor-model", "realistic"]], ids=["exact", "confirming"])
+def test_one_search_on_two_processes_writes_what_a_serial_run_writes(project: pytest.Pytester, noise: list[str]):
+    """Under sensor noise each failure is confirmed by runs under fresh noise seeds within the
+    generation (search/holding.py): the same runs, decisions and files on two processes too."""
     args = ["-p", "no:cacheprovider", "--nav-subject=straight_planner:Straight", "--navsearch", "crate",
-            "--budget", "40", "--navsearch-seed", "5"]
+            "--budget", "40", "--navsearch-seed", "5", *noise]
     serial = project.runpytest(*args, "--navsearch-out", "serial")
     parallel = project.runpytest(*args, "-n", "2", "--navsearch-out", "parallel")
     assert serial.ret == parallel.ret == 0, parallel.stdout.str()
@@ -90,6 +93,7 @@ def test_one_search_on_two_processes_writes_what_a_serial_run_writes(project: py
     assert_same_search_output(project.path / "serial", project.path / "parallel")
     line = re.compile(r"crate vs .*: 40/40 sims.*")
     assert line.search(serial.stdout.str()) and line.search(parallel.stdout.str())
+    assert ("of them confirming" in serial.stdout.str()) == bool(noise)
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["ctrl-c", "sigterm"])
