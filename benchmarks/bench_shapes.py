@@ -9,6 +9,11 @@ feasibility check (the shortest path, which the metrics reuse), and the first 10
 ``dwa`` planner. The obstacle stands 1 m beside the robot's straight way, so the safety layer and the
 lidar see it. The budget is one second per item; the limits (``MAX_POLYGON_POINTS``,
 ``mesh.MAX_TRIANGLES``, ``mesh.MAX_OUTLINE_POINTS``) are set to hold it. Medians of ``--repeat``.
+
+    python benchmarks/bench_shapes.py --hostile
+
+instead times refusing two hostile OBJ files (16 MB of two million faces; 20 MB of one face with
+ten million corners), each read in a fresh process: CPU seconds and the process's peak memory.
 """
 from __future__ import annotations
 
@@ -125,10 +130,44 @@ def item_once(path: Path) -> dict[str, float]:
     return out
 
 
+READ_ONE = """
+import resource, sys, time
+from pathlib import Path
+from pytest_navscenario.scenario.mesh import MeshError, read_mesh
+t = time.process_time()
+try:
+    read_mesh(Path(sys.argv[1]))
+    what = "read"
+except MeshError as exc:
+    what = "refused: " + str(exc)[:90]
+print(f"{time.process_time() - t:.3f} s CPU, peak {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MB; {what}")
+"""
+
+
+def hostile() -> None:
+    import subprocess
+    with tempfile.TemporaryDirectory() as tmp:
+        many, fan = Path(tmp) / "many.obj", Path(tmp) / "fan.obj"
+        many.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n" + "f 1 2 3\n" * 2_000_000)
+        fan.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf " + "1 2 3 " * 3_300_000 + "\n")
+        idle = subprocess.run([sys.executable, "-c", "import resource, numpy, shapely; print("
+                               "resource.getrusage(resource.RUSAGE_SELF).ru_maxrss // 1024)"],
+                              capture_output=True, text=True).stdout.strip()
+        print(f"(an interpreter with numpy and shapely imported: {idle} MB)")
+        for what, path in (("2 M faces, 16 MB", many), ("one face of 10 M corners, 20 MB", fan)):
+            out = subprocess.run([sys.executable, "-c", READ_ONE, str(path)], capture_output=True, text=True,
+                                 cwd=ROOT)
+            print(f"{what:<34}{(out.stdout or out.stderr).strip()}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--hostile", action="store_true", help="time refusing two hostile mesh files instead")
     args = ap.parse_args()
+    if args.hostile:
+        hostile()
+        return
     corners = min(MAX_POLYGON_POINTS, mesh.MAX_OUTLINE_POINTS)
     rows = [("polygon", 100, 0), ("polygon", 1000, 0), ("polygon", MAX_POLYGON_POINTS, 0),
             ("mesh", 100, 10_000), ("mesh", 1000, mesh.MAX_TRIANGLES),

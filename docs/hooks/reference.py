@@ -4,12 +4,17 @@ A page asks for a generated part with a marker line of its own:
 
     <!-- generated: pytest-options -->   every pytest option and ini setting the plugin registers
     <!-- generated: cli -->              every ``navscenario`` subcommand and its arguments
+    <!-- generated: scenario-keys -->    every key of the scenario format, section by section
+    <!-- generated: search-keys -->      every key of a seed's ``search:`` section
+    <!-- generated: scenario-run-only --> the checks across keys that need a run (no schema says them)
 
 The pytest options are read by calling the plugin's own ``pytest_addoption`` hooks (the plugin
 module and every feature plugin it lists in ``pytest_plugins``) with a recording parser, so what
 is documented is exactly what the plugin registers: flag, metavar, help, ini twin and default.
 The CLI is read from the argparse parser that ``navscenario`` itself builds (``build_parser``).
-An unknown marker stops the build. ``tests/docs/test_docs_reference.py`` checks that every option a
+The scenario keys are read from the declarations the loader and the JSON Schema read
+(``scenario/keys.py``, ``format.SCENARIO``), and the schema itself is added to the site at
+``schema/scenario-v1.json`` (``on_files``). An unknown marker stops the build. ``tests/docs/test_docs_reference.py`` checks that every option a
 real pytest session gets from the plugin appears here.
 """
 from __future__ import annotations
@@ -246,7 +251,72 @@ def cli_markdown() -> str:
     return "\n".join(_parser_section(build_parser(), 2))
 
 
-GENERATORS = {"pytest-options": pytest_options_markdown, "cli": cli_markdown}
+# -- the scenario format ------------------------------------------------------------------------
+_KIND_WORDS = {"number": "number", "integer": "whole number", "text": "text", "flag": "true / false",
+               "choice": "one of", "version": "whole number", "sub": "mapping", "listed": "list of mappings",
+               "point": "[x, y]", "points": "list of [x, y]", "rows": "list of rows", "scale": "number or [sx, sy, sz]",
+               "free": "free-form mapping", "marks": "list of marks", "elements": "list of typed mappings",
+               "variant": "mapping with a type", "range": "number or [lo, hi]", "size_range": "number or [lo, hi]",
+               "names": "list of names"}
+
+
+def _anchor(title: str) -> str:
+    return re.sub(r"[^a-z0-9]+", "-", title.lower()).strip("-") or "top-level"
+
+
+def _key_rows(section: Any) -> list[str]:
+    from pytest_navscenario.scenario.json_schema import describe_default, describe_range
+    rows = ["| key | type and range | unit | default | meaning |", "|---|---|---|---|---|"]
+    for key in section.keys:
+        kind = _KIND_WORDS.get(key.kind, key.kind)
+        allowed = describe_range(key)
+        rows.append(f"| `{key.name}` | {escape(kind + (': ' + allowed if allowed else ''))} | {escape(key.unit)} | "
+                    f"{escape(describe_default(key))} | {escape(key.doc)} |")
+    return rows
+
+
+def _sections_markdown(root: Any, skip: tuple[str, ...] = ()) -> str:
+    from pytest_navscenario.scenario.keys import walk
+    seen: dict[int, list[str]] = {}
+    order: list[Any] = []
+    for path, section in walk(root):
+        if any(path == s or path.startswith(s + ".") for s in skip):
+            continue
+        where = section.path if "(" in section.path else (path or "top level")
+        if id(section) not in seen:
+            seen[id(section)] = []
+            order.append(section)
+        if where not in seen[id(section)]:
+            seen[id(section)].append(where)
+    lines: list[str] = []
+    for section in order:
+        if not section.keys:
+            continue
+        title = ", ".join(seen[id(section)])
+        lines += [f"### `{title}` {{ #{_anchor('keys ' + seen[id(section)][0])} }}", "",
+                  escape(section.doc[:1].upper() + section.doc[1:]) + ".", ""]
+        lines += _key_rows(section) + [""]
+    return "\n".join(lines)
+
+
+def scenario_keys_markdown() -> str:
+    from pytest_navscenario.scenario.format import SCENARIO
+    return _sections_markdown(SCENARIO, skip=("search",))
+
+
+def search_keys_markdown() -> str:
+    from pytest_navscenario.scenario.search_keys import SEARCH
+    return "\n".join(_key_rows(SEARCH))
+
+
+def run_only_markdown() -> str:
+    from pytest_navscenario.scenario.json_schema import run_only_checks
+    return "\n".join(f"* `{where}`: {escape(rule)}" for where, rule in run_only_checks())
+
+
+GENERATORS = {"pytest-options": pytest_options_markdown, "cli": cli_markdown,
+              "scenario-keys": scenario_keys_markdown, "search-keys": search_keys_markdown,
+              "scenario-run-only": run_only_markdown}
 
 
 def expand(markdown: str, where: str = "page") -> str:
@@ -262,3 +332,12 @@ def expand(markdown: str, where: str = "page") -> str:
 def on_page_markdown(markdown: str, page: Any, config: Any, files: Any) -> str:
     """MkDocs event: fill in the generated parts of a page."""
     return expand(markdown, page.file.src_path)
+
+
+def on_files(files: Any, config: Any) -> Any:
+    """MkDocs event: the scenario format's JSON Schema, generated, at a stable path of the site
+    (schema/scenario-v1.json), so pages link to it and a published site serves it."""
+    from mkdocs.structure.files import File
+    from pytest_navscenario.scenario.json_schema import SCHEMA_FILE, schema_text
+    files.append(File.generated(config, f"schema/{SCHEMA_FILE}", content=schema_text()))
+    return files

@@ -37,6 +37,8 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
                  "build a seed scenario from a map_server occupancy grid"),
     "import": ("pytest_navscenario.ros.world_import",
                "import an Aerialist test or a Gazebo SDF world as a scenario"),
+    "schema": ("pytest_navscenario.cli.schema",
+               "write the JSON Schema of the scenario format (editor completion and checks, CI)"),
 }
 
 # name -> the description at the top of the subcommand's own --help
@@ -63,6 +65,12 @@ DESCRIPTIONS: dict[str, str] = {
     "from-map": "Build a seed scenario from a map_server occupancy grid (the map YAML and the image "
                 "beside it): occupied cells become box obstacles; start and goal are poses in the "
                 "map frame, e.g. --start -2.25,3,90.",
+    "schema": "Write the JSON Schema (draft 2020-12) of the scenario format, generated from the loader's own "
+              "declarations: every key with its type, range, allowed values, default, unit and description. "
+              "Editors with the YAML language server (VS Code's YAML extension and others) then complete "
+              "keys and mark mistakes as they are typed; check-jsonschema checks files in CI. Keep it at "
+              ".navscenario/scenario-v1.json in your project: the modeline that starts every scenario "
+              "file the tool writes names that path (see docs/reference/scenario-format.md).",
     "import": "Import another tool's world as a scenario: an Aerialist test definition or a Gazebo "
               "SDF world (static boxes and cylinders; anything not carried over is listed). Poses "
               "are x,y,yaw in metres and degrees, e.g. --start -2.25,3,90.",

@@ -23,6 +23,8 @@ import multiprocessing
 import os
 import pickle
 import signal
+import threading
+import time
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
@@ -37,6 +39,7 @@ PRELOAD = ["pytest_navscenario.harness.runner", "pytest_navscenario.sim.episode"
            "pytest_navscenario.verdict.feasibility",
            "pytest_navscenario.subjects.planners.dwa"]
 MAX_ATTEMPTS = 3           # a job whose worker died this many times is reported as an error
+STOP_GRACE = 2.0           # s the workers have to stop their planners' processes when the pool closes
 
 
 def available_cores() -> int:
@@ -73,7 +76,27 @@ class _Slot:
     job: EpisodeJob
     future: Future
     generation: int
-    attempts: int = 0
+    attempts: int = 0          # times the worker running this job died of it
+    death: str = ""            # how it died the last time: "exit code 3", "killed by SIGKILL"
+
+
+def _dead_workers(pool: ProcessPoolExecutor | None) -> dict[int, str]:
+    """pid -> how it ended, of the workers of a broken pool that ended on their own (not by the
+    SIGTERM with which the pool stops the others once one has died)."""
+    if pool is None or not getattr(pool, "_broken", False):
+        return {}
+    procs = dict(getattr(pool, "_processes", None) or {})
+    manager = getattr(pool, "_executor_manager_thread", None)
+    if manager is not None:      # it stops and reaps the other workers (~0.1 s): then every code is
+        manager.join(timeout=10)  # known, and only it reads them (two readers could garble one)
+    dead = {}
+    for pid, proc in procs.items():
+        code = proc.exitcode
+        if code is None or code == -signal.SIGTERM:
+            continue
+        dead[pid] = (f"killed by {signal.Signals(-code).name}" if code < 0 and -code in signal.valid_signals()
+                     else f"exit code {code}")
+    return dead
 
 
 _STARTED: Any = None   # worker side: the pipe end on which a worker says which job it started
@@ -81,41 +104,110 @@ _STARTED: Any = None   # worker side: the pipe end on which a worker says which 
 
 def _worker_init(started: Any, alive: Any = None) -> None:
     """In each worker: leave Ctrl-C to the parent (it cancels the batch and stops the pool),
-    note started jobs, stop exec: planner programs when the worker exits, and exit when the
-    parent is gone (``_exit_with_parent``)."""
+    note started jobs, stop what the planners started (exec: programs, processes an in-process
+    planner left) whenever the worker ends: at exit, on SIGTERM (a broken pool stops the others
+    so), and when the parent is gone (``_exit_with_parent``)."""
     global _STARTED
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _stop_on_sigterm)
     _STARTED = started
     from multiprocessing.util import Finalize
 
-    from ..subjects.external import _shutdown_all
-    Finalize(None, _shutdown_all, exitpriority=10)
+    Finalize(None, _stop_planner_processes, exitpriority=10)
     if alive is not None:
-        import threading
         threading.Thread(target=_exit_with_parent, args=(alive,), name="navscenario-parent-watch",
                          daemon=True).start()
 
 
+_STOPPING = threading.RLock()   # re-entered by the SIGTERM handler in the thread holding it
+
+
+def _stop_planner_processes() -> None:
+    """Worker side: end the exec: planner programs (their process groups) and the processes
+    in-process planners left running (core/processes.py). Several ends may come at once (the
+    worker's exit and its parent-watch thread): the first does the work, the others wait for it,
+    so that none exits the process while the first is still ending a group."""
+    from ..core.processes import end_left_behind
+    from ..subjects.external import _shutdown_all
+    with _STOPPING:
+        try:
+            _shutdown_all()
+        finally:
+            end_left_behind(grace=0.5)
+
+
+def _stop_on_sigterm(signum: int, frame: Any) -> None:
+    """Worker side: stop the planners' processes, then die of the SIGTERM as before (its exit
+    code -15 tells the parent this worker was stopped, not killed by its episode)."""
+    try:
+        _stop_planner_processes()
+    finally:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGTERM)
+
+
 def _exit_with_parent(alive: Any) -> None:
     """Worker side: wait for the end of file on ``alive``, a pipe whose only writing end the
-    parent holds, then stop this worker's exec: planners and exit. The end of file comes when the
-    parent closes the pool or dies, even by SIGKILL: a pool's worker otherwise waits for its next
-    job forever (it holds its job queue's writing end itself), and with it the forkserver and the
-    resource tracker (they exit when the last process holding their pipes does)."""
+    parent holds, then stop this worker's planners' processes and exit. The end of file comes
+    when the parent closes the pool or dies, even by SIGKILL: a pool's worker otherwise waits for
+    its next job forever (it holds its job queue's writing end itself), and with it the
+    forkserver and the resource tracker (they exit when the last process holding their pipes does)."""
     try:
         alive.recv()
     except (EOFError, OSError):
         pass
     try:
-        from ..subjects.external import _shutdown_all
-        _shutdown_all()
+        _stop_planner_processes()
     finally:
         os._exit(0)
 
 
 def _pool_run(key: int, job: Any) -> Any:
-    _STARTED.send(key)   # a few bytes: one atomic pipe write, whichever worker writes at once
+    _STARTED.send((key, os.getpid()))   # a few bytes: one atomic pipe write, whichever worker writes
     return run_job(job)
+
+
+class _StartLog:
+    """Which job each worker process started last (pid -> key), from the workers' pipe.
+
+    A thread of this process reads the pipe as the messages come, so it never fills: unread, it
+    held ~4000 messages, after which every worker blocked on its next one and the pool hung (a
+    suite or a search of more than a few thousand episodes on -n 2). When a worker dies, the job it
+    started last (unless that one finished) is the one that killed it."""
+
+    def __init__(self, reader: Any):
+        self._reader = reader
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self.last: dict[int, int] = {}          # pid -> key of the job it started last
+        self._thread = threading.Thread(target=self._read, name="navscenario-pool-starts", daemon=True)
+        self._thread.start()
+
+    def _read(self) -> None:
+        while not self._stop.is_set():
+            try:
+                if self._reader.poll(0.1):
+                    with self._lock:
+                        self._take()
+            except (EOFError, OSError):
+                return
+
+    def _take(self) -> None:
+        while self._reader.poll(0):
+            key, pid = self._reader.recv()
+            self.last[pid] = key
+
+    def close(self) -> dict[int, int]:
+        """Stop reading, take what is left in the pipe, and return pid -> last started key."""
+        self._stop.set()
+        self._thread.join(timeout=5)
+        with self._lock:
+            try:
+                self._take()
+            except (EOFError, OSError):
+                pass
+            self._reader.close()
+        return self.last
 
 
 class _Warm:
@@ -139,7 +231,7 @@ class ProcessExecutor:
         self.start_method = start_method or default_start_method()
         self.description = f"{workers} local worker process(es) ({self.start_method})"
         self._pool: ProcessPoolExecutor | None = None
-        self._started: Any = None               # reading end of the workers' "started" pipe
+        self._starts: _StartLog | None = None   # which job each worker started last
         self._alive: Any = None                 # writing end of the workers' "parent alive" pipe
         self._generation = 0
         self._keys = itertools.count()
@@ -151,7 +243,8 @@ class ProcessExecutor:
             if self.start_method == "forkserver":
                 ctx.set_forkserver_preload(PRELOAD)
             # a plain pipe, not a SimpleQueue: its semaphore upsets the resource tracker at exit
-            self._started, writer = ctx.Pipe(duplex=False)
+            reader, writer = ctx.Pipe(duplex=False)
+            self._starts = _StartLog(reader)
             alive, self._alive = ctx.Pipe(duplex=False)   # only this process holds the writing end
             self._pool = ProcessPoolExecutor(self.workers, mp_context=ctx, initializer=_worker_init,
                                              initargs=(writer, alive))
@@ -198,8 +291,9 @@ class ProcessExecutor:
                 if slot.attempts >= MAX_ATTEMPTS:
                     self._open.pop(slot.key, None)
                     return EpisodeError("WorkerDied", f"the worker process running this episode died "
-                                        f"{slot.attempts} times (killed, out of memory, or the planner "
-                                        f"crashed the interpreter); it was not run again",
+                                        f"{slot.attempts} times (last: {slot.death}; the planner ended "
+                                        f"its process or crashed the interpreter, or the process was "
+                                        f"killed or ran out of memory); it was not run again",
                                         "", worker_name(), None)
                 continue
             self._open.pop(slot.key, None)
@@ -211,25 +305,31 @@ class ProcessExecutor:
         self._open.pop(slot.key, None)
 
     def _recover(self) -> None:
-        """The pool broke (a worker died): run every unfinished job again on a new pool; the jobs
-        that had started count an attempt (the one that killed its worker is among them)."""
-        started = set()
-        while self._started is not None and self._started.poll():
-            started.add(self._started.recv())
+        """The pool broke (a worker died): run every unfinished job again on a new pool. Only the
+        job whose episode killed its worker (the one that worker started last) counts an attempt;
+        the jobs the pool stopped with it are innocent and run again as if nothing had happened. If
+        no worker can be singled out (each ended by SIGTERM, as the pool ends the others), every
+        job that had started counts one."""
         old, self._pool = self._pool, None
+        starts, self._starts = self._starts, None
+        dead = _dead_workers(old)
+        last = starts.close() if starts is not None else {}
         if old is not None:
             old.shutdown(wait=False, cancel_futures=True)
         self._let_workers_go()
+        culprits = {last[pid]: why for pid, why in dead.items() if pid in last}
+        started = set(last.values())
         pool = self._ensure_pool()
         for slot in self._open.values():
             done_ok = slot.future.done() and not slot.future.cancelled() and slot.future.exception() is None
             if done_ok:
                 continue
-            if slot.key in started:
+            if slot.key in culprits or (not culprits and slot.key in started):
                 slot.attempts += 1
-            if slot.attempts < MAX_ATTEMPTS:
+                slot.death = culprits.get(slot.key, "ended by a signal")
+            if slot.attempts < MAX_ATTEMPTS:   # else its broken future stays: _wait reports it
                 slot.future = pool.submit(_pool_run, slot.key, slot.job)
-            slot.generation = self._generation
+                slot.generation = self._generation
 
     def _let_workers_go(self) -> None:
         """Close this process's end of the "parent alive" pipe: every worker still running exits."""
@@ -240,23 +340,32 @@ class ProcessExecutor:
     def close(self, cancel: bool = False) -> None:
         """Stop the workers; with ``cancel`` (Ctrl-C, an error) at once, dropping unfinished jobs."""
         pool, self._pool = self._pool, None
+        starts, self._starts = self._starts, None
         self._open.clear()
-        if pool is None:
-            return
-        if not cancel:
-            pool.shutdown(wait=True)
-            self._let_workers_go()
-            return
-        procs = list((getattr(pool, "_processes", None) or {}).values())   # gone after shutdown
-        pool.shutdown(wait=False, cancel_futures=True)
-        self._let_workers_go()
-        for proc in procs:
-            try:
-                proc.kill()
-            except Exception:
-                pass
-        for proc in procs:
-            proc.join(timeout=5)
+        try:
+            if pool is None:
+                return
+            if not cancel:
+                pool.shutdown(wait=True)
+                self._let_workers_go()
+                return
+            procs = list((getattr(pool, "_processes", None) or {}).values())   # gone after shutdown
+            pool.shutdown(wait=False, cancel_futures=True)
+            self._let_workers_go()    # each worker stops its exec: planners and leftovers, and exits
+            deadline = time.monotonic() + STOP_GRACE
+            for proc in procs:
+                proc.join(timeout=max(0.0, deadline - time.monotonic()))
+            for proc in procs:        # one stuck in C code that ignores its parent-watch thread
+                if proc.exitcode is None:
+                    try:
+                        proc.kill()
+                    except Exception:
+                        pass
+            for proc in procs:
+                proc.join(timeout=5)
+        finally:
+            if starts is not None:     # after the workers: none is left to write to its pipe
+                starts.close()
 
 
 def make_local_executor(workers: int | None) -> SerialExecutor | ProcessExecutor:

@@ -14,6 +14,8 @@ from typing import Any
 
 import numpy as np
 
+from ..core import processes
+from ..subjects.external import running_pids
 from ..subjects.loading import make_planner, subject_identity
 from ..verdict.result import EpisodeResult
 from ..scenario.model import Scenario
@@ -67,6 +69,7 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
     from ..sim.episode import simulate
 
     t0 = time.perf_counter()
+    before = processes.children()
     instance, spec = make_planner(planner)
     if tick_limit and hasattr(instance, "tick_timeout"):  # adapters that enforce the limit themselves
         instance.tick_timeout = tick_limit
@@ -76,6 +79,8 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
     ran = perturbed(scenario, ep_seed)   # simulation.perturb: this episode's start and timing (else itself)
     facts = simulate(ran, instance, ep_seed, tick_limit=tick_limit, stuck_after=stuck_after)
     name, version = subject_identity(instance, spec)  # after reset: a planner may name itself there
+    del instance    # a planner that ends its helpers when it is dropped has done so before the check
+    left = processes.note_left_behind(before, scenario.name or "the episode", ours=running_pids())
     t1 = time.perf_counter()
     outcome, message = oracle.classify(
         ran, facts.trajectory, collision=facts.collision, safety_stop=facts.safety_stop,
@@ -89,4 +94,5 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
         scenario=scenario, outcome=outcome, metrics=figures, trajectory=facts.trajectory, seed=ep_seed,
         subject=name, subject_version=version, message=message, collision=facts.collision,
         safety_stop=facts.safety_stop, subject_failure=facts.subject_failure,
-        wall_time=t2 - t0, timings=timings, terrain_event=facts.terrain_event)
+        wall_time=t2 - t0, timings=timings, terrain_event=facts.terrain_event,
+        left_running=tuple(f"pid {p.pid}: {p.command}" for p in left))

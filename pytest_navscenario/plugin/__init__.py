@@ -115,6 +115,41 @@ def pytest_sessionstart(session: pytest.Session) -> None:
         except OSError as exc:
             raise pytest.UsageError(f"navscenario: cannot create the folder of the results file "
                                     f"{settings.results}: {exc}") from None
+        if not config.option.collectonly and not _search_run(config):
+            _lock_results(config, settings.results)
+
+
+def _search_run(config: pytest.Config) -> bool:
+    from .parallel import _wants_search
+    return _wants_search(config)
+
+
+def _lock_results(config: pytest.Config, path: Path) -> None:
+    """One run at a time writes a results file: two runs would each write their own records
+    whole, and the file would keep only the last run's (issue 26). A second run is refused at
+    once, naming the first; the lock goes when this run ends (or dies: the OS drops it)."""
+    import datetime
+    import os
+    import shlex
+    import socket
+
+    from ..core.files import FileBusy, WriterLock
+
+    started = datetime.datetime.now().strftime("%Y-%m-%d %H:%M:%S")
+    command = shlex.join(["pytest", *map(str, config.invocation_params.args)])
+    me = f"pid {os.getpid()} on {socket.gethostname()}, started {started}: {command}"
+    try:
+        lock = WriterLock(path, me)
+    except FileBusy as busy:
+        raise pytest.UsageError(
+            f"navscenario: another run is writing the results file {path} ({busy.holder or 'its pid is unknown'}); "
+            f"two runs writing one results file would leave only one run's records in it. Wait for "
+            f"that run to end, or give this one a file of its own, e.g. --nav-results="
+            f"{path.with_name(path.stem + '-2' + path.suffix).name}") from None
+    except OSError as exc:
+        raise pytest.UsageError(f"navscenario: cannot lock the results file {path} against a second "
+                                f"writer ({exc}); is its folder writable?") from None
+    config.add_cleanup(lock.release)
 
 
 def pytest_report_header(config: pytest.Config) -> list[str]:
@@ -262,6 +297,7 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
     from .state import STATE_KEY
     config = session.config
     state = config.stash.get(STATE_KEY, None)
+    _end_left_running(state)
     if state is not None and state.is_worker and (state.not_scenarios or state.scenario_folders):
         from .skipped import WORKER_KEY
         config.workeroutput[WORKER_KEY] = {  # type: ignore[attr-defined]
@@ -270,6 +306,9 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
         return
     if config.option.collectonly:  # nothing ran: keep an existing results file
         return
+    if not state.records and (state.settings.results.exists() or _search_run(config)):
+        state.results_kept = True   # a run that recorded no episode (a search, -k matching nothing)
+        return                      # leaves the file as it was
     from ..report.flaky import annotate_repeats
     from ..report.results_file import write_results
     try:
@@ -283,6 +322,18 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
             session.exitstatus = pytest.ExitCode.INTERNAL_ERROR
 
 
+def _end_left_running(state: Any) -> None:
+    """End the processes in-process planners left running in this process (its episodes: the
+    controller's in a serial run, an xdist worker's own); the controller says so in its summary."""
+    import sys
+    processes = sys.modules.get("pytest_navscenario.core.processes")   # loaded once an episode ran
+    if processes is None:
+        return
+    ended = processes.end_left_behind()
+    if state is not None and ended:
+        state.ended_left_running = [f"pid {p.pid} after {p.episode}" for p in ended]
+
+
 def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pytest.Config) -> None:
     from .collect import rel_path
     from .state import STATE_KEY
@@ -292,6 +343,10 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
     from .skipped import summary_lines
     for line in summary_lines(state, lambda p: rel_path(config, p), config.getoption("verbose") > 0):
         terminalreporter.write_line(line)
+    if state.ended_left_running:
+        shown = state.ended_left_running[:5] + (["..."] if len(state.ended_left_running) > 5 else [])
+        terminalreporter.write_line(f"navscenario: ended {len(state.ended_left_running)} process(es) the planner "
+                                    f"had left running ({', '.join(shown)}; see the warnings)", yellow=True)
     if not state.records and state.settings.results is None:
         return
     tr = terminalreporter
@@ -313,7 +368,14 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
     if state.results_error is not None:
         tr.write_line(state.results_error, red=True, bold=True)
     elif state.settings.results is not None and not config.option.collectonly:
-        tr.write_line(f"navscenario: wrote {len(state.records)} record(s) to {state.settings.results}")
+        if not state.results_kept:
+            tr.write_line(f"navscenario: wrote {len(state.records)} record(s) to {state.settings.results}")
+        elif _search_run(config):
+            tr.write_line(f"navscenario: a search records its simulations in its own log, not in the "
+                          f"results file; {state.settings.results} was left as it was")
+        else:
+            tr.write_line(f"navscenario: no episode ran, so the results file {state.settings.results} "
+                          f"was left as it was")
     if state.failed_artifacts:
         tr.write_line(f"navscenario: artifacts of {len(state.failed_artifacts)} failing item(s) in "
                       f"{state.settings.artifacts}")

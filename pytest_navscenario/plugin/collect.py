@@ -246,6 +246,18 @@ def _fmt(value: Any, unit: str = "", digits: int = 3) -> str:
     return f"{value:.{digits}f}{unit}"
 
 
+def _warn_left_running(where: str, left: tuple[str, ...]) -> None:
+    """A pytest warning (shown with the item in the warnings summary) for the processes the
+    planner started in this episode and left running."""
+    import warnings
+
+    from ..core.processes import LeftRunningWarning
+    warnings.warn(LeftRunningWarning(
+        f"{where}: the planner left {len(left)} process(es) running after its episode ({'; '.join(left)}); "
+        f"they are ended when the run ends. A planner should end what it starts (e.g. in __del__ or an "
+        f"atexit handler), or keep one helper for all its episodes."), stacklevel=2)
+
+
 class ScenarioItem(pytest.Item):
     """One episode of one scenario against the session's subject; passes iff the outcome is success."""
 
@@ -307,6 +319,8 @@ class ScenarioItem(pytest.Item):
                                                  reset_timeout=state.settings.reset_timeout), self.nav_checked)
             self.nav_checked = 0.0
         self.nav_result = result
+        if result.left_running:
+            _warn_left_running(self.rel_path, result.left_running)
         m = result.metrics
         self.user_properties.extend([
             ("nav_outcome", result.outcome.value),

@@ -66,6 +66,12 @@ OPTIONS = (
      "reports stay in this process, so it costs less than pytest-xdist's N pytest workers; "
      "-n N on a run of scenario files only (no Python test files) does the same. Items report "
      "one per scenario in the usual order with the results of a serial run."),
+    ("--nav-isolate", "nav_isolate",
+     "yes: run the episodes in a worker process even without -n or --nav-workers, so that a "
+     "planner that ends its process (os._exit, a crash in C code, the out-of-memory killer) fails "
+     "only the item it was running (WorkerDied, after 3 tries) and the run goes on and writes its "
+     "results; costs the worker's start, about a second. no (default): a serial run simulates in "
+     "this process. With -n N, --nav-workers N or --nav-ray the episodes are isolated anyway."),
 )
 
 
@@ -98,7 +104,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     metavars = {"nav_subject": "SPEC", "nav_seed": "N", "nav_results": "PATH", "nav_artifacts": "DIR",
                 "nav_summary": "{yes,no}", "nav_tick_limit": "SECONDS", "nav_repeat": "N",
                 "nav_reset_timeout": "SECONDS", "nav_ray": "ADDRESS", "nav_workers": "N",
-                "nav_sensor_model": "SPEC"}
+                "nav_isolate": "{yes,no}", "nav_sensor_model": "SPEC"}
     for opt, ini, text in OPTIONS:
         group.addoption(opt, dest=ini, default=None, metavar=metavars[ini],   # argparse %-formats help
                         help=(text + f" [ini: {ini}]").replace("%", "%%"))
@@ -114,6 +120,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
                   default=DEFAULT_RESET_TIMEOUT)
     parser.addini("nav_ray", helps["nav_ray"], default="")
     parser.addini("nav_workers", helps["nav_workers"], default="")
+    parser.addini("nav_isolate", helps["nav_isolate"], type="bool", default=False)
     parser.addini("nav_sensor_model", helps["nav_sensor_model"], default="")
     parser.addini("nav_scenario_glob",
                   "file name patterns of scenario files (space separated); files matching them are "
@@ -142,6 +149,7 @@ class Settings:
 
 
 _EXPECTED = {"nav_seed": "a whole number >= 0", "nav_summary": "yes or no (true or false)",
+             "nav_isolate": "yes or no (true or false)",
              "nav_tick_limit": "seconds >= 0 (0: no limit)",
              "nav_repeat": "a whole number of runs per scenario from 1 to 10000",
              "nav_reset_timeout": "seconds > 0"}
@@ -199,14 +207,7 @@ def read_settings(config: pytest.Config) -> Settings:
             raise pytest.UsageError(f"{where}: {raw!r} exists and is not a folder; give a folder "
                                     f"(created if missing) or 'none' to disable artifacts")
 
-    raw, where, _ = _value(config, "nav_summary")
-    flag = raw.strip().lower()
-    if flag in ("yes", "true", "on", "1"):
-        summary = True
-    elif flag in ("no", "false", "off", "0"):
-        summary = False
-    else:
-        raise pytest.UsageError(f"{where}: expected yes or no, got {raw!r}")
+    summary = read_yes_no(config, "nav_summary")
 
     raw, where, _ = _value(config, "nav_tick_limit")
     if raw.strip().lower() in ("none", "off", "no", ""):
@@ -258,6 +259,17 @@ def read_sensor_model(config: pytest.Config) -> "dict[str, float] | None":
         return parse_sensor_model(raw)
     except ValueError as exc:
         raise pytest.UsageError(f"{where}: {exc}") from None
+
+
+def read_yes_no(config: pytest.Config, name: str) -> bool:
+    """A yes/no option (true/false, on/off, 1/0 too); UsageError otherwise."""
+    raw, where, _ = _value(config, name)
+    flag = raw.strip().lower()
+    if flag in ("yes", "true", "on", "1"):
+        return True
+    if flag in ("no", "false", "off", "0"):
+        return False
+    raise pytest.UsageError(f"{where}: expected yes or no, got {raw!r}")
 
 
 _HOST_PORT = re.compile(r"^(ray://)?[A-Za-z0-9_.\-]+:[0-9]{1,5}$|^(ray://)?\[[0-9A-Fa-f:]+\]:[0-9]{1,5}$")

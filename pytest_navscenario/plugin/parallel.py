@@ -39,6 +39,7 @@ NUM_CPUS_KEY = pytest.StashKey[int]()
 SEARCH_WORKERS_KEY = pytest.StashKey[int]()
 SUBMIT_CHUNK = 16   # scenario items checked and submitted at a time at the start of the run loop
 SUITE_WORKERS_KEY = pytest.StashKey[tuple[int, str]]()   # (workers, which option asked for them)
+ISOLATE = "--nav-isolate"    # the reason given for one worker process asked for by --nav-isolate
 
 
 def _numprocesses(config: pytest.Config) -> Any:
@@ -81,8 +82,16 @@ def pytest_configure(config: pytest.Config) -> None:
     workers = _nav_workers_alone(config)
     if _numprocesses(config) is not None:
         workers = take_over_xdist(config, "--navsearch")
+    if (workers or 0) <= 1 and _isolated(config):
+        workers = 1
     if workers is not None:
         config.stash[SEARCH_WORKERS_KEY] = workers
+
+
+def _isolated(config: pytest.Config) -> bool:
+    """--nav-isolate / ini nav_isolate: episodes on a worker process even in a serial run."""
+    from .options import read_yes_no
+    return read_yes_no(config, "nav_isolate")
 
 
 def _ray_cpus_from_n(config: pytest.Config, address: str) -> None:
@@ -143,15 +152,19 @@ def _choose_suite_workers(config: pytest.Config) -> None:
     """--nav-workers N, or -n N on a scenario-only run: the scenario items' episodes on N local
     worker processes (see the module docstring); xdist is switched off for it."""
     workers = _nav_workers_alone(config)
-    if workers is not None:
+    if workers is not None and (workers > 1 or not _isolated(config)):
         config.stash[SUITE_WORKERS_KEY] = (workers, f"--nav-workers {workers}")
         return
     n = _numprocesses(config)
     if n is None or _xdist_asked_for(config) or config.option.collectonly or not _scenario_only(config):
+        if n is None and _isolated(config):     # xdist's own workers isolate themselves
+            config.stash[SUITE_WORKERS_KEY] = (1, ISOLATE)
         return
     n = take_over_xdist(config, "-n")
     assert n is not None
     config.stash[SUITE_WORKERS_KEY] = (n, f"-n {n} on scenario files only")
+    if n <= 1 and _isolated(config):
+        config.stash[SUITE_WORKERS_KEY] = (1, ISOLATE)
 
 
 def _scenario_only(config: pytest.Config) -> bool:
@@ -196,7 +209,7 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     workers, why = config.stash.get(SUITE_WORKERS_KEY, (0, ""))
     if SEARCH_WORKERS_KEY in config.stash:
         workers, why = config.stash[SEARCH_WORKERS_KEY], "with --navsearch"
-    if state.settings.ray is None and workers > 1:
+    if state.settings.ray is None and (workers > 1 or workers == 1 and (why == ISOLATE or _isolated(config))):
         from ..dispatch.local import ProcessExecutor
 
         pool = ProcessExecutor(workers)
@@ -233,8 +246,9 @@ def pytest_report_header(config: pytest.Config) -> list[str]:
     if state is None or state.executor is None:
         return []
     if state.settings.ray is None and SEARCH_WORKERS_KEY in config.stash:
+        why = ISOLATE if state.executor.workers == 1 else f"-n {state.executor.workers}"
         return [f"navsearch: each search evaluates its candidates on {state.executor.description} "
-                f"(-n {state.executor.workers}); searches run one after the other"]
+                f"({why}); searches run one after the other"]
     if state.settings.ray is None:
         _, why = config.stash[SUITE_WORKERS_KEY]
         return [f"navscenario: episodes run on {state.executor.description} ({why}); this process "

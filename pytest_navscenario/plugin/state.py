@@ -20,6 +20,8 @@ class NavState:
     failed_artifacts: list[str] = field(default_factory=list)      # controller: folders written
     bad_scenario_files: int = 0   # scenario files that failed to load (collection errors)
     results_error: str | None = None   # controller: why the results file could not be written
+    results_kept: bool = False    # controller: no episode was recorded, the file was left as it was
+    ended_left_running: list[str] = field(default_factory=list)   # processes planners left, ended at the end
     not_scenarios: list[tuple[str, str]] = field(default_factory=list)   # (path, why): skipped.py
     scenario_folders: set[str] = field(default_factory=set)   # folders holding collected scenarios
     executor: Any = None          # controller with --nav-ray: where episodes run (dispatch/)

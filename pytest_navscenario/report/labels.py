@@ -23,6 +23,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
 
 PAD = 2.0   # px kept free around a label's text (its halo)
+LEADER_MIN = 14.0   # px: a label set off further than this from its anchor gets a leader line
 
 
 def ring(distances: Sequence[float] = (6.0, 14.0, 26.0), *, first: tuple[float, float] | None = None) -> list[tuple[float, float]]:
@@ -150,11 +151,14 @@ class LabelPlacer:
         return ann
 
     def _leader(self, req: _Request, box: tuple[float, float, float, float]) -> None:
-        """A thin line from the anchor to the nearest point of the text's box."""
+        """A thin line from the anchor to the nearest point of the text's box, when the text
+        stands off far enough (LEADER_MIN pixels) for the eye to need it."""
         ax = self.ax
         px, py = ax.transData.transform(req.xy)
         nx = min(max(px, box[0]), box[2])
         ny = min(max(py, box[1]), box[3])
+        if (nx - px) ** 2 + (ny - py) ** 2 < LEADER_MIN ** 2:
+            return
         end = ax.transData.inverted().transform((nx, ny))
         ax.plot([req.xy[0], end[0]], [req.xy[1], end[1]], scalex=False, scaley=False, **req.leader)
 

@@ -296,7 +296,8 @@ def draw_moving_obstacles(ax: "Axes", result: EpisodeResult, labels: LabelPlacer
                 continue
             labels.avoid_area(np.asarray(poly.exterior.coords))
             labels.add(text, (poly.centroid.x, poly.centroid.y), priority=4,
-                       offsets=ring((10.0, 18.0, 30.0), first=(0, 1)), **style)
+                       offsets=ring((10.0, 18.0, 30.0), first=(0, 1)),
+                       leader=dict(color=MOVING_COLOUR, lw=0.5, zorder=7), **style)
 
 
 def _draw_shortest_path(ax: "Axes", scenario: Any) -> None:

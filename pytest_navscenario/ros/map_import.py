@@ -19,6 +19,7 @@ import numpy as np
 
 from ..core.errors import NavScenarioError
 from ..scenario.model import BoxObstacle, Mission, Scenario
+from .robot_options import add_robot_arguments, mission_timeout, robot_from_args
 from .world_import import parse_pose, write_seed
 
 
@@ -195,17 +196,23 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--start", required=True, metavar="X,Y,YAW", help="start pose x,y,yaw (m, m, degrees) in the map frame")
     p.add_argument("--goal", required=True, metavar="X,Y,YAW", help="goal pose x,y,yaw (m, m, degrees) in the map frame")
     p.add_argument("-o", "--output", required=True, metavar="OUT.yaml", help="scenario YAML to write")
-    p.add_argument("--timeout", type=float, default=60.0, metavar="SECONDS", help="mission timeout (default 60)")
+    add_robot_arguments(p)
     p.add_argument("--name", default="", metavar="TEXT", help="scenario name (default: the output file's stem)")
     p.add_argument("--force", action="store_true", help="overwrite an existing output file")
 
 
 def run(args: argparse.Namespace) -> int:
+    import dataclasses
+
     start, goal = parse_pose(args.start, "--start"), parse_pose(args.goal, "--goal")
+    robot, robot_note = robot_from_args(args)
     boxes, info, cells = map_obstacles(args.map)
-    scenario = Scenario(mission=Mission(start=start, goal=goal, timeout=args.timeout),
-                        obstacles=tuple(boxes), name=args.name,
+    scenario = Scenario(mission=Mission(start=start, goal=goal), obstacles=tuple(boxes), robot=robot, name=args.name,
                         description=f"Imported from map {Path(args.map).name} ({info.resolution} m/cell).")
+    timeout, timeout_note = mission_timeout(scenario, args.timeout)
+    scenario = dataclasses.replace(scenario, mission=dataclasses.replace(scenario.mission, timeout=timeout))
     write_seed(scenario, args.output, force=args.force)
+    print(f"navscenario from-map: {robot_note}")
+    print(f"navscenario from-map: {timeout_note}")
     print(f"navscenario from-map: {cells} occupied cells -> {len(boxes)} boxes -> wrote {args.output}")
     return 0

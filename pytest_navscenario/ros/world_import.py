@@ -18,6 +18,7 @@ Also home of ``write_seed``, which every importer uses to write its scenario fil
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import os
 import sys
@@ -30,6 +31,7 @@ from ..core.errors import NavScenarioError
 from ..core.files import usual_mode
 from .aerialist import aerialist_obstacles, mission_from_plan, read_aerialist  # noqa: F401 (re-exported)
 from ..scenario.model import BoxObstacle, CylinderObstacle, Mission, Obstacle, Pose, Scenario
+from .robot_options import add_robot_arguments, mission_timeout, robot_from_args
 
 
 class WorldImportError(NavScenarioError):
@@ -69,7 +71,8 @@ def write_seed(scenario: Scenario, out: str | Path, *, extra_files: dict[str, st
     except ScenarioError as exc:   # named by the user's file and field, not the temporary copy checked
         exc.path, exc.line = None, None
         raise WorldImportError(f"{out}: not written, the imported scenario is invalid: {exc.format()}") from None
-    targets[out] = text
+    from ..scenario.modeline import ensure_project_schema, with_modeline
+    targets[out] = with_modeline(text, out)     # the schema for editors (a comment: same scenario)
     out.parent.mkdir(parents=True, exist_ok=True)
     staged: list[tuple[str, Path]] = []
     try:
@@ -86,6 +89,7 @@ def write_seed(scenario: Scenario, out: str | Path, *, extra_files: dict[str, st
         for tmp, _ in staged:
             if os.path.exists(tmp):
                 os.unlink(tmp)
+    ensure_project_schema(out)
     return out
 
 
@@ -114,6 +118,7 @@ class SdfWorld:
     names: set[str] = field(default_factory=set)
     notes: list[str] = field(default_factory=list)          # imported, but not all of it (said how)
     meshes: dict[str, bytes] = field(default_factory=dict)   # files to write beside the seed
+    roots: tuple[Path, ...] = ()                              # folders meshes may come from
 
 
 def _pose6(elem: ET.Element | None, where: str, path: Path) -> tuple[float, ...]:
@@ -151,10 +156,12 @@ def _floats(elem: ET.Element | None, n: int, where: str, path: Path) -> list[flo
     return vals
 
 
-def sdf_obstacles(path: str | Path) -> SdfWorld:
-    """Box and cylinder collisions of the static models of an SDF world (see module docstring)."""
+def sdf_obstacles(path: str | Path, model_path: tuple[str | Path, ...] = ()) -> SdfWorld:
+    """Box, cylinder, polyline and mesh collisions of the static models of an SDF world (see
+    module docstring). ``model_path``: folders besides the world's own where ``model://`` and
+    ``file://`` meshes may be found (like GAZEBO_MODEL_PATH); a mesh elsewhere is an error."""
     path = Path(path)
-    recovered = None
+    recovered: list[str] = []
     try:
         root = ET.parse(path).getroot()
     except FileNotFoundError:
@@ -165,12 +172,15 @@ def sdf_obstacles(path: str | Path) -> SdfWorld:
         raise WorldImportError(f"{path}: cannot read: {exc}") from None
     world = root.find("world") if root.tag == "sdf" else None
     if world is None:
-        raise WorldImportError(f"{path}: not an SDF world: expected <sdf><world>..., found <{root.tag}>")
+        found = f"<{root.tag}>" + (f" with <{'>, <'.join(sorted({c.tag for c in root}))}> in it" if len(root) else "")
+        raise WorldImportError(f"{path}: not an SDF world: expected <sdf><world>..., found {found}"
+                               + (f" (even after repairing its XML: {len(recovered)} repair(s), the first at line "
+                                  f"{recovered[0]})" if recovered else ""))
     state = world.find("state")
     state_poses = {m.get("name"): m.find("pose") for m in (state.findall("model") if state is not None else [])}
     out = SdfWorld(obstacles=[])
-    if recovered:
-        out.warnings.append(recovered)
+    out.roots = (path.parent.resolve(), *(Path(p).resolve() for p in model_path))
+    out.warnings.extend(recovered)
     for inc in world.findall("include"):
         uri = (inc.findtext("uri") or "?").strip()
         out.warnings.append(f"<include> {uri}: included models are not resolved (not imported)")
@@ -181,37 +191,77 @@ def sdf_obstacles(path: str | Path) -> SdfWorld:
     tilt = math.radians(1.0)
     for model in world.findall("model"):
         _model(path, model, (0.0,) * 6, state_poses, out, tilt, top=True)
+    _one_of_each_pile(out)
     return out
 
 
-def _recover(path: Path, error: ET.ParseError) -> tuple[ET.Element, str]:
-    """Gazebo's parser (tinyxml2) forgives some slips a strict XML parser refuses: a bare ``&`` (kept
-    as text), more after the root element (further top-level content). Repair those, parse again,
-    and say what was done (a warning); anything else (a truncated file, mismatched tags) stays an
-    error, as it is for Gazebo."""
-    import re
+# where lxml's recovery gives up (a truncated file, mismatched tags): Gazebo refuses those too
+_FATAL = {"ERR_TAG_NOT_FINISHED", "ERR_TAG_NAME_MISMATCH", "ERR_DOCUMENT_EMPTY", "ERR_DOCUMENT_END_OF_DATA",
+          "ERR_LTSLASH_REQUIRED", "ERR_GT_REQUIRED"}
 
-    line = error.position[0]
+
+def _recover(path: Path, error: ET.ParseError) -> tuple[ET.Element, list[str]]:
+    """Gazebo classic reads world files with TinyXML, which forgives slips a strict XML parser
+    refuses (unquoted or empty attribute values, ``<pose frame=>``, a bare ``&``, stray characters,
+    more after the root element). libxml2's recovering parser (lxml) reads past them the same way;
+    each repair is returned as a warning with its line. A truncated file or mismatched tags, which
+    Gazebo refuses too, stay an error naming the line."""
+    from lxml import etree
+
+    parser = etree.XMLParser(recover=True, remove_comments=True, remove_pis=True, resolve_entities=False,
+                             no_network=True)
     try:
-        text = path.read_text(encoding="utf-8", errors="replace").lstrip("\ufeff \t\r\n")
-    except OSError as exc:
-        raise WorldImportError(f"{path}: cannot read: {exc}") from None
-    done = []
-    fixed = re.sub(r"&(?!(amp|lt|gt|quot|apos|#\d+|#x[0-9a-fA-F]+);)", "&amp;", text)
-    if fixed != text:
-        done.append("escaped bare '&'")
-    end = fixed.rfind("</sdf>")
-    if end >= 0 and fixed[end + 6:].strip():
-        fixed = fixed[:end + 6] + "\n"
-        done.append("dropped the text after </sdf>")
-    try:
-        root = ET.fromstring(fixed) if done else None
-    except ET.ParseError:
-        root = None
-    if root is None:
-        raise WorldImportError(f"{path}:{line}: not an SDF world: not well-formed XML ({error})") from None
-    return root, (f"{path.name}:{line}: not well-formed XML ({error}); read it as Gazebo would after "
-                  f"repairing it ({'; '.join(done)}): check the imported obstacles")
+        tree = etree.parse(str(path), parser)
+    except (OSError, etree.XMLSyntaxError) as exc:
+        raise WorldImportError(f"{path}:{error.position[0]}: not an SDF world: not well-formed XML ({error}; "
+                               f"not readable even by a recovering parser: {exc})") from None
+    errors = list(parser.error_log)
+    fatal = [e for e in errors if e.type_name in _FATAL]
+    root = tree.getroot() if tree is not None else None
+    if fatal or root is None:
+        first = fatal[0] if fatal else None
+        line = first.line if first is not None else error.position[0]
+        raise WorldImportError(f"{path}:{line}: not an SDF world: not well-formed XML ("
+                               f"{first.message.strip() if first is not None else error}); Gazebo refuses it too")
+    repairs = [f"{e.line}: not well-formed XML ({e.message.strip()}): repaired and read as Gazebo would; check "
+               f"what was imported from there" for e in errors]
+    return _plain_tree(root), repairs or [f"{error.position[0]}: not well-formed XML ({error}): repaired"]
+
+
+def _plain_tree(elem) -> ET.Element:
+    """An lxml element (and its children) as a plain ElementTree element."""
+    out = ET.Element(str(elem.tag), {str(k): str(v) for k, v in elem.attrib.items()})
+    out.text, out.tail = elem.text, elem.tail
+    for child in elem:
+        if isinstance(child.tag, str):
+            out.append(_plain_tree(child))
+    return out
+
+
+def _one_of_each_pile(out: SdfWorld) -> None:
+    """Identical obstacles standing at one spot (dynamic worlds start their moving models in a pile
+    for their plugins to spread): kept once, and said so."""
+    import dataclasses
+
+    piles: dict[tuple, list[int]] = {}
+    for i, o in enumerate(out.obstacles):
+        key = (type(o).__name__, dataclasses.astuple(dataclasses.replace(o, name="")))
+        piles.setdefault(key, []).append(i)
+    drop = set()
+    for members in piles.values():
+        if len(members) > 1:
+            names = [out.obstacles[i].name for i in members]
+            o = out.obstacles[members[0]]
+            shown = ", ".join(names[:6]) + (", ..." if len(names) > 6 else "")
+            out.warnings.append(f"{len(names)} identical models stand at one spot ({o.x:g}, {o.y:g}): {shown}; "
+                                f"imported once, as {names[0]} (a dynamic world piles up the models its plugins "
+                                f"move: write their motion by hand)")
+            drop.update(members[1:])
+    if drop:
+        gone = {out.obstacles[i].name for i in drop}
+        # their plugin warnings are said once, by the pile's
+        out.warnings = [w for w in out.warnings if not any(w.startswith(f"model {n}: plugin(s)") for n in gone)]
+        out.obstacles = [o for i, o in enumerate(out.obstacles) if i not in drop]
 
 
 def _model(path: Path, model: ET.Element, parent: tuple[float, ...], state_poses: dict, out: SdfWorld,
@@ -223,8 +273,9 @@ def _model(path: Path, model: ET.Element, parent: tuple[float, ...], state_poses
     plugins = tuple(f"{p.get('name', '?')} ({p.get('filename', '?')})" for p in model.findall("plugin"))
     moved_by = moved_by + plugins
     if plugins:
-        out.notes.append(f"model {mname}: plugin(s) {', '.join(plugins)} may move or change it: imported "
-                         f"where it stands in the world file; what the plugins do is not carried over")
+        out.warnings.append(f"model {mname}: plugin(s) {', '.join(plugins)} may move or change it: imported "
+                            f"where it stands in the world file; what the plugins do is not carried over (write "
+                            f"its motion by hand)")
     for inner in model.findall("model"):
         _model(path, inner, mpose, {}, out, tilt, top=False, moved_by=moved_by)
     for inc in model.findall("include"):
@@ -298,11 +349,17 @@ def _outlined(path: Path, mname: str, lname: str, cname: str, where: str, geom: 
     uri = (shape.findtext("uri") or "").strip()
     scale = tuple(_floats(shape.find("scale"), 3, f"{where} mesh scale", path)) if shape.find("scale") is not None \
         else (1.0, 1.0, 1.0)
-    found = _find_mesh(path, uri)
+    found = _find_mesh(path, uri, out.roots)
     if found is None:
         out.warnings.append(f"{where}: mesh {uri or '(no uri)'}: no such file beside the world, looked in "
-                            f"{path.parent} and its models/ folder (not imported)")
+                            f"{path.parent} and its models/ folder" +
+                            (f" and {', '.join(str(r) for r in out.roots[1:])}" if len(out.roots) > 1 else "")
+                            + " (not imported)")
         return
+    if not any(found.resolve().is_relative_to(r) for r in out.roots):
+        raise WorldImportError(f"{path}: {where}: mesh {uri} is {found.resolve()}, outside the world's folder "
+                               f"{path.parent.resolve()}: meshes are read only from beside the world (the scenario "
+                               f"loader's own rule); copy it there, or name its folder with --model-path")
     try:
         verts, tris = read_mesh(found)
         outline, height = mesh_outline(verts, tris, scale, found.name)
@@ -318,16 +375,17 @@ def _outlined(path: Path, mname: str, lname: str, cname: str, where: str, geom: 
                                       footprint=outline, height=height))
 
 
-def _find_mesh(world: Path, uri: str) -> Path | None:
+def _find_mesh(world: Path, uri: str, roots: tuple[Path, ...] = ()) -> Path | None:
     """The file of a mesh ``uri``: file://, a path relative to the world, or model://<model>/<path>
-    under the world's folder or its models/ folder (as GAZEBO_MODEL_PATH would often have it)."""
+    under the world's folder, its models/ folder or the ``roots`` given (as GAZEBO_MODEL_PATH
+    would often have it). Whether it may be read is the caller's check."""
     if not uri:
         return None
     if uri.startswith("file://"):
         candidates = [Path(uri[len("file://"):])]
     elif uri.startswith("model://"):
         rest = uri[len("model://"):]
-        candidates = [world.parent / rest, world.parent / "models" / rest]
+        candidates = [world.parent / rest, world.parent / "models" / rest] + [r / rest for r in roots[1:]]
     else:
         candidates = [world.parent / uri]
     return next((c for c in candidates if c.is_file()), None)
@@ -344,7 +402,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "else 0,0,90 (the paper's 10 m task)")
     p.add_argument("--goal", default=None, metavar="X,Y,YAW", help="goal pose x,y,yaw (m, m, degrees); required for "
                    "sdf; for aerialist, default the mission file's last position, else 0,10,90")
-    p.add_argument("--timeout", type=float, default=30.0, metavar="SECONDS", help="mission timeout (default 30)")
+    add_robot_arguments(p)
+    p.add_argument("--model-path", action="append", default=[], metavar="DIR",
+                   help="sdf: a folder where model:// meshes may also be found (like GAZEBO_MODEL_PATH; repeat for "
+                        "more); meshes are read only from the world's folder and these")
     p.add_argument("--name", default="", metavar="TEXT", help="scenario name (default: the output file's stem)")
     p.add_argument("--force", action="store_true", help="overwrite an existing output file")
 
@@ -353,6 +414,7 @@ def run(args: argparse.Namespace) -> int:
     src = Path(args.file)
     notes: list[str] = []
     extra: dict[str, bytes] = {}
+    robot, robot_note = robot_from_args(args)
     if args.format == "aerialist":
         obstacles, start, goal, waypoints = _aerialist(args, src, notes)
     else:
@@ -360,22 +422,25 @@ def run(args: argparse.Namespace) -> int:
             raise WorldImportError(f"{src}: an SDF world has no mission: pass --start x,y,yaw and --goal x,y,yaw")
         start, goal = parse_pose(args.start, "--start"), parse_pose(args.goal, "--goal")
         waypoints = ()
-        world = sdf_obstacles(src)
+        world = sdf_obstacles(src, tuple(args.model_path))
         obstacles = world.obstacles
         extra = world.meshes
         notes.extend(world.notes)
         if world.ignored_planes:
             notes.append(f"{world.ignored_planes} plane(s) ignored (the ground)")
-        for w in world.warnings:
-            print(f"navscenario import: warning: {src}: {w}", file=sys.stderr)
+        for w in world.warnings:   # a repair starts with its line number: file:line: as editors read it
+            print(f"navscenario import: warning: {src}:{w}" if w[:1].isdigit() else
+                  f"navscenario import: warning: {src}: {w}", file=sys.stderr)
         if world.warnings:
-            print(f"navscenario import: warning: {len(world.warnings)} element(s) of {src} not imported "
-                  f"(listed above)", file=sys.stderr)
-    scenario = Scenario(mission=Mission(start=start, goal=goal, waypoints=waypoints, timeout=args.timeout),
-                        obstacles=tuple(obstacles), name=args.name,
+            print(f"navscenario import: warning: {len(world.warnings)} warning(s) about {src} (listed above)",
+                  file=sys.stderr)
+    scenario = Scenario(mission=Mission(start=start, goal=goal, waypoints=waypoints),
+                        obstacles=tuple(obstacles), robot=robot, name=args.name,
                         description=f"Imported from {args.format} file {src.name}.")
+    timeout, timeout_note = mission_timeout(scenario, args.timeout)
+    scenario = dataclasses.replace(scenario, mission=dataclasses.replace(scenario.mission, timeout=timeout))
     write_seed(scenario, args.output, force=args.force, extra_files=extra)
-    for note in notes:
+    for note in [*notes, robot_note, timeout_note]:
         print(f"navscenario import: {note}")
     print(f"navscenario import: {len(obstacles)} obstacle(s) -> wrote {args.output}")
     return 0

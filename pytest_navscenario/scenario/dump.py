@@ -180,5 +180,7 @@ def dump_scenario(scenario: Scenario) -> str:
 
 
 def save_scenario(scenario: Scenario, path: str | os.PathLike) -> None:
-    """Write the scenario to ``path`` atomically (never a half-written file)."""
-    atomic_write_text(path, dump_scenario(scenario))
+    """Write the scenario to ``path`` atomically (never a half-written file), its first line the
+    YAML language server's modeline naming the project's scenario schema (``modeline.py``)."""
+    from .modeline import with_modeline
+    atomic_write_text(path, with_modeline(dump_scenario(scenario), path))

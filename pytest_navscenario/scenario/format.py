@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from .keys import REQUIRED, Free, Marks, Rule, Section, Sub, Text, Version, section, walk
 from .model import MISSION, OBSTACLES, REFERENCE, ROBOT, SCHEMA_VERSION, SIMULATION, Scenario
+from .search_keys import SEARCH
 from .terrain import TERRAIN
 
 SUPPORTED_VERSIONS = (SCHEMA_VERSION,)
@@ -29,7 +30,8 @@ SCENARIO = section(Scenario, "", "a navigation test case: robot, mission, obstac
     TERRAIN,
     Sub("simulation", "", "physics step, control rate and noise seed", section=SIMULATION),
     Sub("reference", "", "a recorded trajectory to compare the run with", section=REFERENCE, default=None),
-    Free("search", "", "the failure search's settings for this seed (see the failure search)", default=None),
+    Sub("search", "", "the failure search's space around this seed (see the failure search)", section=SEARCH,
+        default=None),
     Free("provenance", "", "written by the search: where a frozen failure came from", default=None),
 ], what="a mapping of scenario fields", rules=[
     Rule("obstacle names are unique", None),
@@ -38,6 +40,11 @@ SCENARIO = section(Scenario, "", "a navigation test case: robot, mission, obstac
     Rule("latencies are whole multiples of the control period and shorter than the timeout", None),
     Rule("the robot's footprint at the start and the goal, and each waypoint, are clear of obstacles (a moving "
          "obstacle where it stands at t = 0, and it may cross the goal and the waypoints)", None),
+    Rule("the body goes with the drive (a wheeled body cannot drive omni) and with the terrain (the planar "
+         "body cannot ride it); start and goal stand on the ground (not over a pit or stairwell, not half "
+         "on a platform), and no waypoint lies over a hole", None),
+    Rule("free-form data (provenance, mark arguments) holds only text, numbers, true/false, null, lists and "
+         "mappings: a YAML date must be quoted", None),
 ])
 
 

@@ -67,9 +67,26 @@ def to_local(element: TerrainElement, px: np.ndarray, py: np.ndarray) -> tuple[n
     return c * dx + s * dy, -s * dx + c * dy
 
 
-def pieces(terrain: Sequence[TerrainElement]) -> list[Piece]:
+def pieces(terrain: Sequence[TerrainElement]) -> tuple[Piece, ...]:
     """The convex blocks of every primitive element (ramps, steps, platforms, pits); rough ground
-    and heightfields are grids (scenario/heightmap.py) and have none."""
+    and heightfields are grids (scenario/heightmap.py) and have none. Cached per terrain (the ground
+    is asked for heights every tick)."""
+    terrain = tuple(terrain)
+    try:
+        return _PIECES[terrain]
+    except KeyError:
+        pass
+    out = _pieces(terrain)
+    if len(_PIECES) >= 256:
+        _PIECES.clear()
+    _PIECES[terrain] = out
+    return out
+
+
+_PIECES: dict = {}
+
+
+def _pieces(terrain: tuple) -> tuple[Piece, ...]:
     out: list[Piece] = []
     for i, el in enumerate(terrain):
         if isinstance(el, Ramp):
@@ -84,7 +101,7 @@ def pieces(terrain: Sequence[TerrainElement]) -> list[Piece]:
                 top = el.z + sign * (k + 1) * el.rise
                 u0 = -el.length / 2 + k * el.run
                 out.append(Piece(i, u0, u0 + el.run, top, top, cut=top < FLOOR - 1e-12))
-    return out
+    return tuple(out)
 
 
 def grid_elements(terrain: Sequence[TerrainElement]) -> list[int]:
@@ -132,7 +149,16 @@ def ground_height(scenario, px, py) -> np.ndarray:
         inside = (np.abs(u) <= el.length / 2 + 1e-9) & (np.abs(v) <= el.width / 2 + 1e-9)
         if inside.any():
             solid = np.where(inside, np.maximum(solid, _grid_height(el, scenario, u, v)), solid)
+            if grid_low(el, scenario) < FLOOR:       # a grid dipping below the floor cuts it
+                floor = np.where(inside, -np.inf, floor)
     return np.maximum(solid, floor)
+
+
+def grid_low(element: TerrainElement, scenario) -> float:
+    """The lowest surface of a grid element (rough ground, heightfield)."""
+    from .heightmap import height_grid
+
+    return float(element.z + np.asarray(height_grid(element, scenario).heights).min())
 
 
 def element_at(scenario, x: float, y: float, margin: float = 0.0) -> int | None:
@@ -158,11 +184,17 @@ def describe_element(element: TerrainElement) -> str:
 
 def holes(scenario) -> list[tuple[np.ndarray, float]]:
     """The cuts in the floor: (outline corners (4, 2) world frame, its surface height) of each
-    pit and each step of a flight going down that lies below the floor."""
+    pit, each step of a flight going down that lies below the floor, and each grid (rough ground,
+    heightfield) whose surface dips below it (its lowest height)."""
     out = []
     for piece in pieces(scenario.terrain):
         if piece.cut:
             out.append((piece_outline(scenario.terrain[piece.element], piece), piece.top0))
+    for i in grid_elements(scenario.terrain):
+        el = scenario.terrain[i]
+        low = grid_low(el, scenario)
+        if low < FLOOR:
+            out.append((outline(el)[::-1].copy(), low))
     return out
 
 
@@ -176,7 +208,7 @@ def piece_outline(element: TerrainElement, piece: Piece) -> np.ndarray:
 
 def lowest(scenario) -> float:
     """The lowest surface of the terrain (0 with no cuts)."""
-    return min([FLOOR] + [p.top0 for p in pieces(scenario.terrain) if p.cut])
+    return min([FLOOR] + [h for _, h in holes(scenario)])
 
 
 def highest(scenario) -> float:

@@ -19,6 +19,7 @@ import difflib
 import math
 import os
 import re
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -51,6 +52,8 @@ from .model import (  # noqa: F401  (DRIVES ... PERSON_SPEED: re-exported, they 
     SHAPES,
     SIMULATION,
     GOAL_TOLERANCE,
+    BoxObstacle,
+    CylinderObstacle,
     Mark,
     MeshObstacle,
     Mission,
@@ -63,6 +66,7 @@ from .model import (  # noqa: F401  (DRIVES ... PERSON_SPEED: re-exported, they 
     Simulation,
 )
 from .reading import (  # the readers, under the names this module always used
+    _MAX_ABS,
     _Ctx,
     _Section,
     _build_section,
@@ -80,6 +84,7 @@ from .reading import (  # the readers, under the names this module always used
     _read_sub,
     _read_text,
 )
+from .search_settings import read_search
 from .yaml_tree import YMap, YNode, YScalar, YSeq, describe, from_plain, parse_yaml
 
 _LIST_LIMITS = {"obstacles": (int(SCENARIO_LIMITS["max_obstacles"]), "obstacles")}  # refused while parsing
@@ -107,7 +112,34 @@ TYPE_KEYS = {e.type: ("type",) + e.section.names for e in OBSTACLES.types}
 # --------------------------------------------------------------------------- sections
 
 def _robot(ctx: _Ctx, top: _Section) -> Robot:
-    return _read_sub(ctx, top, SCENARIO["robot"])
+    robot = _read_sub(ctx, top, SCENARIO["robot"])
+    if robot.body.kind == "mjcf":
+        robot = replace(robot, body=_mjcf_file(ctx, robot.body))
+    return robot
+
+
+def _mjcf_file(ctx: _Ctx, body: Any) -> Any:
+    """An MJCF body's file: beside the scenario (the mesh path rules), there and readable; its
+    digest (a hash of the file's bytes) made part of the content. MuJoCo reads it at run time."""
+    import hashlib
+
+    from .mesh import MeshError, resolve_mesh_path
+
+    field = "robot.body.file"
+    line = ctx.lines.get(field, ctx.lines.get("robot.body", ctx.lines.get("robot")))
+    folder = Path(ctx.source).parent if ctx.source else Path.cwd()
+    fix = "write the MJCF file's path relative to the scenario's folder"
+    try:
+        path = resolve_mesh_path(folder, body.file, what="MJCF")
+    except MeshError as exc:
+        raise ctx.fail(str(exc), field, line, fix) from None
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        raise ctx.fail(f"{path} does not exist", field, line, fix) from None
+    except OSError as exc:
+        raise ctx.fail(f"{path} cannot be read: {exc.strerror or exc}", field, line, fix) from None
+    return replace(body, digest=hashlib.sha256(data).hexdigest()[:16])
 
 
 def _pose(ctx: _Ctx, node: YNode | None, path: str, line: int | None, what: str) -> Pose:
@@ -198,6 +230,11 @@ def _mesh(ctx: _Ctx, sec: _Section, decl: K.Section, values: dict[str, Any]) -> 
     try:
         path = resolve_mesh_path(folder, file)
         verts, tris = read_mesh(path)
+        reach = max(float(abs(verts[:, k]).max()) * scale[k] for k in range(3))   # m, scale included
+        if not reach <= _MAX_ABS:
+            raise MeshError(f"{Path(file).name}: a vertex lies {reach:g} m from the mesh's origin (scale "
+                            f"included), beyond the supported magnitude of {_MAX_ABS:g} m; check the file's "
+                            f"units and the scale (e.g. scale: 0.001 for millimetres)")
         outline, height = mesh_outline(verts, tris, scale, Path(file).name)
     except MeshError as exc:
         raise ctx.fail(str(exc), _join(sec.path, "file"), sec.line_of("file"),
@@ -320,14 +357,102 @@ def check_scenario(scenario: Scenario, *, _ctx: _Ctx | None = None) -> None:
                            f"({1.0 / sim.control_rate:g} s at {sim.control_rate:g} Hz)", field,
                            lines.get(field, lines.get("robot.latency")),
                            f"e.g. {key}: {round(ticks) / sim.control_rate:g}")
+        timeout = scenario.mission.timeout
+        if delay >= timeout:
+            field = f"robot.latency.{key}"
+            what = ("the planner would see nothing after the first observation" if key == "observation"
+                    else "no command would act before the episode ends: the robot never moves")
+            raise ctx.fail(f"a delay of {delay!r} s is not shorter than the timeout ({timeout!r} s): {what}",
+                           field, lines.get(field, lines.get("robot.latency")),
+                           f"shorten the delay below {timeout:g} s, or lengthen mission.timeout")
     if scenario.obstacles:
         _check_clear(scenario, ctx)
+        _check_speeds(scenario, ctx)
     if scenario.terrain or scenario.robot.body.kind != "planar":
         from .ground import body_problem, mission_problem
         problem = body_problem(scenario) or mission_problem(scenario)
         if problem is not None:
             field, message, fix = problem
             raise ctx.fail(message, field, lines.get(field, lines.get(field.split(".")[0])), fix)
+
+
+STEP_SHARE = 0.2   # of the obstacle's and the robot's smallest widths: the farthest a mover may go in a step
+
+
+def max_resolved_speed(scenario: Scenario, obs: Any, timestep: float | None = None) -> float:
+    """The fastest a moving obstacle may go (m/s) for contacts, checked after every physics step,
+    to see it cross the robot: the two may close in on each other by at most ``STEP_SHARE`` of the
+    sum of their smallest widths per step (the robot's own top speed counts), so that a crossing
+    overlaps at some step; at the limit only a graze shallower than ~1 % of the two widths together
+    can fall between two steps (round shapes). Above it a box at 100 m/s passed through the robot
+    unseen (issue 26)."""
+    reach, robot_speed = _closing(scenario, obs)
+    return reach / (timestep or scenario.simulation.timestep) - robot_speed
+
+
+def _closing(scenario: Scenario, obs: Any) -> tuple[float, float]:
+    """(how far the obstacle and the robot may close in per physics step, the robot's top speed)."""
+    from .geometry import convex_parts_local, outline_points
+
+    if isinstance(obs, BoxObstacle):
+        width = min(obs.length, obs.width)
+    elif isinstance(obs, CylinderObstacle):
+        width = 2.0 * obs.radius
+    else:                                    # polygon, mesh: the thinnest of its convex parts
+        width = min(_min_width(part) for part in convex_parts_local(tuple(outline_points(obs))))
+    fp = scenario.robot.footprint
+    robot_width = 2.0 * fp.radius if fp.shape == "circle" else min(fp.length, fp.width)
+    limits = scenario.robot.limits
+    robot_speed = math.hypot(limits.max_speed, limits.max_lateral_speed if scenario.robot.drive == "omni" else 0.0)
+    return STEP_SHARE * (width + robot_width), robot_speed
+
+
+def _min_width(points: Any) -> float:
+    """The width of a convex polygon across its thinnest direction (the least, over its edges, of
+    the farthest corner from the edge's line)."""
+    best = math.inf
+    n = len(points)
+    for i in range(n):
+        (ax, ay), (bx, by) = points[i], points[(i + 1) % n]
+        ex, ey = bx - ax, by - ay
+        length = math.hypot(ex, ey)
+        if length > 0.0:
+            best = min(best, max(abs(ex * (py - ay) - ey * (px - ax)) for px, py in points) / length)
+    return best
+
+
+def _check_speeds(scenario: Scenario, ctx: _Ctx) -> None:
+    """Moving obstacles no faster than the physics step can follow (``max_resolved_speed``)."""
+    for i, obs in enumerate(scenario.obstacles):
+        motion = getattr(obs, "motion", None)
+        if motion is None:
+            continue
+        speed = math.hypot(*motion.velocity) if motion.velocity is not None else motion.speed
+        limit = max_resolved_speed(scenario, obs)
+        if speed <= limit:
+            continue
+        key = "velocity" if motion.velocity is not None else "speed"
+        field = f"obstacles[{i}].motion.{key}"
+        dt, period = scenario.simulation.timestep, 1.0 / scenario.simulation.control_rate
+        reach, robot_speed = _closing(scenario, obs)
+        steps = math.ceil(period / (reach / (speed + robot_speed)) - 1e-9)   # per tick, to follow it
+        while not _decimal(steps):
+            steps += 1          # a step count whose timestep is a short decimal: 0.00125, not 0.00175439
+        raise ctx.fail(
+            f"{speed:g} m/s is faster than the simulation can follow at a timestep of {dt:g} s: "
+            f"{obs.name!r} would move {speed * dt:.3g} m per physics step and could pass through the "
+            f"robot between two steps unseen; at most {max(limit, 0.0):.3g} m/s at this timestep (it and "
+            f"the robot may close in by {STEP_SHARE:g} of their smallest widths per step)",
+            field, ctx.lines.get(field, ctx.lines.get(f"obstacles[{i}].motion", ctx.lines.get("obstacles"))),
+            f"slow it down, or give simulation.timestep: {period / steps:.10g} ({steps} steps per control tick)")
+
+
+def _decimal(n: int) -> bool:
+    """True if 1/n has a finite decimal expansion (n = 2^a 5^b)."""
+    for p in (2, 5):
+        while n % p == 0:
+            n //= p
+    return n == 1
 
 
 def _check_clear(scenario: Scenario, ctx: _Ctx) -> None:
@@ -409,6 +534,9 @@ def _build(root: YNode | None, ctx: _Ctx, name: str | None, family: str | None) 
         provenance=_mapping(ctx, top, "provenance"),
         source=ctx.source,
     )
+    if scenario.search is not None:     # the search's space, checked on plain runs too
+        read_search(ctx, top.get("search"), "search", top.line_of("search"),
+                    obstacles=tuple(o.name for o in scenario.obstacles), waypoints=len(scenario.mission.waypoints))
     check_scenario(scenario, _ctx=ctx)
     return scenario
 
@@ -529,3 +657,23 @@ _TOP_KEY = re.compile(r"^(?:---[ \t]*\n)?[\"']?([A-Za-z_][\w-]*)[\"']?[ \t]*:", 
 # --------------------------------------------------------------------------- dumping
 
 
+
+
+def field_line(source: str | os.PathLike | None, field: str) -> int | None:
+    """The line of a dotted field (``robot.body.file``) in the scenario file ``source``, for an
+    error found after loading (at run time); None when the file or the field is not there."""
+    if not source:
+        return None
+    try:
+        text = _decode(Path(source).read_bytes()[:int(SCENARIO_LIMITS["max_file_bytes"])], os.fspath(source))
+        node = parse_yaml(text, os.fspath(source), max_depth=int(SCENARIO_LIMITS["max_depth"]),
+                          max_nodes=int(SCENARIO_LIMITS["max_nodes"]))
+    except (OSError, ScenarioError):
+        return None
+    line = None
+    for key in field.split("."):
+        if not isinstance(node, YMap) or key not in node.items:
+            break
+        key_line, node = node.items[key]
+        line = key_line or node.line
+    return line

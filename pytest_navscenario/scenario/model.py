@@ -44,7 +44,7 @@ class Pose:
         return math.radians(self.yaw)
 
 
-POSE = section(Pose, "mission.start", "a planar pose", [
+POSE = section(Pose, "pose", "a planar pose", [
     Number("x", "m", "position along x", example="x: 0.0"),
     Number("y", "m", "position along y", example="y: 0.0"),
     Number("yaw", "deg", "heading, counter-clockwise from +x"),
@@ -676,5 +676,8 @@ def content_hash(scenario: Scenario) -> str:
     for element in body.get("terrain", []):   # terrain names are labels; a heightfield is its digest
         element.pop("name", None)
         element.pop("file", None)
+    robot_body = body.get("robot", {}).get("body")
+    if isinstance(robot_body, dict) and robot_body.get("kind") == "mjcf":
+        robot_body.pop("file", None)            # an MJCF body is its digest, wherever its file is
     text = json.dumps(body, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]

@@ -547,3 +547,5 @@ read_section = _read
 build_section = _build_section
 read_elements = _read_elements
 READERS = _READ
+join = _join
+number = _number

@@ -200,11 +200,14 @@ class MjcfBody:
     """The user's own robot: an MJCF ``file`` beside the scenario (same path rules as meshes) whose
     ``base`` body (None: the first body with a free joint) is the robot, driven by ``controller``
     (``pkg.mod:Attr``, loaded like a subject), which turns each velocity command into the model's
-    actuator controls."""
+    actuator controls. ``digest`` is what the loader read from the file (a hash of its bytes): it
+    makes the model part of the content, wherever the file lives (files it includes are not
+    hashed)."""
     file: str
     controller: str
     base: str | None = None
     tip_angle: float = 45.0              # degrees of roll or pitch that count as tipped over
+    digest: str = ""                     # what the loader read from the file (a hash of its bytes)
     kind: Literal["mjcf"] = field(default="mjcf", init=False)
 
 

@@ -103,9 +103,11 @@ def standalone_scenario(scenario: Scenario, seed: Scenario, *, name: str, descri
 def save_standalone(scenario: Scenario, seed: Scenario, path: Path) -> None:
     """Write ``scenario`` to ``path`` atomically, its mesh files copied beside it."""
     from ..scenario.dump import save_scenario
+    from ..scenario.modeline import ensure_project_schema
 
     path.parent.mkdir(parents=True, exist_ok=True)
     save_scenario(_with_mesh_copies(scenario, seed, path.parent), path)
+    ensure_project_schema(path)     # the schema its modeline names, so an editor reads it at once
 
 
 def _now() -> str:

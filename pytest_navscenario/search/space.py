@@ -47,54 +47,38 @@ yields the params of a seed and an applier (``APPLIERS``) that turns their value
 scenario. Moving obstacles or sensor faults add one builder and one applier each.
 
 Every bound must contain 0 (the seed lies in the space); ``[lo, hi]`` with lo > hi is
-inverted and lo == hi != 0 is empty: both are errors naming the seed file and field.
+inverted and lo == hi != 0 is empty: both are errors naming the seed file and field. Every range
+and count has a documented upper limit (scenario/search_keys.py), checked when the seed loads.
+A candidate never leaves what the loader accepts: each moved value is kept within its key's range
+(positions within the magnitude bound, fault settings within theirs, speeds above MIN_SPEED), and
+``invalid_reason`` runs the loader's own checks across keys (``check_scenario``).
 """
 from __future__ import annotations
 
-import difflib
 import math
 from dataclasses import dataclass, replace
 from typing import Any, Mapping, Sequence
 
-from ..core.errors import ScenarioError
+from ..scenario.keys import MAX_ABS
 from ..scenario.model import BoxObstacle, CylinderObstacle, MeshObstacle, PolygonObstacle, Pose, Scenario
+from ..scenario.search_keys import RANGES, SEARCH, SearchSettings
+from ..scenario.search_settings import search_settings
 
-DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {
-    "obstacle_dx": (-1.0, 1.0),
-    "obstacle_dy": (-1.0, 1.0),
-    "obstacle_size": (-0.1, 0.3),
-    "obstacle_yaw": (-30.0, 30.0),
-    "start_dx": (0.0, 0.0),
-    "start_dy": (0.0, 0.0),
-    "start_yaw": (0.0, 0.0),
-    "goal_dx": (0.0, 0.0),
-    "goal_dy": (0.0, 0.0),
-    "goal_yaw": (0.0, 0.0),
-    "waypoint_dx": (0.0, 0.0),
-    "waypoint_dy": (0.0, 0.0),
-    "polygon_vertex": (0.0, 0.0),
-    "motion_start": (-5.0, 5.0),    # s: a robot at ~1 m/s meets it anywhere on a 10 m stretch
-    "motion_speed": (-0.5, 0.5),
-    # sensor and localisation faults: off unless a seed opts in (offsets added, never below 0)
-    "lidar_noise_per_metre": (0.0, 0.0),
-    "lidar_dropout_at_max": (0.0, 0.0),
-    "lidar_spurious": (0.0, 0.0),
-    "drift_per_metre": (0.0, 0.0),
-    "drift_per_second": (0.0, 0.0),
-    "yaw_drift_per_metre": (0.0, 0.0),
-}
+# The search: section's keys, ranges, defaults and limits are declared in scenario/search_keys.py
+# (read there when the seed loads); these names are kept for the modules and tests that use them.
+DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {key.name: key.default for key in RANGES}
 ROBOT_PARAMS = ("lidar_noise_per_metre", "lidar_dropout_at_max", "lidar_spurious", "drift_per_metre",
                 "drift_per_second", "yaw_drift_per_metre")
 MIN_SPEED = 0.1         # m/s: a moving obstacle's speed never drops below this
-OTHER_KEYS = ("frozen", "min_size", "insert", "insert_size", "insert_margin", "remove")
-DEFAULT_INSERT = 2
-DEFAULT_INSERT_SIZE = (0.3, 1.0)
-DEFAULT_INSERT_MARGIN = 1.0
-DEFAULT_REMOVE = 0
+OTHER_KEYS = tuple(name for name in SEARCH.names if name not in DEFAULT_BOUNDS)
+DEFAULT_INSERT = SEARCH["insert"].default
+DEFAULT_INSERT_SIZE = SEARCH["insert_size"].default
+DEFAULT_INSERT_MARGIN = SEARCH["insert_margin"].default
+DEFAULT_REMOVE = SEARCH["remove"].default
 INSERT_PREFIX = "navsearch_inserted_"   # names of inserted obstacles (index from 1)
 FLAG_ON = 0.5                           # a flag parameter is set when its value is >= this
-KNOWN_KEYS = tuple(DEFAULT_BOUNDS) + OTHER_KEYS
-DEFAULT_MIN_SIZE = 0.05
+KNOWN_KEYS = SEARCH.names
+DEFAULT_MIN_SIZE = SEARCH["min_size"].default
 POSITION_DECIMALS = 4   # candidate values are rounded (0.1 mm, 0.0001 deg) so YAML is short and exact
 
 
@@ -113,15 +97,7 @@ class Param:
         return self.hi - self.lo
 
 
-@dataclass(frozen=True)
-class Limits:
-    """The non-range settings of a ``search:`` section, validated."""
-    frozen: frozenset
-    min_size: float
-    insert: int
-    insert_size: tuple[float, float]
-    insert_margin: float
-    remove: int
+Limits = SearchSettings     # the checked search: section (bounds and the other settings)
 
 
 class SearchSpace:
@@ -131,7 +107,8 @@ class SearchSpace:
         self.seed = seed
         merged: dict[str, Any] = dict(seed.search or {})
         merged.update(overrides or {})
-        self.bounds, self.limits = _validate(seed, merged)
+        self.limits = search_settings(seed, merged)
+        self.bounds = dict(self.limits.bounds)
         self.frozen, self.min_size = self.limits.frozen, self.limits.min_size
         self.region = _insert_region(seed, self.limits.insert_margin)
         self.params: tuple[Param, ...] = tuple(p for build in BUILDERS for p in build(self))
@@ -322,8 +299,18 @@ APPLIERS = [_apply_obstacles, _apply_inserted, _apply_mission, _apply_robot]
 
 
 def _r(value: float) -> float:
-    out = round(value, POSITION_DECIMALS)
+    """A candidate value: rounded, and within the magnitude every number of a scenario keeps."""
+    out = min(MAX_ABS, max(-MAX_ABS, round(value, POSITION_DECIMALS)))
     return 0.0 if out == 0 else out  # no -0.0 in YAML
+
+
+_TARGETS = {key.name: key.target for key in RANGES}
+
+
+def _within(value: float, range_key: str) -> float:
+    """``value`` kept within the range of the key that search range ``range_key`` moves."""
+    low, high = _TARGETS[range_key].span
+    return _r(min(high, max(low, value)))
 
 
 def _mutate_pose(pose: Pose, d: Mapping[str, float] | None) -> Pose:
@@ -337,20 +324,22 @@ def _mutate_pose(pose: Pose, d: Mapping[str, float] | None) -> Pose:
 
 
 def _mutate_robot(robot: Any, d: Mapping[str, float] | None) -> Any:
-    """The robot with the opted-in sensor and localisation fault offsets added (clamped to their
-    ranges: never below 0, probabilities at most 1)."""
+    """The robot with the opted-in sensor and localisation fault offsets added, each kept within
+    the range the loader allows for it (never below 0, probabilities at most 1, drifts at most
+    their declared maximum)."""
     if not d:
         return robot
     lidar, loc = robot.lidar, robot.localisation
     changes: dict[str, Any] = {}
     if "lidar_noise_per_metre" in d:
-        changes["noise_per_metre"] = _r(min(1.0, max(0.0, lidar.noise_per_metre + d["lidar_noise_per_metre"])))
+        changes["noise_per_metre"] = _within(lidar.noise_per_metre + d["lidar_noise_per_metre"],
+                                             "lidar_noise_per_metre")
     if "lidar_dropout_at_max" in d:
         base = lidar.dropout if lidar.dropout_at_max is None else lidar.dropout_at_max
-        changes["dropout_at_max"] = _r(min(1.0, max(0.0, base + d["lidar_dropout_at_max"])))
+        changes["dropout_at_max"] = _within(base + d["lidar_dropout_at_max"], "lidar_dropout_at_max")
     if "lidar_spurious" in d:
-        changes["spurious"] = _r(min(1.0, max(0.0, lidar.spurious + d["lidar_spurious"])))
-    drift = {k: _r(min(90.0, max(0.0, getattr(loc, k) + d[k])))
+        changes["spurious"] = _within(lidar.spurious + d["lidar_spurious"], "lidar_spurious")
+    drift = {k: _within(getattr(loc, k) + d[k], k)
              for k in ("drift_per_metre", "drift_per_second", "yaw_drift_per_metre") if k in d}
     return replace(robot, lidar=replace(lidar, **changes), localisation=replace(loc, **drift))
 
@@ -360,7 +349,7 @@ def _mutate_motion(motion: Any, d: Mapping[str, float]) -> Any:
     if motion is None:
         return None
     dx, dy = d.get("dx", 0.0), d.get("dy", 0.0)
-    start = _r(max(0.0, motion.start + d["start"])) if "start" in d else motion.start
+    start = _within(motion.start + d["start"], "motion_start") if "start" in d else motion.start
     ds = d.get("speed", 0.0)
     if motion.velocity is not None:
         vx, vy = motion.velocity
@@ -369,7 +358,7 @@ def _mutate_motion(motion: Any, d: Mapping[str, float]) -> Any:
         return replace(motion, start=start, velocity=(_r(vx * scale), _r(vy * scale)) if scale != 1.0
                        else motion.velocity)
     path = (tuple((_r(px + dx), _r(py + dy)) for px, py in motion.path) if dx or dy else motion.path)
-    speed = _r(max(MIN_SPEED, motion.speed + ds)) if ds else motion.speed
+    speed = _within(max(MIN_SPEED, motion.speed + ds), "motion_speed") if ds else motion.speed
     return replace(motion, path=path, start=start, speed=speed)
 
 
@@ -397,124 +386,15 @@ def _mutate_obstacle(obs, d: Mapping[str, float], min_size: float):
     raise TypeError(f"unknown obstacle type {type(obs).__name__}")
 
 
-# -- validation ------------------------------------------------------------------------------
-def _line_of(seed: Scenario, field: str) -> int | None:
-    """1-based line of ``field`` inside the seed file's ``search:`` block (best effort)."""
-    import re
-    from pathlib import Path
-
-    key = field.split("[")[0]
-    try:
-        lines = Path(seed.source).read_text(encoding="utf-8").splitlines() if seed.source else []
-    except (OSError, UnicodeDecodeError):
-        return None
-    in_search = False
-    for no, line in enumerate(lines, 1):
-        if re.match(r"^search\s*:", line):
-            in_search = True
-        elif in_search and re.match(r"^\S", line):
-            in_search = False
-        if in_search and re.search(rf"(^|[\s{{,]){re.escape(key)}\s*:", line):
-            return no
-    return None
-
-
-def _err(seed: Scenario, field: str, message: str, hint: str) -> ScenarioError:
-    return ScenarioError(message, path=seed.source or seed.name or None, line=_line_of(seed, field),
-                         field=f"search.{field}", hint=hint)
-
-
-def _number(seed, key, v) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-        raise _err(seed, key, f"must be a finite number, got {v!r}", f"write e.g. {key}: 0.5")
-    return float(v)
-
-
-def _validate(seed: Scenario, mapping: Mapping[str, Any]):
-    bounds = dict(DEFAULT_BOUNDS)
-    for key, value in mapping.items():
-        if key not in KNOWN_KEYS:
-            close = difflib.get_close_matches(str(key), KNOWN_KEYS, n=1)
-            hint = f"did you mean {close[0]!r}?" if close else f"known keys: {', '.join(KNOWN_KEYS)}"
-            raise _err(seed, str(key), "unknown search setting", hint)
-        if key in OTHER_KEYS:
-            continue   # validated below
-        if isinstance(value, (list, tuple)):
-            if len(value) != 2:
-                raise _err(seed, key, f"a range needs exactly two numbers [lo, hi], got {list(value)!r}",
-                           f"write e.g. {key}: [-0.5, 0.5]")
-            lo, hi = _number(seed, key, value[0]), _number(seed, key, value[1])
-        else:
-            half = _number(seed, key, value)
-            if half < 0:
-                raise _err(seed, key, f"a single number is a half-width and must be >= 0, got {half:g}",
-                           f"write {key}: {-half:g} (meaning [{half:g}, {-half:g}])")
-            lo, hi = -half, half
-        if lo > hi:
-            raise _err(seed, key, f"inverted bounds [{lo:g}, {hi:g}] (lo > hi)", f"write [{hi:g}, {lo:g}]")
-        if lo == hi and lo != 0:
-            raise _err(seed, key, f"empty bounds [{lo:g}, {hi:g}]: no room to search",
-                       "give a range containing 0, e.g. [-0.5, 0.5], or 0 to leave it fixed")
-        if not lo <= 0 <= hi:
-            raise _err(seed, key, f"bounds [{lo:g}, {hi:g}] do not contain 0, so the seed itself is "
-                       "outside the search space", f"offsets are relative to the seed: use e.g. [{min(lo, 0):g}, {max(hi, 0):g}]")
-        bounds[key] = (lo, hi)
-    frozen_raw = mapping.get("frozen", ()) or ()
-    if isinstance(frozen_raw, str):
-        frozen_raw = [frozen_raw]
-    if not isinstance(frozen_raw, (list, tuple)):
-        raise _err(seed, "frozen", f"must be a list of part names, got {frozen_raw!r}",
-                   "write e.g. frozen: [wall_left, start]")
-    parts = [o.name for o in seed.obstacles] + ["start", "goal", "waypoints", "robot"] + [
-        f"waypoints[{i}]" for i in range(len(seed.mission.waypoints))]
-    for i, name in enumerate(frozen_raw):
-        if name not in parts:
-            close = difflib.get_close_matches(str(name), parts, n=1)
-            hint = f"did you mean {close[0]!r}?" if close else f"parts of this seed: {', '.join(parts)}"
-            raise _err(seed, f"frozen[{i}]", f"{name!r} is not an obstacle or mission part of this seed", hint)
-    min_size = _number(seed, "min_size", mapping.get("min_size", DEFAULT_MIN_SIZE))
-    if min_size <= 0:
-        raise _err(seed, "min_size", f"must be > 0, got {min_size:g}", "write e.g. min_size: 0.05")
-    return bounds, Limits(frozenset(frozen_raw), min_size, *_insert_limits(seed, mapping))
-
-
-def _count(seed: Scenario, key: str, value: Any) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-        raise _err(seed, key, f"must be a whole number >= 0, got {value!r}", f"write e.g. {key}: 2 (0 = none)")
-    return value
-
-
-def _insert_limits(seed: Scenario, mapping: Mapping[str, Any]):
-    """insert, insert_size, insert_margin, remove: validated, with defaults."""
-    insert = _count(seed, "insert", mapping.get("insert", DEFAULT_INSERT))
-    raw = mapping.get("insert_size", DEFAULT_INSERT_SIZE)
-    if isinstance(raw, (list, tuple)):
-        if len(raw) != 2:
-            raise _err(seed, "insert_size", f"a range needs exactly two numbers [lo, hi], got {list(raw)!r}",
-                       "write e.g. insert_size: [0.3, 1.0]")
-        lo, hi = _number(seed, "insert_size", raw[0]), _number(seed, "insert_size", raw[1])
-    else:
-        lo = hi = _number(seed, "insert_size", raw)
-    if not 0 < lo <= hi:
-        raise _err(seed, "insert_size", f"sizes must satisfy 0 < lo <= hi, got [{lo:g}, {hi:g}]",
-                   "write e.g. insert_size: [0.3, 1.0] (side length of an inserted box, m)")
-    margin = _number(seed, "insert_margin", mapping.get("insert_margin", DEFAULT_INSERT_MARGIN))
-    if margin < 0:
-        raise _err(seed, "insert_margin", f"must be >= 0, got {margin:g}", "write e.g. insert_margin: 1.0")
-    remove = _count(seed, "remove", mapping.get("remove", DEFAULT_REMOVE))
-    if remove > len(seed.obstacles):
-        raise _err(seed, "remove", f"the seed has {len(seed.obstacles)} obstacle(s), so at most that many "
-                   f"can be removed, got {remove}", f"write remove: {len(seed.obstacles)} or less")
-    return insert, (lo, hi), margin, remove
-
-
 # -- validity before simulation -------------------------------------------------------------
 def invalid_reason(scenario: Scenario) -> str | None:
     """Why a candidate is not a test (a broken scenario, not a planner failure), or None.
 
     A polygon whose corners were moved into a self-intersecting outline, obstacles covering the
     start or goal footprint (a moving obstacle: the start, where it stands at t = 0; it may cross
-    the goal), or no collision-free path for the footprint at all (``paths.path_exists``).
+    the goal), anything else the loader's checks across keys refuse (a waypoint inside an
+    obstacle: ``loader-refuses:<field>``), or no collision-free path for the footprint at all
+    (``paths.path_exists``). A candidate that passes loads again when frozen.
     """
     from ..scenario.geometry import footprint_polygon, obstacle_polygon, polygon_problem
 
@@ -530,6 +410,12 @@ def invalid_reason(scenario: Scenario) -> str | None:
             return f"start-blocked:{obs.name}"
         if poly.intersects(goal) and getattr(obs, "motion", None) is None:
             return f"goal-blocked:{obs.name}"
+    from ..core.errors import ScenarioError
+    from ..scenario.loader import check_scenario
+    try:
+        check_scenario(scenario)
+    except ScenarioError as exc:
+        return f"loader-refuses:{exc.field}"
     from ..verdict.paths import path_exists
     if not path_exists(scenario):
         return "no-path"

@@ -60,8 +60,9 @@ def build_body_spec(scenario: Scenario, body: Any) -> mujoco.MjSpec:
     add_terrain(spec, scenario)
     _add_obstacles(spec, scenario, obstacle_bases(scenario))
     body.build(spec)
+    objtype, objname = getattr(body, "contact_sensor", (mujoco.mjtObj.mjOBJ_GEOM, "footprint"))
     spec.add_sensor(name="chassis_contacts", type=mujoco.mjtSensor.mjSENS_CONTACT,
-                    objtype=mujoco.mjtObj.mjOBJ_GEOM, objname="footprint", intprm=[1, 0, 1])
+                    objtype=objtype, objname=objname, intprm=[1, 0, 1])
     return spec
 
 
@@ -75,18 +76,21 @@ class BodyWorld(World):
     element_names: tuple = ()
 
     def first_collision(self, d: mujoco.MjData, obstacles: tuple, t: float) -> Collision | None:
-        """The deepest contact of the chassis with an obstacle or a terrain face (a contact whose
-        normal is within ~45 degrees of horizontal), or None. Wheels, casters and feet meet the
-        terrain only, and the chassis resting on the ground (high-centred) is no collision."""
+        """The deepest contact of the robot with an obstacle, or of its chassis with a terrain face
+        (a contact whose normal is within ~45 degrees of horizontal), or None. Wheels, casters and
+        feet meet the terrain freely, and the chassis resting on the ground (high-centred) is no
+        collision. (``body.robot_geoms``: the geoms that meet obstacles; ``chassis_geoms``: those
+        whose terrain contacts count.)"""
         best = None
         contacts = d.contact
         chassis, obstacle_of_geom, terrain = self.body.chassis_geoms, self.obstacle_of_geom, self.terrain_of_geom
+        robot = self.body.robot_geoms
         for k in range(d.ncon):
             dist = float(contacts.dist[k])
             if dist >= 0.0:
                 continue
             g1, g2 = int(contacts.geom[k][0]), int(contacts.geom[k][1])
-            other = g2 if g1 in chassis else (g1 if g2 in chassis else -1)
+            mine, other = (g1, g2) if g1 in robot else ((g2, g1) if g2 in robot else (-1, -1))
             if other < 0:
                 continue
             idx = obstacle_of_geom.get(other)
@@ -94,7 +98,7 @@ class BodyWorld(World):
                 hit = (dist, obstacles[idx].name, k, False)
             else:
                 element = terrain.get(other)
-                if element is None or abs(float(contacts.frame[k][2])) >= FACE_NZ:
+                if element is None or mine not in chassis or abs(float(contacts.frame[k][2])) >= FACE_NZ:
                     continue
                 hit = (dist, self.element_names[element] if element >= 0 else "floor", k, True)
             if best is None or hit[0] < best[0]:
@@ -112,7 +116,7 @@ class BodyWorld(World):
 def build_body_world(scenario: Scenario, body: Any) -> BodyWorld:
     spec = build_body_spec(scenario, body)
     try:
-        model = spec.compile()
+        model = _compile(spec, body)
     except Exception as exc:
         raise ScenarioError(f"MuJoCo could not build the model: {exc}", path=scenario.source,
                             hint="check the terrain's and the obstacles' sizes, and the robot's body") from exc
@@ -166,6 +170,20 @@ def model_xml(scenario: Scenario) -> str:
     if not rides_the_ground(scenario):
         return planar.model_xml(scenario)
     from .bodies import body_model
-    spec = build_body_spec(scenario, body_model(scenario))
-    spec.compile()
+    body = body_model(scenario)
+    spec = build_body_spec(scenario, body)
+    _compile(spec, body)
+    if body.kind_name == "mjcf":
+        from .bodies.mjcf import kept_names
+        with kept_names():
+            return spec.to_xml()
     return spec.to_xml()
+
+
+def _compile(spec: mujoco.MjSpec, body: Any) -> mujoco.MjModel:
+    """``spec.compile()``; a user's MJCF robot attached with its own names compiles quietly."""
+    if body.kind_name == "mjcf":
+        from .bodies.mjcf import kept_names
+        with kept_names():
+            return spec.compile()
+    return spec.compile()

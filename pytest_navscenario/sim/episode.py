@@ -545,8 +545,10 @@ class RidingEpisode(Episode):
         super().__init__(scenario, planner, seed, max_ticks, tick_limit=tick_limit, stuck_after=stuck_after)
         world = self.world
         self.body = world.body
+        self.control = self.body          # the body's controller of this episode (start: body.begin)
         self.base_qpos, self.base_qvel = self.body.views(self.data)
-        self.mount = float(scenario.robot.lidar.mount_height)
+        self.offset = float(self.body.ground_offset)   # the base's origin above its ground (MJCF bodies)
+        self.mount = float(scenario.robot.lidar.mount_height) - self.offset
         self.probe = GroundProbe(scenario)
         self.watch = TerrainWatch(scenario, self.body, self.spt * self.dt, self.probe)
         self.sensordata, self.chassis_sensor = self.data.sensordata, world.chassis_sensor
@@ -565,6 +567,7 @@ class RidingEpisode(Episode):
         m, d, start = self.model, self.data, self.scenario.mission.start
         z, roll, pitch = resting_pose(self.scenario, start.x, start.y, start.yaw_rad)
         self.body.place(d, start.x, start.y, start.yaw_rad, self.body.start_height(z), roll, pitch)
+        self.control = self.body.begin(d)
         if self.moving is not None:
             self.moving.write(0)
         mujoco.mj_step1(m, d)
@@ -598,6 +601,8 @@ class RidingEpisode(Episode):
 
     def observe(self) -> tuple[tuple[float, ...], Observation]:
         state = base_state(self.base_qpos, self.base_qvel)
+        if self.offset:
+            state = state[:2] + (state[2] - self.offset,) + state[3:]
         x, y, z, roll, pitch, yaw, vx, vy, vz, wz = state
         t = self.i * self.dt
         if not math.isfinite(x + y + z + yaw + vx + vy + vz + wz):
@@ -633,7 +638,7 @@ class RidingEpisode(Episode):
         state's base recorded; the contacts are looked at only when the chassis touches something."""
         m, d, ctrl, qpos7, qvel6, pose_buf, qvel_buf, inner = self.stepping
         self.setpoint = setpoint
-        self.body.command(ctrl, setpoint, self.state3d)
+        self.control.command(ctrl, setpoint, self.state3d)
         rows = self.moving.rows_for_tick(self.i) if self.moving is not None else None
         mocap = self.moving.mocap_pos if rows is not None else None
         sensordata, k_chassis = self.sensordata, self.chassis_sensor
@@ -688,7 +693,7 @@ class RidingEpisode(Episode):
             ranges=self.lidar.ranges(self.tick), angles=self.lidar.angles,
             waypoint_times=tuple(self.mission.passed_at),
             believed=None if self.faults is None else self.faults.believed_poses(),
-            z=q[:, 2].copy(), roll=np.asarray(roll), pitch=np.asarray(pitch))
+            z=q[:, 2] - self.offset, roll=np.asarray(roll), pitch=np.asarray(pitch))
 
     def result(self):
         out = super().result()

@@ -2,7 +2,9 @@
 bodies, and their velocities for the safety layer.
 
 Positions come from ``scenario.motion`` (a pure function of time, so the verdict and the pictures
-recompute exactly the same ones) and are computed in chunks of ``CHUNK_TICKS`` ticks in one
+recompute exactly the same ones); on terrain each one's base is at its own ``z`` or, without one,
+on the highest ground under its outline at that step (``scenario.ground``: a person walks up a
+ramp, a cart rolls off a platform's edge down onto the floor) and are computed in chunks of ``CHUNK_TICKS`` ticks in one
 vectorised call per obstacle; writing a row into ``mocap_pos`` before each physics step is then one
 numpy copy (the design notes measured a per-step numpy expression at ~4 us a step; a copy of a
 precomputed row is a fraction of that). MuJoCo uses a mocap position from the next kinematics on:
@@ -39,6 +41,18 @@ class MovingObstacles:
         self.table = np.empty((self.rows, len(self.indices), 3))
         self.table[:, :, 2] = 0.0         # a mocap body's origin is on the floor, its geoms above it
         self.base = -self.rows        # no chunk yet
+        self.scenario = scenario
+        # on terrain: each obstacle's base at its own z, or on the highest ground under its outline
+        self.on_ground = []           # (column, outline points (k, 2) about its centre)
+        if scenario.terrain:
+            from ..scenario.geometry import obstacle_polygon
+            for j, i in enumerate(self.indices):
+                obs = obstacles[i]
+                if obs.z is not None:
+                    self.table[:, j, 2] = float(obs.z)
+                    continue
+                outline = np.asarray(obstacle_polygon(obs).exterior.coords)[:-1] - self.origin[j]
+                self.on_ground.append((j, np.vstack([outline, [(0.0, 0.0)]])))
 
     def _fill(self, i: int) -> None:
         """Positions for steps i .. i + rows - 1 (i is a tick's first step), and for each tick of
@@ -47,6 +61,12 @@ class MovingObstacles:
         times = (i + np.arange(self.rows)) * self.dt
         for j, track in enumerate(self.tracks):
             self.table[:, j, :2] = track.positions(times)
+        if self.on_ground:
+            from ..scenario.ground import ground_height
+            for j, outline in self.on_ground:
+                px = self.table[:, j, 0:1] + outline[None, :, 0]
+                py = self.table[:, j, 1:2] + outline[None, :, 1]
+                self.table[:, j, 2] = ground_height(self.scenario, px, py).max(axis=1)
         self.base = i
         spt = self.spt
         info = np.empty((CHUNK_TICKS, len(self.indices), 4))

@@ -11,6 +11,7 @@ from collections import deque
 import numpy as np
 
 from ..scenario import ground
+from ..scenario.crossing import SPACING, Capability, walk
 from .trajectory import TerrainEvent
 
 ON_GROUND = 0.08          # m: a base this close above the ground under it stands on it
@@ -18,6 +19,7 @@ STUCK_TIME = 3.0          # s of being driven without moving that make the robot
 STUCK_COMMAND = 0.1       # m/s: a setpoint at least this fast counts as driving
 STUCK_MOVING = 0.25       # of the setpoint's speed: slower than this counts as not moving
 LOOK_AHEAD = 0.3          # m beyond the footprint's front where a stuck robot's step is measured
+FEATURE = Capability(max_step=0.01, max_slope=5.0, max_gap=0.0)   # what counts as a step or a slope there
 
 
 def resting_pose(scenario, x: float, y: float, yaw: float) -> tuple[float, float, float]:
@@ -151,21 +153,24 @@ class TerrainWatch:
         return "off " + self._name(above) if above is not None else ""
 
     def _stuck(self, t, x, y, z, roll, pitch, yaw, setpoint, touching) -> None:
-        """What holds the robot: a step ahead (measured on the ground along its way), the slope it
-        is on, or its chassis resting on the ground (high-centred)."""
+        """What holds the robot: the first step or slope along its way (the ground from under its
+        centre to LOOK_AHEAD past its front, walked with FEATURE: ``scenario/crossing.py``), the
+        slope it is on, or its chassis resting on the ground (high-centred)."""
         ahead = 1.0 if setpoint[0] >= 0 else -1.0
         c, s = math.cos(yaw), math.sin(yaw)
-        here = self.probe.height(x, y)
-        best, where = here, None
-        for k in range(1, 7):
-            d = ahead * (self.front + LOOK_AHEAD * k / 6)
-            h = self.probe.height(x + c * d, y + s * d)
-            if h > best:
-                best, where = h, (x + c * d, y + s * d)
+        d = ahead * np.arange(int((self.front + LOOK_AHEAD) / SPACING) + 1) * SPACING
+        px, py = x + c * d, y + s * d
+        h = ground.ground_height(self.scenario, px, py).tolist()
+        _, barrier = walk(h, SPACING, h[0], FEATURE)
         slope = math.degrees(max(abs(pitch), abs(roll)))
-        if where is not None and best - here > 0.01:
-            el = self.probe.element(*where)
-            detail = f"cannot climb the {best - here:.2f} m step"
+        if barrier is not None and barrier.kind != "drop":
+            k = min(barrier.index + 1, len(h) - 1)
+            el = self.probe.element(float(px[k]), float(py[k]))
+            if barrier.kind == "step":
+                detail = f"cannot climb the {barrier.height:.2f} m step"
+            else:
+                angle = math.degrees(math.atan2(barrier.height, barrier.width + SPACING))
+                detail = f"cannot climb the {angle:.0f} deg slope"
         elif slope > 3.0:
             el = self.probe.element(x, y)
             detail = f"cannot climb the {slope:.0f} deg slope"

@@ -36,6 +36,7 @@ import time
 from typing import Any
 
 from ..core.errors import PlannerProtocolError, SubjectLoadError
+from ..core.processes import end_group
 from .protocol import Command, Observation
 from ..scenario.model import Scenario
 
@@ -62,6 +63,8 @@ class ExternalProcess:
 
     # -- life cycle -------------------------------------------------------------------------
     def start(self) -> None:
+        if _CLOSING[0]:
+            raise PlannerProtocolError("external planner not started again: this process is ending")
         try:
             self.proc = subprocess.Popen(
                 self.argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
@@ -84,7 +87,9 @@ class ExternalProcess:
         return self.proc is not None and self.proc.poll() is None
 
     def stop(self, grace: float = 1.0) -> None:
-        """Ask politely (shutdown message, close stdin), then terminate, then kill."""
+        """Ask politely (shutdown message, close stdin), then end its whole process group: the
+        program was started in a session of its own, so whatever it started (as a launch file
+        starts nodes) is in that group too; SIGTERM, then SIGKILL (core/processes.end_group)."""
         proc, self.proc = self.proc, None
         if proc is None:
             return
@@ -97,12 +102,13 @@ class ExternalProcess:
         try:
             proc.wait(timeout=grace)
         except subprocess.TimeoutExpired:
-            proc.terminate()
-            try:
-                proc.wait(timeout=grace)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+            pass
+        end_group(proc.pid, grace)
+        try:
+            proc.wait(timeout=grace)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
         for stream in (proc.stdout, proc.stderr, proc.stdin):
             try:
                 if stream:
@@ -192,7 +198,19 @@ class ExternalProcess:
 _PROCESSES: dict[tuple[str, ...], ExternalProcess] = {}
 
 
+def running_pids() -> set[int]:
+    """The pids of the exec: planner programs this process runs (not a planner's leftovers)."""
+    return {p.proc.pid for p in _PROCESSES.values() if p.proc is not None}
+
+
+_CLOSING = [False]   # set by _shutdown_all: the process is ending, no program is started again
+
+
 def _shutdown_all() -> None:
+    """Stop every exec: planner program of this process, for good: an episode still running in
+    another thread (a pool worker stopping while its episode runs) must not start one again, or it
+    would outlive the process."""
+    _CLOSING[0] = True
     for proc in list(_PROCESSES.values()):
         proc.stop(grace=0.5)
     _PROCESSES.clear()

@@ -9,14 +9,17 @@ Cost: the common case is one ``paths.shortest_path`` (cached; the metrics need t
 after the episode, so a normal run pays nothing extra). Only when that finds no path is the
 verdict confirmed, conservatively: obstacles grown by half the robot's width minus the polygon
 tolerance (so the polygons lie inside the true grown shapes) and every waypoint and the goal
-counted as reached anywhere within its tolerance. If any way remains, the scenario runs.
+counted as reached anywhere within its tolerance; on terrain, the barriers of a more capable body
+than the robot's (``traversable.lenient``). If any way remains, the scenario runs.
 """
 from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ..scenario.model import Scenario
-from .paths import INFLATION_TOLERANCE, inflation_radius, path_through_discs, shortest_path
+from .paths import INFLATION_TOLERANCE, inflation_radius, path_through_discs, shortest_path, static_obstacles
 
 
 def trivially_passed(scenario: Scenario) -> str | None:
@@ -50,7 +53,9 @@ def impassable_reason(scenario: Scenario) -> str | None:
     r = inflation_radius(fp)
     stops = [(m.start.x, m.start.y, 0.0), *((w.x, w.y, m.waypoint_tolerance) for w in m.waypoints),
              (m.goal.x, m.goal.y, m.goal_tolerance.position)]
-    path, reached = path_through_discs(scenario, stops, inflation=max(r - INFLATION_TOLERANCE, 0.0))
+    inflation = max(r - INFLATION_TOLERANCE, 0.0)
+    path, reached = path_through_discs(scenario, stops, inflation=inflation,
+                                       obstacles=static_obstacles(scenario) + _terrain(scenario, stops, inflation))
     if path is not None:
         return None   # only the exact points are closed off: a planner may still pass
     names = ["the start", *(f"waypoint {i} ({w.x:g}, {w.y:g})" for i, w in enumerate(m.waypoints)),
@@ -58,12 +63,70 @@ def impassable_reason(scenario: Scenario) -> str | None:
     width = f"{2 * r:g} m wide" if fp.shape != "circle" else f"{2 * r:g} m across"
     blocked = _closest_obstacle(scenario, stops[reached], r)
     where = f"{names[reached - 1]} to {names[reached]}" if reached > 0 else names[0]
-    why = (f"{names[reached]} lies within {blocked[1]:.2f} m of obstacle {blocked[0]!r}, closer than "
-           f"half the robot's width ({r:g} m), with all of its {stops[reached][2]:g} m tolerance"
-           if blocked is not None else "obstacles close every way between them")
+    if blocked is not None:
+        why = (f"{names[reached]} lies within {blocked[1]:.2f} m of obstacle {blocked[0]!r}, closer than "
+               f"half the robot's width ({r:g} m), with all of its {stops[reached][2]:g} m tolerance")
+    else:
+        why = _terrain_words(scenario, stops[reached - 1] if reached > 0 else stops[0], stops[reached]) or \
+            "obstacles close every way between them"
     return (f"no planner can pass this scenario: there is no collision-free way for the robot "
             f"({width}) from {where}: {why}; move the obstacles or the mission points, or, if the "
             f"scenario is meant to be impassable, mark it xfail")
+
+
+def _terrain(scenario: Scenario, stops, inflation: float) -> tuple:
+    """The terrain barriers for the confirmation: a more capable body's (traversable.lenient),
+    leaving out those the footprint already overlaps at a mission point (the loader accepted it
+    standing there)."""
+    if not scenario.terrain:
+        return ()
+    from ..scenario.crossing import body_capability
+    from .paths import inflated_polygon
+    from .traversable import barriers, lenient
+
+    cap = body_capability(scenario)
+    if cap is None:
+        return ()
+    points = np.array([(x, y) for x, y, _ in stops])
+    keep = []
+    for wall in barriers(scenario, lenient(cap)):
+        poly = inflated_polygon(wall, inflation)
+        edges = np.roll(poly, -1, axis=0) - poly
+        cross = edges[None, :, 0] * (points[:, None, 1] - poly[None, :, 1]) - \
+            edges[None, :, 1] * (points[:, None, 0] - poly[None, :, 0])
+        if not (cross > 0).all(axis=1).any():
+            keep.append(wall)
+    return tuple(keep)
+
+
+def _terrain_words(scenario: Scenario, a, b) -> str | None:
+    """"the terrain the body cannot cross closes every way between them (in the way: ...)", naming
+    the barriers the obstacle-free way from a to b crosses; None without terrain barriers."""
+    if not scenario.terrain:
+        return None
+    from ..scenario.crossing import body_capability
+    from .paths import inflated_polygon, path_through_discs
+    from .traversable import barriers
+
+    cap = body_capability(scenario)
+    walls = barriers(scenario) if cap is not None else ()
+    if not walls:
+        return None
+    way, _ = path_through_discs(scenario, [(a[0], a[1], 0.0), (b[0], b[1], b[2])], inflation=0.0,
+                                obstacles=static_obstacles(scenario))
+    from shapely.geometry import LineString, Polygon
+    line = LineString(way.points) if way is not None and len(way.points) > 1 else None
+    crossed = []
+    for wall in walls:
+        if line is None or line.intersects(Polygon(inflated_polygon(wall, 0.0))):
+            if wall.name not in crossed:
+                crossed.append(wall.name)
+    kind = scenario.robot.body.kind
+    limits = (f"{'its' if kind == 'legged' else 'its estimated'} limits: a {cap.max_step:.2g} m step, a "
+              f"{cap.max_slope:.3g} deg slope, a {cap.max_gap:.2g} m gap")
+    named = ", ".join(crossed[:3]) + (f" and {len(crossed) - 3} more" if len(crossed) > 3 else "")
+    return (f"the terrain the {kind} body cannot cross closes every way between them"
+            + (f": in the way, {named}" if named else "") + f"; {limits}")
 
 
 def _closest_obstacle(scenario: Scenario, stop: tuple[float, float, float],

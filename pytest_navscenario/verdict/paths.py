@@ -165,6 +165,17 @@ def static_obstacles(scenario: Scenario) -> tuple[Obstacle, ...]:
     return tuple(o for o in obstacles if getattr(o, "motion", None) is None)
 
 
+def path_obstacles(scenario: Scenario) -> tuple[Obstacle, ...]:
+    """What a path must keep the footprint clear of: the static obstacles, and on terrain the
+    ground the body cannot cross (``traversable.barriers``: a step above its climb height, a
+    slope too steep, a pit's walls)."""
+    statics = static_obstacles(scenario)
+    if not scenario.terrain:
+        return statics
+    from .traversable import barriers
+    return statics + barriers(scenario)
+
+
 def min_obstacle_gap(scenario: Scenario) -> tuple[float, str, str]:
     """The narrowest gap between two static obstacles: ``(distance m, name a, name b)``, 0 when
     they touch or overlap; ``(inf, "", "")`` with fewer than two. Exact (true circles)."""
@@ -353,7 +364,7 @@ def path_through(scenario: Scenario, stops: Sequence[tuple[float, float]]) -> Sh
     """Shortest collision-free path for the scenario's footprint through ``stops`` (x, y) in
     order, among the scenario's obstacles; None if there is none. Cached like shortest_path."""
     stops = tuple((float(x), float(y)) for x, y in stops)
-    key = (scenario.robot.footprint, stops, static_obstacles(scenario))
+    key = (scenario.robot.footprint, stops, path_obstacles(scenario))
     try:
         return _PATH_CACHE[key]
     except KeyError:
@@ -379,7 +390,7 @@ def passage_room(scenario: Scenario, margins: Sequence[float]) -> float:
     m = scenario.mission
     stops = np.array([(m.start.x, m.start.y), *((w.x, w.y) for w in m.waypoints), (m.goal.x, m.goal.y)],
                      dtype=float)
-    obstacles, r = static_obstacles(scenario), inflation_radius(scenario.robot.footprint)
+    obstacles, r = path_obstacles(scenario), inflation_radius(scenario.robot.footprint)
     for margin in sorted(margins, reverse=True):
         keep = obstacles
         if obstacles:
@@ -461,15 +472,17 @@ DISC_SAMPLES = 32   # points on a tolerance disc's rim (plus its centre) a path 
 
 
 def path_through_discs(scenario: Scenario, discs: Sequence[tuple[float, float, float]],
-                       inflation: float | None = None) -> tuple[ShortestPath | None, int]:
+                       inflation: float | None = None,
+                       obstacles: tuple[Obstacle, ...] | None = None) -> tuple[ShortestPath | None, int]:
     """Shortest collision-free path from the first disc's centre touching every following disc
     (x, y, radius) in order; ``(path or None, number of discs reached in order)``. A disc is
     touched at its centre or at one of ``DISC_SAMPLES`` points on its rim (a path through the
     exact touch point of the optimum is at most r (1 - cos(pi / 32)), 0.5 % of r, longer).
-    ``inflation``: obstacle growth (default: the footprint's, as for shortest_path). Cached."""
+    ``inflation``: obstacle growth (default: the footprint's, as for shortest_path); ``obstacles``:
+    what to keep clear of (default: ``path_obstacles``). Cached."""
     r = inflation_radius(scenario.robot.footprint) if inflation is None else inflation
     discs = tuple((float(x), float(y), max(float(t), 0.0)) for x, y, t in discs)
-    key = ("discs", r, discs, static_obstacles(scenario))
+    key = ("discs", r, discs, path_obstacles(scenario) if obstacles is None else tuple(obstacles))
     try:
         return _PATH_CACHE[key]
     except KeyError:

@@ -81,6 +81,7 @@ class EpisodeResult:
     wall_time: float = 0.0                      # s, the whole run_scenario call (+ a feasibility check before it)
     timings: dict[str, float] = field(default_factory=dict)  # s: physics, rays, planner, harness
     terrain_event: TerrainEvent | None = None   # fell, tipped over or stuck on terrain
+    left_running: tuple[str, ...] = ()          # processes the planner started and left running ("pid N: cmd")
 
     @property
     def passed(self) -> bool:

@@ -7,6 +7,10 @@ from pathlib import Path
 
 from dispatch_helpers import KILLABLE_PLANNER, scenario_text
 
+#: Why the Ray tests skip, and how to run them (shown in the summary: -rs is in addopts).
+RAY_MISSING = ("Ray is not installed, so the --nav-ray tests cannot run: pip install -e '.[ray]' "
+               "(the ray extra), then pytest tests/dispatch -n 2")
+
 SUITE = [("a", 1.0), ("b", 1.1), ("victim", 1.2), ("c", 1.3), ("d", 1.4), ("e", 1.5)]
 
 

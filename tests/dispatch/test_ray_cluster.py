@@ -13,7 +13,13 @@ from pathlib import Path
 
 import pytest
 
-ray = pytest.importorskip("ray")
+from ray_fixtures import RAY_MISSING
+
+ray = pytest.importorskip("ray", reason=RAY_MISSING)
+
+# A two-node cluster is a whole workflow (~15 s quiet, most of it starting the cluster): heavy.
+# The default run covers --nav-ray on a local instance (test_ray_local.py).
+pytestmark = pytest.mark.heavy
 
 # Imported here, before pytester's in-process runs snapshot sys.modules (numpy cannot load twice).
 import pytest_navscenario.dispatch.on_ray  # noqa: E402,F401

@@ -13,7 +13,9 @@ from pathlib import Path
 
 import pytest
 
-ray = pytest.importorskip("ray")
+from ray_fixtures import RAY_MISSING
+
+ray = pytest.importorskip("ray", reason=RAY_MISSING)
 
 # Imported here, before pytester's in-process runs snapshot sys.modules (numpy cannot load twice).
 import pytest_navscenario.dispatch.on_ray  # noqa: E402,F401
@@ -147,6 +149,9 @@ def test_interrupting_a_search_on_ray_keeps_what_it_found(pytester: pytest.Pytes
     assert sorted(folder.glob("crate-*.yaml")), out[-3000:]
 
 
+# Heavy (~5 s quiet): a suite interrupted on the plugin's own workers keeps its finished items in the
+# default run (tests/plugin/test_interrupt.py), and an interrupt on Ray in the search below.
+@pytest.mark.heavy
 def test_interrupting_a_suite_on_ray_keeps_the_finished_items(pytester: pytest.Pytester, planners: Path):
     from dispatch_helpers import scenario_text
     suite = pytester.path / "suite"

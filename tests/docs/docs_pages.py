@@ -12,7 +12,7 @@ GitHub and MkDocs render nothing for it. docs/contributing.md is the user-facing
     <!-- run: exit 0 1 1 -->      the same, with each command's exit status in order
     <!-- output -->               the output of the last command run (a ``text`` block)
     <!-- file: PATH -->           write the block to PATH (relative to the current folder)
-    <!-- append: PATH -->         append the block to PATH
+    <!-- append: PATH -->         append the block to PATH (after two blank lines)
     <!-- skip: REASON -->         a command block that is not run; the docs test reports it as
                                   skipped with REASON
 
@@ -428,8 +428,8 @@ def run_pages(pages: list[Path], home: Path, cwd: Path, update: bool) -> PageRun
                 target = cwd / step.path
                 target.parent.mkdir(parents=True, exist_ok=True)
                 text = "\n".join(step.block.lines) + "\n"
-                if step.kind == "append" and target.exists():
-                    text = target.read_text(encoding="utf-8") + text
+                if step.kind == "append" and target.exists():      # two blank lines between, as PEP 8 has it
+                    text = target.read_text(encoding="utf-8").rstrip("\n") + "\n\n\n" + text
                 target.write_text(text, encoding="utf-8")
             elif step.kind == "skip":
                 result.skipped.append(f"{step.block.where}: {step.reason}")

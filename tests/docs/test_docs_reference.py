@@ -238,3 +238,25 @@ def test_the_tick_limit_defaults_and_their_reasons_are_stated():
     assert "check-planner" in dict((o, h) for o, _, h in OPTIONS)["--nav-tick-limit"]
     page = (ROOT / "docs/reference/planner-protocol.md").read_text()
     assert "**How long one tick may take**, and why the defaults differ" in page
+
+
+def test_the_scenario_format_page_lists_every_declared_key(reference):
+    """Issue 28: the reference page's key tables are generated from the declarations the loader and
+    the JSON Schema read; every section and key appears, with its range and default."""
+    from pytest_navscenario.scenario.format import SCENARIO
+    from pytest_navscenario.scenario.keys import walk
+    from pytest_navscenario.scenario.search_keys import SEARCH
+    page = (ROOT / "docs" / "reference" / "scenario-format.md").read_text(encoding="utf-8")
+    assert "<!-- generated: scenario-keys -->" in page and "<!-- generated: scenario-run-only -->" in page
+    assert "<!-- generated: search-keys -->" in (ROOT / "docs" / "reference" / "search.md").read_text(encoding="utf-8")
+    text = reference.scenario_keys_markdown()
+    for path, section in walk(SCENARIO):
+        if path.startswith("search"):
+            continue
+        for key in section.keys:
+            assert f"| `{key.name}` |" in text, f"{path}.{key.name}"
+    assert "| `beams` | whole number: 1 … 10000 |  | 72 |" in text
+    search = reference.search_keys_markdown()
+    assert all(f"| `{key.name}` |" in search for key in SEARCH.keys)
+    assert "± 1000" in search or "±1000" in search
+    assert "edges do not cross" in reference.run_only_markdown()

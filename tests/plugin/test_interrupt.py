@@ -34,7 +34,10 @@ obstacles: [{{type: box, name: crate, x: {x}, y: 1, length: 0.5, width: 0.5}}]
 """
 
 
-@pytest.mark.parametrize("workers", [[], ["-p", "xdist.plugin", "-n", "2", "--dist", "load"],
+# xdist's own workers are heavy (~5 s quiet): the results file is written by the same code as with
+# the plugin's worker processes, which the default run interrupts.
+@pytest.mark.parametrize("workers", [[], pytest.param(["-p", "xdist.plugin", "-n", "2", "--dist", "load"],
+                                                      marks=pytest.mark.heavy),
                                      ["-p", "xdist.plugin", "-n", "2"]], ids=["serial", "xdist", "nav-workers"])
 def test_sigterm_mid_run_keeps_a_valid_results_file(tmp_path: Path, workers: list[str]):
     (tmp_path / "slow.py").write_text(SLOW_PLANNER)

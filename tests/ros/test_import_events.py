@@ -104,3 +104,40 @@ def test_at_with_start_or_a_bad_window_is_an_error(event_bag, capsys, tmp_path):
     assert "--window must be a positive number of seconds, got 0.0" in capsys.readouterr().err
     assert main(["from-bag", str(event_bag)]) == 2
     assert "-o/--output is required" in capsys.readouterr().err
+
+
+def test_at_on_a_turn_in_place_holds_the_turn(event_bag):
+    """Issue 24: --at at the moment the robot starts turning in place (9 s) runs the seed to the
+    turn's end, so the seed holds the turn, and says so."""
+    seed = scenario_from_bag(event_bag, at=9.1, window=5.0)
+    note = [n for n in seed.notes if "falls on a turn in place" in n]
+    assert len(note) == 1 and "so that it holds the turn in place" in note[0], seed.notes
+    end = seed.path[-1, 0] + 4.1                                   # the window starts at 4.1 s
+    assert end == pytest.approx(14.0, abs=0.4)
+
+
+def test_at_whose_window_reaches_before_the_bag_says_it_was_cut(event_bag):
+    seed = scenario_from_bag(event_bag, at=3.0, window=30.0)
+    assert any(n.startswith("the window of 30 s before --at 3 would reach before the bag's start: cut there, "
+                            "it covers 0..3 s") for n in seed.notes), seed.notes
+    assert seed.path[-1, 0] == pytest.approx(3.0, abs=0.05)
+
+
+def test_list_events_streams_the_scans(event_bag):
+    """--list-events reads the scans in a second, streamed pass: the bag's data never holds them."""
+    from pytest_navscenario.ros.bag_import.reading import PROBE, read_bag
+    data = read_bag(event_bag)
+    assert len(data.scan_probe) <= 2 * PROBE and not hasattr(data, "scan_ranges")
+    events, _ = bag_events(event_bag)
+    assert [e.kind for e in events].count("close") == 1
+
+
+def test_a_relocalisation_jump_in_a_bag_without_scans_says_nothing_of_scans(tmp_path):
+    """The note about scans on each side of a jump is left out when there are no scans."""
+    t = np.arange(60) * 0.1
+    truth = np.stack([t, 0.5 * t, 0 * t, 0 * t], 1)
+    drift = np.zeros((60, 3))
+    drift[30:, 0] = 0.5
+    seed = scenario_from_bag(robot_bag(tmp_path / "jump", World(), truth, drift=drift, scans=False))
+    jump = [n for n in seed.notes if n.startswith("relocalisation jump")]
+    assert len(jump) == 1 and "scans" not in jump[0], jump

@@ -121,7 +121,7 @@ def test_sdf_poses_composed_and_unrepresentable_listed(tmp_path, capsys):
     out = tmp_path / "w.yaml"
     assert main(["import", "sdf", str(src), "--start=3,-3,0", "--goal=4,-3,0", "-o", str(out)]) == 0
     err = capsys.readouterr().err
-    assert "warning: 4 element(s)" in err and err.count("(not imported)") == 4
+    assert "warning: 4 warning(s) about" in err and err.count("(not imported)") == 4
 
 
 # ------------------------------------------------------------------ map_server

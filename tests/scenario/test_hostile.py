@@ -65,14 +65,14 @@ def test_small_aliases_and_merge_keys_work_like_safe_load():
     text = VALID + textwrap.dedent("""\
         robot:
           lidar: &lidar {beams: 18, range_max: 5}
-        search:
+        provenance:
           base: *lidar
           other: {<<: *lidar, beams: 9}
         """)
     s = loads_scenario(text)
     assert s.robot.lidar.beams == 18
-    assert s.search == yaml.safe_load(text)["search"] == {"base": {"beams": 18, "range_max": 5},
-                                                         "other": {"beams": 9, "range_max": 5}}
+    assert s.provenance == yaml.safe_load(text)["provenance"] == {"base": {"beams": 18, "range_max": 5},
+                                                                 "other": {"beams": 9, "range_max": 5}}
 
 
 def test_recursive_alias_is_an_error_not_a_hang(tmp_path):

@@ -39,7 +39,7 @@ GOOD = textwrap.dedent("""\
       - {type: box, x: 7, y: 5, length: 1, width: 1}
     simulation: {timestep: 0.01, control_rate: 20, seed: 3}
     reference: {file: runs/boxes1.csv}
-    search: {budget: 10, vary: [x, y]}
+    search: {obstacle_dx: 0.5, motion_speed: [-0.2, 0.3], frozen: [box2], insert: 1}
     """)
 
 
@@ -63,7 +63,7 @@ def test_load_reads_every_section_with_defaults_and_yaml_units(good_file):
     assert s.simulation == Simulation(0.01, 20.0, 3)
     assert s.reference == Reference(file="runs/boxes1.csv")
     assert resolve_path(s, s.reference.file) == good_file.parent / "runs" / "boxes1.csv"
-    assert s.search == {"budget": 10, "vary": ["x", "y"]}
+    assert s.search == {"obstacle_dx": 0.5, "motion_speed": [-0.2, 0.3], "frozen": ["box2"], "insert": 1}
     assert s.marks == (Mark("slow"), Mark("xfail", kwargs={"reason": "known"}), Mark("skip", ("why",)),
                        Mark("mymark", ("arg1", 2)))
 
@@ -301,7 +301,11 @@ def scenarios(draw):
         reference=draw(st.none() | st.builds(Reference, file=names)
                        | st.builds(Reference, points=st.lists(st.tuples(finite, finite), max_size=3).map(
                            lambda rows: tuple((float(i), x, y) for i, (x, y) in enumerate(rows))))),
-        search=draw(st.none() | st.dictionaries(names, plain, max_size=3)),
+        search=draw(st.none() | st.fixed_dictionaries({}, optional={   # search: is checked when loaded
+            "obstacle_dx": st.floats(0, 5, allow_subnormal=False), "insert": st.integers(0, 5),
+            "motion_speed": st.tuples(st.floats(-1, 0, allow_subnormal=False),
+                                      st.floats(0, 1, allow_subnormal=False)).map(list),
+            "frozen": st.just(["start", "goal"]), "min_size": positive})),
         provenance=draw(st.none() | st.dictionaries(names, plain, max_size=3)),
     )
 

@@ -78,8 +78,8 @@ def test_insertion_and_removal_are_parameters_zero_is_the_seed(lane):
 
 
 @pytest.mark.parametrize("search, message", [
-    ({"insert": -1}, "whole number >= 0"),
-    ({"insert": 1.5}, "whole number >= 0"),
+    ({"insert": -1}, "must be between 0 and 100"),       # the documented limits (search_keys.py)
+    ({"insert": 1.5}, "expected a whole number"),
     ({"insert_size": [0.8, 0.2]}, "0 < lo <= hi"),
     ({"insert_size": [0.1, 0.2, 0.3]}, "exactly two numbers"),
     ({"insert_margin": -1}, "must be >= 0"),

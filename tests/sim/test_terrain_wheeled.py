@@ -145,3 +145,23 @@ def test_the_verdict_names_what_happened_where_and_the_metrics_see_height():
     assert m.path_length > xy                    # over the ground: the climb counts
     wall = run_scenario(scene([Platform("wall", 4.0, 0.0, length=1.0, width=3.0, height=0.6)]), Straight)
     assert wall.outcome is Outcome.COLLISION and wall.message.startswith("collision with the face of platform 'wall'")
+
+
+def test_a_heightfield_dipping_below_the_floor_cuts_a_hole_in_it(tmp_path):
+    """A hollow 0.3 m deep in a height file: the floor has a hole over it, so the robot drives down
+    into it (the ground function and MuJoCo agree), instead of riding over a floor at z = 0."""
+    from pytest_navscenario.scenario.terrain import Heightfield
+    from pytest_navscenario.sim.body_world import compiled_body_world
+
+    u = np.linspace(-1.0, 1.0, 41)
+    bowl = -0.3 * np.clip(1.0 - (u[None, :] ** 2 + u[:, None] ** 2), 0.0, None) ** 2
+    np.save(tmp_path / "bowl.npy", bowl)
+    el = Heightfield("bowl", 5.0, 0.0, file="bowl.npy", length=4.0, width=4.0, min_height=-0.3, max_height=0.0)
+    sc = scene([el])
+    sc = Scenario(mission=sc.mission, terrain=sc.terrain, robot=sc.robot, source=str(tmp_path / "s.yaml"))
+    assert float(ground.ground_height(sc, 5.0, 0.0)) == pytest.approx(-0.3, abs=0.01)
+    assert ground.lowest(sc) == pytest.approx(-0.3, abs=0.01)
+    floor = [g for g, e in compiled_body_world(sc).terrain_of_geom.items() if e == -1]
+    assert len(floor) > 1                                     # slabs round the hole, not one plane
+    res = simulate(sc, Straight(), 0)
+    assert res.trajectory.z.min() < -0.2 and res.trajectory.pose[-1, 0] > 9.0   # down into it, and out

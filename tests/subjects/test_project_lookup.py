@@ -14,6 +14,7 @@ import pytest
 # Before pytester's in-process runs snapshot sys.modules: a worker pool pickles functions of
 # concurrent.futures by reference, which fails if a later run re-imports that module.
 import pytest_navscenario.dispatch.local  # noqa: F401
+import pytest_navscenario.harness.runner  # noqa: F401  (numpy cannot load twice)
 from pytest_navscenario.core.errors import SubjectLoadError
 from pytest_navscenario.core.user_code import ShadowedModuleWarning, load_object, look_in_project
 
@@ -80,6 +81,7 @@ def test_pytest_from_a_subfolder_and_on_worker_processes(pytester, monkeypatch):
     result = pytester.runpytest_inprocess("-p", "pytest_navscenario.plugin", "--nav-plots=none",
                                           "--nav-workers=2", ".")
     result.assert_outcomes(passed=1)
+    result.stdout.fnmatch_lines(["*episodes run on 2 local worker process*"])
 
 
 def _cli(folder: Path, *args: str) -> subprocess.CompletedProcess:

@@ -52,9 +52,13 @@ def manoeuvre_at(od: np.ndarray, at: float, slack: float = 0.5) -> tuple[str, fl
     t, _, fwd, rate = resample(od)
     spans = [("turn in place", a, b) for a, b in turn_spans(t, fwd, rate)] + \
             [("reversing", a, b) for a, b in reverse_spans(t, fwd)]
-    for kind, a, b in sorted(spans, key=lambda s: s[1]):
+    under_way = []
+    for kind, a, b in spans:
         # the differences blur each end by two steps: the manoeuvre ends that much later
         end = float(t[min(b + 1, len(t) - 1)])
         if t[a] - slack <= at < end:
-            return kind, float(t[a]), end
-    return None
+            under_way.append((end, kind, float(t[a])))
+    if not under_way:
+        return None
+    end, kind, start = max(under_way)      # the one that goes on longest: the seed holds all of them
+    return kind, start, end

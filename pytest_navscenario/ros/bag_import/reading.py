@@ -252,7 +252,7 @@ def _read(reader: Any, path: Path, odom_topic, scan_topic, cut: tuple, cloud_top
                 col.scan_seen(reader, conn, raw, bag_ns)
             else:
                 col.take(conn.topic, reader.deserialize(raw, conn.msgtype), bag_ns)
-    if not len(col.odom):
+    if not len(col.odom) and not col.odom_bad:
         raise BagImportError(f"{path}: topic {odom_name} has no messages; record odometry or choose "
                              f"another topic with --odom-topic")
     data, origin = _odometry(path, col, odom_name, *cut)

@@ -29,6 +29,8 @@ def stream_scans(data, batch: int | None = None) -> Iterator[ScanBatch]:
     stats = data.scan_stats = StreamStats()
     od_t = data.odom[:, 0]
     lo, hi = float(od_t[0]), float(od_t[-1])
+    full = data.full_odom if len(data.full_odom) else data.odom
+    full_lo, full_hi = float(full[0, 0]), float(full[-1, 0])
     gaps = odometry_gaps(od_t)
     offs = timing.beam_offsets(layout.beams)
     early, late = float(offs.min()), float(offs.max())
@@ -44,7 +46,8 @@ def stream_scans(data, batch: int | None = None) -> Iterator[ScanBatch]:
                 continue
             t = (stamp_ns(msg.header, bag_ns) - data.origin_ns) * 1e-9
             if t + early < lo - 1e-6 or t + late > hi + 1e-6:
-                stats.outside += int(lo - 5.0 <= t <= hi + 5.0)   # near the window: worth saying
+                # outside the window; worth saying only where the bag's odometry itself has no pose
+                stats.outside += int(not full_lo <= t <= full_hi and lo - 5.0 <= t <= hi + 5.0)
                 continue
             if len(gaps) and ((gaps[:, 0] < t + late) & (gaps[:, 1] > t + early)).any():
                 stats.in_gap += 1
@@ -77,7 +80,7 @@ def stream_notes(data) -> list[str]:
         notes.append(f"warning: {s.in_gap} scan(s) fell where the odometry has gaps longer than {GAP:g} s ({spans}): "
                      f"skipped, not placed with a guessed pose")
     if s.outside:
-        notes.append(f"{s.outside} scan(s) within 5 s of the window but outside the odometry's span there were "
+        notes.append(f"warning: {s.outside} scan(s) before the first or after the last odometry message were "
                      f"skipped (no pose to place them with)")
     return notes
 

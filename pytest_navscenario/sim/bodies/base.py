@@ -29,6 +29,15 @@ def quat_to_rpy(qw, qx, qy, qz):
     return roll, pitch, yaw
 
 
+def rpy_to_quat(roll: float, pitch: float, yaw: float) -> tuple[float, float, float, float]:
+    """The unit quaternion (w, x, y, z) of roll, pitch, yaw (radians; Z-Y-X, intrinsic)."""
+    cr, sr = math.cos(roll / 2.0), math.sin(roll / 2.0)
+    cp, sp = math.cos(pitch / 2.0), math.sin(pitch / 2.0)
+    cy, sy = math.cos(yaw / 2.0), math.sin(yaw / 2.0)
+    return (cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
+            cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy)
+
+
 def world_yaw_rate(quat: np.ndarray, w_local: np.ndarray) -> np.ndarray:
     """The world-frame z component of a body-frame angular velocity (rows of quaternions and
     angular velocities): the turn rate about the vertical."""
@@ -48,10 +57,13 @@ class FreeBase:
     drop_limit: float = 0.1
     #: roll or pitch (degrees) past which it counts as tipped over
     tip_angle: float = 45.0
+    #: the base's origin above the ground it stands on (0: on it; the MJCF body's base is higher)
+    ground_offset: float = 0.0
 
     def __init__(self, scenario: Scenario):
         self.scenario = scenario
         self.spec_body = scenario.robot.body
+        self.kind_name = self.spec_body.kind
         self.tip_angle = float(getattr(self.spec_body, "tip_angle", 45.0))
 
     # -- the model -------------------------------------------------------------------------
@@ -67,6 +79,7 @@ class FreeBase:
         self.chassis_geoms = frozenset(
             g for g in range(model.ngeom)
             if model.geom_bodyid[g] == self.base_body and model.geom_contype[g] & 1)
+        self.robot_geoms = self.chassis_geoms       # the geoms that meet obstacles
 
     # -- per episode -----------------------------------------------------------------------
     def place(self, d: mujoco.MjData, x: float, y: float, yaw: float, z: float,
@@ -75,15 +88,16 @@ class FreeBase:
         q = d.qpos
         a = self.qadr
         q[a:a + 3] = (x, y, z)
-        cr, sr = math.cos(roll / 2.0), math.sin(roll / 2.0)
-        cp, sp = math.cos(pitch / 2.0), math.sin(pitch / 2.0)
-        cy, sy = math.cos(yaw / 2.0), math.sin(yaw / 2.0)
-        q[a + 3:a + 7] = (cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
-                          cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy)
+        q[a + 3:a + 7] = rpy_to_quat(roll, pitch, yaw)
 
     def start_height(self, ground_z: float) -> float:
         """The base's z at the start: on the ground (a hair above, so it settles onto it)."""
         return ground_z + 0.002
+
+    def begin(self, d: mujoco.MjData) -> Any:
+        """The body's controller for one episode on ``d``, called once the base is placed: an
+        object with ``command``. A body that keeps nothing per episode (wheeled) is its own."""
+        return self
 
     # -- per tick (small: batched later) ---------------------------------------------------
     def command(self, ctrl: np.ndarray, setpoint: tuple[float, float, float], state: Any) -> None:

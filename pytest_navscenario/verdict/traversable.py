@@ -1,0 +1,210 @@
+"""What the robot's body cannot cross on the scenario's terrain, as obstacles for the path search.
+
+The rule is the legged body's (``scenario/crossing.py``), with the body's ``Capability``
+(``crossing.body_capability``: a legged body's declared limits, a wheeled body's estimated ones):
+
+* a *face* (where the ground jumps: a step's riser, a platform's edge, a pit's wall, a ramp's
+  side) higher than ``max_step`` is a wall, both ways (up it cannot climb, down it would fall),
+  unless it is the wall of a gap no wider than ``max_gap`` (ground within ``max_step`` of the
+  upper side comes back within ``max_gap``: a trench it strides over);
+* a slope steeper than ``max_slope`` rising more than ``max_step`` in all (a steep ramp) is a
+  wall over its whole surface;
+* a pit is enclosed by its walls: a hole.
+
+Ramps, steps, platforms and pits are exact (their faces are found along their edges, 5 cm apart,
+from ``scenario.ground``'s heights on either side); rough ground and height files are checked on
+their grid (a cell where the ground jumps by more than ``max_step`` to a neighbour, and connected
+cells steeper than ``max_slope`` whose heights span more than ``max_step``).
+
+``barriers(scenario)`` gives them as thin ``BoxObstacle``s named after the element and what it is
+("platform 'kerb' (0.30 m step)"): ``verdict/paths.py`` grows them by the footprint like any
+obstacle, so the shortest path goes round a step the body cannot climb and up a ramp it can, and
+the feasibility check says "no planner can pass this" when the terrain closes every way. A body
+that declares no limits (an MJCF robot) gets no barriers. Cached per terrain and body.
+"""
+from __future__ import annotations
+
+import math
+from collections import OrderedDict
+from dataclasses import replace
+
+import numpy as np
+
+from ..scenario import ground
+from ..scenario.crossing import Capability, body_capability
+from ..scenario.model import BoxObstacle, Scenario
+
+EDGE_SPACING = 0.05     # m between the points along an element's edge where faces are measured
+PROBE = 0.01            # m either side of an edge where the two heights are read
+WALL = 0.02             # m: the thickness of a face's barrier box
+CACHE_SIZE = 256
+
+
+def barriers(scenario: Scenario, capability: Capability | None = None) -> tuple[BoxObstacle, ...]:
+    """The terrain the body cannot cross, as thin boxes (see the module docstring); () without
+    terrain or for a body without limits. ``capability`` overrides the body's (for the lenient
+    confirmation of ``feasibility``)."""
+    if not scenario.terrain:
+        return ()
+    cap = capability if capability is not None else body_capability(scenario)
+    if cap is None:
+        return ()
+    key = (scenario.terrain, cap)
+    try:
+        out = _CACHE[key]
+        _CACHE.move_to_end(key)
+        return out
+    except KeyError:
+        pass
+    out = tuple(_piece_barriers(scenario, cap)) + tuple(_grid_barriers(scenario, cap))
+    _CACHE[key] = out
+    if len(_CACHE) > CACHE_SIZE:
+        _CACHE.popitem(last=False)
+    return out
+
+
+_CACHE: OrderedDict = OrderedDict()
+
+
+def _name(scenario: Scenario, element: int, what: str) -> str:
+    return f"{ground.describe_element(scenario.terrain[element])} ({what})"
+
+
+def _piece_barriers(scenario: Scenario, cap: Capability) -> list[BoxObstacle]:
+    out = []
+    for piece in ground.pieces(scenario.terrain):
+        el = scenario.terrain[piece.element]
+        x, y, c, s = ground.frame(el)
+        rise = piece.top1 - piece.top0
+        run = piece.u1 - piece.u0
+        if abs(rise) > cap.max_step and math.degrees(math.atan2(abs(rise), run)) > cap.max_slope:
+            um = (piece.u0 + piece.u1) / 2
+            out.append(BoxObstacle(_name(scenario, piece.element, f"{math.degrees(math.atan2(abs(rise), run)):.0f} "
+                                                                   f"deg slope"),
+                                   x + c * um, y + s * um, run, el.width, yaw=el.yaw, height=1.0))
+        hw = el.width / 2
+        corners = [(piece.u0, -hw), (piece.u1, -hw), (piece.u1, hw), (piece.u0, hw)]
+        for k in range(4):
+            (ua, va), (ub, vb) = corners[k], corners[(k + 1) % 4]
+            out += _edge_barriers(scenario, cap, piece.element, (x, y, c, s), (ua, va), (ub, vb))
+    return out
+
+
+def _edge_barriers(scenario, cap, element, pose, a, b) -> list[BoxObstacle]:
+    """Barrier boxes along one edge (from local a to b, counter-clockwise round the piece, so the
+    outside is on the right) where the ground jumps by more than max_step and no gap is bridged."""
+    x, y, c, s = pose
+    length = math.hypot(b[0] - a[0], b[1] - a[1])
+    n = max(2, int(math.ceil(length / EDGE_SPACING)) + 1)
+    t = (np.arange(n) + 0.5) / n
+    lu = a[0] + (b[0] - a[0]) * t
+    lv = a[1] + (b[1] - a[1]) * t
+    px, py = x + c * lu - s * lv, y + s * lu + c * lv
+    dx, dy = (b[0] - a[0]) / length, (b[1] - a[1]) / length
+    nx, ny = c * dy - s * -dx, s * dy + c * -dx          # outward normal (right of a -> b), world
+    inside = ground.ground_height(scenario, px - nx * PROBE, py - ny * PROBE)
+    outside = ground.ground_height(scenario, px + nx * PROBE, py + ny * PROBE)
+    jump = outside - inside
+    wall = np.abs(jump) > cap.max_step + 1e-9
+    if not wall.any():
+        return []
+    if cap.max_gap > 0:
+        at = np.flatnonzero(wall)
+        wall[at] = ~_bridged(scenario, cap, px[at], py[at], nx, ny, inside[at], outside[at])
+    out = []
+    runs = np.flatnonzero(np.diff(np.concatenate([[0], wall.astype(int), [0]])))
+    for start, stop in zip(runs[::2], runs[1::2]):
+        t0, t1 = start / n, stop / n
+        mid = (t0 + t1) / 2
+        mu, mv = a[0] + (b[0] - a[0]) * mid, a[1] + (b[1] - a[1]) * mid
+        height = float(np.abs(jump[start:stop]).max())
+        out.append(BoxObstacle(_name(scenario, element, f"{height:.2f} m step"),
+                               x + c * mu - s * mv, y + s * mu + c * mv, (t1 - t0) * length, WALL,
+                               yaw=math.degrees(math.atan2(s * dx + c * dy, c * dx - s * dy)), height=1.0))
+    return out
+
+
+def _bridged(scenario, cap, px, py, nx, ny, inside, outside) -> np.ndarray:
+    """Per edge point: the face is a wall of a gap no wider than max_gap (from the upper side,
+    ground within max_step of it comes back within max_gap across the lower side)."""
+    high = np.maximum(inside, outside)
+    toward = np.where(outside < inside, 1.0, -1.0)       # across the lower side
+    k = np.arange(1, int(math.ceil(cap.max_gap / 0.02)) + 1) * 0.02
+    qx = px[:, None] + toward[:, None] * nx * (PROBE + k[None])
+    qy = py[:, None] + toward[:, None] * ny * (PROBE + k[None])
+    back = ground.ground_height(scenario, qx, qy) >= high[:, None] - cap.max_step - 1e-9
+    return back.any(axis=1)
+
+
+def _grid_barriers(scenario: Scenario, cap: Capability) -> list[BoxObstacle]:
+    """Rough ground and height files: barrier cells on the element's own grid, as boxes (a run
+    of cells along a row is one box)."""
+    out = []
+    from ..scenario.heightmap import height_grid
+
+    for i in ground.grid_elements(scenario.terrain):
+        el = scenario.terrain[i]
+        grid = height_grid(el, scenario)
+        heights = np.asarray(grid.heights, dtype=float)
+        dx, dy = grid.cell
+        blocked = _blocked_cells(heights, dx, dy, cap)
+        if not blocked.any():
+            continue
+        x, y, c, s = ground.frame(el)
+        for r in range(blocked.shape[0]):
+            runs = np.flatnonzero(np.diff(np.concatenate([[0], blocked[r].astype(int), [0]])))
+            for start, stop in zip(runs[::2], runs[1::2]):
+                u0, u1 = -el.length / 2 + (start - 0.5) * dx, -el.length / 2 + (stop - 0.5) * dx
+                v = -el.width / 2 + r * dy
+                um = (u0 + u1) / 2
+                out.append(BoxObstacle(_name(scenario, i, "ground it cannot cross"), x + c * um - s * v,
+                                       y + s * um + c * v, max(u1 - u0, WALL), max(dy, WALL), yaw=el.yaw,
+                                       height=1.0))
+    return out
+
+
+def _blocked_cells(h: np.ndarray, dx: float, dy: float, cap: Capability) -> np.ndarray:
+    """Cells of a height grid the body cannot cross: a jump of more than max_step to a neighbour,
+    or a connected patch steeper than max_slope whose heights span more than max_step."""
+    blocked = np.zeros(h.shape, dtype=bool)
+    jx = np.abs(np.diff(h, axis=1)) > cap.max_step
+    jy = np.abs(np.diff(h, axis=0)) > cap.max_step
+    blocked[:, 1:] |= jx
+    blocked[:, :-1] |= jx
+    blocked[1:, :] |= jy
+    blocked[:-1, :] |= jy
+    gx = np.gradient(h, dx, axis=1) if h.shape[1] > 1 else np.zeros_like(h)
+    gy = np.gradient(h, dy, axis=0) if h.shape[0] > 1 else np.zeros_like(h)
+    steep = np.hypot(gx, gy) > math.tan(math.radians(min(cap.max_slope, 89.9)))
+    if steep.any():
+        labels = _label(steep)
+        for lab in np.unique(labels[steep]):
+            patch = labels == lab
+            if float(h[patch].max() - h[patch].min()) > cap.max_step:
+                blocked |= patch
+    return blocked
+
+
+def _label(mask: np.ndarray) -> np.ndarray:
+    """Connected components (8-neighbours) of ``mask``: each cell's label is the smallest flat
+    index in its component (-1 outside), by propagating minima until nothing changes."""
+    big = mask.size
+    labels = np.where(mask, np.arange(big).reshape(mask.shape), big)
+    while True:
+        padded = np.pad(labels, 1, constant_values=big)
+        best = labels.copy()
+        for oy in (-1, 0, 1):
+            for ox in (-1, 0, 1):
+                best = np.minimum(best, padded[1 + oy:1 + oy + mask.shape[0], 1 + ox:1 + ox + mask.shape[1]])
+        best = np.where(mask, best, big)
+        if np.array_equal(best, labels):
+            return np.where(mask, labels, -1)
+        labels = best
+
+
+def lenient(cap: Capability) -> Capability:
+    """A more capable body than ``cap`` (half as much again, 5 degrees steeper): what
+    ``feasibility`` confirms an impassable verdict with, so an estimate's error never makes a
+    passable scenario a setup error."""
+    return replace(cap, max_step=cap.max_step * 1.5, max_slope=min(cap.max_slope + 5.0, 89.0),
+                   max_gap=cap.max_gap * 1.5)

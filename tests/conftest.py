@@ -1,0 +1,42 @@
+"""Suite-wide check (issue 28): every scenario file the tool wrote during this test session (frozen
+failures, generated suites, imported seeds: each starts with the YAML language server's modeline)
+validates against the scenario schema, as an editor or check-jsonschema would read it. Checked
+once per process at the end of the session, over the session's temporary folders (pytester runs
+included); a file that does not validate is an error of the session's last test."""
+from __future__ import annotations
+
+import pytest
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _written_scenarios_validate(tmp_path_factory: pytest.TempPathFactory):
+    yield
+    from pytest_navscenario.scenario.modeline import PREFIX
+
+    base = tmp_path_factory.getbasetemp()
+    written = []
+    for path in base.rglob("*.yaml"):
+        try:
+            with open(path, encoding="utf-8") as fh:
+                if fh.readline().startswith(PREFIX):
+                    written.append(path)
+        except (OSError, UnicodeDecodeError):
+            continue
+    if not written:
+        return
+    import jsonschema
+    from ruamel.yaml import YAML
+
+    from pytest_navscenario.scenario.json_schema import scenario_schema
+
+    validator = jsonschema.Draft202012Validator(scenario_schema())
+    reader = YAML(typ="safe", pure=True)
+    problems = []
+    for path in written:
+        errors = [f"{'/'.join(map(str, e.absolute_path))}: {e.message}"
+                  for e in validator.iter_errors(reader.load(path.read_text(encoding="utf-8")))]
+        if errors:
+            problems.append(f"{path}: " + "; ".join(errors[:3]))
+    if problems:
+        pytest.fail(f"{len(problems)} of the {len(written)} scenario files written during the session do not "
+                    f"validate against the scenario schema:\n" + "\n".join(problems[:20]), pytrace=False)

@@ -1,0 +1,36 @@
+"""Body controllers for the MJCF cart of tests/data/mjcf/cart.xml: the planner's (v, w) into the
+two wheels' speed targets, and controllers that break the protocol."""
+
+RADIUS, TRACK = 0.1, 0.4
+
+
+class Cart:
+    """Differential drive: each wheel's speed target (v -+ w track / 2) / r."""
+
+    def reset(self, model, data):
+        self.left = model.actuator("left").id
+        self.right = model.actuator("right").id
+        self.controls = [0.0] * model.nu
+
+    def control(self, command, model, data):
+        v, _, w = command
+        self.controls[self.left] = (v - w * TRACK / 2) / RADIUS
+        self.controls[self.right] = (v + w * TRACK / 2) / RADIUS
+        return self.controls
+
+
+class WritesCtrl(Cart):
+    """Writes data.ctrl itself and returns None."""
+
+    def control(self, command, model, data):
+        data.ctrl[:] = super().control(command, model, data)
+
+
+class TooFew:
+    def control(self, command, model, data):
+        return [1.0]
+
+
+class Raises:
+    def control(self, command, model, data):
+        raise RuntimeError("motor driver offline")

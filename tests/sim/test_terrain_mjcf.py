@@ -1,0 +1,132 @@
+"""The user's own MJCF robot (tests/data/mjcf/cart.xml, a small differential-drive cart) driven by a
+controller of theirs (tests/sim/cart_controller.py): it rides the terrain (up a ramp, off a dock),
+meets obstacles, and a file that MuJoCo cannot load, a model without a free base, a controller that
+cannot be found or breaks the protocol are clear errors naming the file and the field."""
+import math
+import shutil
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pytest_navscenario.core.errors import ScenarioError
+from pytest_navscenario.scenario.loader import load_scenario
+from pytest_navscenario.scenario.model import content_hash
+from pytest_navscenario.sim.bodies.mjcf import BodyControllerError
+from pytest_navscenario.sim.episode import simulate
+
+sys.path.insert(0, str(Path(__file__).parents[1] / "search"))
+from straight_planner import Straight  # noqa: E402
+
+CART = Path(__file__).parents[1] / "data" / "mjcf" / "cart.xml"
+
+
+def write(folder: Path, body: str, terrain: str = "", obstacles: str = "", goal: str = "{x: 9, y: 0}") -> Path:
+    shutil.copy(CART, folder / "cart.xml")
+    path = folder / "scene.yaml"
+    path.write_text(f"""version: 1
+mission: {{start: {{x: 0, y: 0}}, goal: {goal}, timeout: 20}}
+robot:
+  drive: diff
+  safety: {{enabled: false}}
+  body: {body}
+{terrain}
+{obstacles}
+""")
+    return path
+
+
+RAMP = """terrain:
+  - {type: ramp, name: ramp, x: 4.5, y: 0, length: 3.0, width: 3.0, rise: 0.53}
+  - {type: platform, name: top, x: 9.0, y: 0, length: 6.0, width: 3.0, height: 0.53}"""
+CART_BODY = '{type: mjcf, file: cart.xml, controller: "cart_controller:Cart"}'
+
+
+def test_the_users_cart_climbs_a_10_degree_ramp_on_its_own_wheels(tmp_path):
+    res = simulate(load_scenario(write(tmp_path, CART_BODY, RAMP)), Straight(), 0)
+    assert res.end == "goal"
+    traj = res.trajectory
+    assert traj.z[0] == pytest.approx(0.002, abs=1e-6)                # its wheels on the ground at the start
+    assert traj.z[-1] == pytest.approx(0.53, abs=0.01)                 # on the upper level
+    on_ramp = (traj.pose[:, 0] > 3.6) & (traj.pose[:, 0] < 5.4)
+    assert 8.0 < math.degrees(-traj.pitch[on_ramp].mean()) < 14.0
+
+
+def test_it_falls_off_a_dock_and_its_wheels_hit_an_obstacle(tmp_path):
+    dock = write(tmp_path, CART_BODY, "terrain:\n  - {type: platform, name: dock, x: 0, y: 0, length: 6.0, "
+                                      "width: 4.0, height: 1.2}")
+    res = simulate(load_scenario(dock), Straight(), 0)
+    assert res.end == "fell" and res.terrain_event.element == "off platform 'dock'"
+    assert res.terrain_event.drop == pytest.approx(1.2)
+    crate = write(tmp_path, CART_BODY, obstacles="obstacles:\n  - {type: box, name: crate, x: 5, y: 0.2, "
+                                                 "length: 0.4, width: 0.1, height: 0.15}")
+    res = simulate(load_scenario(crate), Straight(), 0)
+    assert res.end == "collision" and res.collision.obstacle == "crate"
+
+
+def test_a_controller_writing_ctrl_itself_drives_the_same_bits(tmp_path):
+    a = simulate(load_scenario(write(tmp_path, CART_BODY, RAMP)), Straight(), 0)
+    b = simulate(load_scenario(write(tmp_path, CART_BODY.replace("Cart", "WritesCtrl"), RAMP)), Straight(), 0)
+    for name in ("pose", "velocity", "z", "roll", "pitch"):
+        assert getattr(a.trajectory, name).tobytes() == getattr(b.trajectory, name).tobytes()
+
+
+def test_the_file_is_content_by_its_bytes_not_its_path(tmp_path):
+    first = load_scenario(write(tmp_path, CART_BODY))
+    (tmp_path / "robots").mkdir()
+    shutil.copy(CART, tmp_path / "robots" / "same.xml")
+    moved = load_scenario(write(tmp_path, CART_BODY.replace("cart.xml", "robots/same.xml")))
+    assert content_hash(moved) == content_hash(first)
+    (tmp_path / "robots" / "same.xml").write_text(CART.read_text().replace('mass="20"', 'mass="25"'))
+    assert content_hash(load_scenario(tmp_path / "scene.yaml")) != content_hash(first)
+
+
+def test_a_file_outside_the_folder_or_missing_is_refused_at_load_with_its_line(tmp_path):
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(write(tmp_path, CART_BODY.replace("cart.xml", "../cart.xml")))
+    assert err.value.field == "robot.body.file" and err.value.line == 6 and "leaves the scenario's folder" in str(err.value)
+    with pytest.raises(ScenarioError, match="robot.body.file: .*nothere.xml does not exist"):
+        load_scenario(write(tmp_path, CART_BODY.replace("cart.xml", "nothere.xml")))
+
+
+def test_mujocos_own_message_for_a_file_it_cannot_load_and_a_model_without_a_free_base(tmp_path):
+    path = write(tmp_path, CART_BODY)
+    (tmp_path / "cart.xml").write_text(CART.read_text().replace("<freejoint", "<frejoint"))
+    with pytest.raises(ScenarioError) as err:
+        simulate(load_scenario(path), Straight(), 0)
+    text = str(err.value)
+    assert text.startswith(f"{path}:6: robot.body.file: MuJoCo cannot load {tmp_path / 'cart.xml'}: ")
+    assert "frejoint" in text                                          # MuJoCo's own words
+    (tmp_path / "cart.xml").write_text(CART.read_text().replace('<freejoint name="root"/>', ""))
+    with pytest.raises(ScenarioError, match="has no body with a free joint .*fix: give the robot's base body"):
+        simulate(load_scenario(path), Straight(), 0)
+    shutil.copy(CART, tmp_path / "cart.xml")
+    with pytest.raises(ScenarioError, match="robot.body.base: .*has no body named 'chasis' .*chassis"):
+        simulate(load_scenario(write(tmp_path, CART_BODY[:-1] + ", base: chasis}")), Straight(), 0)
+    with pytest.raises(ScenarioError, match="robot.body.base: body 'left_wheel' .*has no free joint"):
+        simulate(load_scenario(write(tmp_path, CART_BODY[:-1] + ", base: left_wheel}")), Straight(), 0)
+
+
+def test_a_controller_that_cannot_be_found_or_breaks_the_protocol(tmp_path):
+    with pytest.raises(ScenarioError, match=r"robot.body.controller: body controller 'no_such_mod:Cart': cannot "
+                                            r"import module 'no_such_mod'"):
+        simulate(load_scenario(write(tmp_path, CART_BODY.replace("cart_controller", "no_such_mod"))), Straight(), 0)
+    with pytest.raises(BodyControllerError, match=r"'cart_controller:TooFew' returned 1 controls \(the model has 2"):
+        simulate(load_scenario(write(tmp_path, CART_BODY.replace("Cart", "TooFew"))), Straight(), 0)
+    with pytest.raises(BodyControllerError, match="raised RuntimeError: motor driver offline"):
+        simulate(load_scenario(write(tmp_path, CART_BODY.replace("Cart", "Raises"))), Straight(), 0)
+
+
+def test_the_robots_geoms_are_hidden_from_the_lidar_and_the_model_saves(tmp_path):
+    from pytest_navscenario.sim.body_world import compiled_body_world, model_xml
+    from pytest_navscenario.sim.bodies.base import ROBOT_GROUP
+
+    sc = load_scenario(write(tmp_path, CART_BODY, RAMP))
+    world = compiled_body_world(sc)
+    assert {int(world.model.geom_group[g]) for g in world.body.robot_geoms} == {ROBOT_GROUP}
+    assert world.body.ground_offset == pytest.approx(0.2)             # its base 0.2 m above its wheels' contact
+    res = simulate(sc, Straight(), 0, max_ticks=5)
+    assert np.all(res.trajectory.ranges[0] > 1.0)                       # it does not see itself
+    xml = model_xml(sc)
+    assert '<body name="chassis"' in xml and 'name="left"' in xml        # the user's names, kept

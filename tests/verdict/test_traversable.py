@@ -1,0 +1,121 @@
+"""The shortest path and the feasibility check know the body: a ramp within its slope is passable, a
+step above its climb height is a wall, a pit is a hole, a trench within a legged body's max_gap is
+strode over; terrain that closes every way is "no planner can pass this", a setup error naming the
+element and the body's limits, never a planner failure."""
+import math
+import sys
+from pathlib import Path
+
+import pytest
+
+from pytest_navscenario.scenario.crossing import body_capability
+from pytest_navscenario.scenario.model import Footprint, Mission, Pose, Robot, Scenario
+from pytest_navscenario.scenario.terrain import LeggedBody, MjcfBody, Pit, Platform, Ramp, Rough, Steps, WheeledBody
+from pytest_navscenario.verdict.feasibility import impassable_reason
+from pytest_navscenario.verdict.paths import shortest_path
+from pytest_navscenario.verdict.traversable import barriers
+
+sys.path.insert(0, str(Path(__file__).parents[1] / "search"))
+from straight_planner import Straight  # noqa: E402
+
+LEGGED = LeggedBody(max_step=0.2, max_slope=30.0, max_gap=0.3)
+
+
+def scene(terrain, body, goal=(12.0, 0.0)):
+    return Scenario(mission=Mission(start=Pose(0.0, 0.0, 0.0), goal=Pose(*goal), timeout=60.0),
+                    terrain=tuple(terrain), robot=Robot(footprint=Footprint(), drive="diff", body=body))
+
+
+def upper_level(*ways):
+    """An upper level 0.85 m up, 20 m wide, from x = 9: reached only by ``ways``."""
+    return (Platform("upper", 12.0, 0.0, length=6.0, width=20.0, height=0.85), *ways)
+
+
+STAIRS = Steps("stairs", 8.25, 0.0, count=5, rise=0.17, run=0.3, width=3.0)
+
+
+def ramp(deg: float, y: float = 4.0) -> Ramp:
+    length = 0.85 / math.tan(math.radians(deg))
+    return Ramp("ramp", 9.0 - length / 2, y, length=length, width=3.0, rise=0.85)
+
+
+def test_legged_takes_the_stairs_and_wheeled_goes_round_by_the_ramp():
+    terrain = upper_level(STAIRS, ramp(8.0))
+    legged = shortest_path(scene(terrain, LEGGED))
+    assert legged.length == pytest.approx(12.0)                        # straight up the stairs
+    wheeled = shortest_path(scene(terrain, WheeledBody()))
+    assert wheeled.length > 13.0 and wheeled.points[:, 1].max() > 2.5  # by the ramp, 4 m aside
+
+
+def test_a_step_above_its_climb_height_is_a_wall_and_a_ramp_within_its_slope_a_way():
+    walled = scene(upper_level(), LEGGED)                               # only the 0.85 m edge
+    reason = impassable_reason(walled)
+    assert reason.startswith("no planner can pass this scenario")
+    assert ("the terrain the legged body cannot cross closes every way between them: in the way, "
+            "platform 'upper' (0.85 m step); its limits: a 0.2 m step, a 30 deg slope, a 0.3 m gap") in reason
+    assert impassable_reason(scene(upper_level(ramp(25.0)), LEGGED)) is None
+    assert shortest_path(scene(upper_level(ramp(35.0)), LEGGED)) is None
+    steep = impassable_reason(scene(upper_level(ramp(45.0)), LEGGED))
+    assert steep is not None and "platform 'upper' (0.85 m step)" in steep
+    kerb = scene([Platform("kerb", 12.0, 0.0, length=6.0, width=20.0, height=0.15)], LEGGED)
+    assert shortest_path(kerb).length == pytest.approx(12.0)           # 0.15 m: climbed
+
+
+def test_stairs_are_a_wall_to_the_wheeled_body():
+    reason = impassable_reason(scene(upper_level(Steps("stairs", 8.25, 0.0, count=5, rise=0.17, run=0.3,
+                                                         width=20.0)), WheeledBody()))
+    assert "the terrain the wheeled body cannot cross" in reason and "steps 'stairs' (0.17 m step)" in reason
+    assert "its estimated limits: a 0.04 m step, a 15 deg slope, a 0.05 m gap" in reason
+
+
+def test_a_pit_is_a_hole_and_a_narrow_trench_is_strode_over_by_the_legged_body():
+    pit = scene([Pit("pit", 6.0, 0.0, length=2.0, width=2.0, depth=1.0)], LEGGED)
+    around = shortest_path(pit)
+    assert around.length > 12.2 and abs(around.points[:, 1]).max() > 1.2
+    trench = [Pit("trench", 6.0, 0.0, length=0.25, width=8.0, depth=1.0)]
+    assert shortest_path(scene(trench, LEGGED)).length == pytest.approx(12.0)
+    wheeled = shortest_path(scene(trench, WheeledBody()))
+    assert wheeled.length > 12.5 and abs(wheeled.points[:, 1]).max() > 4.0   # round its end
+
+
+WALLED = """version: 1
+mission: {start: {x: 0, y: 0}, goal: {x: 12, y: 0}, timeout: 30}
+robot: {drive: diff, body: {type: legged}}
+terrain:
+  - {type: platform, name: upper, x: 12, y: 0, length: 6, width: 20, height: 0.85}
+"""
+
+
+def test_the_impassable_verdict_is_a_setup_error_not_a_planner_failure(pytester, monkeypatch):
+    monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
+    pytester.makepyfile(straight_planner=(Path(__file__).parents[1] / "search" / "straight_planner.py").read_text())
+    pytester.makefile(".yaml", walled=WALLED, stairs=WALLED + "  - {type: steps, name: stairs, x: 8.25, y: 0, "
+                                                              "count: 5, rise: 0.17, run: 0.3, width: 3}\n")
+    result = pytester.runpytest_subprocess("-p", "pytest_navscenario.plugin", "--nav-plots=none",
+                                           "--nav-subject=straight_planner:Straight", "-p", "no:cacheprovider")
+    result.assert_outcomes(passed=1, errors=1)
+    result.stdout.fnmatch_lines(["*ERROR at setup of*walled*",
+                                 "*no planner can pass this scenario*platform 'upper' (0.85 m step)*"])
+
+
+def test_rough_ground_blocks_only_where_it_is_too_steep_and_too_high():
+    gentle = scene([Rough("yard", 6.0, 0.0, length=6.0, width=4.0, amplitude=0.05, wavelength=0.6, seed=1)], LEGGED)
+    assert barriers(gentle) == ()
+    wild = scene([Rough("yard", 6.0, 0.0, length=6.0, width=4.0, amplitude=1.0, wavelength=0.6, seed=1)], LEGGED)
+    walls = barriers(wild)
+    assert walls and all(w.name == "rough 'yard' (ground it cannot cross)" for w in walls)
+
+
+def test_bodies_without_declared_limits_get_no_barriers():
+    body = MjcfBody(file="robot.xml", controller="m:C")
+    assert body_capability(scene([], body)) is None
+    assert barriers(scene(upper_level(), body)) == ()
+
+
+def test_the_legged_simulation_agrees_with_the_path_where_it_can_and_cannot_go():
+    from pytest_navscenario.sim.episode import simulate
+
+    up = scene(upper_level(STAIRS, ramp(8.0)), LEGGED)
+    assert simulate(up, Straight(), 0).end == "goal"
+    blocked = scene(upper_level(), LEGGED)
+    assert simulate(blocked, Straight(), 0).end == "stuck-terrain"
