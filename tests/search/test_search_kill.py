@@ -99,13 +99,13 @@ def assert_nothing_left(sid: int) -> None:
     assert processes_in_session(sid) == []
 
 
-def assert_every_failure_found_is_frozen(folder: Path) -> int:
+def assert_every_failure_found_is_frozen(folder: Path, noise: bool = False) -> int:
     """Each failure of the search's log has a frozen file that loads; returns how many.
 
     The log is the witness: a failure's file is written before its ``failure`` record, which is
     written before the record of the candidate that found it; so every failure the log shows (its
-    last record not "rejected" or "unconfirmed") has its file, and every failing candidate of a
-    new way of failing (this seed has no noise: each holds at once) has a failure record."""
+    last record not "rejected" or "unconfirmed") has its file, and (without noise, where each holds
+    at once) every failing candidate of a new way of failing has a failure record."""
     lines = (folder / "search-log.jsonl").read_text().splitlines()
     records = [json.loads(line) for line in lines]          # every line whole: each is one write
     assert records and records[0]["record"] == "start"
@@ -118,7 +118,8 @@ def assert_every_failure_found_is_frozen(folder: Path) -> int:
     for r in records:
         if r["record"] == "candidate" and r["phase"] == "search" and r["outcome"] not in ("success", "harness-error"):
             ways.setdefault(tuple(r["signature"]), r["sim"])
-    assert sorted(ways.values()) == sorted(status)
+    if not noise:
+        assert sorted(ways.values()) == sorted(status)
     frozen = {}
     for path in folder.glob("crate-*.yaml"):
         scenario = load_scenario(path)                       # loads: never half a file
@@ -130,8 +131,9 @@ def assert_every_failure_found_is_frozen(folder: Path) -> int:
 
 @pytest.mark.parametrize("mode, kills", [
     ([], 1), (["-n", "2"], 1),                      # each kill ~3-6 s; more of them in the heavy run
-    pytest.param([], 6, marks=pytest.mark.heavy), pytest.param(["-n", "2"], 6, marks=pytest.mark.heavy)],
-    ids=["serial", "n2", "serial-6-kills", "n2-6-kills"])
+    pytest.param([], 6, marks=pytest.mark.heavy), pytest.param(["-n", "2"], 6, marks=pytest.mark.heavy),
+    pytest.param(["-n", "2", "--nav-sensor-model", "realistic"], 6, marks=pytest.mark.heavy)],
+    ids=["serial", "n2", "serial-6-kills", "n2-6-kills", "n2-6-kills-confirming"])
 def test_a_search_killed_at_random_moments_keeps_every_failure_it_had_found(project: Path, mode: list[str],
                                                                             kills: int):
     rnd = random.Random(2611 + kills)
@@ -145,7 +147,7 @@ def test_a_search_killed_at_random_moments_keeps_every_failure_it_had_found(proj
         assert proc.returncode == -signal.SIGKILL, seen[-3000:]
         assert_nothing_left(proc.pid)
         shown = [int(n) for n in re.findall(r"sims, (\d+) distinct failure", seen)]
-        found = assert_every_failure_found_is_frozen(project / out / "crate")
+        found = assert_every_failure_found_is_frozen(project / out / "crate", "realistic" in mode)
         assert found >= max(shown, default=0)
 
 
