@@ -373,11 +373,12 @@ def _search_loop(strategy: Any, sim: _Simulator, budget: int, on_result: Callabl
     report = sim.report
     in_flight: deque[tuple[Iterator[Candidate], bool]] = deque()   # (results, the strategy's generation?)
     planned, asking = report.sims_used, True
+    new_in_flight = 0   # the strategy's candidates handed over, results not yet read
     while True:
         while len(in_flight) <= max(0, int(getattr(strategy, "lag", 0))) and planned < budget:
             sim.check_stop()
             confirm = confirming.requests(budget - planned) if confirming is not None else []
-            room = budget - planned - len(confirm) - (confirming.reserve() if confirming is not None else 0)
+            room = budget - planned - len(confirm) - (confirming.reserve(new_in_flight) if confirming is not None else 0)
             proposals: list = []
             if asking and room > 0:
                 try:
@@ -391,6 +392,7 @@ def _search_loop(strategy: Any, sim: _Simulator, budget: int, on_result: Callabl
             if not confirm and not proposals:
                 break   # nothing to run now: wait for what is in flight (or end)
             planned += len(confirm) + len(proposals)
+            new_in_flight += len(proposals)
             in_flight.append((sim.start(confirm + proposals, "search"), bool(proposals)))
         if not in_flight:
             break
@@ -399,6 +401,7 @@ def _search_loop(strategy: Any, sim: _Simulator, budget: int, on_result: Callabl
         for cand in batch:
             if cand.run == 0:
                 results.append(cand)
+                new_in_flight -= 1
             on_result(cand)
             if report.sims_used < budget:
                 sim.check_stop()
@@ -430,6 +433,11 @@ class _Confirming:
         self.held: set[tuple] = set()
         self.rejections: dict[tuple, int] = {}
         self.max_rejections = MAX_REJECTIONS
+        self.seen = self.begun = 0    # the strategy's candidates read, failures begun (reserve's rate)
+
+    def counted(self, cand: Candidate) -> None:
+        """A strategy's candidate came back (the rate of new failures, for ``reserve``)."""
+        self.seen += 1
 
     def failed(self, cand: Candidate) -> Failure | None:
         """A search candidate failed: the new failure it starts (None: a way of failing known)."""
@@ -442,6 +450,7 @@ class _Confirming:
         return self._begin(cand)
 
     def _begin(self, cand: Candidate) -> Failure:
+        self.begun += 1
         failure = Failure(found=cand, shrunk=cand, estimate=Estimate(threshold=self.threshold))
         if self.test is None:
             failure.estimate.decision = self.exact
@@ -465,16 +474,24 @@ class _Confirming:
             self.flight[failure.key] = n
         return out
 
-    def reserve(self) -> int:
-        """Runs the failures under test may still need beyond those in flight, if each keeps
-        failing (the runs a failure that holds takes): kept out of the strategy's room so that the
-        failures found can be decided before the budget ends."""
+    def reserve(self, new_in_flight: int = 0) -> int:
+        """Runs kept out of the strategy's room so that the failures found can be decided before
+        the budget ends: what the failures under test still need beyond the runs in flight if
+        each keeps failing (the runs a failure that holds takes), and what the new failures
+        expected among the ``new_in_flight`` candidates not yet read would need (at the rate new
+        failures have come so far)."""
         need = 0
         for failure in self.pending:
             est = failure.estimate
-            to_accept = math.ceil((self.test.accept_at - self.test.llr(est.outcomes)) / self.test.up - 1e-9)
-            need += max(min(to_accept, self.test.max_runs - est.runs) - self.flight.get(failure.key, 0), 0)
+            need += max(self._to_accept(est.outcomes) - self.flight.get(failure.key, 0), 0)
+        if self.seen and new_in_flight:
+            need += math.ceil(new_in_flight * self.begun / self.seen * self._to_accept([]) - 1e-9)
         return need
+
+    def _to_accept(self, outcomes: list[bool]) -> int:
+        """Runs to accept after ``outcomes`` if every one fails (at most the test's last run)."""
+        runs = math.ceil((self.test.accept_at - self.test.llr(outcomes)) / self.test.up - 1e-9)
+        return max(0, min(runs, self.test.max_runs - len(outcomes)))
 
     def result(self, cand: Candidate) -> None:
         """A confirmation run came back: note it; decide when the runs asked for are all in."""
@@ -846,7 +863,9 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
     def on_result(cand: Candidate) -> None:
         if cand.run:
             confirming.result(cand)
-        elif cand.failed:
+        else:
+            confirming.counted(cand)
+        if not cand.run and cand.failed:
             failure = confirming.failed(cand)
             if failure is not None:
                 sim.tell_recorder("failure", failure)   # on disk before it is logged
