@@ -188,3 +188,22 @@ def test_a_search_on_a_local_ray_instance_killed_leaves_nothing_running(project:
     proc.communicate(timeout=60)
     assert_nothing_left(proc.pid)
     assert assert_every_failure_found_is_frozen(project / "scenarios" / "regressions" / "crate") >= 1
+
+
+@pytest.mark.heavy
+def test_two_interrupts_on_a_local_ray_instance_keep_the_files_and_stop_ray(project: Path):
+    """Issue 26: on Ray, two signals lost the files and left Ray's agents running 48 s later."""
+    pytest.importorskip("ray")
+    proc = start_search(project, "--nav-ray=auto", "--navsearch-junit", "suite.xml")
+    seen = wait_for_progress(proc)
+    time.sleep(1.0)
+    for _ in range(2):
+        proc.send_signal(signal.SIGTERM)
+        delivered(proc.pid, signal.SIGTERM)
+        time.sleep(0.1)
+    out = seen + proc.communicate(timeout=120)[0]
+    assert proc.returncode == pytest.ExitCode.INTERRUPTED, out[-3000:]
+    assert "Traceback" not in out and "CUT SHORT: interrupted (SIGTERM)" in out, out[-3000:]
+    assert (project / "suite.xml").is_file()
+    assert assert_every_failure_found_is_frozen(project / "scenarios" / "regressions" / "crate") >= 1
+    assert_nothing_left(proc.pid)
