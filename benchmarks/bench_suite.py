@@ -96,7 +96,7 @@ def pytest_configure(config):
         from pytest_navscenario.verdict import feasibility
     except ImportError:
         return
-    check = feasibility.impassable_reason
+    check = feasibility.infeasible
 
     def timed(scenario):
         t0 = time.process_time()
@@ -104,7 +104,7 @@ def pytest_configure(config):
             return check(scenario)
         finally:
             _T["feasibility"] += time.process_time() - t0
-    feasibility.impassable_reason = timed
+    feasibility.infeasible = timed
 
 
 def pytest_sessionstart(session):

@@ -150,7 +150,8 @@ def cases(extra: list[str]):
     yield "divergence", blowup, lambda: Constant((1e12, 0.0, 0.0)), 0, {}
 
 
-NEWER_EVENT_FIELDS = ("robot_speed", "robot_moving", "obstacle_speed", "terrain")  # terrain: issue 25
+NEWER_EVENT_FIELDS = ("robot_speed", "robot_moving", "obstacle_speed", "terrain",   # terrain: issue 25
+                      "ground")     # a safety stop before the ground (issue 25): older code has none
 
 
 def _event(ev):

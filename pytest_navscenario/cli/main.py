@@ -25,7 +25,7 @@ EPILOG = ("Run 'navscenario COMMAND --help' for a command's arguments. Whole sui
 # name -> (module, one-line purpose for the command list)
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "run": ("pytest_navscenario.cli.run",
-            "run one scenario against a planner; print outcome and metrics"),
+            "run scenario files against a planner; print outcomes and metrics"),
     "check-planner": ("pytest_navscenario.cli.run",
                       "check that a planner keeps the protocol: reset/act signatures, finite "
                       "commands, read-only observations, determinism, tick time"),
@@ -37,15 +37,18 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
                  "build a seed scenario from a map_server occupancy grid"),
     "import": ("pytest_navscenario.ros.world_import",
                "import an Aerialist test or a Gazebo SDF world as a scenario"),
+    "policy-template": ("pytest_navscenario.cli.policy",
+                        "write the declaration a learned policy (.onnx) needs beside its model, to edit"),
     "schema": ("pytest_navscenario.cli.schema",
                "write the JSON Schema of the scenario format (editor completion and checks, CI)"),
 }
 
 # name -> the description at the top of the subcommand's own --help
 DESCRIPTIONS: dict[str, str] = {
-    "run": "Run one scenario file against a planner in the simulation and print the outcome, the "
-           "oracle's message and the metrics. Exit status: 0 on success, 1 on a failing outcome, "
-           "2 when the scenario or the planner cannot be loaded.",
+    "run": "Run scenario files against a planner in the simulation and print each outcome, the "
+           "oracle's message and the metrics (several files: in batches, with one planner call a tick "
+           "for all, when the planner implements the batch protocol). Exit status: 0 on success, 1 on "
+           "a failing outcome, 2 when a scenario or the planner cannot be loaded (or an episode raised).",
     "check-planner": "Run a planner for a few real ticks and report protocol mistakes in plain words: "
                      "missing or mis-declared reset(scenario) / act(obs), exceptions, act() answers "
                      "that are not three finite numbers (vx, vy, wz), writes into the observation's "
@@ -71,6 +74,12 @@ DESCRIPTIONS: dict[str, str] = {
               "keys and mark mistakes as they are typed; check-jsonschema checks files in CI. Keep it at "
               ".navscenario/scenario-v1.json in your project: the modeline that starts every scenario "
               "file the tool writes names that path (see docs/reference/scenario-format.md).",
+    "policy-template": "Write MODEL.policy.yaml beside an ONNX policy: the declaration of the observation it was "
+                       "trained on (lidar beams, target, velocity, previous command; clipping and "
+                       "normalisation) and of the action it answers (vx, vy, wz or vx, wz; clipping and "
+                       "scaling), with every field explained and a layout that adds up to the model's input "
+                       "width. The layout is a guess: edit it to your training environment's, then run "
+                       "'navscenario check-planner MODEL.onnx'. Needs the onnx extra (onnxruntime).",
     "import": "Import another tool's world as a scenario: an Aerialist test definition or a Gazebo "
               "SDF world (static boxes and cylinders; anything not carried over is listed). Poses "
               "are x,y,yaw in metres and degrees, e.g. --start -2.25,3,90.",

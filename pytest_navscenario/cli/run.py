@@ -1,5 +1,6 @@
-"""``navscenario run`` (one scenario file, one subject: outcome, message and metrics) and
-``navscenario check-planner`` (check a planner against the protocol).
+"""``navscenario run`` (scenario files, one subject: each one's outcome, message and metrics; several
+files run in batches when the subject implements the batch protocol) and ``navscenario
+check-planner`` (check a planner against the protocol).
 
 Exit codes: 0 success / check passed, 1 failing outcome / check found problems, 2 usage or
 input error (bad scenario file, subject that cannot be loaded; printed by cli.main).
@@ -19,12 +20,15 @@ from ..subjects.loading import BUILTIN_SUBJECTS, DEFAULT_SUBJECT
 HUNG_TICK = 10.0   # = harness.conformance.HUNG_TICK (not imported: `run --help` stays light)
 
 _SUBJECT_HELP = (f"planner under test: a built-in name ({', '.join(sorted(BUILTIN_SUBJECTS))}), "
-                 f"'package.module:Attribute' (a class or zero-argument factory) or "
-                 f"'exec:PROGRAM ARGS' (an external process); default {DEFAULT_SUBJECT}")
+                 f"'package.module:Attribute' (a class or zero-argument factory), "
+                 f"'exec:PROGRAM ARGS' (an external process) or a learned policy's model file "
+                 f"'path/to/policy.onnx'; default {DEFAULT_SUBJECT}")
 
 
 def add_arguments_run(p: argparse.ArgumentParser) -> None:
-    p.add_argument("scenario", metavar="SCENARIO.yaml", help="scenario YAML file")
+    p.add_argument("scenario", metavar="SCENARIO.yaml", nargs="+",
+                   help="scenario YAML file(s); several run one after the other, in batches when "
+                        "the subject implements the batch protocol (see --batch)")
     p.add_argument("--subject", "-s", default=DEFAULT_SUBJECT, metavar="SPEC", help=_SUBJECT_HELP)
     p.add_argument("--seed", type=int, default=None, metavar="N",
                    help="base seed (integer >= 0) mixed with the scenario's simulation.seed "
@@ -33,7 +37,48 @@ def add_arguments_run(p: argparse.ArgumentParser) -> None:
                    help=f"a planner tick slower than this is a subject error (default {DEFAULT_TICK_LIMIT:g}, "
                         f"as pytest's --nav-tick-limit, so that run gives a pytest item's outcome; 0: no "
                         f"limit, e.g. to step through act() in a debugger)")
-    p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON object instead of text (several files: a list of them)")
+    p.add_argument("--batch", default="auto", metavar="N",
+                   help="with several files, episodes run together in lockstep with one planner call a "
+                        "tick, when the subject implements the batch protocol (the built-in dwa does): "
+                        "auto (default: batches of 16), N (at most N), 1 or off (each alone); the "
+                        "results are the same either way")
+    p.add_argument("--batch-engine", default="cpu", choices=("cpu", "warp"),
+                   help="what steps a batch: cpu (default: MuJoCo in this process, each trajectory "
+                        "bit-identical to running it alone) or warp (MuJoCo Warp on the GPU, or Warp's "
+                        "CPU kernels without one: the optional extra pytest-navscenario[gpu]; "
+                        "trajectories within a tolerance of the CPU's, not bit for bit; scenarios it "
+                        "cannot simulate (terrain, bodies that ride the ground, 3D lidars) run alone "
+                        "on the CPU, said in the last line). See docs/how-to/gpu-batches.md")
+
+
+def _engine(name: str):
+    """The batch engine called ``name`` (sim/batch.py); NavScenarioError saying how to install
+    the warp engine's extra when it is missing."""
+    from ..sim.batch import batch_engine
+    try:
+        return batch_engine(name)
+    except ValueError as exc:
+        from ..core.errors import NavScenarioError
+        raise NavScenarioError(f"--batch-engine {name}: {exc}") from None
+
+
+def _batch_size(raw: str) -> int:
+    value = str(raw).strip().lower()
+    if value in ("", "auto"):
+        from ..harness.batch import DEFAULT_BATCH
+        return DEFAULT_BATCH
+    if value in ("off", "no", "none"):
+        return 1
+    try:
+        n = int(value)
+    except ValueError:
+        n = 0
+    if n < 1:
+        from ..core.errors import NavScenarioError
+        raise NavScenarioError(f"--batch {raw!r}: expected auto, a whole number of episodes >= 1, or off")
+    return n
 
 
 def _metrics_lines(metrics: Any) -> list[str]:
@@ -76,31 +121,73 @@ def run_run(args: argparse.Namespace) -> int:
     from ..scenario.loader import load_scenario
     from ..harness.runner import run_scenario
 
-    scenario = load_scenario(args.scenario)
+    files = list(args.scenario)
+    batch = _batch_size(args.batch)
+    scenarios = [load_scenario(path) for path in files]
     look_in_current_folder(args.subject)
-    result = run_scenario(scenario, args.subject, seed=args.seed, tick_limit=args.tick_limit or None)
+    tick_limit = args.tick_limit or None
+    if len(files) == 1:
+        result = run_scenario(scenarios[0], args.subject, seed=args.seed, tick_limit=tick_limit)
+        if args.json:
+            print(json.dumps(_record(scenarios[0], files[0], result), indent=2, allow_nan=False))
+        else:
+            _print_result(scenarios[0], files[0], result)
+        return 0 if result.passed else 1
+    from ..harness.batch import Batching, run_batch
+
+    batching = Batching()
+    results = run_batch(scenarios, args.subject, seeds=[args.seed] * len(files), tick_limit=tick_limit,
+                        batch=batch, batching=batching, engine=_engine(args.batch_engine))
+    failed = errors = 0
+    records = []
+    for scenario, path, result in zip(scenarios, files, results):
+        if isinstance(result, Exception):
+            errors += 1
+            if args.json:
+                records.append({"scenario": scenario.name, "file": path, "error": f"{type(result).__name__}: {result}"})
+            else:
+                print(f"{scenario.name} ({path}): error: {result}\n")
+            continue
+        failed += not result.passed
+        if args.json:
+            records.append(_record(scenario, path, result))
+        else:
+            _print_result(scenario, path, result)
+            print()
     if args.json:
-        record = {
-            "scenario": scenario.name, "file": args.scenario, "subject": result.subject,
-            "subject_version": result.subject_version, "seed": result.seed,
-            "outcome": result.outcome.value, "passed": result.passed, "message": result.message,
-            "metrics": _json_safe(result.metrics.as_dict()),
-            "wall_time": result.wall_time, "timings": result.timings,
-        }
-        if result.subject_failure is not None and result.subject_failure.traceback:
-            record["traceback"] = result.subject_failure.traceback
-        print(json.dumps(record, indent=2, allow_nan=False))
+        print(json.dumps(records, indent=2, allow_nan=False))
     else:
-        version = f" {result.subject_version}" if result.subject_version else ""
-        print(f"{scenario.name} ({args.scenario}) with {result.subject}{version}, seed {result.seed}")
-        print(f"outcome: {result.outcome.value}")
-        print(f"message: {result.message}")
-        if result.subject_failure is not None and result.subject_failure.traceback:
-            print("planner traceback:\n" + result.subject_failure.traceback.rstrip())
-        print("metrics:")
-        print("\n".join(_metrics_lines(result.metrics)))
-        print(f"wall time: {result.wall_time * 1e3:.1f} ms")
-    return 0 if result.passed else 1
+        passed = len(files) - failed - errors
+        print(f"{len(files)} scenario(s): {passed} passed, {failed} failed" + (f", {errors} error(s)" if errors else "")
+              + f"; batches (--batch {args.batch}"
+              + (f", --batch-engine {args.batch_engine}" if args.batch_engine != "cpu" else "")
+              + f"): {batching.describe()}")
+    return 2 if errors else (1 if failed else 0)
+
+
+def _record(scenario: Any, path: str, result: Any) -> dict[str, Any]:
+    record = {
+        "scenario": scenario.name, "file": path, "subject": result.subject,
+        "subject_version": result.subject_version, "seed": result.seed,
+        "outcome": result.outcome.value, "passed": result.passed, "message": result.message,
+        "metrics": _json_safe(result.metrics.as_dict()),
+        "wall_time": result.wall_time, "timings": result.timings,
+    }
+    if result.subject_failure is not None and result.subject_failure.traceback:
+        record["traceback"] = result.subject_failure.traceback
+    return record
+
+
+def _print_result(scenario: Any, path: str, result: Any) -> None:
+    version = f" {result.subject_version}" if result.subject_version else ""
+    print(f"{scenario.name} ({path}) with {result.subject}{version}, seed {result.seed}")
+    print(f"outcome: {result.outcome.value}")
+    print(f"message: {result.message}")
+    if result.subject_failure is not None and result.subject_failure.traceback:
+        print("planner traceback:\n" + result.subject_failure.traceback.rstrip())
+    print("metrics:")
+    print("\n".join(_metrics_lines(result.metrics)))
+    print(f"wall time: {result.wall_time * 1e3:.1f} ms")
 
 
 def add_arguments_check_planner(p: argparse.ArgumentParser) -> None:

@@ -51,9 +51,9 @@ class EpisodeJob:
 
         checked = 0.0
         if self.check_feasible:
-            reason, checked = check_feasibility(self.scenario)
-            if reason is not None:
-                return Impassable(reason)
+            found, checked = check_feasibility(self.scenario)
+            if found is not None:
+                return Impassable(str(found), found.field)
         result = run_scenario(self.scenario, _subject_for(self), seed=self.seed, tick_limit=self.tick_limit,
                               reset_timeout=self.reset_timeout)
         return compact(add_check_time(result, checked), self.keep_trajectory)
@@ -69,8 +69,10 @@ class EpisodeJob:
 @dataclass(frozen=True)
 class Impassable:
     """What a job with ``check_feasible`` returns for a scenario no planner can pass (or that
-    passes without one): ``verdict.feasibility.impassable_reason``'s words."""
+    passes without one, or simulates the impossible): ``verdict.feasibility.infeasible``'s words and
+    the field to fix (None when no one field is to blame)."""
     reason: str
+    field: str | None = None
 
 
 @dataclass
@@ -83,7 +85,8 @@ class EpisodeError:
     pickled: bytes | None      # the exception itself when it survives pickling unchanged
 
     @classmethod
-    def capture(cls, exc: BaseException) -> "EpisodeError":
+    def capture(cls, exc: BaseException, text: str | None = None) -> "EpisodeError":
+        """The EpisodeError of ``exc``; ``text``: its traceback (default: the one being handled)."""
         pickled: bytes | None
         try:
             pickled = pickle.dumps(exc)
@@ -92,7 +95,9 @@ class EpisodeError:
                 pickled = None
         except Exception:
             pickled = None
-        return cls(type(exc).__name__, str(exc), traceback.format_exc(), worker_name(), pickled)
+        if text is None:
+            text = traceback.format_exc()
+        return cls(type(exc).__name__, str(exc), text, worker_name(), pickled)
 
     def exception(self) -> BaseException:
         exc: BaseException

@@ -325,7 +325,8 @@ class ProcessExecutor:
             if done_ok:
                 continue
             if slot.key in culprits or (not culprits and slot.key in started):
-                slot.attempts += 1
+                # a batch job is not run again whole (dispatch/batches.py): its episodes go alone
+                slot.attempts += MAX_ATTEMPTS if getattr(slot.job, "alone_after_death", False) else 1
                 slot.death = culprits.get(slot.key, "ended by a signal")
             if slot.attempts < MAX_ATTEMPTS:   # else its broken future stays: _wait reports it
                 slot.future = pool.submit(_pool_run, slot.key, slot.job)

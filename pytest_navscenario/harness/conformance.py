@@ -33,7 +33,7 @@ HUNG_TICK = 10.0            # s: an act() call this long is stopped and reported
 LIMIT_SLACK = 1.05          # commands up to 5 % over a limit are not worth a warning
 # frames in these folders are the harness's own, not the planner's
 _HARNESS_FILES = tuple(str(Path(__file__).resolve().parents[1] / layer) for layer in ("sim", "harness"))
-_OBS_ARRAYS = ("pose", "velocity", "ranges", "angles", "goal", "waypoints")
+_OBS_ARRAYS = ("pose", "velocity", "ranges", "angles", "goal", "waypoints", "points", "attitude")
 
 
 @dataclass
@@ -100,13 +100,16 @@ class _Recorder:
         self.times.append(time.perf_counter() - t0)
         self.answers.append(answer)
         for name in _OBS_ARRAYS:
+            if getattr(obs, name) is None:      # points without a 3D lidar
+                continue
             if not np.array_equal(getattr(mine, name), getattr(obs, name), equal_nan=True):
                 self.mutated.append(f"obs.{name} (tick {obs.tick})")
         return answer
 
 
 def _writable_copy(obs: Observation) -> Observation:
-    return dataclasses.replace(obs, **{name: np.array(getattr(obs, name)) for name in _OBS_ARRAYS})
+    return dataclasses.replace(obs, **{name: np.array(getattr(obs, name)) for name in _OBS_ARRAYS
+                                       if getattr(obs, name) is not None})
 
 
 def _make(planner: Any) -> tuple[Any, Any, str]:

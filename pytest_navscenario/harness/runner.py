@@ -22,14 +22,15 @@ from ..scenario.model import Scenario
 from ..scenario.perturb import perturbed
 
 
-def check_feasibility(scenario: Scenario) -> tuple[str | None, float]:
-    """(``impassable_reason(scenario)``, the seconds it took). Its shortest path is the one the
-    episode's metrics need (cached per process): the time belongs to the episode's evaluation."""
+def check_feasibility(scenario: Scenario) -> tuple[Any, float]:
+    """(``feasibility.infeasible(scenario)``: None, or why the scenario is no test with the field to
+    fix, the seconds it took). Its shortest path is the one the episode's metrics need (cached per
+    process): the time belongs to the episode's evaluation."""
     from ..verdict import feasibility
 
     t0 = time.perf_counter()
-    reason = feasibility.impassable_reason(scenario)
-    return reason, time.perf_counter() - t0
+    found = feasibility.infeasible(scenario)
+    return found, time.perf_counter() - t0
 
 
 def add_check_time(result: EpisodeResult, seconds: float) -> EpisodeResult:
@@ -65,7 +66,6 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
     Raises SubjectLoadError if the planner cannot be made, SimulationDivergedError if the physics
     blows up.
     """
-    from ..verdict import metrics, oracle   # written by the metrics module's owner
     from ..sim.episode import simulate
 
     t0 = time.perf_counter()
@@ -81,6 +81,20 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
     name, version = subject_identity(instance, spec)  # after reset: a planner may name itself there
     del instance    # a planner that ends its helpers when it is dropped has done so before the check
     left = processes.note_left_behind(before, scenario.name or "the episode", ours=running_pids())
+    return verdict(scenario, facts, ep_seed, name, version, stuck_after, t0, left, ran=ran)
+
+
+def verdict(scenario: Scenario, facts: Any, ep_seed: int, name: str, version: str | None,
+            stuck_after: float | None, t0: float, left: Any = (), ran: Scenario | None = None) -> EpisodeResult:
+    """The EpisodeResult of an episode's raw facts (``sim.SimResult``): the oracle's outcome and
+    message, the metrics; ``wall_time`` counted from ``t0``; ``left``: the processes it left
+    running (core/processes.py). ``ran``: the scenario as simulated (``perturbed(scenario,
+    ep_seed)``, computed when not given): judged and measured; ``scenario`` is reported."""
+    from ..verdict import metrics, oracle
+
+    if ran is None:
+        ran = perturbed(scenario, ep_seed)
+
     t1 = time.perf_counter()
     outcome, message = oracle.classify(
         ran, facts.trajectory, collision=facts.collision, safety_stop=facts.safety_stop,

@@ -161,6 +161,7 @@ def pytest_report_header(config: pytest.Config) -> list[str]:
     limit = f"{s.tick_limit:g} s" if s.tick_limit else "none"
     lines = [f"navscenario: subject {state.subject.label}, seed {s.seed} (--nav-seed), "
              f"tick limit {limit}"]
+    lines += [f"navscenario: subject note: {note}" for note in state.subject.notes]
     if s.repeat > 1:
         lines.append(f"navscenario: {s.repeat} runs per scenario with different noise seeds "
                      f"(--nav-repeat; scenarios without sensor noise repeat identically)")
@@ -215,7 +216,7 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) ->
     report = yield
     result = getattr(item, "nav_result", None)
     if call.when == "call" and result is not None:
-        from .payload import episode_to_payload, trajectories_requested
+        from .payload import clouds_requested, episode_to_payload, trajectories_requested
         from .state import get_state
 
         state = get_state(item.config)
@@ -225,7 +226,7 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) ->
         spec = state.subject.spec if state.subject.origin != "hook" else None
         report.nav = episode_to_payload(result, nodeid=item.nodeid, path=item.rel_path,  # type: ignore[attr-defined]
                                         with_trajectory=with_traj, repeat=item.repeat,  # type: ignore[attr-defined]
-                                        subject_spec=spec)
+                                        subject_spec=spec, with_cloud=clouds_requested(item.config))
         item.nav_result = None  # type: ignore[attr-defined]  # the payload has it; free the arrays
     return report
 

@@ -83,8 +83,9 @@ def pytest_configure(config: pytest.Config) -> None:
     state = read_bag_settings(config)
     config.stash[_STATE] = state
     if state.mode != "none":
-        from .payload import request_trajectories
+        from .payload import request_clouds, request_trajectories
         request_trajectories(config, state.mode)
+        request_clouds(config)
 
 
 def bag_path_for(state: BagState, record: dict[str, Any]) -> Path:

@@ -246,6 +246,17 @@ def _fmt(value: Any, unit: str = "", digits: int = 3) -> str:
     return f"{value:.{digits}f}{unit}"
 
 
+def _field_line(scenario: Any, field: str) -> int | None:
+    """The line of ``field`` in the scenario's file (read again only for this error), or None."""
+    from ..scenario.yaml_tree import field_line
+
+    try:
+        with open(scenario.source, encoding="utf-8") as fh:
+            return field_line(fh.read(), field)
+    except (OSError, TypeError, UnicodeDecodeError):
+        return None
+
+
 def _warn_left_running(where: str, left: tuple[str, ...]) -> None:
     """A pytest warning (shown with the item in the warnings summary) for the processes the
     planner started in this episode and left running."""
@@ -283,14 +294,16 @@ class ScenarioItem(pytest.Item):
         if pending is not None:
             from ..dispatch.jobs import Impassable
             outcome = pending.outcome()
-            reason = outcome.reason if isinstance(outcome, Impassable) else None
+            reason, field = (outcome.reason, outcome.field) if isinstance(outcome, Impassable) else (None, None)
         else:
             from ..harness.runner import check_feasibility
-            reason, self.nav_checked = check_feasibility(self.scenario)
+            found, self.nav_checked = check_feasibility(self.scenario)
+            reason, field = (str(found), found.field) if found is not None else (None, None)
         if reason is not None:
             self.nav_pending = None
             from ..core.errors import ImpassableScenarioError
-            raise ImpassableScenarioError(f"{self.rel_path}: {reason}")
+            line = _field_line(self.scenario, field) if field else None
+            raise ImpassableScenarioError(f"{self.rel_path}{f':{line}' if line else ''}: {reason}")
 
     def episode_job(self, keep_trajectory: str) -> Any:
         """This item's episode as a dispatch job (what runtest runs in place without an
@@ -350,6 +363,14 @@ class ScenarioItem(pytest.Item):
         if Path(self.config.invocation_params.dir) != Path(self.config.rootpath):
             cmd = f"cd {shlex.quote(str(self.config.rootpath))} && {cmd}"
         return cmd
+
+    def _repr_failure_py(self, excinfo: pytest.ExceptionInfo[BaseException], style: Any = None) -> Any:
+        """An error of ours at setup (a scenario no planner can pass) reads as its message, as one
+        in the call does (pytest reports setup errors through this, not ``repr_failure``), not as a
+        traceback through pytest's and pluggy's frames."""
+        if isinstance(excinfo.value, NavScenarioError) and not isinstance(excinfo.value, ScenarioFailed):
+            return self.repr_failure(excinfo, style)
+        return super()._repr_failure_py(excinfo, style)
 
     def repr_failure(self, excinfo: pytest.ExceptionInfo[BaseException], style: Any = None) -> Any:
         exc = excinfo.value

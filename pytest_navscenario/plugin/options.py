@@ -25,7 +25,8 @@ DEFAULT_RESET_TIMEOUT = 10.0   # = subjects.external.RESET_TIMEOUT (not imported
 OPTIONS = (
     ("--nav-subject", "nav_subject",
      "planner under test: 'package.module:Attribute' (a class or zero-argument factory) or a "
-     "built-in name (dwa, potential-field), or exec:PROGRAM [ARGS] for an external planner. "
+     "built-in name (dwa, potential-field), exec:PROGRAM [ARGS] for an external planner, or the "
+     "path of a learned policy's .onnx file (with its declaration NAME.policy.yaml beside it). "
      "Default: the built-in 'dwa'."),
     ("--nav-seed", "nav_seed",
      "base seed (integer >= 0) mixed into each scenario's own noise seed; 0 (default) runs each "
@@ -66,6 +67,18 @@ OPTIONS = (
      "reports stay in this process, so it costs less than pytest-xdist's N pytest workers; "
      "-n N on a run of scenario files only (no Python test files) does the same. Items report "
      "one per scenario in the usual order with the results of a serial run."),
+    ("--nav-batch", "nav_batch",
+     "episodes run together in lockstep, with one planner call per control tick for all of them, "
+     "when the subject implements the batch protocol (reset_batch/act_batch; the built-in dwa does): "
+     "a search's generations and shrinks, each worker's share of a suite (--nav-workers, -n, "
+     "--nav-ray). 'auto' (default): batches of 16; N: at most N; 1 or off: every episode alone. "
+     "Results are the same either way, bit for bit; the summary says how episodes were batched."),
+    ("--nav-batch-engine", "nav_batch_engine",
+     "what steps the batches of --nav-batch: cpu (default: MuJoCo in the worker, each trajectory "
+     "bit-identical to running it alone) or warp (MuJoCo Warp on the GPU, or Warp's CPU kernels "
+     "without one; needs the optional extra pytest-navscenario[gpu]; trajectories within a "
+     "tolerance of the CPU's, not bit for bit; scenarios it cannot simulate, such as terrain and "
+     "3D lidars, run alone on the CPU and the summary says so). See docs/how-to/gpu-batches.md."),
     ("--nav-isolate", "nav_isolate",
      "yes: run the episodes in a worker process even without -n or --nav-workers, so that a "
      "planner that ends its process (os._exit, a crash in C code, the out-of-memory killer) fails "
@@ -97,6 +110,17 @@ def ini_value(config: pytest.Config, name: str, expected: str = "") -> object:
         raise pytest.UsageError(f"ini option {name}: {exc}{hint}") from None
 
 
+def ini_is_set(config: pytest.Config, name: str) -> bool:
+    """Whether the ini file or ``-o name=...`` sets ``name`` (``getini`` cannot tell a set value
+    from the default). pytest 9.2 deprecates ``config.inicfg`` (a PytestRemovedIn10Warning on
+    every read); the same mapping is ``config._inicfg`` from pytest 9.0, ``config.inicfg`` before."""
+    values = getattr(config, "_inicfg", None)
+    if values is None:
+        values = config.inicfg                                  # pytest 8
+    overrides = getattr(config.option, "override_ini", None) or []
+    return name in values or any(str(o).split("=", 1)[0].strip() == name for o in overrides)
+
+
 def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("navscenario", "navigation scenarios (pytest-navscenario)")
     helps = {ini: text for _, ini, text in OPTIONS}
@@ -104,7 +128,8 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     metavars = {"nav_subject": "SPEC", "nav_seed": "N", "nav_results": "PATH", "nav_artifacts": "DIR",
                 "nav_summary": "{yes,no}", "nav_tick_limit": "SECONDS", "nav_repeat": "N",
                 "nav_reset_timeout": "SECONDS", "nav_ray": "ADDRESS", "nav_workers": "N",
-                "nav_isolate": "{yes,no}", "nav_sensor_model": "SPEC"}
+                "nav_batch": "N", "nav_isolate": "{yes,no}", "nav_batch_engine": "{cpu,warp}",
+                "nav_sensor_model": "SPEC"}
     for opt, ini, text in OPTIONS:
         group.addoption(opt, dest=ini, default=None, metavar=metavars[ini],   # argparse %-formats help
                         help=(text + f" [ini: {ini}]").replace("%", "%%"))
@@ -120,6 +145,8 @@ def pytest_addoption(parser: pytest.Parser) -> None:
                   default=DEFAULT_RESET_TIMEOUT)
     parser.addini("nav_ray", helps["nav_ray"], default="")
     parser.addini("nav_workers", helps["nav_workers"], default="")
+    parser.addini("nav_batch", helps["nav_batch"], default="auto")
+    parser.addini("nav_batch_engine", helps["nav_batch_engine"], default="cpu")
     parser.addini("nav_isolate", helps["nav_isolate"], type="bool", default=False)
     parser.addini("nav_sensor_model", helps["nav_sensor_model"], default="")
     parser.addini("nav_scenario_glob",
@@ -146,13 +173,17 @@ class Settings:
     reset_timeout: float = DEFAULT_RESET_TIMEOUT   # s an exec: planner may take to answer reset
     ray: str | None = None            # --nav-ray: "auto" or "HOST:PORT"; None: no Ray
     sensor_model: "dict[str, float] | None" = None   # --nav-sensor-model: lidar noise keys; None: off
+    batch: int = 16                   # --nav-batch: episodes a batch at most (1: no batches)
+    batch_engine: str = "cpu"         # --nav-batch-engine: "cpu" or "warp" (sim/batch.py)
 
 
 _EXPECTED = {"nav_seed": "a whole number >= 0", "nav_summary": "yes or no (true or false)",
              "nav_isolate": "yes or no (true or false)",
              "nav_tick_limit": "seconds >= 0 (0: no limit)",
              "nav_repeat": "a whole number of runs per scenario from 1 to 10000",
-             "nav_reset_timeout": "seconds > 0"}
+             "nav_reset_timeout": "seconds > 0",
+             "nav_batch": "auto, a whole number of episodes >= 1, or off",
+             "nav_batch_engine": "cpu or warp"}
 
 
 def option_value(config: pytest.Config, name: str, expected: str = "") -> tuple[str, str, Path]:
@@ -246,7 +277,8 @@ def read_settings(config: pytest.Config) -> Settings:
     return Settings(subject_spec=subject, seed=seed, results=results, artifacts=artifacts,
                     summary=summary, tick_limit=tick_limit, repeat=repeat, globs=globs,
                     scenario_paths=paths, reset_timeout=reset_timeout, ray=read_ray_address(config),
-                    sensor_model=read_sensor_model(config))
+                    sensor_model=read_sensor_model(config), batch=read_batch(config),
+                    batch_engine=read_batch_engine(config))
 
 
 def read_sensor_model(config: pytest.Config) -> "dict[str, float] | None":
@@ -259,6 +291,45 @@ def read_sensor_model(config: pytest.Config) -> "dict[str, float] | None":
         return parse_sensor_model(raw)
     except ValueError as exc:
         raise pytest.UsageError(f"{where}: {exc}") from None
+
+
+DEFAULT_BATCH = 16   # = harness.batch.DEFAULT_BATCH (not imported: plugin load stays light)
+
+
+def read_batch(config: pytest.Config) -> int:
+    """--nav-batch / ini nav_batch: episodes a batch at most (``auto``: DEFAULT_BATCH; 1 or off: no
+    batches). UsageError otherwise."""
+    raw, where, _ = _value(config, "nav_batch")
+    value = raw.strip().lower()
+    if value in ("", "auto"):
+        return DEFAULT_BATCH
+    if value in ("off", "no", "none", "false"):
+        return 1
+    try:
+        n = int(value)
+    except ValueError:
+        n = 0
+    if not 1 <= n <= 100_000:
+        raise pytest.UsageError(f"{where}: expected auto, a whole number of episodes per batch >= 1, or off "
+                                f"(1 and off: every episode alone), got {raw!r} (e.g. --nav-batch=32)")
+    return n
+
+
+def read_batch_engine(config: pytest.Config) -> str:
+    """--nav-batch-engine / ini nav_batch_engine: "cpu" or "warp"; UsageError for another name, or
+    for warp without its packages (found without importing them: the plugin's load stays light)."""
+    raw, where, _ = _value(config, "nav_batch_engine")
+    name = raw.strip().lower() or "cpu"
+    if name not in ("cpu", "warp"):
+        raise pytest.UsageError(f"{where}: expected cpu or warp, got {raw!r} (e.g. --nav-batch-engine=warp)")
+    if name == "warp":
+        import importlib.util
+        absent = [dist for dist, module in (("warp-lang", "warp"), ("mujoco-warp", "mujoco_warp"))
+                  if importlib.util.find_spec(module) is None]
+        if absent:
+            raise pytest.UsageError(f"{where}: the warp batch engine needs {' and '.join(absent)}: "
+                                    f'pip install "pytest-navscenario[gpu]" (docs/how-to/gpu-batches.md)')
+    return name
 
 
 def read_yes_no(config: pytest.Config, name: str) -> bool:

@@ -305,14 +305,40 @@ def pytest_runtestloop(session: pytest.Session) -> Any:
     executor = state.executor if state is not None else None
     if executor is not None and not session.config.option.collectonly:
         # scenario items (collect.ScenarioItem, known by its method: no import, no cycle)
+        from ..dispatch.batches import submit_batched
+        from ..harness.batch import Batching
+
         keep = keep_trajectory(session.config)
         # in chunks, so the first episodes run while this process checks the later items
         items = [i for i in session.items if hasattr(i, "episode_job")]
-        for start in range(0, len(items), SUBMIT_CHUNK):
-            chunk = [i for i in items[start:start + SUBMIT_CHUNK] if not _skipped(i)]
-            for item, pending in zip(chunk, executor.submit([i.episode_job(keep) for i in chunk])):
+        size = (batch_size(state.settings.batch, len(items), getattr(executor, "workers", 1))
+                if state.subject.answers_batches() else 1)
+        state.batching = Batching() if size > 1 else None
+        step = max(SUBMIT_CHUNK, size)
+        for start in range(0, len(items), step):
+            chunk = [i for i in items[start:start + step] if not _skipped(i)]
+            jobs = [i.episode_job(keep) for i in chunk]
+            for item, pending in zip(chunk, submit_batched(executor, jobs, size, state.batching,
+                                                       state.settings.batch_engine)):
                 item.nav_pending = pending
     return (yield)
+
+
+def batch_size(batch: int, items: int, workers: int) -> int:
+    """Episodes a batch job holds: --nav-batch at most, and few enough that every worker gets one
+    (20 items on 2 workers: batches of 10, not one of 16 and one of 4)."""
+    return max(1, min(batch, -(-items // max(1, workers))))
+
+
+def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pytest.Config) -> None:
+    """The line saying how the scenario items' episodes were batched on the workers."""
+    state = config.stash.get(STATE_KEY, None)
+    batching = getattr(state, "batching", None) if state is not None else None
+    if batching is None or not (batching.batched or batching.alone):
+        return
+    engine = state.settings.batch_engine
+    flags = f"--nav-batch {state.settings.batch}" + (f", --nav-batch-engine {engine}" if engine != "cpu" else "")
+    terminalreporter.write_line(f"navscenario: batches ({flags}): {batching.describe()}")
 
 
 @pytest.hookimpl(tryfirst=True)

@@ -11,7 +11,8 @@ Format (set on the *call* report of every scenario item that ran an episode)::
                      "subject_failure": {...} | None, "terrain": {...} | None}
       "metrics":    Metrics.as_dict()              # exact (inf/nan kept; the record has null)
       "timings":    {"physics": s, ...}            # the runner's timing breakdown
-      "trajectory": result.trajectory_to_dict(...) # ONLY when requested, else None
+      "trajectory": result.trajectory_to_dict(...) # ONLY when requested, else None (the 3D
+                                                   # lidar's scans only on request_clouds)
     }
 
 Feature plugins ask for trajectories with ``request_trajectories(config, "failed" | "all")`` in
@@ -54,6 +55,19 @@ def request_trajectories(config: pytest.Config, which: str) -> None:
         config.stash[_REQUEST_KEY] = which
 
 
+_CLOUDS_KEY = pytest.StashKey[bool]()
+
+
+def request_clouds(config: pytest.Config) -> None:
+    """Ask for the 3D lidar's scans in the trajectories of ``report.nav`` too (bags show them; they
+    are megabytes an episode, so only on request). Call it from ``pytest_configure``."""
+    config.stash[_CLOUDS_KEY] = True
+
+
+def clouds_requested(config: pytest.Config) -> bool:
+    return config.stash.get(_CLOUDS_KEY, False)
+
+
 def trajectories_requested(config: pytest.Config) -> str:
     """"none", "failed" or "all": what the feature plugins have asked for so far."""
     return config.stash.get(_REQUEST_KEY, "none")
@@ -70,7 +84,7 @@ def _event(value: Any) -> dict[str, Any] | None:
 
 def episode_to_payload(result: EpisodeResult, *, nodeid: str, path: str,
                        with_trajectory: bool, repeat: int = 0,
-                       subject_spec: str | None = None) -> dict[str, Any]:
+                       subject_spec: str | None = None, with_cloud: bool = False) -> dict[str, Any]:
     """The ``report.nav`` dict of one episode (see the module docstring)."""
     from ..scenario.dump import scenario_to_dict
     from ..report.results_file import make_record
@@ -88,7 +102,7 @@ def episode_to_payload(result: EpisodeResult, *, nodeid: str, path: str,
         },
         "metrics": _shallow(result.metrics),
         "timings": dict(result.timings),
-        "trajectory": trajectory_to_dict(result.trajectory) if with_trajectory else None,
+        "trajectory": trajectory_to_dict(result.trajectory, cloud=with_cloud) if with_trajectory else None,
     }
 
 

@@ -376,6 +376,10 @@ class NavSearchItem(pytest.Item):
         s, job = state.settings, state.jobs[self.job_name]
         subject = core.subject.spec or core.subject.label
         factory, evaluator = search_subject_and_evaluator(self.config)   # -n N / --nav-ray: workers
+        batch = core.settings.batch
+        if evaluator is None and batch > 1:   # --nav-batch: generations and shrinks in batches
+            from ..search.batched import batch_evaluator
+            evaluator = batch_evaluator()
         recorder = None
         if not state.is_worker:   # this process writes: each failure and log line as found
             from ..search.freeze import SearchRecorder
@@ -384,7 +388,8 @@ class NavSearchItem(pytest.Item):
                             strategy=s.strategy, shrink_budget=s.shrink_budget, space=job.space,
                             subject=subject, episode_seed=core.settings.seed, stuck_after=s.stuck_after,
                             progress=None if state.is_worker else _Progress(self.config, job.name, s.budget),
-                            evaluator=evaluator, recorder=recorder, hold=s.hold)
+                            evaluator=evaluator, recorder=recorder, hold=s.hold, batch=batch,
+                            engine=core.settings.batch_engine)
         self.navsearch_payload = report_to_payload(report)
         if report.interrupted and report.stop_reason.startswith("interrupted"):
             from ..core.interrupts import first_signal
@@ -487,6 +492,7 @@ def report_to_payload(report: Any) -> dict[str, Any]:
         "skipped": report.skipped, "interrupted": report.interrupted,
         "stop_reason": report.stop_reason, "wall_time": report.wall_time,
         "episode_seed": report.episode_seed, "first_failure": report.first_failure,
+        "batching": report.batching,
         "candidates": [cand(c) for c in report.candidates],
         "failures": [failure(f) for f in report.failures],
         "rejected": [failure(f) for f in report.rejected],
@@ -518,6 +524,7 @@ def payload_to_report(data: dict[str, Any], space: Any) -> Any:
     report.discard_log = [(int(n), str(k)) for n, k in data.get("discard_log", [])]
     report.first_failure = data.get("first_failure", 0)
     report.shrink_total = data.get("shrink_total", 0)
+    report.batching = data.get("batching", "")
     report.candidates = cands
     report.hold, report.randomness = data.get("hold", 0.0), tuple(data.get("randomness", ()))
     report.confirm_sims = data.get("confirm_sims", 0)
@@ -688,6 +695,8 @@ def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
         lines.append(f"  {unshrunk} of {len(r.failures)} failure(s) frozen as found: the shrink budget "
                      f"({r.shrink_total} simulations) went to the most severe and earliest ones (raise "
                      f"--navsearch-shrink-budget, e.g. 50%, to shrink more)")
+    if r.batching:
+        lines.append(f"  batches (--nav-batch): {r.batching}")
     if r.skipped:
         lines.append(f"  {r.skipped} candidate(s) repeating a simulated one or next to a known failure were "
                      f"redrawn without simulating them")

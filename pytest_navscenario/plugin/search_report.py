@@ -24,15 +24,13 @@ from typing import Any
 
 import pytest
 
+from .options import ini_is_set
 from .reports import REPORT_KEY
 
 
 def _plots_asked(config: pytest.Config) -> bool:
     """--nav-plots / nav_plots set by the user (not its default, which is for scenario items)."""
-    if config.getoption("nav_plots") is not None:
-        return True
-    overrides = getattr(config.option, "override_ini", None) or []
-    return "nav_plots" in config.inicfg or any(str(o).startswith("nav_plots=") for o in overrides)
+    return config.getoption("nav_plots") is not None or ini_is_set(config, "nav_plots")
 
 
 def wanted(config: pytest.Config) -> tuple[bool, bool]:

@@ -28,6 +28,7 @@ class NavState:
     executor_notes: list[str] = field(default_factory=list)       # header lines about it
     # frozen failures of the search among the collected scenarios: (path, name) -> provenance
     frozen: dict[tuple[str, str], dict[str, Any]] = field(default_factory=dict)
+    batching: Any = None          # controller with an executor: harness.batch.Batching of the items
 
 
 STATE_KEY = pytest.StashKey[NavState]()

@@ -109,7 +109,9 @@ def _anchor(rec: dict[str, Any]) -> str:
 def view_data(result: Any, max_points: int = 400) -> dict[str, Any] | None:
     """A compact, JSON-able picture of one episode for the report's interactive viewer: obstacle
     outlines, footprint, goal, and the poses and speeds at up to ``max_points`` instants; moving
-    obstacles (``mov``: index into ``obs``, offsets dx/dy at the same instants) move with the slider."""
+    obstacles (``mov``: index into ``obs``, offsets dx/dy at the same instants) move with the slider;
+    on terrain the ground's shading, the elements' outlines, the base's height and pitch and where
+    it fell or tipped over (``_terrain_view``)."""
     import numpy as np
 
     from ..scenario.geometry import obstacle_polygon
@@ -129,7 +131,7 @@ def view_data(result: Any, max_points: int = 400) -> dict[str, Any] | None:
     for j, track in tracks(s.obstacles).items():
         off = displacement(track, times)
         mov.append({"i": j, "dx": np.round(off[:, 0], 3).tolist(), "dy": np.round(off[:, 1], 3).tolist()})
-    return {
+    out = {
         "mov": mov,
         "t": np.round(np.asarray(traj.t, dtype=float)[idx], 2).tolist(),
         "x": np.round(pose[:, 0], 3).tolist(), "y": np.round(pose[:, 1], 3).tolist(),
@@ -139,6 +141,37 @@ def view_data(result: Any, max_points: int = 400) -> dict[str, Any] | None:
         "goal": [s.mission.goal.x, s.mission.goal.y, s.mission.goal_tolerance.position],
         "vmax": max(0.1, float(s.robot.limits.max_speed)),
     }
+    if getattr(s, "terrain", ()):
+        out.update(_terrain_view(result, idx, pose))
+    return out
+
+
+def _terrain_view(result: Any, idx: Any, pose: Any) -> dict[str, Any]:
+    """The view's terrain: the ground's shading (a PNG over ``gnd``'s extent), the elements'
+    outlines, the base's height and pitch at the view's instants, where it fell or tipped over."""
+    import numpy as np
+
+    from ..scenario import ground
+    from .terrain_plot import shading_png, terrain_extent
+
+    s, traj = result.scenario, result.trajectory
+    tx, ty = terrain_extent(s)
+    x0 = min(tx + pose[:, 0].tolist() + [s.mission.goal.x]) - 1.0
+    x1 = max(tx + pose[:, 0].tolist() + [s.mission.goal.x]) + 1.0
+    y0 = min(ty + pose[:, 1].tolist() + [s.mission.goal.y]) - 1.0
+    y1 = max(ty + pose[:, 1].tolist() + [s.mission.goal.y]) + 1.0
+    out: dict[str, Any] = {
+        "gnd": {"png": shading_png(s, (x0, x1, y0, y1)), "ext": [round(v, 3) for v in (x0, x1, y0, y1)]},
+        "ter": [np.round(ground.outline(el), 3).tolist() for el in s.terrain],
+    }
+    if getattr(traj, "z", None) is not None and getattr(traj, "pitch", None) is not None:
+        out["z"] = np.round(np.asarray(traj.z, dtype=float)[idx], 3).tolist()
+        out["pitch"] = np.round(-np.degrees(np.asarray(traj.pitch, dtype=float)[idx]), 1).tolist()
+    event = getattr(result, "terrain_event", None)
+    if event is not None:
+        out["ev"] = {"x": round(event.x, 3), "y": round(event.y, 3), "t": round(event.time - 0.005, 2),
+                     "kind": event.kind}       # t rounded down: the view's last instant shows it
+    return out
 
 
 @functools.lru_cache(maxsize=1)

@@ -12,6 +12,9 @@ labels, start / waypoints / goal (with its tolerance circle), the point of minim
 and the narrowest obstacle gap with their values, the collision or safety stop, a grid in
 metres, equal aspect and the outcome in the title. ``draw_episode`` draws these in named steps
 (``draw_obstacles`` first: the one place where obstacles are drawn, to extend for new kinds).
+On terrain (``terrain_plot.py``) the map is shaded by the ground's height with contour lines, the
+elements outlined and named, falls and tip-overs marked, and a side profile of the route (the
+ground under it, the base's height and pitch against the distance driven) is drawn under the map.
 """
 from __future__ import annotations
 
@@ -136,6 +139,11 @@ def _extent(result: EpisodeResult, margin: float = 0.8) -> tuple[float, float, f
     if believed is not None and len(believed):
         xs += [float(np.min(believed[:, 0])), float(np.max(believed[:, 0]))]
         ys += [float(np.min(believed[:, 1])), float(np.max(believed[:, 1]))]
+    if getattr(s, "terrain", ()):
+        from .terrain_plot import terrain_extent
+        tx, ty = terrain_extent(s)
+        xs += tx
+        ys += ty
     return min(xs) - margin, max(xs) + margin, min(ys) - margin, max(ys) + margin
 
 
@@ -144,7 +152,7 @@ _HALO = dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8)   # be
 
 def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
                  outline_every: float | None = None, title: str | None = None,
-                 legend: bool = False, labels: LabelPlacer | None = None) -> Any:
+                 legend: bool = False, labels: LabelPlacer | None = None, ground_scale: bool = True) -> Any:
     """Draw one episode on ``ax``; return the speed colour mapping (for a colour bar) or None.
 
     The picture is made in named steps, back to front: the obstacles, the shortest path, the
@@ -159,6 +167,9 @@ def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
     """
     s = result.scenario
     placer = labels if labels is not None else LabelPlacer(ax)
+    if getattr(s, "terrain", ()):     # the ground's height under everything (terrain_plot.py)
+        from .terrain_plot import draw_terrain
+        draw_terrain(ax, s, _extent(result), colorbar=ground_scale)
     draw_obstacles(ax, s, involved=_involved_obstacles(result), labels=placer)
     draw_moving_obstacles(ax, result, labels=placer)
     _draw_shortest_path(ax, s)
@@ -196,12 +207,12 @@ def draw_obstacles(ax: "Axes", scenario: Any, *, involved: set[str] = frozenset(
 
     # Collections, not one patch each: patches re-run autoscaling per patch (slow).
     polys = [obstacle_polygon(obs) for obs in scenario.obstacles]
-    from ..sim.world import LIDAR_HEIGHT
+    plane = float(scenario.robot.lidar.mount_height)    # the 2D lidar's plane above the floor
 
     still = [(obs, p) for obs, p in zip(scenario.obstacles, polys) if not is_moving(obs)]
     glass = [p for obs, p in still if not getattr(obs, "visible_to_lidar", True)]
-    seen = [p for obs, p in still if getattr(obs, "visible_to_lidar", True) and obs.height > LIDAR_HEIGHT]
-    low = [p for obs, p in still if getattr(obs, "visible_to_lidar", True) and obs.height <= LIDAR_HEIGHT]
+    seen = [p for obs, p in still if getattr(obs, "visible_to_lidar", True) and obs.height > plane]
+    low = [p for obs, p in still if getattr(obs, "visible_to_lidar", True) and obs.height <= plane]
     if glass:   # visible_to_lidar: false (glass): see-through, dashed
         ax.add_collection(PolyCollection([np.asarray(p.exterior.coords) for p in glass], closed=True,
                                          facecolors="#b3e5fc", edgecolors="#0277bd", linewidths=1.0,
@@ -214,7 +225,7 @@ def draw_obstacles(ax: "Axes", scenario: Any, *, involved: set[str] = frozenset(
         ax.add_collection(PolyCollection([np.asarray(p.exterior.coords) for p in low], closed=True,
                                          facecolors="#e0e0e0", edgecolors="#424242", linewidths=1.0,
                                          hatch="////", zorder=2,
-                                         label=f"below the lidar ({LIDAR_HEIGHT:g} m): unseen"),
+                                         label=f"below the lidar ({plane:g} m): unseen"),
                           autolim=False)
     for obs, poly in zip(scenario.obstacles, polys):
         if len(polys) > MAX_NAMED_OBSTACLES and obs.name not in involved:
@@ -511,7 +522,14 @@ def _draw_narrowest_gap(ax: "Axes", scenario: Any, metrics: Any, labels: LabelPl
 
 
 def _draw_events(ax: "Axes", result: EpisodeResult, labels: LabelPlacer | None = None) -> None:
-    """Where the episode ended badly: the collision's contact point, the safety stop's pose."""
+    """Where the episode ended badly: the collision's contact point, the safety stop's pose, where
+    the robot fell, tipped over or got stuck on terrain."""
+    event = getattr(result, "terrain_event", None)
+    if event is not None:
+        from .terrain_plot import draw_terrain_event
+        draw_terrain_event(ax, result)
+        if labels is not None:
+            labels.avoid((event.x, event.y), 9)
     if result.collision is not None:
         c = result.collision
         who = "" if getattr(c, "robot_moving", True) else ", robot standing"
@@ -638,9 +656,18 @@ _CBAR_H, _CBAR_Y = 0.14, 0.42
 
 
 def _figsize(results: Sequence[EpisodeResult], panels: int) -> tuple[float, float]:
-    """Figure size (inches) for ``panels`` maps side by side, each with the maps' aspect ratio."""
+    """Figure size (inches) for ``panels`` maps side by side, each with the maps' aspect ratio
+    (and the side profile under them on terrain)."""
     pw, ph = _panel_size(results)
-    return _LEFT + panels * pw + (panels - 1) * _GAP + _RIGHT, _BOTTOM + ph + _TOP
+    return _LEFT + panels * pw + (panels - 1) * _GAP + _RIGHT, _BOTTOM + ph + _TOP + _profile_height(results)
+
+
+def _profile_height(results: Sequence[EpisodeResult]) -> float:
+    """Inches of side profile under the maps: only where the ground is not flat."""
+    if not any(getattr(r.scenario, "terrain", ()) for r in results):
+        return 0.0
+    from .terrain_plot import PROFILE_HEIGHT
+    return PROFILE_HEIGHT
 
 
 def _panel_size(results: Sequence[EpisodeResult]) -> tuple[float, float]:
@@ -661,16 +688,29 @@ def _map_figure(results: Sequence[EpisodeResult]) -> tuple["Figure", list["Axes"
     fw, fh = _figsize(results, n)
     fig = _figure(fw, fh, constrained=False)
     axes: list[Axes] = []
+    up = _profile_height(results)          # the side profile goes under the maps
     for k in range(n):
-        rect = ((_LEFT + k * (pw + _GAP)) / fw, _BOTTOM / fh, pw / fw, ph / fh)
+        rect = ((_LEFT + k * (pw + _GAP)) / fw, (_BOTTOM + up) / fh, pw / fw, ph / fh)
         ax = fig.add_axes(rect, sharex=axes[0] if axes else None, sharey=axes[0] if axes else None)
         if k:
             ax.tick_params(labelleft=False)
         axes.append(ax)
     span = n * pw + (n - 1) * _GAP
     cw = min(span, 5.0)
-    cax = fig.add_axes(((_LEFT + (span - cw) / 2) / fw, _CBAR_Y / fh, cw / fw, _CBAR_H / fh))
+    cax = fig.add_axes(((_LEFT + (span - cw) / 2) / fw, (_CBAR_Y + up) / fh, cw / fw, _CBAR_H / fh))
     return fig, axes, cax
+
+
+def _draw_profile(fig: "Figure", results: Sequence[EpisodeResult], labels: Sequence[str] = (),
+                  colours: Sequence[str] = ()) -> None:
+    """The side profile of the routes under the maps (terrain_plot.draw_profile), when on terrain."""
+    up = _profile_height(results)
+    if not up:
+        return
+    from .terrain_plot import draw_profile
+    fw, fh = fig.get_size_inches()
+    ax = fig.add_axes((_LEFT / fw, 0.45 / fh, (fw - _LEFT - _RIGHT) / fw, (up - 0.75) / fh))
+    draw_profile(ax, results, labels, colours)
 
 
 def _figure_legend(fig: "Figure", axes: Sequence["Axes"]) -> None:
@@ -699,6 +739,7 @@ def trajectory_figure(result: EpisodeResult, *, outline_every: float | None = No
     mapping = draw_episode(ax, result, outline_every=outline_every, title=episode_title(result, width=width))
     _figure_legend(fig, [ax])
     _colorbar(fig, mapping, cax)
+    _draw_profile(fig, [result])
     return fig
 
 
@@ -717,7 +758,7 @@ def comparison_figure(a: EpisodeResult, b: EpisodeResult, labels: tuple[str, str
     width = max(30, int(_panel_size([a, b])[0] / 0.075))  # characters per title line, one panel
     placers = [LabelPlacer(ax) for ax in axes]
     for ax, res, label, placer in zip(axes, (a, b), labels, placers):
-        mapping = draw_episode(ax, res, norm=norm, outline_every=every, labels=placer,
+        mapping = draw_episode(ax, res, norm=norm, outline_every=every, labels=placer, ground_scale=ax is axes[-1],
                                title=episode_title(res, prefix=f"{label}: ", width=width)) or mapping
     boxes = [_extent(r) for r in (a, b)]  # the shared axes must show both runs whole
     axes[0].set_xlim(min(x[0] for x in boxes), max(x[1] for x in boxes))
@@ -727,6 +768,7 @@ def comparison_figure(a: EpisodeResult, b: EpisodeResult, labels: tuple[str, str
     axes[1].set_ylabel("")
     _figure_legend(fig, axes)
     _colorbar(fig, mapping, cax)
+    _draw_profile(fig, [a, b], labels, (A_COLOUR, B_COLOUR))
     return fig
 
 

@@ -9,20 +9,28 @@ topic                            type                                rate
 ===============================  ==================================  =====================
 /odom                            nav_msgs/Odometry                   physics rate, <= 50 Hz
 /tf                              tf2_msgs/TFMessage (odom->base_link) with /odom
-/tf_static                       tf2_msgs/TFMessage (base_link->laser) once, latched
+/tf_static                       tf2_msgs/TFMessage (base_link->laser once, latched
+                                 and ->lidar3d)
 /scan                            sensor_msgs/LaserScan (frame laser) control ticks
+/points                          sensor_msgs/PointCloud2 (frame      control ticks, only with
+                                 lidar3d: x, y, z, ring)             robot.lidar3d
 /cmd_vel                         geometry_msgs/Twist (commanded)     control ticks
 /goal_pose                       geometry_msgs/PoseStamped           once, latched
 /navscenario/waypoints           nav_msgs/Path                       once, latched
 /navscenario/obstacles           visualization_msgs/MarkerArray      once, latched (static ones)
 /navscenario/moving_obstacles    visualization_msgs/MarkerArray      with /odom, only when
                                  (moving obstacles where they are)   obstacles move
+/navscenario/terrain             visualization_msgs/MarkerArray      once, latched, only with
+                                 (the ground's surface, one          terrain
+                                 TRIANGLE_LIST per element)
 /navscenario/result              std_msgs/String (JSON)              once, at the end
 /navscenario/scenario            std_msgs/String (scenario YAML)     once, latched
 ===============================  ==================================  =====================
 
 The bag clock is the simulation clock (t = 0 at the episode's start); the scenario's world
-frame is the ``odom`` frame. The bag is written to a temporary name and renamed into place,
+frame is the ``odom`` frame. On a body that rides the ground the base's pose is full 3D (its
+height, roll and pitch on /odom and /tf); the 2D lidar's frame ``laser`` sits ``mount_height``
+above the base and the 3D lidar's frame ``lidar3d`` at its mount, pitched as mounted. The bag is written to a temporary name and renamed into place,
 so a crash never leaves a partial bag behind.
 """
 from __future__ import annotations
@@ -44,7 +52,7 @@ from ..core.files import json_safe
 from ..scenario.model import BoxObstacle, CylinderObstacle, MeshObstacle, PolygonObstacle
 
 FORMATS = ("mcap", "sqlite3", "ros1")
-ODOM_FRAME, BASE_FRAME, LASER_FRAME = "odom", "base_link", "laser"
+ODOM_FRAME, BASE_FRAME, LASER_FRAME, CLOUD_FRAME = "odom", "base_link", "laser", "lidar3d"
 ODOM_MAX_RATE = 50.0  # Hz: physics runs at 100 Hz+, a viewer needs no more than this
 
 TOPICS: dict[str, str] = {
@@ -60,8 +68,12 @@ TOPICS: dict[str, str] = {
     "/navscenario/scenario": "std_msgs/msg/String",
 }
 MOVING_TOPIC = "/navscenario/moving_obstacles"     # only in bags of episodes with moving obstacles
+CLOUD_TOPIC = "/points"                            # only in bags of episodes with a 3D lidar
+TERRAIN_TOPIC = "/navscenario/terrain"             # only in bags of scenarios with terrain
+TERRAIN_CELLS = 60                                 # ground samples along an element's longer side
 LATCHED = ("/tf_static", "/goal_pose", "/navscenario/waypoints", "/navscenario/obstacles",
            "/navscenario/result", "/navscenario/scenario")
+LATCHED_WHEN_THERE = (TERRAIN_TOPIC,)              # latched too, in the bags that have them
 
 
 class BagWriteError(NavScenarioError):
@@ -150,6 +162,15 @@ def _quat(yaw: float) -> dict[str, float]:
     return {"x": 0.0, "y": 0.0, "z": math.sin(yaw / 2.0), "w": math.cos(yaw / 2.0)}
 
 
+def _quat_rpy(roll: float, pitch: float, yaw: float) -> dict[str, float]:
+    """The quaternion of Z-Y-X angles (yaw, then pitch, then roll), ROS's order of fields."""
+    cr, sr = math.cos(roll / 2.0), math.sin(roll / 2.0)
+    cp, sp = math.cos(pitch / 2.0), math.sin(pitch / 2.0)
+    cy, sy = math.cos(yaw / 2.0), math.sin(yaw / 2.0)
+    return {"x": sr * cp * cy - cr * sp * sy, "y": cr * sp * cy + sr * cp * sy,
+            "z": cr * cp * sy - sr * sp * cy, "w": cr * cp * cy + sr * sp * sy}
+
+
 def _pose(x: float, y: float, yaw: float, z: float = 0.0) -> dict[str, Any]:
     return {"position": {"x": float(x), "y": float(y), "z": float(z)}, "orientation": _quat(yaw)}
 
@@ -178,9 +199,16 @@ def _messages(result: EpisodeResult, ros1: bool):
     def header(time_s: float, frame: str) -> dict[str, Any]:
         return {"stamp": _stamp(time_s), "frame_id": frame}
 
-    yield "/tf_static", 0.0, {"transforms": [{
-        "header": header(0.0, BASE_FRAME), "child_frame_id": LASER_FRAME,
-        "transform": {"translation": {"x": 0.0, "y": 0.0, "z": 0.0}, "rotation": _quat(0.0)}}]}
+    mounts = [{"header": header(0.0, BASE_FRAME), "child_frame_id": LASER_FRAME,
+               "transform": {"translation": {"x": 0.0, "y": 0.0, "z": float(scenario.robot.lidar.mount_height)},
+                             "rotation": _quat(0.0)}}]
+    spec3d = scenario.robot.lidar3d
+    if spec3d is not None:
+        mounts.append({"header": header(0.0, BASE_FRAME), "child_frame_id": CLOUD_FRAME,
+                       "transform": {"translation": {"x": float(spec3d.mount_x), "y": float(spec3d.mount_y),
+                                                     "z": float(spec3d.mount_z)},
+                                     "rotation": _quat_rpy(0.0, math.radians(spec3d.mount_pitch), 0.0)}})
+    yield "/tf_static", 0.0, {"transforms": mounts}
     goal = scenario.mission.goal
     yield "/goal_pose", 0.0, {"header": header(0.0, ODOM_FRAME),
                               "pose": _pose(goal.x, goal.y, goal.yaw_rad)}
@@ -188,6 +216,8 @@ def _messages(result: EpisodeResult, ros1: bool):
     yield "/navscenario/waypoints", 0.0, {"header": header(0.0, ODOM_FRAME), "poses": [
         {"header": header(0.0, ODOM_FRAME), "pose": _pose(p.x, p.y, p.yaw_rad)} for p in points]}
     yield "/navscenario/obstacles", 0.0, {"markers": _markers(result)}
+    if scenario.terrain:
+        yield TERRAIN_TOPIC, 0.0, {"markers": terrain_markers(scenario)}
     from ..scenario.dump import dump_scenario
     yield "/navscenario/scenario", 0.0, {"data": dump_scenario(scenario)}  # the bag reproduces the run
 
@@ -200,17 +230,23 @@ def _messages(result: EpisodeResult, ros1: bool):
     if idx and idx[-1] != len(t) - 1:
         idx.append(len(t) - 1)  # the final pose always makes it into the bag
     yield from _moving_markers(result, t[idx])
+    # the full 3D pose of a body that rides the ground (None: the planar body, on the floor, level)
+    zs, rolls, pitches = (getattr(traj, name, None) for name in ("z", "roll", "pitch"))
     for i in idx:
         x, y, yaw = (float(v) for v in pose[i])
         ti = float(t[i])
+        z = float(zs[i]) if zs is not None else 0.0
+        rot = (_quat_rpy(float(rolls[i]), float(pitches[i]), yaw) if rolls is not None and pitches is not None
+               else _quat(yaw))
         yield "/odom", ti, {
             "header": header(ti, ODOM_FRAME), "child_frame_id": BASE_FRAME,
-            "pose": {"pose": _pose(x, y, yaw)},
+            "pose": {"pose": {"position": {"x": x, "y": y, "z": z}, "orientation": rot}},
             "twist": {"twist": {"linear": {"x": float(vel[i, 0]), "y": float(vel[i, 1])},
                                 "angular": {"z": float(vel[i, 2])}}}}
         yield "/tf", ti, {"transforms": [{
             "header": header(ti, ODOM_FRAME), "child_frame_id": BASE_FRAME,
-            "transform": {"translation": {"x": x, "y": y, "z": 0.0}, "rotation": _quat(yaw)}}]}
+            "transform": {"translation": {"x": x, "y": y, "z": z}, "rotation": rot}}]}
+    yield from _clouds(result, header)
 
     lidar = scenario.robot.lidar
     angles = np.asarray(traj.angles, dtype=float)
@@ -235,6 +271,65 @@ def _messages(result: EpisodeResult, ros1: bool):
 
     yield "/navscenario/result", traj.duration, {
         "data": json.dumps(result_summary(result), sort_keys=True, allow_nan=False)}
+
+
+def _clouds(result: EpisodeResult, header: Any):
+    """The 3D lidar's scans as PointCloud2 in its own frame: the returns' x, y, z (float32) and ring
+    (uint16), one message a control tick."""
+    spec, cloud = result.scenario.robot.lidar3d, result.trajectory.cloud
+    if spec is None or cloud is None:
+        return
+    from ..sim.lidar3d import sensor_directions   # plain numpy: the beam table
+
+    dirs = sensor_directions(spec).reshape(int(spec.rings), int(spec.beams), 3)
+    ring = np.broadcast_to(np.arange(int(spec.rings), dtype=np.uint16)[:, None], dirs.shape[:2])
+    record = np.dtype([("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("ring", "<u2"), ("pad", "<u2")])
+    fields = [{"name": n, "offset": o, "datatype": d, "count": 1}
+              for n, o, d in (("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("ring", 12, 4))]
+    for k, tk in enumerate(np.asarray(result.trajectory.tick_t, dtype=float)):
+        if k >= len(cloud):
+            break
+        ranges = cloud[k]
+        seen = ranges < np.float32(spec.range_max)
+        pts = np.zeros(int(seen.sum()), dtype=record)
+        xyz = dirs[seen] * ranges[seen, None]
+        pts["x"], pts["y"], pts["z"], pts["ring"] = xyz[:, 0], xyz[:, 1], xyz[:, 2], ring[seen]
+        yield CLOUD_TOPIC, float(tk), {
+            "header": header(float(tk), CLOUD_FRAME), "height": 1, "width": len(pts), "fields": fields,
+            "is_bigendian": False, "point_step": record.itemsize, "row_step": record.itemsize * len(pts),
+            "data": np.frombuffer(pts.tobytes(), dtype=np.uint8), "is_dense": True}
+
+
+def terrain_markers(scenario: Any) -> list[dict[str, Any]]:
+    """The ground's surface over each terrain element (and a margin of floor around it) as a
+    TRIANGLE_LIST marker: its height sampled on a grid of at most TERRAIN_CELLS a side (two
+    triangles a cell, so a step's riser is a steep band one cell wide), coloured by height per
+    vertex: blue below the floor, green to brown above."""
+    from ..scenario import ground
+
+    out = []
+    for i, el in enumerate(scenario.terrain):
+        corners = ground.outline(el)
+        (x0, y0), (x1, y1) = corners.min(axis=0) - 0.2, corners.max(axis=0) + 0.2
+        step = max(x1 - x0, y1 - y0) / TERRAIN_CELLS
+        xs = np.linspace(x0, x1, max(2, int(round((x1 - x0) / step)) + 1))
+        ys = np.linspace(y0, y1, max(2, int(round((y1 - y0) / step)) + 1))
+        gx, gy = np.meshgrid(xs, ys)
+        gz = ground.ground_height(scenario, gx, gy)
+        verts = np.stack([gx, gy, gz], axis=-1)
+        a, b, c, d = verts[:-1, :-1], verts[:-1, 1:], verts[1:, 1:], verts[1:, :-1]
+        tris = np.stack([a, b, c, a, c, d], axis=2).reshape(-1, 3)
+        z = tris[:, 2]
+        span = max(float(np.abs(gz).max()), 0.05)
+        up, down = np.clip(z / span, 0.0, 1.0), np.clip(-z / span, 0.0, 1.0)
+        colours = [{"r": float(0.75 - 0.35 * u - 0.55 * w), "g": float(0.8 - 0.45 * u - 0.35 * w),
+                    "b": float(0.7 - 0.45 * u + 0.25 * w), "a": 1.0} for u, w in zip(up.tolist(), down.tolist())]
+        out.append({"header": {"frame_id": ODOM_FRAME}, "ns": "terrain", "id": i, "type": 11, "action": 0,
+                    "pose": _pose(0.0, 0.0, 0.0), "scale": {"x": 1.0, "y": 1.0, "z": 1.0},
+                    "color": {"r": 0.6, "g": 0.55, "b": 0.45, "a": 1.0}, "text": ground.describe_element(el),
+                    "points": [{"x": float(p[0]), "y": float(p[1]), "z": float(p[2])} for p in tris.tolist()],
+                    "colors": colours})
+    return out
 
 
 _COLOURS = {"box": (0.55, 0.55, 0.6), "cylinder": (0.45, 0.5, 0.65), "polygon": (0.5, 0.55, 0.55),
@@ -349,12 +444,16 @@ def _write(result: EpisodeResult, path: Path, fmt: str) -> None:
         topics = dict(TOPICS)
         if any(getattr(o, "motion", None) is not None for o in result.scenario.obstacles):
             topics[MOVING_TOPIC] = TOPICS["/navscenario/obstacles"]
+        if result.scenario.robot.lidar3d is not None and result.trajectory.cloud is not None:
+            topics[CLOUD_TOPIC] = "sensor_msgs/msg/PointCloud2"
+        if result.scenario.terrain:
+            topics[TERRAIN_TOPIC] = TOPICS["/navscenario/obstacles"]
         for topic, msgtype in topics.items():
             if ros1:
                 conns[topic] = writer.add_connection(topic, msgtype, typestore=ts,
-                                                     latching=1 if topic in LATCHED else None)
+                                                     latching=1 if topic in LATCHED + LATCHED_WHEN_THERE else None)
             else:
-                qos = _latched_qos() if topic in LATCHED else ()
+                qos = _latched_qos() if topic in LATCHED + LATCHED_WHEN_THERE else ()
                 conns[topic] = writer.add_connection(topic, msgtype, typestore=ts,
                                                      offered_qos_profiles=qos)
         for topic, time_s, values in msgs:

@@ -10,8 +10,10 @@
   on load). A model with plugins (which may move it) is imported where it stands, with a note that
   what the plugins do is not carried over. Planes are ignored; everything else (other meshes,
   spheres, includes, tilted shapes, non-static models without plugins) is listed in a warning,
-  never dropped silently. A file that is not quite well-formed XML but that Gazebo reads anyway (a
-  bare ``&``, more after ``</sdf>``) is repaired and read, with a warning saying what was repaired.
+  never dropped silently. A ``<heightmap>`` (a PNG) becomes heightfield terrain, its image copied
+  beside the seed (``sdf_terrain.py``); the robot then needs a body that rides the ground. A file
+  that is not quite well-formed XML but that Gazebo reads anyway (a bare ``&``, more after
+  ``</sdf>``) is repaired and read, with a warning saying what was repaired.
 
 Also home of ``write_seed``, which every importer uses to write its scenario file.
 """
@@ -119,6 +121,7 @@ class SdfWorld:
     notes: list[str] = field(default_factory=list)          # imported, but not all of it (said how)
     meshes: dict[str, bytes] = field(default_factory=dict)   # files to write beside the seed
     roots: tuple[Path, ...] = ()                              # folders meshes may come from
+    terrain: list = field(default_factory=list)              # <heightmap>s as heightfields (sdf_terrain.py)
 
 
 def _pose6(elem: ET.Element | None, where: str, path: Path) -> tuple[float, ...]:
@@ -299,6 +302,12 @@ def _model(path: Path, model: ET.Element, parent: tuple[float, ...], state_poses
                 out.warnings.append(f"{where}: {shape.tag} of a non-static model (not imported)")
                 continue
             cpose = _compose(lpose, _pose6(col.find("pose"), where, path))
+            if shape.tag == "heightmap":
+                from .sdf_terrain import heightmap_terrain
+                heightmap_terrain(path, where, shape, cpose, mname if mname not in out.names
+                                  else f"{mname}/{lname}/{cname}", lambda w, u: _find_mesh(w, u, out.roots),
+                                  _floats, out)
+                continue
             if shape.tag in ("polyline", "mesh") and not (abs(cpose[3]) > tilt or abs(cpose[4]) > tilt):
                 _outlined(path, mname, lname, cname, where, geom, shape, cpose, out)
                 continue
@@ -434,15 +443,31 @@ def run(args: argparse.Namespace) -> int:
         if world.warnings:
             print(f"navscenario import: warning: {len(world.warnings)} warning(s) about {src} (listed above)",
                   file=sys.stderr)
+    terrain = tuple(world.terrain) if args.format == "sdf" else ()
     scenario = Scenario(mission=Mission(start=start, goal=goal, waypoints=waypoints),
-                        obstacles=tuple(obstacles), robot=robot, name=args.name,
+                        obstacles=tuple(obstacles), robot=robot, name=args.name, terrain=terrain,
                         description=f"Imported from {args.format} file {src.name}.")
-    timeout, timeout_note = mission_timeout(scenario, args.timeout)
+    if terrain and scenario.robot.body.kind == "planar":   # the planar body cannot ride terrain: guess
+        from ..scenario.terrain import WheeledBody
+        scenario = dataclasses.replace(scenario, robot=dataclasses.replace(scenario.robot, body=WheeledBody(),
+                                                                           drive="diff"))
+        notes.append("robot.body: wheeled, drive: diff (a guess: the world does not say which robot drives it; "
+                     "set robot.body)")
+    if terrain:          # the route's length reads the heightfields: from their files, staged as beside the seed
+        with tempfile.TemporaryDirectory() as tmp:
+            for name, data in extra.items():
+                (Path(tmp) / name).parent.mkdir(parents=True, exist_ok=True)
+                (Path(tmp) / name).write_bytes(data if isinstance(data, bytes) else data.encode("utf-8"))
+            staged = dataclasses.replace(scenario, source=str(Path(tmp) / Path(args.output).name))
+            timeout, timeout_note = mission_timeout(staged, args.timeout)
+    else:
+        timeout, timeout_note = mission_timeout(scenario, args.timeout)
     scenario = dataclasses.replace(scenario, mission=dataclasses.replace(scenario.mission, timeout=timeout))
     write_seed(scenario, args.output, force=args.force, extra_files=extra)
     for note in [*notes, robot_note, timeout_note]:
         print(f"navscenario import: {note}")
-    print(f"navscenario import: {len(obstacles)} obstacle(s) -> wrote {args.output}")
+    print(f"navscenario import: {len(obstacles)} obstacle(s)"
+          + (f", {len(terrain)} terrain element(s)" if terrain else "") + f" -> wrote {args.output}")
     return 0
 
 

@@ -34,7 +34,7 @@ SCENARIO = section(Scenario, "", "a navigation test case: robot, mission, obstac
         default=None),
     Free("provenance", "", "written by the search: where a frozen failure came from", default=None),
 ], what="a mapping of scenario fields", rules=[
-    Rule("obstacle names are unique", None),
+    Rule("names are unique across obstacles and terrain elements", None),
     Rule("1 / (timestep × control_rate) is a whole number of physics steps, and timeout / timestep at most "
          "10⁷ steps", None),
     Rule("latencies are whole multiples of the control period and shorter than the timeout", None),
@@ -43,6 +43,10 @@ SCENARIO = section(Scenario, "", "a navigation test case: robot, mission, obstac
     Rule("the body goes with the drive (a wheeled body cannot drive omni) and with the terrain (the planar "
          "body cannot ride it); start and goal stand on the ground (not over a pit or stairwell, not half "
          "on a platform), and no waypoint lies over a hole", None),
+    Rule("an obstacle's z stands it on the ground under it, neither floating above it nor buried under it "
+         "(the planar body's obstacles stand on its flat floor: z 0 or left out)", None),
+    Rule("the terrain has at most 5000 blocks (each step of a flight counts) and at most 100 elements "
+         "cutting holes in the floor", None),
     Rule("free-form data (provenance, mark arguments) holds only text, numbers, true/false, null, lists and "
          "mappings: a YAML date must be quoted", None),
 ])

@@ -155,10 +155,20 @@ def ground_height(scenario, px, py) -> np.ndarray:
 
 
 def grid_low(element: TerrainElement, scenario) -> float:
-    """The lowest surface of a grid element (rough ground, heightfield)."""
-    from .heightmap import height_grid
+    """The lowest surface of a grid element (rough ground, heightfield); cached (asked for with
+    every height on it)."""
+    key = (element, getattr(scenario, "source", None))
+    low = _GRID_LOW.get(key)
+    if low is None:
+        from .heightmap import height_grid
 
-    return float(element.z + np.asarray(height_grid(element, scenario).heights).min())
+        if len(_GRID_LOW) >= 256:
+            _GRID_LOW.clear()
+        low = _GRID_LOW[key] = float(element.z + np.asarray(height_grid(element, scenario).heights).min())
+    return low
+
+
+_GRID_LOW: dict = {}
 
 
 def element_at(scenario, x: float, y: float, margin: float = 0.0) -> int | None:
@@ -223,6 +233,65 @@ def highest(scenario) -> float:
 BODY_DRIVES = {"planar": ("omni", "diff"), "wheeled": ("diff",), "legged": ("omni", "diff"),
                "mjcf": ("omni", "diff")}
 FACE_STEP = 0.3     # m: ground under a footprint differing by more than this stands it in a face
+MAX_BLOCKS = 5000   # terrain blocks, each step of a flight one: 5000 build in ~0.2 s, 100 000 took 17 s and 0.5 GB
+MAX_HOLES = 100     # elements cutting the floor: the floor around 100 holes at random places ~0.15 s
+                    # (sim/terrain._floor_parts), around 1000 about 9 s
+FLOAT_GAP = 0.01    # m an obstacle's explicit base may stand above the highest ground under it
+
+
+def terrain_problem(scenario) -> tuple[str, str, str] | None:
+    """(field, message, fix) when the terrain is too large to build in about a second: more than
+    MAX_BLOCKS blocks, or more than MAX_HOLES elements cutting the floor; None otherwise."""
+    terrain = scenario.terrain
+    blocks = sum(el.count if isinstance(el, Steps) else 1 for el in terrain)
+    if blocks > MAX_BLOCKS:
+        return ("terrain", f"the terrain has {blocks} blocks (each step of a flight counts), more than the limit "
+                           f"of {MAX_BLOCKS}: building its world would take tens of seconds",
+                "use fewer, deeper steps, or a heightfield for ground this detailed")
+    cutting = {piece.element for piece in pieces(terrain) if piece.cut}
+    cutting |= {i for i in grid_elements(terrain) if grid_low(terrain[i], scenario) < FLOOR}
+    if len(cutting) > MAX_HOLES:
+        return ("terrain", f"{len(cutting)} elements cut holes in the floor (pits, flights going down, grids "
+                           f"dipping below it), more than the limit of {MAX_HOLES}: the floor around them would "
+                           f"take tens of seconds to build",
+                "merge neighbouring pits, or give ground this broken as a heightfield")
+    return None
+
+
+def obstacle_problem(scenario) -> tuple[str, str, str] | None:
+    """(field, message, fix) when an obstacle's explicit ``z`` puts it where the verdict, the safety
+    layer and the paths (all of which see an obstacle as standing on the ground under it) cannot
+    follow: floating above the highest ground under it (a shelf over the route, at which the
+    safety layer would halt the robot with nothing in its way), entirely under the lowest, or
+    anywhere but on the floor for the planar body, whose world puts every obstacle on it; None
+    otherwise."""
+    from .geometry import obstacle_polygon
+
+    planar = scenario.robot.body.kind == "planar" and not scenario.terrain
+    for i, obs in enumerate(scenario.obstacles):
+        if obs.z is None:
+            continue
+        what = f"{obs.kind} '{obs.name}'"
+        if planar:
+            if obs.z != 0.0:
+                return (f"obstacles[{i}].z", f"{what} {'floats' if obs.z > 0 else 'sinks'} {abs(obs.z):g} m "
+                        f"{'above' if obs.z > 0 else 'below'} the floor, but the planar body's world is a flat "
+                        f"floor on which every obstacle stands", "leave z out (or give the robot a body that "
+                        "rides the ground: robot.body)")
+            continue
+        pts = np.asarray(obstacle_polygon(obs).exterior.coords)
+        heights = ground_height(scenario, np.append(pts[:, 0], obs.x), np.append(pts[:, 1], obs.y))
+        high, low = float(heights.max()), float(heights.min())
+        if obs.z > high + FLOAT_GAP:
+            return (f"obstacles[{i}].z", f"{what} floats {obs.z - high:.3g} m above the ground under it "
+                    f"(z = {obs.z:g}, the ground {high:.3g} m at most): the verdict, the safety layer and the "
+                    f"paths see every obstacle standing on the ground (overhangs are not modelled)",
+                    f"leave z out to stand it on the ground, or give z: {high:.3g}")
+        if obs.z + obs.height <= low:
+            return (f"obstacles[{i}].z", f"{what} lies under the ground (its top at {obs.z + obs.height:.3g} m, "
+                    f"the ground under it {low:.3g} m at least): nothing of it stands above the ground",
+                    "leave z out to stand it on the ground")
+    return None
 
 
 def body_problem(scenario) -> tuple[str, str, str] | None:

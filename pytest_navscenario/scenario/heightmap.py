@@ -127,12 +127,9 @@ def read_height_file(path: Path) -> np.ndarray:
     if size > MAX_HEIGHTFIELD_BYTES:
         raise HeightmapError(f"{path.name} is {size / 1e6:.1f} MB, more than the limit of "
                              f"{MAX_HEIGHTFIELD_BYTES / 1e6:.0f} MB; downsample it first")
-    values = _read_png(path) if suffix == ".png" else _read_npy(path)
+    values = _read_png(path) if suffix == ".png" else _read_npy(path, size)
     rows, cols = values.shape
-    if rows > MAX_GRID_SIDE or cols > MAX_GRID_SIDE:
-        raise HeightmapError(f"{path.name} is {cols} x {rows} samples, more than the limit of "
-                             f"{MAX_GRID_SIDE} a side; downsample it (a finer grid also slows every "
-                             f"lidar scan over it)")
+    _check_sides(path, rows, cols)
     if rows < 2 or cols < 2:
         raise HeightmapError(f"{path.name} is {cols} x {rows} samples; a heightfield needs at least "
                              f"2 x 2 (its corners)")
@@ -145,12 +142,28 @@ def read_height_file(path: Path) -> np.ndarray:
     return values
 
 
+def _check_sides(path: Path, rows: int, cols: int) -> None:
+    if rows > MAX_GRID_SIDE or cols > MAX_GRID_SIDE:
+        raise HeightmapError(f"{path.name} is {cols} x {rows} samples, more than the limit of "
+                             f"{MAX_GRID_SIDE} a side; downsample it (a finer grid also slows every "
+                             f"lidar scan over it)")
+
+
 def _read_png(path: Path) -> np.ndarray:
+    """A PNG's grey values; its size is checked from its header before a pixel is decoded (so a
+    small file declaring a huge image costs nothing), without touching Pillow's own limit, which a
+    planner in the same process may rely on."""
+    import warnings
+
     from PIL import Image, UnidentifiedImageError
 
-    Image.MAX_IMAGE_PIXELS = MAX_GRID_SIDE * MAX_GRID_SIDE * 4   # refuse decompression bombs early
     try:
-        with Image.open(path) as image:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)   # refused below by size
+            image = Image.open(path)
+        with image:
+            cols, rows = image.size
+            _check_sides(path, rows, cols)
             image.load()
             mode, bands = image.mode, image.getbands()
             if mode in ("L", "I", "I;16", "I;16B", "I;16L", "I;16N", "F"):
@@ -176,18 +189,41 @@ def _read_png(path: Path) -> np.ndarray:
     return values.astype(float)
 
 
-def _read_npy(path: Path) -> np.ndarray:
+def _read_npy(path: Path, size: int) -> np.ndarray:
+    """A 2-D numeric ``.npy`` array. Its header (shape, type) is checked before its data is read:
+    numpy allocates what the header promises, so a 200-byte file promising 60000 x 60000 would
+    ask for 27 GB."""
+    from numpy.lib import format as npy
+
+    try:
+        with open(path, "rb") as fp:
+            if fp.read(1) == b"\x80":
+                raise ValueError("it is a Python pickle (never loaded: it could run code); save the array with "
+                                 "numpy.save")
+            fp.seek(0)
+            version = npy.read_magic(fp)
+            read_header = {(1, 0): npy.read_array_header_1_0, (2, 0): npy.read_array_header_2_0}.get(version)
+            if read_header is None:
+                raise ValueError(f"unsupported .npy format version {version[0]}.{version[1]}")
+            shape, _, dtype = read_header(fp)
+            data_bytes = size - fp.tell()
+    except (ValueError, OSError, EOFError) as exc:
+        raise HeightmapError(f"{path.name} cannot be read as a NumPy .npy array: {exc}") from None
+    if dtype.kind not in "iuf":
+        raise HeightmapError(f"{path.name} holds {dtype} values; a heightfield array holds numbers "
+                             f"(integers or floats)")
+    if len(shape) != 2:
+        raise HeightmapError(f"{path.name} is a {len(shape)}-D array of shape {shape}; a "
+                             f"heightfield is a 2-D array (rows, columns)")
+    _check_sides(path, *shape)
+    promised = shape[0] * shape[1] * dtype.itemsize
+    if data_bytes < promised:
+        raise HeightmapError(f"{path.name} is cut short: it holds {data_bytes} bytes of data where its header "
+                             f"promises {promised} ({shape[1]} x {shape[0]} {dtype} values)")
     try:
         values = np.load(path, allow_pickle=False)
     except (ValueError, OSError, EOFError) as exc:
         raise HeightmapError(f"{path.name} cannot be read as a NumPy .npy array: {exc}") from None
-    if not isinstance(values, np.ndarray) or values.dtype.kind not in "iuf":
-        kind = getattr(values, "dtype", type(values).__name__)
-        raise HeightmapError(f"{path.name} holds {kind} values; a heightfield array holds numbers "
-                             f"(integers or floats)")
-    if values.ndim != 2:
-        raise HeightmapError(f"{path.name} is a {values.ndim}-D array of shape {values.shape}; a "
-                             f"heightfield is a 2-D array (rows, columns)")
     return values.astype(float)
 
 
@@ -218,7 +254,12 @@ def grid_digest(values: np.ndarray) -> str:
 def _normalised(values: np.ndarray) -> np.ndarray:
     """Values mapped to [0, 1] from their lowest to their highest (a flat grid: all 0)."""
     low, high = float(values.min()), float(values.max())
-    return (values - low) / (high - low) if high > low else np.zeros_like(values)
+    if not high > low:
+        return np.zeros_like(values)
+    if math.isfinite(high - low):
+        return (values - low) / (high - low)
+    scale = max(abs(low), abs(high))          # values near the ends of the float range: no overflow
+    return (values / scale - low / scale) / (high / scale - low / scale)
 
 
 def load_heightfield(folder: Path, file: str, length: float, width: float) -> tuple[Path, str]:

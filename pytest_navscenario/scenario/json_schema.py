@@ -40,9 +40,9 @@ def scenario_schema() -> dict[str, Any]:
     """The schema of a scenario file, from ``format.SCENARIO``."""
     builder = _Builder()
     root = builder.section(SCENARIO, "scenario")
+    root["title"] = f"pytest-navscenario scenario (format version {SCHEMA_VERSION})"
     return {
         "$schema": DRAFT,
-        "title": f"pytest-navscenario scenario (format version {SCHEMA_VERSION})",
         "$comment": "Generated from pytest_navscenario's declarations by 'navscenario schema'; do not edit.",
         **root,
         "$defs": builder.defs,
@@ -98,6 +98,7 @@ class _Builder:
             if key.required:
                 required.append(key.name)
         out: dict[str, Any] = {"type": ["object", "null"] if nullable else "object",
+                               "title": sec.path or "scenario",
                                "description": _sentence(sec.doc), "properties": props,
                                "additionalProperties": False}
         rules = []

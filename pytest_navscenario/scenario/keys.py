@@ -22,11 +22,13 @@ Declaring a section: the dataclass as usual (its defaults are the format's defau
         Number("margin", "m", "the footprint grown by this", ge=0),
     ])
 
-and name it where it sits: a ``Sub(...)`` key of its parent section (``Sub("safety", "",
-"...", SAFETY)``), or an ``Element`` of a typed list such as ``obstacles``. Rules across keys
-(``range_max > range_min``) are ``Rule`` objects of the section: the loader runs them, the
-schema includes those that JSON Schema can say, and the reference lists the others as "checks
-that need a run". Every number is also bounded by ``SCENARIO_LIMITS["max_abs_value"]``.
+and name it where it sits: a ``Sub`` key of its parent section (``Sub("safety", "", "the
+collision safety layer", section=SAFETY)``), or an ``Element`` of a typed list such as
+``obstacles``. Rules across keys (``range_max > range_min``) are ``Rule`` objects of the section:
+the loader runs them, the schema includes those that JSON Schema can say, and the reference lists
+the others as "checks that need a run". Every number is also bounded by
+``SCENARIO_LIMITS["max_abs_value"]``. Then regenerate the two committed copies of the schema
+(``navscenario schema -o .navscenario/scenario-v1.json`` and the same file into this folder).
 
 This module holds no I/O and imports nothing heavy (it is read when a scenario loads).
 """

@@ -178,7 +178,8 @@ def _obstacles(ctx: _Ctx, top: _Section) -> tuple[Obstacle, ...]:
 def _obstacle(ctx: _Ctx, sec: _Section, element: K.Element, name: str) -> Obstacle:
     """One obstacle: its motion first (a path places it), then its keys as declared."""
     decl = element.section
-    motion = _motion(ctx, sec, decl["motion"].section)
+    keys = decl.by_name
+    motion = _motion(ctx, sec, keys["motion"].section) if "motion" in sec.node.items else None
     if motion is not None and motion.path:
         for key in ("x", "y"):
             if sec.has(key):
@@ -187,7 +188,7 @@ def _obstacle(ctx: _Ctx, sec: _Section, element: K.Element, name: str) -> Obstac
                                f"remove '{key}', or make it the path's first point")
         x, y = motion.path[0]
     else:
-        x, y = _read_number(ctx, sec, decl["x"]), _read_number(ctx, sec, decl["y"])
+        x, y = _read_number(ctx, sec, keys["x"]), _read_number(ctx, sec, keys["y"])
     values: dict[str, Any] = {"name": name, "x": x, "y": y, "motion": motion}
     if element.type == "mesh":
         return _mesh(ctx, sec, decl, values)
@@ -241,6 +242,28 @@ def _mesh(ctx: _Ctx, sec: _Section, decl: K.Section, values: dict[str, Any]) -> 
                        "fix the file or the path (relative to the scenario's folder)") from None
     values.update(file=file, scale=scale, footprint=outline, height=height)
     return MeshObstacle(**_read(ctx, sec, decl, values))
+
+
+def _terrain_element(ctx: _Ctx, sec: _Section, element: K.Element, name: str) -> Any:
+    """One terrain element as declared; a heightfield's file read now (a bad file is an error here,
+    at its line, and its digest makes the grid content), a rough patch's grid size checked."""
+    decl = element.section
+    values = _read(ctx, sec, decl, {"name": name})
+    if element.type not in ("heightfield", "rough"):
+        return decl.cls(**values)
+    from .heightmap import HeightmapError, check_rough, load_heightfield
+
+    try:
+        if element.type == "rough":
+            check_rough(values["length"], values["width"], values["wavelength"])
+        else:
+            folder = Path(ctx.source).parent if ctx.source else Path.cwd()
+            _, values["digest"] = load_heightfield(folder, values["file"], values["length"], values["width"])
+    except HeightmapError as exc:
+        hint = ("fix the file or the path (relative to the scenario's folder)" if exc.field == "file"
+                else f"change {exc.field}")
+        raise ctx.fail(str(exc), _join(sec.path, exc.field), sec.line_of(exc.field) or sec.line, hint) from None
+    return decl.cls(**values)
 
 
 def _motion(ctx: _Ctx, obs: _Section, decl: K.Section) -> Motion | None:
@@ -368,9 +391,10 @@ def check_scenario(scenario: Scenario, *, _ctx: _Ctx | None = None) -> None:
     if scenario.obstacles:
         _check_clear(scenario, ctx)
         _check_speeds(scenario, ctx)
-    if scenario.terrain or scenario.robot.body.kind != "planar":
-        from .ground import body_problem, mission_problem
-        problem = body_problem(scenario) or mission_problem(scenario)
+    if scenario.terrain or scenario.robot.body.kind != "planar" or any(o.z is not None for o in scenario.obstacles):
+        from .ground import body_problem, mission_problem, obstacle_problem, terrain_problem
+        problem = (body_problem(scenario) or terrain_problem(scenario) or mission_problem(scenario)
+                   or obstacle_problem(scenario))
         if problem is not None:
             field, message, fix = problem
             raise ctx.fail(message, field, lines.get(field, lines.get(field.split(".")[0])), fix)
@@ -527,7 +551,7 @@ def _build(root: YNode | None, ctx: _Ctx, name: str | None, family: str | None) 
         robot=_robot(ctx, top),
         mission=_mission(ctx, top),
         obstacles=_obstacles(ctx, top),
-        terrain=_read_elements(ctx, top, SCENARIO["terrain"]),
+        terrain=_read_elements(ctx, top, SCENARIO["terrain"], _terrain_element),
         simulation=_simulation(ctx, top),
         reference=_reference(ctx, top),
         search=_mapping(ctx, top, "search"),
@@ -536,7 +560,8 @@ def _build(root: YNode | None, ctx: _Ctx, name: str | None, family: str | None) 
     )
     if scenario.search is not None:     # the search's space, checked on plain runs too
         read_search(ctx, top.get("search"), "search", top.line_of("search"),
-                    obstacles=tuple(o.name for o in scenario.obstacles), waypoints=len(scenario.mission.waypoints))
+                    obstacles=tuple(o.name for o in scenario.obstacles), waypoints=len(scenario.mission.waypoints),
+                    terrain=tuple(el.name for el in scenario.terrain))
     check_scenario(scenario, _ctx=ctx)
     return scenario
 

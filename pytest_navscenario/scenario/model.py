@@ -92,6 +92,8 @@ MOTION = section(Motion, "obstacles[].motion", "how an obstacle moves: along a p
     Rule("'velocity' does not go with 'path', 'speed' or 'mode'; without it, 'path' is required", None,
          _motion_schema),
     Rule("a path has some length (its points are not all the same)", None),
+    Rule("no faster than the physics step can follow: it and the robot close in by at most a fifth of their "
+         "smallest widths per step (loader.max_resolved_speed)", None),
 ])
 
 

@@ -12,6 +12,7 @@ has an older one), so their files work in an editor without setup.
 """
 from __future__ import annotations
 
+import functools
 import os
 from pathlib import Path
 
@@ -27,8 +28,14 @@ def schema_file_name() -> str:
 
 def project_root(scenario_path: str | os.PathLike) -> Path | None:
     """The nearest folder at or above the scenario's folder that holds a project marker, or None."""
-    folder = Path(os.path.abspath(scenario_path)).parent
-    for candidate in (folder, *folder.parents):
+    return _root_of(os.path.dirname(os.path.abspath(scenario_path)))
+
+
+@functools.lru_cache(maxsize=256)
+def _root_of(folder: str) -> Path | None:
+    """(cached per folder: a generated suite writes hundreds of files into one folder)"""
+    path = Path(folder)
+    for candidate in (path, *path.parents):
         if any((candidate / marker).exists() for marker in PROJECT_MARKERS):
             return candidate
     return None

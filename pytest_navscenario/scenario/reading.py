@@ -46,6 +46,9 @@ class _Ctx:
     def __init__(self, source: str | None):
         self.source = source
         self.lines: dict[str, int | None] = {}
+        #: names of the typed lists read so far (obstacles, then terrain) -> "obstacles[i]": one
+        #: name space, so that a name (in ``search: frozen``, a message) means one thing
+        self.element_names: dict[str, str] = {}
 
     def fail(self, message: str, field: str | None, line: int | None, hint: str | None = None) -> ScenarioError:
         return ScenarioError(message, path=self.source, line=line, field=field, hint=hint)
@@ -85,7 +88,7 @@ class _Section:
         self.ctx, self.path, self.keys = ctx, path, keys
         if not isinstance(node, YMap):
             raise ctx.fail(f"expected {what}, got {describe(node) if node is not None else 'nothing'}",
-                           path or None, node.line if node is not None and node.line else line,
+                           path or None, line if line is not None else (node.line if node is not None else None),
                            f"write it as 'key: value' lines with keys from: {', '.join(keys)}")
         self.node = node
         self.line = line if line is not None else node.line
@@ -245,9 +248,15 @@ def _read(ctx: _Ctx, sec: _Section, decl: K.Section, values: dict[str, Any] | No
     """The values of ``decl``'s keys (by dataclass field), each read and checked as declared, then
     the section's rules. Keys already in ``values`` are not read again."""
     values = {} if values is None else values
+    items = sec.node.items
     for key in decl.keys:
-        if key.field not in values:
-            values[key.field] = _READ[key.kind](ctx, sec, key)
+        field = key.field
+        if field in values:
+            continue
+        if key.name not in items and key.default is not _REQUIRED:
+            values[field] = key.default             # absent: its default (most keys of most files)
+        else:
+            values[field] = _READ[key.kind](ctx, sec, key)
     for rule in decl.rules:
         if rule.check is not None:
             problem = rule.check(values, sec.node.items)
@@ -416,15 +425,16 @@ def _read_elements(ctx: _Ctx, top: _Section, key: K.Elements, build: Any = None)
                 raise ctx.fail(f"'{name}' does not apply to type: {kind} (it is a {other} key)", f"{path}.{name}",
                                key_line or line, f"remove '{name}', or set type: {other}")
         sec = _Section(ctx, item, path, keys, line=line)
-        name = _read_text(ctx, sec, element.section["name"])
+        name = _read_text(ctx, sec, element.section.by_name["name"]) if "name" in item.items else None
         if name is not None:
-            if name in given:
-                first = given[name]
-                raise ctx.fail(f"name {name!r} is already used by {key.name}[{first}]", f"{path}.name",
-                               sec.line_of("name"), f"{key.item} names must be unique; rename one of them")
+            if name in given or name in ctx.element_names:
+                first = f"{key.name}[{given[name]}]" if name in given else ctx.element_names[name]
+                raise ctx.fail(f"name {name!r} is already used by {first}", f"{path}.name",
+                               sec.line_of("name"), "names of obstacles and terrain elements must be unique; "
+                               "rename one of them")
             given[name] = i
         parsed.append((element, sec, name))
-    taken = set(given)
+    taken = set(given) | set(ctx.element_names)
     counters = dict.fromkeys(types, 0)
     result = []
     for element, sec, name in parsed:
@@ -437,6 +447,7 @@ def _read_elements(ctx: _Ctx, top: _Section, key: K.Elements, build: Any = None)
             taken.add(name)
         result.append(build(ctx, sec, element, name) if build is not None
                       else element.section.cls(**_read(ctx, sec, element.section, {"name": name})))
+    ctx.element_names.update((item.name, f"{key.name}[{i}]") for i, item in enumerate(result))
     return tuple(result)
 
 

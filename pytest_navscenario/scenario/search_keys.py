@@ -16,6 +16,9 @@ from typing import Mapping
 from . import keys as K
 from .keys import SCENARIO_LIMITS, Integer, Names, Number, Range, Rule, SizeRange, section
 from .model import BOX, LIDAR, LOCALISATION, MOTION, POLYGON, POSE
+from .terrain import RAMP, ROUGH, STEPS
+
+RAMP_SLOPE = Number("slope", "deg", "a ramp's slope", ge=0, le=90.0)   # what terrain_slope moves
 
 MAX_POSITION_OFFSET = 1000.0    # m: obstacle, start, goal, waypoint and corner offsets
 MAX_SIZE_OFFSET = 100.0         # m
@@ -71,14 +74,27 @@ RANGES = (
             _span(LOCALISATION["drift_per_second"]), LOCALISATION["drift_per_second"]),
     _offset("yaw_drift_per_metre", "deg/√m", "added to robot.localisation.yaw_drift_per_metre (0: off)",
             (0.0, 0.0), _span(LOCALISATION["yaw_drift_per_metre"]), LOCALISATION["yaw_drift_per_metre"]),
+    # terrain (issue 25): each element moved; by its kind steeper, higher or rougher
+    _offset("terrain_dx", "m", "moves each terrain element along x (a platform's edge, a ramp's place)",
+            (-1.0, 1.0), MAX_POSITION_OFFSET, RAMP["x"]),
+    _offset("terrain_dy", "m", "moves each terrain element along y", (-1.0, 1.0), MAX_POSITION_OFFSET, RAMP["y"]),
+    _offset("terrain_yaw", "deg", "turns each terrain element (0: off)", (0.0, 0.0), 180.0, RAMP["yaw"]),
+    _offset("terrain_size", "m", "added to each terrain element's length and width (a flight of steps: its "
+            "width; 0: off)", (0.0, 0.0), MAX_SIZE_OFFSET, RAMP["length"]),
+    _offset("terrain_slope", "deg", "added to a ramp's slope, its high end kept where it is (between 1 and 80 deg)",
+            (-5.0, 5.0), 80.0, RAMP_SLOPE),
+    _offset("terrain_rise", "m", "added to a step's rise, a platform's height, a pit's depth (never below 5 mm)",
+            (-0.05, 0.1), MAX_SIZE_OFFSET, STEPS["rise"]),
+    _offset("terrain_roughness", "m", "added to rough ground's amplitude (never below 5 mm)", (-0.02, 0.05),
+            MAX_SIZE_OFFSET, ROUGH["amplitude"]),
 )
-MAX_PARTS = int(SCENARIO_LIMITS["max_obstacles"] + SCENARIO_LIMITS["max_waypoints"]) + 4
+MAX_PARTS = int(2 * SCENARIO_LIMITS["max_obstacles"] + SCENARIO_LIMITS["max_waypoints"]) + 4
 
 SEARCH = section(None, "search", "the failure search's space around this seed", [
     *RANGES,
     Number("min_size", "m", "sizes never shrink below this", gt=0, le=MAX_SIZE, default=0.05),
-    Names("frozen", "", "parts the search leaves as they are: obstacle names, start, goal, robot, "
-          "waypoints, waypoints[i]", max=MAX_PARTS, default=()),
+    Names("frozen", "", "parts the search leaves as they are: obstacle and terrain element names, start, "
+          "goal, robot, waypoints, waypoints[i]", max=MAX_PARTS, default=()),
     Integer("insert", "", "at most this many new box obstacles (0: none)", ge=0, le=MAX_INSERT, default=2),
     SizeRange("insert_size", "m", "side length of an inserted box: [lo, hi] or one number", le=MAX_SIZE,
               default=(0.3, 1.0)),

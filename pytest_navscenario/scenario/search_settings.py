@@ -14,13 +14,13 @@ from .yaml_tree import YNode, YScalar, YSeq, describe, from_plain, to_plain
 
 
 def read_search(ctx: Ctx, node: YNode, field: str, line: int | None, *, obstacles: tuple[str, ...],
-                waypoints: int) -> SearchSettings:
+                waypoints: int, terrain: tuple[str, ...] = ()) -> SearchSettings:
     """The ``search:`` mapping ``node`` of a seed with these obstacle names and this many waypoints,
     checked key by key (file, line, field and a fix for each problem)."""
     sec = SectionReader(ctx, node, field, SEARCH.names, line=line, what=SEARCH.what)
     bounds = {key.name: _read_range(ctx, sec, key) for key in RANGES}
     min_size = sec.number("min_size", SEARCH["min_size"].default, low=0, low_open=True, high=MAX_SIZE)
-    frozen = _read_frozen(ctx, sec, obstacles, waypoints)
+    frozen = _read_frozen(ctx, sec, obstacles, waypoints, terrain)
     insert = sec.integer("insert", SEARCH["insert"].default, low=0, high=MAX_INSERT)
     if insert and len(obstacles) + insert > SCENARIO_LIMITS["max_obstacles"]:
         raise ctx.fail(f"the seed has {len(obstacles)} obstacles: with {insert} inserted it could pass the "
@@ -44,7 +44,8 @@ def search_settings(scenario: Any, mapping: Mapping[str, Any] | None = None) -> 
     node = from_plain(data, max_depth=int(SCENARIO_LIMITS["max_depth"]),
                       max_nodes=int(SCENARIO_LIMITS["max_nodes"]), source=ctx.source)
     return read_search(ctx, node, "search", None, obstacles=tuple(o.name for o in scenario.obstacles),
-                       waypoints=len(scenario.mission.waypoints))
+                       waypoints=len(scenario.mission.waypoints),
+                       terrain=tuple(el.name for el in getattr(scenario, "terrain", ())))
 
 
 # -- the kinds only search: has ----------------------------------------------------------------
@@ -112,7 +113,8 @@ def _read_sizes(ctx: Ctx, sec: SectionReader, key: SizeRange) -> tuple[float, fl
     return (lo, hi)
 
 
-def _read_frozen(ctx: Ctx, sec: SectionReader, obstacles: tuple[str, ...], waypoints: int) -> frozenset:
+def _read_frozen(ctx: Ctx, sec: SectionReader, obstacles: tuple[str, ...], waypoints: int,
+                 terrain: tuple[str, ...] = ()) -> frozenset:
     node = sec.get("frozen")
     if node is None or (isinstance(node, YScalar) and node.value is None):
         return frozenset()
@@ -126,7 +128,8 @@ def _read_frozen(ctx: Ctx, sec: SectionReader, obstacles: tuple[str, ...], waypo
     if len(items) > limit:
         raise ctx.fail(f"{len(items)} names is more than the limit of {limit}", field, line,
                        "name each part once")
-    parts = list(obstacles) + ["start", "goal", "waypoints", "robot"] + [f"waypoints[{i}]" for i in range(waypoints)]
+    parts = list(obstacles) + ["start", "goal", "waypoints", "robot"] + [f"waypoints[{i}]" for i in range(waypoints)] \
+        + list(terrain)
     known = set(parts)
     names = []
     for i, item in enumerate(items):
@@ -136,7 +139,7 @@ def _read_frozen(ctx: Ctx, sec: SectionReader, obstacles: tuple[str, ...], waypo
             close = difflib.get_close_matches(str(name), parts, n=1) if isinstance(name, str) else []
             hint = f"did you mean {close[0]!r}?" if close else f"parts of this seed: {', '.join(parts[:20])}" + \
                 (" ..." if len(parts) > 20 else "")
-            raise ctx.fail(f"{shown} is not an obstacle or mission part of this seed", f"{field}[{i}]",
+            raise ctx.fail(f"{shown} is not an obstacle, terrain element or mission part of this seed", f"{field}[{i}]",
                            item.line or line, hint)
         names.append(name)
     return frozenset(names)

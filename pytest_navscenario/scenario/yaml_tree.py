@@ -386,3 +386,30 @@ def to_plain(node: YNode) -> Any:
     if isinstance(node, YSeq):
         return [to_plain(item) for item in node.items]
     return {key: to_plain(item) for key, (_, item) in node.items.items()}
+
+
+_FIELD_PART = re.compile(r"\[(\d+)\]|([^.\[\]]+)")
+
+
+def field_line(text: str, field: str, *, max_depth: int = 64, max_nodes: int = 500_000) -> int | None:
+    """The 1-based line of a dotted ``field`` (``mission.timeout``, ``obstacles[3].motion.path``) in
+    YAML ``text``: the line of its own key, else of the nearest enclosing key written in the text (a
+    value left at its default is reported at its section's key); None when the text does not parse.
+    For errors found after loading (the feasibility check) that name a field."""
+    try:
+        node = parse_yaml(text, None, max_depth=max_depth, max_nodes=max_nodes)
+    except ScenarioError:
+        return None
+    line = None
+    for index, key in _FIELD_PART.findall(field):
+        if index:
+            if not isinstance(node, YSeq) or int(index) >= len(node.items):
+                break
+            node = node.items[int(index)]
+            line = node.line or line
+        else:
+            if not isinstance(node, YMap) or key not in node.items:
+                break
+            key_line, node = node.items[key]
+            line = key_line or node.line or line
+    return line

@@ -152,6 +152,7 @@ class SearchReport:
     wall_time: float = 0.0
     episode_seed: int | None = None   # the run's base seed (--nav-seed) every episode used
     first_failure: int = 0            # simulation number of the first failing candidate (0: none)
+    batching: str = ""                # how the simulations ran in batches (search/batched.py), or ""
 
     @property
     def discarded_total(self) -> int:
@@ -211,6 +212,8 @@ class EvalContext:
     stuck_after: float | None = DEFAULT_STUCK_AFTER
     hold: Sprt | None = None
     hold_threshold: float = 0.0
+    batch: int = 1        # candidates simulated together (harness/batch.py) by evaluate_candidates
+    engine: str = "cpu"   # the batch engine that steps them (sim/batch.py: "cpu" or "warp")
 
     def run_seed(self, run: int) -> int | None:
         """The base seed of noise run ``run`` (0: the search's own, the run's --nav-seed)."""
@@ -232,23 +235,77 @@ def _route(space: SearchSpace) -> Any:
 Proposal = tuple  # (offsets, origin) from a strategy, or (offsets, origin, run) with a noise run
 
 
+def unpack(proposal: Proposal) -> tuple[tuple[float, ...], str, int]:
+    """(offsets, origin, run) of a proposal (run 0, the search's own noise, when it names none)."""
+    offsets, origin, *run = proposal
+    return tuple(offsets), origin, (run[0] if run else 0)
+
+
 def evaluate_candidate(ctx: EvalContext, offsets: Sequence[float], origin: str, run: int = 0) -> Candidate:
     """Simulate one candidate under noise run ``run``; never raises for a harness failure
     (recorded as harness-error)."""
     from ..harness.runner import run_scenario
-    from ..scenario.model import content_hash
-    from .fitness import read_episode
 
     scenario = ctx.space.apply(offsets)
     t0 = time.perf_counter()
     try:
         res = run_scenario(scenario, ctx.subject_factory(), seed=ctx.run_seed(run), stuck_after=ctx.stuck_after)
-        reading, culprit = read_episode(res, _route(ctx.space))
     except KeyboardInterrupt:
         raise
     except Exception as exc:  # the harness itself failed: record, never raise inside the loop
+        res = exc
+    return _candidate(ctx, offsets, origin, scenario, res, t0, run)
+
+
+def evaluate_candidates(ctx: EvalContext, proposals: Sequence[Proposal],
+                        batching: Any = None) -> list[Candidate]:
+    """``evaluate_candidate`` for each proposal, in order, the episodes run ``ctx.batch`` at a time
+    in lockstep when the subject answers the batch protocol (harness/batch.py): the same
+    candidates, bit for bit, wall times aside. ``batching`` (a harness.batch.Batching) counts how."""
+    return list(iter_candidates(ctx, proposals, batching))
+
+
+def iter_candidates(ctx: EvalContext, proposals: Sequence[Proposal],
+                    batching: Any = None) -> Iterator[Candidate]:
+    """``evaluate_candidates``'s candidates, each as soon as its episode is known (harness/batch.
+    iter_batch: alone, one by one; in a batch, when the batch ends)."""
+    from ..harness.batch import iter_batch
+
+    proposals = [unpack(p) for p in proposals]
+    scenarios = [ctx.space.apply(offsets) for offsets, _, _ in proposals]
+    t0 = time.perf_counter()
+    results = iter_batch(scenarios, ctx.subject_factory, seeds=[ctx.run_seed(run) for _, _, run in proposals],
+                         stuck_after=ctx.stuck_after, batch=ctx.batch, call_factory=True, batching=batching,
+                         engine=ctx.engine)
+    for (offsets, origin, run), sc in zip(proposals, scenarios):
+        try:
+            res = next(results)
+        except KeyboardInterrupt:
+            raise
+        except Exception as exc:   # the harness itself failed: every candidate left records it
+            results = iter([exc] * len(scenarios))
+            res = exc
+        yield _candidate(ctx, offsets, origin, sc, res, t0, run)
+        t0 = time.perf_counter()
+
+
+def _candidate(ctx: EvalContext, offsets: Sequence[float], origin: str, scenario: Scenario, res: Any,
+               t0: float, run: int = 0) -> Candidate:
+    """The Candidate of an episode's result under noise run ``run`` (or of the exception the
+    harness raised for it)."""
+    from ..scenario.model import content_hash
+    from .fitness import read_episode
+
+    if not isinstance(res, Exception):
+        try:
+            reading, culprit = read_episode(res, _route(ctx.space))
+        except KeyboardInterrupt:
+            raise
+        except Exception as exc:
+            res = exc
+    if isinstance(res, Exception):   # the harness itself failed: record, never raise inside the loop
         return Candidate(0, "", origin, tuple(offsets), "harness-error", math.nan, "",
-                         f"{type(exc).__name__}: {exc}", {}, content_hash(scenario),
+                         f"{type(res).__name__}: {res}", {}, content_hash(scenario),
                          time.perf_counter() - t0, scenario, signature=("harness-error", "", 0, 0), run=run)
     cand = Candidate(0, "", origin, tuple(offsets), res.outcome.value, float(res.metrics.min_clearance),
                      culprit, res.message, res.metrics.as_dict(), content_hash(scenario),
@@ -259,7 +316,11 @@ def evaluate_candidate(ctx: EvalContext, offsets: Sequence[float], origin: str, 
 
 
 def serial_evaluator(ctx: EvalContext, proposals: Sequence[Proposal]) -> Iterator[Candidate]:
-    """The default evaluator: one candidate after the other, in proposal order."""
+    """The default evaluator: one candidate after the other, in proposal order (with ``ctx.batch``
+    > 1, the generation in one batch)."""
+    if ctx.batch > 1:
+        yield from iter_candidates(ctx, proposals)
+        return
     for proposal in proposals:
         yield evaluate_candidate(ctx, *proposal)
 
@@ -791,7 +852,8 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
                stop: Callable[[], bool] | None = None, space: SearchSpace | None = None,
                subject: str = "", episode_seed: int | None = None,
                stuck_after: float | None = DEFAULT_STUCK_AFTER, evaluator: Evaluator | None = None,
-               recorder: Recorder | None = None, hold: float | None = None) -> SearchReport:
+               recorder: Recorder | None = None, hold: float | None = None, batch: int = 1,
+               engine: str = "cpu") -> SearchReport:
     """Search for failures of ``subject_factory()`` planners around ``seed``.
 
     Exactly ``budget`` simulations of valid candidates (fewer only if interrupted or if the
@@ -809,6 +871,11 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
     while the search goes on, with a cap no larger than the plan's, ``_early_shrink``) and
     ``discard()`` (give up what is still in flight when the search ends early), as the
     worker-process one in search/parallel.py does; the result does not depend on the evaluator.
+    ``batch`` > 1 simulates each generation's candidates together, in lockstep, when the subject
+    answers the batch protocol (harness/batch.py): the same search, faster; search/batched.py's
+    ``batch_evaluator`` also batches the generations in flight together and the failures' shrinks.
+    ``engine`` names the batch engine ("cpu"; "warp": MuJoCo Warp, sim/warp_engine.py, whose
+    trajectories agree with the CPU's within a tolerance, not bit for bit).
     ``recorder`` (``Recorder``) is told every candidate and failure as the search goes, so that a
     search killed at any moment has written what it found (search/freeze.py: ``SearchRecorder``).
     ``hold`` (default holding.DEFAULT_HOLD, 0.9): a failure counts (is distinct, shrunk, frozen) only
@@ -832,7 +899,8 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
                           subject_version=None, strategy=strategy, seed_value=seed_value, budget=budget,
                           shrink_budget=str(shrink_budget), params=[p.name for p in space.params],
                           episode_seed=episode_seed, hold=hold, randomness=noisy)
-    ctx = EvalContext(space, subject_factory, episode_seed, stuck_after, test if noisy else None, hold)
+    ctx = EvalContext(space, subject_factory, episode_seed, stuck_after, test if noisy else None, hold,
+                      batch=batch, engine=engine)
     sim = _Simulator(ctx, report, stop, evaluator, recorder)
     searcher = make_strategy(strategy, space, report, budget, seed_value)
     told = getattr(searcher, "confirmed", None)   # strategies.py: prefer failures that hold
@@ -912,6 +980,9 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
         if confirming.pending:   # cut short during the search phase
             report.interrupted = True
             close_confirming()
+        batching = getattr(evaluator, "batching", None)
+        if batching is not None and batching.batched:
+            report.batching = batching.describe()
         if report.interrupted:
             for f in report.failures:
                 if f.shrink_sims == 0 and not f.note and any(f.found.offsets):

@@ -18,7 +18,8 @@ A failure's robustness is -1 + progress / 2: failures rank before every success,
 failures the one that got less far ranks first.
 
 The *cause signature* tells failures apart by behaviour, not by parameters: outcome, culprit
-obstacle (inserted obstacles are one culprit "inserted", whichever slot holds them), where the
+obstacle (inserted obstacles are one culprit "inserted", whichever slot holds them; a terrain
+element, ``terrain:<name>``, for a fall, a tip-over, being stuck on it or driving into its face), where the
 culprit is along the seed's route (a seed obstacle: where the seed has it, part of its identity; an
 inserted box: where it stands) and how far along the route the robot was when it failed (both in
 PLACE_BINS bins). Two failures with the same signature fail the same way.
@@ -69,6 +70,7 @@ class Route:
         # a seed obstacle's place is where the seed has it: part of its identity, so a nudge across
         # a quarter boundary (the paper seeds' obstacles sit on one) is not a new way of failing
         self.places = {o.name: _bin(self.fraction(o.x, o.y)) for o in seed.obstacles}
+        self.places.update({f"terrain:{el.name}": _bin(self.fraction(el.x, el.y)) for el in seed.terrain})
 
     def fraction(self, x: float, y: float) -> float:
         """Arc-length fraction (0..1) of the route point nearest to (x, y)."""
@@ -98,10 +100,16 @@ def _bin(fraction: float) -> int:
 
 
 def culprit_of(res: Any) -> str:
-    """The obstacle hit, the one the safety layer stopped for, or (timeout) the one nearest to
-    where the robot ended, else nearest over the run."""
+    """The obstacle hit, the one the safety layer stopped for, the terrain element the robot
+    fell from, tipped on, was stuck at or drove into (``terrain:<name>``), or (timeout) the
+    obstacle nearest to where the robot ended, else nearest over the run."""
     if res.collision is not None:
+        if getattr(res.collision, "terrain", False):
+            return terrain_culprit(res.scenario, res.collision.obstacle, res.collision.x, res.collision.y)
         return res.collision.obstacle
+    event = getattr(res, "terrain_event", None)
+    if event is not None:
+        return terrain_culprit(res.scenario, event.element, event.x, event.y)
     if res.safety_stop is not None:
         return res.safety_stop.obstacle
     if res.outcome.value == "timeout" and len(res.trajectory.pose):
@@ -110,7 +118,23 @@ def culprit_of(res: Any) -> str:
         name = min_clearance(res.scenario, res.trajectory.t[-1:], pose[-1:])[1]
         if name:
             return name
+        if res.scenario.terrain:       # no obstacle near: the terrain element it ended beside
+            return terrain_culprit(res.scenario, "", float(pose[-1, 0]), float(pose[-1, 1]), margin=1.0)
     return res.metrics.min_clearance_obstacle
+
+
+def terrain_culprit(scenario: Any, label: str, x: float, y: float, margin: float = 0.3) -> str:
+    """``terrain:<name>`` of the element a message names ("off platform 'dock'", "ramp 'r'"), or
+    of the element under (x, y) (its outline grown by ``margin``); "" over the plain floor."""
+    import re
+
+    names = {el.name for el in scenario.terrain}
+    quoted = re.findall(r"'([^']*)'", label or "")
+    if quoted and quoted[-1] in names:
+        return f"terrain:{quoted[-1]}"
+    from ..scenario.ground import element_at
+    i = element_at(scenario, x, y, margin=margin)
+    return f"terrain:{scenario.terrain[i].name}" if i is not None else ""
 
 
 def read_episode(res: Any, route: Route) -> tuple[Reading, str]:

@@ -101,11 +101,12 @@ def standalone_scenario(scenario: Scenario, seed: Scenario, *, name: str, descri
 
 
 def save_standalone(scenario: Scenario, seed: Scenario, path: Path) -> None:
-    """Write ``scenario`` to ``path`` atomically, its mesh files copied beside it."""
+    """Write ``scenario`` to ``path`` atomically, its mesh and heightfield files copied beside it."""
     from ..scenario.dump import save_scenario
     from ..scenario.modeline import ensure_project_schema
 
     path.parent.mkdir(parents=True, exist_ok=True)
+    scenario = _with_body_copy(scenario, seed, path.parent)
     save_scenario(_with_mesh_copies(scenario, seed, path.parent), path)
     ensure_project_schema(path)     # the schema its modeline names, so an editor reads it at once
 
@@ -174,28 +175,35 @@ def freeze_failures(report: SearchReport, space: SearchSpace, out_dir: str | Pat
 
 def _with_mesh_copies(scenario: Scenario, seed: Scenario, folder: Path) -> Scenario:
     """The frozen scenario with its mesh files copied beside it (``meshes/<stem>-<hash><suffix>``,
-    named by their content so equal files are stored once): a mesh path must stay inside the
-    scenario's folder, and the frozen file lives elsewhere than its seed."""
+    named by their content so equal files are stored once), and its heightfield files
+    (``heightmaps/``): a file's path must stay inside the scenario's folder, and the frozen file
+    lives elsewhere than its seed."""
     import hashlib
     import shutil
 
     from ..scenario.model import MeshObstacle
 
-    if not any(isinstance(o, MeshObstacle) for o in scenario.obstacles):
+    grids = [el for el in scenario.terrain if el.kind == "heightfield"]
+    if not any(isinstance(o, MeshObstacle) for o in scenario.obstacles) and not grids:
         return scenario
     base = Path(seed.source).parent if seed.source else Path.cwd()
-    obstacles = []
-    for obs in scenario.obstacles:
-        if isinstance(obs, MeshObstacle):
-            src = base / obs.file
-            digest = hashlib.sha256(src.read_bytes()).hexdigest()[:12]
-            rel = Path("meshes") / f"{src.stem}-{digest}{src.suffix.lower()}"
-            if not (folder / rel).exists():
-                (folder / rel.parent).mkdir(parents=True, exist_ok=True)
-                shutil.copyfile(src, folder / rel)
-            obs = replace(obs, file=rel.as_posix())
-        obstacles.append(obs)
-    return replace(scenario, obstacles=tuple(obstacles))
+
+    def copied(file: str, kind: str) -> str:
+        src = base / file
+        digest = hashlib.sha256(src.read_bytes()).hexdigest()[:12]
+        rel = Path(kind) / f"{src.stem}-{digest}{src.suffix.lower()}"
+        if not (folder / rel).exists():
+            (folder / rel.parent).mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(src, folder / rel)
+        return rel.as_posix()
+
+    obstacles = tuple(replace(o, file=copied(o.file, "meshes")) if isinstance(o, MeshObstacle) else o
+                      for o in scenario.obstacles)
+    # heightfield files likewise (heightmaps/): the grid's digest is the file's content, so the
+    # frozen scenario hashes as the one that failed
+    terrain = tuple(replace(el, file=copied(el.file, "heightmaps")) if el.kind == "heightfield" else el
+                    for el in scenario.terrain)
+    return replace(scenario, obstacles=obstacles, terrain=terrain)
 
 
 def new_search_id() -> str:
@@ -445,3 +453,26 @@ def write_junit(items: Iterable[tuple[SearchReport, SearchSpace]], path: str | P
                                 f"seed {report.seed_value})", cases))
     atomic_write_text(path, to_xml_report_string(suites))
     return Path(path)
+
+
+def _with_body_copy(scenario: Scenario, seed: Scenario, folder: Path) -> Scenario:
+    """The frozen scenario with its MJCF robot copied beside it (``bodies/<stem>-<hash>/``, named
+    by the robot file's content digest, with the files it names in the same layout), as meshes are:
+    the frozen file lives elsewhere than its seed, and the robot must lie in its folder."""
+    import shutil
+
+    from ..scenario.mjcf_files import mjcf_files
+
+    body = scenario.robot.body
+    if body.kind != "mjcf":
+        return scenario
+    base = (Path(seed.source).parent if seed.source else Path.cwd()) / body.file
+    src_dir = base.resolve().parent
+    rel_dir = Path("bodies") / f"{base.stem}-{body.digest or 'robot'}"
+    for file in mjcf_files(base):
+        target = folder / rel_dir / file.relative_to(src_dir)
+        if not target.exists():
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(file, target)
+    moved = (rel_dir / base.name).as_posix()
+    return replace(scenario, robot=replace(scenario.robot, body=replace(body, file=moved)))

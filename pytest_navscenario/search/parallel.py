@@ -19,8 +19,8 @@ import uuid
 from dataclasses import dataclass
 from typing import Any, Iterator, Sequence
 
-from .engine import (Candidate, EvalContext, Failure, SearchReport, _Simulator, evaluate_candidate, shrink_failure,
-                     shrink_order, shrink_status)
+from .engine import (Candidate, EvalContext, Failure, SearchReport, _Simulator, evaluate_candidate,
+                     evaluate_candidates, shrink_failure, shrink_order, shrink_status, unpack)
 from .holding import Estimate
 
 _CONTEXTS: dict[str, EvalContext] = {}   # worker side: the first copy of each context received
@@ -54,6 +54,26 @@ def _context(token: str, ctx: EvalContext) -> EvalContext:
             _CONTEXTS.clear()
         cached = _CONTEXTS[token] = ctx
     return cached
+
+
+@dataclass(frozen=True)
+class CandidateBatchJob:
+    """Several candidates simulated together in a worker (``engine.evaluate_candidates``: in
+    lockstep when the subject answers the batch protocol): one worker's share of a generation."""
+    ctx: EvalContext
+    proposals: tuple[tuple[tuple[float, ...], str, int], ...]   # (offsets, origin, noise run)
+    token: str
+
+    def run(self) -> list[Candidate]:
+        cands = evaluate_candidates(_context(self.token, self.ctx), self.proposals)
+        for cand in cands:
+            cand.scenario = None
+        return cands
+
+    def restore(self, cands: list[Candidate]) -> list[Candidate]:
+        for cand, (offsets, *_) in zip(cands, self.proposals):
+            cand.scenario = self.ctx.space.apply(offsets)
+        return cands
 
 
 @dataclass(frozen=True)
@@ -116,7 +136,10 @@ class executor_evaluator:   # noqa: N801  (used like a function: evaluator=execu
     """An evaluator that runs each generation on ``executor`` (see the module docstring)."""
 
     def __init__(self, executor: Any):
+        from ..harness.batch import Batching
+
         self.executor = executor
+        self.batching = Batching()     # the candidates sent to the workers as batches (the summary line)
         self._ctx: EvalContext | None = None
         self._token = ""
         self._open: dict[int, Any] = {}              # id -> Pending: submitted, result not yet taken
@@ -139,8 +162,16 @@ class executor_evaluator:   # noqa: N801  (used like a function: evaluator=execu
     def __call__(self, ctx: EvalContext, proposals: Sequence[tuple]) -> Iterator[Candidate]:
         """Submit the generation now; the iterator waits for each candidate in proposal order."""
         token = self._token_for(ctx)
-        pending = self._submit([CandidateJob(ctx, tuple(offsets), origin, token, *run)
-                                for offsets, origin, *run in proposals])
+        proposals = [unpack(p) for p in proposals]
+        if ctx.batch > 1 and len(proposals) > 1 and _answers_batches(ctx):   # each worker's share as a batch
+            workers = max(1, int(getattr(self.executor, "workers", 1)))
+            size = min(ctx.batch, -(-len(proposals) // workers))
+            chunks = [tuple(proposals[i:i + size]) for i in range(0, len(proposals), size)]
+            pending = self._submit([CandidateBatchJob(ctx, chunk, token) for chunk in chunks])
+            self.batching.batched += len(proposals)
+            self.batching.batches += len(chunks)
+            return (cand for p in pending for cand in self._take(p))
+        pending = self._submit([CandidateJob(ctx, offsets, origin, token, run) for offsets, origin, run in proposals])
         return (self._take(p) for p in pending)
 
     def start_shrink(self, ctx: EvalContext, found: Candidate, cap: int, known: Sequence[Candidate] = (),
@@ -203,6 +234,30 @@ class executor_evaluator:   # noqa: N801  (used like a function: evaluator=execu
             p.cancel()
         self._open.clear()
         self._shrinks = []
+
+
+_BATCHES: dict[int, bool] = {}
+
+
+def _answers_batches(ctx: EvalContext) -> bool:
+    """True if the context's subject makes planners that answer the batch protocol, as far as this
+    process can tell without making one (a class, or a spec naming one); False otherwise, and for an
+    exec: program or a subject this process cannot load (then each candidate is its own job)."""
+    factory = ctx.subject_factory
+    key = id(factory)
+    if key not in _BATCHES:
+        from ..subjects.protocol import is_batch_planner
+        spec = getattr(factory, "spec", None)
+        try:
+            if isinstance(spec, str):
+                from ..subjects.loading import load_subject
+                factory = None if spec.strip().startswith("exec:") else load_subject(spec, cwd=getattr(factory, "cwd", None))
+            answer = isinstance(factory, type) and is_batch_planner(factory)
+        except Exception:
+            answer = False
+        _BATCHES.clear()
+        _BATCHES[key] = answer
+    return _BATCHES[key]
 
 
 def _stripped(cand: Candidate) -> Candidate:

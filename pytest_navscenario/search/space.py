@@ -22,7 +22,7 @@ Defaults can be overridden in the seed's YAML ``search:`` mapping::
       waypoint_dx: 0            # every waypoint gets its own dx/dy offsets
       waypoint_dy: 0
       min_size: 0.05            # m: sizes never shrink below this
-      frozen: [wall_left, start]  # obstacle names, start, goal, waypoints, waypoints[i]
+      frozen: [wall_left, start]  # obstacle and terrain element names, start, goal, waypoints, waypoints[i]
       insert: 2                 # at most this many new box obstacles (0 = none)
       insert_size: [0.3, 1.0]   # m: side length of an inserted box
       insert_margin: 1.0        # m: inserted boxes lie in the route's bounding box grown by this
@@ -33,10 +33,20 @@ Defaults can be overridden in the seed's YAML ``search:`` mapping::
       drift_per_metre: [0, 0.1] # sensor and localisation faults (default 0: off): lidar_noise_per_metre,
                                 # lidar_dropout_at_max, lidar_spurious, drift_per_metre,
                                 # drift_per_second, yaw_drift_per_metre; added to the seed's value
+      terrain_dx: 1.0           # m: each terrain element moved (a platform's edge, a ramp's place)
+      terrain_dy: 1.0
+      terrain_yaw: 0            # degrees (default 0: off)
+      terrain_size: 0           # m added to length and width (default 0: off)
+      terrain_slope: 5          # degrees added to a ramp's slope, its high end kept where it is
+      terrain_rise: [-0.05, 0.1]  # m added to a step's rise, a platform's height, a pit's depth
+      terrain_roughness: [-0.02, 0.05]  # m added to rough ground's amplitude
 
 A moving obstacle's dx/dy shift its whole path (every point, or its start for a constant
 velocity); its motion_start and motion_speed move when and how fast it goes. A polygon or mesh is
-moved and turned like a box (no size change). Fault parameters live on the part ``robot``.
+moved and turned like a box (no size change). Fault parameters live on the part ``robot``. A
+terrain element (part ``terrain:<name>``) is moved, and by its kind made steeper (a ramp), higher
+(a step, a platform, a pit's depth) or rougher; zero is the seed's element, so shrinking brings a
+failure back toward the seed's terrain.
 
 Insertion and removal are parameters like the others and zero means "as in the seed": an
 inserted obstacle exists when its ``on`` flag is >= 0.5 (flags shrink to 0, so shrinking removes
@@ -67,6 +77,8 @@ from ..scenario.search_settings import search_settings
 # The search: section's keys, ranges, defaults and limits are declared in scenario/search_keys.py
 # (read there when the seed loads); these names are kept for the modules and tests that use them.
 DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {key.name: key.default for key in RANGES}
+MIN_TERRAIN = 0.005     # m: a searched rise, height, depth or amplitude never drops below this
+SLOPE_RANGE = (1.0, 80.0)   # degrees a searched ramp's slope stays within
 ROBOT_PARAMS = ("lidar_noise_per_metre", "lidar_dropout_at_max", "lidar_spurious", "drift_per_metre",
                 "drift_per_second", "yaw_drift_per_metre")
 MIN_SPEED = 0.1         # m/s: a moving obstacle's speed never drops below this
@@ -251,8 +263,29 @@ def _apply_obstacles(space: SearchSpace, scenario: Scenario, parts) -> Scenario:
         if d and d.get("removed", 0.0) >= FLAG_ON and removed < space.limits.remove:
             removed += 1
             continue
-        out.append(_mutate_obstacle(obs, d, space.min_size) if d else obs)
+        out.append(_followable(_mutate_obstacle(obs, d, space.min_size), scenario, d) if d else obs)
     return replace(scenario, obstacles=tuple(out))
+
+
+def _followable(obs: Any, scenario: Scenario, d: Mapping[str, float]) -> Any:
+    """A moving obstacle whose speed (or size) the candidate changed, no faster than the physics
+    step can follow (the loader refuses faster ones: ``loader.max_resolved_speed``); unchanged when
+    it already is, or when even MIN_SPEED is too fast (then the loader's check discards it)."""
+    motion = getattr(obs, "motion", None)
+    if motion is None or not ("speed" in d or "size" in d):
+        return obs
+    from ..scenario.loader import max_resolved_speed
+    limit = math.floor(max_resolved_speed(scenario, obs) * 10**POSITION_DECIMALS) / 10**POSITION_DECIMALS
+    if motion.velocity is not None:
+        speed = math.hypot(*motion.velocity)
+        if speed <= limit or limit < MIN_SPEED:
+            return obs
+        scale = limit / speed
+        velocity = tuple(math.trunc(v * scale * 10**POSITION_DECIMALS) / 10**POSITION_DECIMALS for v in motion.velocity)
+        return replace(obs, motion=replace(motion, velocity=velocity))
+    if motion.speed <= limit or limit < MIN_SPEED:
+        return obs
+    return replace(obs, motion=replace(motion, speed=limit))
 
 
 def _apply_inserted(space: SearchSpace, scenario: Scenario, parts) -> Scenario:
@@ -294,8 +327,61 @@ def _apply_robot(space: SearchSpace, scenario: Scenario, parts) -> Scenario:
     return replace(scenario, robot=_mutate_robot(scenario.robot, d)) if d else scenario
 
 
-BUILDERS = [_obstacle_params, _mission_params, _inserted_params, _robot_params]
-APPLIERS = [_apply_obstacles, _apply_inserted, _apply_mission, _apply_robot]
+def _terrain_params(space: SearchSpace):
+    for el in space.seed.terrain:
+        if el.name in space.frozen:
+            continue
+        attrs = ["dx", "dy", "yaw", "size"]
+        attrs += {"ramp": ["slope"], "steps": ["rise"], "platform": ["rise"], "pit": ["rise"],
+                  "rough": ["roughness"]}.get(el.kind, [])
+        for attr in attrs:
+            r = space.range_of(f"terrain_{attr}")
+            if r:
+                yield Param(f"terrain.{el.name}.{attr}", f"terrain:{el.name}", attr, *r)
+
+
+def _apply_terrain(space: SearchSpace, scenario: Scenario, parts) -> Scenario:
+    if not any(k.startswith("terrain:") for k in parts):
+        return scenario
+    return replace(scenario, terrain=tuple(_mutate_terrain(el, parts[f"terrain:{el.name}"], space.min_size)
+                                           if f"terrain:{el.name}" in parts else el for el in scenario.terrain))
+
+
+def _mutate_terrain(el, d: Mapping[str, float], min_size: float):
+    """A terrain element moved (dx, dy), turned (yaw), grown (size: length and width; a flight of
+    steps only wider), a ramp made steeper or gentler with its high end where it was (slope), a
+    step's rise, a platform's height or a pit's depth changed (rise), rough ground's amplitude."""
+    changes: dict[str, Any] = {}
+    x = el.x + d.get("dx", 0.0)
+    y = el.y + d.get("dy", 0.0)
+    if "yaw" in d:
+        changes["yaw"] = _r(el.yaw + d["yaw"])
+    ds = d.get("size", 0.0)
+    if ds:
+        changes["width"] = _r(max(min_size, el.width + ds))
+        if el.kind != "steps":
+            changes["length"] = _r(max(min_size, el.length + ds))
+    if "slope" in d and el.kind == "ramp":
+        length = changes.get("length", el.length)
+        slope = min(SLOPE_RANGE[1], max(SLOPE_RANGE[0], math.degrees(math.atan2(el.rise, length)) + d["slope"]))
+        new = el.rise / math.tan(math.radians(slope))
+        yaw = math.radians(changes.get("yaw", el.yaw))
+        x += (length - new) / 2 * math.cos(yaw)      # the high end (+x) stays where it was
+        y += (length - new) / 2 * math.sin(yaw)
+        changes["length"] = _r(max(min_size, new))
+    if "rise" in d:
+        key = {"steps": "rise", "platform": "height", "pit": "depth"}.get(el.kind)
+        if key is not None:
+            changes[key] = _r(max(MIN_TERRAIN, getattr(el, key) + d["rise"]))
+    if "roughness" in d and el.kind == "rough":
+        changes["amplitude"] = _r(max(MIN_TERRAIN, el.amplitude + d["roughness"]))
+    if "dx" in d or "dy" in d or "slope" in d:
+        changes["x"], changes["y"] = _r(x), _r(y)
+    return replace(el, **changes)
+
+
+BUILDERS = [_obstacle_params, _mission_params, _inserted_params, _robot_params, _terrain_params]
+APPLIERS = [_apply_obstacles, _apply_inserted, _apply_mission, _apply_robot, _apply_terrain]
 
 
 def _r(value: float) -> float:
@@ -393,8 +479,11 @@ def invalid_reason(scenario: Scenario) -> str | None:
     A polygon whose corners were moved into a self-intersecting outline, obstacles covering the
     start or goal footprint (a moving obstacle: the start, where it stands at t = 0; it may cross
     the goal), anything else the loader's checks across keys refuse (a waypoint inside an
-    obstacle: ``loader-refuses:<field>``), or no collision-free path for the footprint at all
-    (``paths.path_exists``). A candidate that passes loads again when frozen.
+    obstacle: ``loader-refuses:<field>``), no collision-free path for the footprint at all
+    (``paths.path_exists``), a shortest way that cannot be driven within the timeout at the robot's
+    top speed (``too-slow``), or a moving obstacle whose motion crosses a static one
+    (``mover-through:<name>``): the same checks as a hand-written scenario's at setup
+    (verdict/feasibility.py). A candidate that passes loads again when frozen.
     """
     from ..scenario.geometry import footprint_polygon, obstacle_polygon, polygon_problem
 
@@ -419,6 +508,13 @@ def invalid_reason(scenario: Scenario) -> str | None:
     from ..verdict.paths import path_exists
     if not path_exists(scenario):
         return "no-path"
+    from ..verdict.feasibility import too_slow
+    if too_slow(scenario) is not None:     # no planner reaches the goal in time: not a failure to find
+        return "too-slow"
+    from ..verdict.movers import mover_through
+    crossing = mover_through(scenario)
+    if crossing is not None:               # a person through a wall: the simulation of the impossible
+        return f"mover-through:{crossing.mover}"
     return None
 
 

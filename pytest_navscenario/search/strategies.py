@@ -145,7 +145,7 @@ class HillClimb:
     def __init__(self, space: SearchSpace, report: Any, budget: int, seed_value: int):
         self.space, self.admission = space, _Admission(space, report, budget)
         obstacle_groups = [tuple(i for i in g if space.params[i].kind == "offset")
-                           for g in space.groups if space.params[g[0]].part.startswith("obstacle:")]
+                           for g in space.groups if space.params[g[0]].part.startswith(("obstacle:", "terrain:"))]
         self.groups = [g for g in obstacle_groups if g] or [g for g in space.groups]
         self.rnd = random.Random(seed_value)
         self.group = self.rnd.randrange(len(self.groups)) if seed_value else 0

@@ -58,7 +58,9 @@ def _describe(value: Any) -> str:
 
 
 def validate_command(cmd: Any) -> tuple[float, float, float] | str:
-    """(vx, vy, wz) as floats, or a plain-words message saying what is wrong with ``cmd``."""
+    """(vx, vy, wz) as floats, or a plain-words message saying what is wrong with ``cmd``. An
+    exception instance (a batch planner's answer for an episode it cannot serve) reads as if
+    ``act`` had raised it, so that episode ends with the message it gets alone."""
     expected = "expected a Command(vx, vy, wz) or a sequence of 3 finite floats"
     if (type(cmd) is Command or type(cmd) is tuple) and len(cmd) == 3:   # the common case, fast
         try:
@@ -68,6 +70,8 @@ def validate_command(cmd: Any) -> tuple[float, float, float] | str:
         else:
             if math.isfinite(vx + vy + wz):
                 return vx, vy, wz
+    if isinstance(cmd, Exception):   # a batch planner's answer for one episode it cannot serve
+        return f"planner.act raised {type(cmd).__name__}: {cmd}"
     if type(cmd) is Command or type(cmd) is tuple:
         items = cmd
     elif isinstance(cmd, np.ndarray):

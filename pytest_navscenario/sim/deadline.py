@@ -45,6 +45,7 @@ class TickDeadline:
         self._old_timer = (0.0, 0.0)
         self._entered_at = 0.0
         self._armed_at = 0.0
+        self.scale = 1          # a batch call of k episodes may take k times the limit (sim/batch.py)
 
     def __enter__(self) -> "TickDeadline":
         if self._use_alarm:
@@ -63,14 +64,19 @@ class TickDeadline:
                 signal.setitimer(signal.ITIMER_REAL, left, interval)
 
     def _on_alarm(self, signum, frame) -> None:
-        raise PlannerTimeout(f"planner did not answer within the per-tick limit of {self.limit:g} s")
+        raise PlannerTimeout(f"planner did not answer within the per-tick limit of {self._limit_text()}")
+
+    def _limit_text(self) -> str:
+        if self.scale == 1:
+            return f"{self.limit:g} s"
+        return f"{self.limit * self.scale:g} s ({self.limit:g} s for each of the call's {self.scale} episodes)"
 
     def arm(self) -> None:
         if self.limit is None:
             return
         self._armed_at = time.perf_counter()
         if self._use_alarm:
-            signal.setitimer(signal.ITIMER_REAL, self.limit)
+            signal.setitimer(signal.ITIMER_REAL, self.limit * self.scale)
 
     def disarm(self) -> float:
         """Stop the timer; return the seconds since arm(). Raises PlannerTimeout if over the limit."""
@@ -79,7 +85,7 @@ class TickDeadline:
         if self._use_alarm:
             signal.setitimer(signal.ITIMER_REAL, 0)
         elapsed = time.perf_counter() - self._armed_at
-        if elapsed > self.limit:
+        if elapsed > self.limit * self.scale:
             raise PlannerTimeout(
-                f"planner took {elapsed:.3f} s for one tick, over the per-tick limit of {self.limit:g} s")
+                f"planner took {elapsed:.3f} s for one tick, over the per-tick limit of {self._limit_text()}")
         return elapsed

@@ -28,7 +28,9 @@ from ..scenario.model import Mission, Scenario
 from ..subjects.protocol import Observation
 from .command import Drive, call_planner, planner_traceback, validate_command
 from .deadline import PlannerTimeout, TickDeadline
-from .lidar import Lidar
+from .ground_safety import ground_safety
+from .lidar import Lidar, base_rotation
+from .lidar3d import CloudLidar, LEVEL
 from .faults import Faults
 from .moving import MovingObstacles, describe_collision
 from .trajectory import Collision, SafetyStop, SubjectFailure, TerrainEvent, Trajectory
@@ -163,6 +165,10 @@ class Episode:
         self.warn_count = d.warning.number         # a live view
         self.own_handler = mujoco.get_mju_user_warning() is on_mujoco_warning
         self.lidar = Lidar(scenario, world, d, self.n_ticks + 1, seed)
+        self.cloud = (CloudLidar(scenario, world, d, self.n_ticks + 1, seed)
+                      if scenario.robot.lidar3d is not None else None)
+        if self.cloud is not None and type(self).observe is Episode.observe:
+            self.observe = self.observe_cloud       # the planar body's 3D scan, level at z = 0
         self.moving = (MovingObstacles(scenario, d.mocap_pos, dt, spt) if world.model.nmocap else None)
         self._allocate_records(self.n_ticks * spt + 1)
         robot = scenario.robot
@@ -171,7 +177,7 @@ class Episode:
                        else None)
         self.i = 0              # physics step index of the current state
         self.tick = 0           # control ticks run
-        self.t_physics = self.t_rays = self.t_planner = self.t_safety = 0.0
+        self.t_physics = self.t_rays = self.t_planner = self.t_safety = self.t_cloud = 0.0
         self.collision: Collision | None = None
         self.safety_stop: SafetyStop | None = None
         self.failure: SubjectFailure | None = None
@@ -222,6 +228,12 @@ class Episode:
     def start(self) -> None:
         """The robot at the start pose (a collision there ends the episode), the planner reset (the
         tick limit is for act only: reset may build maps)."""
+        self.place()
+        self._reset_planner()
+
+    def place(self) -> None:
+        """The robot at the start pose, its contacts checked: a collision there ends the episode
+        before the planner is reset (a batch resets its planner after every episode's place)."""
         m, d, start = self.model, self.data, self.scenario.mission.start
         self.qpos[:] = (start.x, start.y, start.yaw_rad)
         if self.moving is not None:
@@ -235,6 +247,8 @@ class Episode:
             if self.collision is not None:
                 self.collision = describe_collision(self.collision, self.scenario, self.qvel_buf[0])
                 raise EpisodeOver("collision")
+
+    def _reset_planner(self) -> None:
         t0 = perf_counter()
         try:
             call_planner(self.planner.reset, self.scenario, None)
@@ -317,8 +331,25 @@ class Episode:
         obs = _new(Observation)
         obs.__dict__.update(tick=tick, time=t, pose=self.seen_pose[tick], velocity=self.seen_vel[tick],
                             ranges=ranges, angles=lidar.angles, goal=mission.goal,
-                            waypoints=mission.left, obstacles=self.obstacles)
+                            waypoints=mission.left, obstacles=self.obstacles, points=None, attitude=LEVEL)
         return (t, x, y, yaw, vx, vy, wz), obs
+
+    def observe_cloud(self) -> tuple[tuple[float, ...], Observation]:
+        """``observe`` with the 3D lidar's points (the planar body: level, its base at z = 0)."""
+        state, obs = Episode.observe(self)
+        x, y, yaw = state[1], state[2], state[3]
+        c, s = math.cos(yaw), math.sin(yaw)
+        obs.__dict__["points"] = self.scan_cloud(obs.tick, np.array([x, y, 0.0]),
+                                                 np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]))
+        return state, obs
+
+    def scan_cloud(self, tick: int, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
+        """The 3D lidar's points from a base at ``pos`` turned by ``rot`` (world from base), its
+        time counted apart (``timings["lidar3d"]``)."""
+        t0 = perf_counter()
+        points = self.cloud.scan(tick, pos, rot)
+        self.t_cloud += perf_counter() - t0
+        return points
 
     def check_stuck(self, tick: int, x: float, y: float) -> None:
         """End the episode ("stuck", a timeout) when the robot has entered no new square of
@@ -488,14 +519,17 @@ class Episode:
             command=np.array(self.commands, dtype=float).reshape(-1, 3),
             ranges=self.lidar.ranges(self.tick), angles=self.lidar.angles,
             waypoint_times=tuple(self.mission.passed_at),
-            believed=None if self.faults is None else self.faults.believed_poses())
+            believed=None if self.faults is None else self.faults.believed_poses(),
+            cloud=None if self.cloud is None else self.cloud.ranges(self.tick))
 
     def result(self) -> SimResult:
         trajectory = self.trajectory()
         total = perf_counter() - self.t_start
-        spent = self.t_physics + self.t_rays + self.t_planner
+        spent = self.t_physics + self.t_rays + self.t_planner + self.t_cloud
         timings = {"physics": self.t_physics, "rays": self.t_rays, "planner": self.t_planner,
                    "safety": self.t_safety, "harness": total - spent, "total": total}
+        if self.cloud is not None:
+            timings["lidar3d"] = self.t_cloud      # the 3D lidar's scans, on their own
         return SimResult(trajectory, self.collision, self.safety_stop, self.failure, self.end == "goal",
                          self.end, self.tick, timings)
 
@@ -555,6 +589,8 @@ class RidingEpisode(Episode):
         self.setpoint = (0.0, 0.0, 0.0)
         self.stepping = (self.model, self.data, self.ctrl, self.base_qpos, self.base_qvel, self.pose_buf,
                          self.qvel_buf, range(self.spt - 1))
+        # the safety layer's view of the ground, from the 3D lidar's scans (sim/ground_safety.py)
+        self.ground = ground_safety(scenario, self.body.drop_limit) if self.cloud is not None else None
 
     def _allocate_records(self, n_steps: int) -> None:
         super()._allocate_records(n_steps)
@@ -621,17 +657,53 @@ class RidingEpisode(Episode):
         if self.stuck_ticks:
             self.check_stuck(tick, x, y)
         t0 = perf_counter()
-        c, s = math.cos(yaw), math.sin(yaw)
+        pos, rot = self.base_qpos[:3].copy(), base_rotation(self.base_qpos[3:7])
         lidar = self.lidar
-        lidar.pnt[2] = z + self.mount          # the scan plane rides with the base (level: sim/lidar.py)
-        ranges = lidar.scan(tick, x, y, c, s)
+        # the scan plane is the base's, tilted with it: a ramp ahead reads as a wall, a drop is unseen
+        ranges = lidar.scan_posed(tick, pos + rot[:, 2] * self.mount, rot)
         self.t_rays += perf_counter() - t0
         self.seen[tick] = (x, y, yaw, vx, vy, wz)
+        attitude = np.array([roll, pitch])
+        attitude.flags.writeable = False
+        points = None
+        if self.cloud is not None:   # mounted above the base's ground point, as the 2D lidar
+            points = self.scan_cloud(tick, pos - rot[:, 2] * self.offset if self.offset else pos, rot)
+            if self.ground is not None:
+                t1 = perf_counter()
+                self.ground.see(self.cloud.last_origin, self.cloud.world_points(), z)
+                self.t_safety += perf_counter() - t1
         obs = _new(Observation)
         obs.__dict__.update(tick=tick, time=t, pose=self.seen_pose[tick], velocity=self.seen_vel[tick],
                             ranges=ranges, angles=lidar.angles, goal=mission.goal,
-                            waypoints=mission.left, obstacles=self.obstacles)
+                            waypoints=mission.left, obstacles=self.obstacles, points=points, attitude=attitude)
         return (t, x, y, yaw, vx, vy, wz), obs
+
+    def steps(self) -> tuple[Any, Any, Any]:
+        """``Episode.steps``, with the ground layer's check where a 3D lidar feeds one."""
+        safety_check, act, step_physics = super().steps()
+        if self.ground is not None:
+            safety_check = self.safety_check_ground
+        return safety_check, act, step_physics
+
+    def safety_check_ground(self, state: tuple[float, ...]) -> None:
+        """The collision layer on the obstacles (as ``safety_check``), then the ground layer on the
+        ground the 3D lidar has seen: a halt before a drop or a slope the body cannot take."""
+        t, x, y, yaw, vx, vy, wz = state
+        if abs(vx) > STILL or abs(vy) > STILL or abs(wz) > STILL:
+            t0 = perf_counter()
+            hit = None
+            if self.safety is not None:
+                hit = self.safety.check(x, y, yaw, vx, vy, wz,
+                                        self.moving.now(self.i) if self.moving is not None else None)
+            ground = None if hit is not None else self.ground.check(x, y, self.state3d[2], yaw, vx, vy, wz)
+            self.t_safety += perf_counter() - t0
+            if hit is not None:
+                self._halt(state, hit)
+            if ground is not None:
+                self.safety_stop = SafetyStop(t, "", math.hypot(vx, vy), ground=ground)
+                self.ctrl[:] = 0.0
+                self.record(t, HALT)
+                raise EpisodeOver("safety-stop")
 
     def step_physics(self, setpoint: tuple[float, float, float]) -> None:
         """The tick's physics: the body's controls for the setpoint, then one step at a time, each
@@ -693,7 +765,8 @@ class RidingEpisode(Episode):
             ranges=self.lidar.ranges(self.tick), angles=self.lidar.angles,
             waypoint_times=tuple(self.mission.passed_at),
             believed=None if self.faults is None else self.faults.believed_poses(),
-            z=q[:, 2] - self.offset, roll=np.asarray(roll), pitch=np.asarray(pitch))
+            z=q[:, 2] - self.offset, roll=np.asarray(roll), pitch=np.asarray(pitch),
+            cloud=None if self.cloud is None else self.cloud.ranges(self.tick))
 
     def result(self):
         out = super().result()

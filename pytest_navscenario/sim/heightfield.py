@@ -22,7 +22,7 @@ import numpy as np
 
 from ..scenario.heightmap import HeightGrid
 
-HFIELD_GROUP = 5            # geom group of heightfields: mj_multiRay skips it (hfield_rays casts instead)
+HFIELD_GROUP = 2            # geom group of heightfields: mj_multiRay skips it (hfield_rays casts instead)
 BASE_BELOW_FLOOR = 0.1      # m: the solid base under a heightfield reaches this far below z = 0
 MIN_ELEVATION = 1e-6        # m: MuJoCo needs an elevation range > 0; a flat grid gets this
 
@@ -55,10 +55,12 @@ def hfield_size(grid: HeightGrid, z: float) -> tuple[list[float], float]:
 
 
 def add_heightfield(spec: mujoco.MjSpec, element: Any, grid: HeightGrid, *, name: str | None = None,
-                    contype: int = 2, conaffinity: int = 1, rgba: Any = (0.55, 0.5, 0.42, 1.0)) -> Any:
+                    contype: int = 2, conaffinity: int = 1, friction: Any = None,
+                    rgba: Any = (0.55, 0.5, 0.42, 1.0)) -> Any:
     """Add ``element``'s grid to ``spec`` as an hfield asset and a static geom (named ``name``, by
     default ``terrain:<element name>``) in ``HFIELD_GROUP``; returns the geom. Contacts as
-    obstacles by default (contype 2, conaffinity 1): the caller sets what the ground touches."""
+    obstacles by default (contype 2, conaffinity 1): the caller sets what the ground touches (and
+    its ``friction``, MuJoCo's default when None)."""
     gname = name or f"terrain:{element.name}"
     size, bottom = hfield_size(grid, float(element.z))
     heights = grid.heights
@@ -67,8 +69,30 @@ def add_heightfield(spec: mujoco.MjSpec, element: Any, grid: HeightGrid, *, name
     rows, cols = heights.shape
     spec.add_hfield(name=gname, size=size, nrow=rows, ncol=cols, userdata=data.ravel())
     yaw = math.radians(element.yaw)
+    extra = {} if friction is None else {"friction": list(friction)}
     return spec.worldbody.add_geom(
         name=gname, type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname=gname,
         pos=[float(element.x), float(element.y), bottom],
         quat=[math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0)],
-        contype=contype, conaffinity=conaffinity, group=HFIELD_GROUP, rgba=list(rgba))
+        contype=contype, conaffinity=conaffinity, group=HFIELD_GROUP, rgba=list(rgba), **extra)
+
+
+GRID_KINDS = ("rough", "heightfield")
+_PLACED: dict[Any, tuple[PlacedGrid, ...]] = {}
+
+
+def placed_grids(scenario: Any) -> tuple[PlacedGrid, ...]:
+    """The scenario's rough and heightfield elements as PlacedGrids (empty without any), the same
+    objects for the same terrain within a process (the ray cast prepares each grid once)."""
+    elements = tuple(el for el in getattr(scenario, "terrain", ()) if el.kind in GRID_KINDS)
+    if not elements:
+        return ()
+    from ..scenario.heightmap import height_grid
+
+    key = (elements, scenario.source if any(el.kind == "heightfield" for el in elements) else None)
+    placed = _PLACED.get(key)
+    if placed is None:
+        if len(_PLACED) >= 64:
+            _PLACED.clear()
+        placed = _PLACED[key] = tuple(placed_grid(el, height_grid(el, scenario)) for el in elements)
+    return placed

@@ -71,8 +71,8 @@ def add_terrain(spec: mujoco.MjSpec, scenario: Scenario) -> None:
 def _add_floor(spec: mujoco.MjSpec, scenario: Scenario, bottom: float, common: dict) -> None:
     holes = ground.holes(scenario)
     if not holes:
-        spec.worldbody.add_geom(name="floor/0", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 1],
-                                rgba=FLOOR_RGBA, **common)
+        from .world import add_floor_plane     # on a body of its own: the lidars' rays see it
+        add_floor_plane(spec, name="floor/0", rgba=FLOOR_RGBA, **common)
         return
     for k, part in enumerate(_floor_parts(floor_extent(scenario), [h[0] for h in holes])):
         _add_prism(spec, f"floor/{k}", part, bottom, 0.0, 0.0, FLOOR_RGBA, common)

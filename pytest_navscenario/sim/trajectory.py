@@ -25,8 +25,10 @@ class Collision:
 @dataclass(frozen=True)
 class SafetyStop:
     time: float
-    obstacle: str          # the obstacle the predicted sweep would have hit
+    obstacle: str          # the obstacle the predicted sweep would have hit ("" for the ground)
     speed: float           # robot speed (m/s) when halted
+    ground: str = ""       # the ground it would have driven into, as a phrase ("a drop of 0.50 m
+                           # ahead"): the ground layer (sim/ground_safety.py) of a 3D lidar
 
 
 @dataclass(frozen=True)
@@ -72,6 +74,8 @@ class Trajectory:
     z: np.ndarray | None = None             # (n,)
     roll: np.ndarray | None = None          # (n,)
     pitch: np.ndarray | None = None         # (n,)
+    cloud: np.ndarray | None = None         # (m, rings, beams) float32 3D lidar ranges (robot.lidar3d),
+                                            # no return = its range_max; None without one
 
     @property
     def duration(self) -> float:
@@ -88,8 +92,9 @@ _TRAJ_ARRAYS = ("t", "pose", "velocity", "tick_t", "command", "ranges", "angles"
 _ATTITUDE = ("z", "roll", "pitch")
 
 
-def trajectory_to_dict(traj: Trajectory) -> dict[str, Any]:
-    """Plain lists (JSON / xdist-serialisable). Inverse: trajectory_from_dict."""
+def trajectory_to_dict(traj: Trajectory, *, cloud: bool = False) -> dict[str, Any]:
+    """Plain lists (JSON / xdist-serialisable). Inverse: trajectory_from_dict. ``cloud``: with the
+    3D lidar's ranges, as base64 float32 (a list would be ten times the size)."""
     out: dict[str, Any] = {name: np.asarray(getattr(traj, name)).tolist() for name in _TRAJ_ARRAYS}
     out["waypoint_times"] = list(traj.waypoint_times)
     if traj.believed is not None:
@@ -98,6 +103,10 @@ def trajectory_to_dict(traj: Trajectory) -> dict[str, Any]:
         value = getattr(traj, name)
         if value is not None:
             out[name] = np.asarray(value).tolist()
+    if cloud and traj.cloud is not None:
+        import base64
+        data = np.ascontiguousarray(traj.cloud, dtype="<f4")
+        out["cloud"] = {"shape": list(data.shape), "float32": base64.b64encode(data.tobytes()).decode("ascii")}
     return out
 
 
@@ -114,6 +123,10 @@ def trajectory_from_dict(data: dict[str, Any]) -> Trajectory:
     }
     believed = data.get("believed")
     attitude = {name: np.asarray(data[name], dtype=float) for name in _ATTITUDE if data.get(name) is not None}
+    cloud = data.get("cloud")
+    if cloud is not None:
+        import base64
+        cloud = np.frombuffer(base64.b64decode(cloud["float32"]), dtype="<f4").reshape(cloud["shape"]).copy()
     return Trajectory(**arrays, waypoint_times=tuple(data.get("waypoint_times", ())),
                       believed=None if believed is None else np.asarray(believed, dtype=float).reshape(-1, 3),
-                      **attitude)
+                      cloud=cloud, **attitude)

@@ -11,7 +11,9 @@ harness -> planner
    "scenario": {...the scenario as in YAML (scenario_to_dict): metres, seconds, degrees...}}
   {"type": "observation", "tick": 0, "time": 0.0, "pose": [x, y, yaw_rad],
    "velocity": [vx, vy, wz], "ranges": [...], "angles": [beam angles, rad, robot frame],
-   "goal": [x, y, yaw_rad], "waypoints": [[x, y], ...]}
+   "goal": [x, y, yaw_rad], "waypoints": [[x, y], ...], "attitude": [roll_rad, pitch_rad],
+   "points": [[x, y, z], ...]}     (points: 3D lidar returns, sensor frame, mm precision; only
+                                    with robot.lidar3d)
   {"type": "shutdown"}
 planner -> harness
   {"type": "ready", "name": "optional", "version": "optional"}   (answer to reset)
@@ -274,7 +276,7 @@ class ExternalPlanner:
             {"type": "observation", "tick": obs.tick, "time": obs.time,
              "pose": obs.pose.tolist(), "velocity": obs.velocity.tolist(),
              "ranges": obs.ranges.tolist(), "angles": obs.angles.tolist(), "goal": obs.goal.tolist(),
-             "waypoints": obs.waypoints.tolist()},
+             "waypoints": obs.waypoints.tolist(), **_terrain_fields(obs)},
             self.tick_timeout, f"the observation of tick {obs.tick}")
         if reply.get("type") != "command":
             raise PlannerProtocolError(f"external planner answered an observation with {reply.get('type')!r}, expected 'command'")
@@ -313,3 +315,15 @@ def exec_factory(command: str, *, cwd: str | None = None,
 
     factory.__name__ = f"exec:{command}"
     return factory
+
+
+def _terrain_fields(obs: Observation) -> dict[str, Any]:
+    """The observation's attitude, and its 3D lidar points rounded to the millimetre (a float32's
+    full repr would triple the line) when a 3D lidar is fitted."""
+    out: dict[str, Any] = {}
+    if obs.attitude is not None:
+        out["attitude"] = [float(a) for a in obs.attitude]
+    if obs.points is not None:
+        import numpy as np
+        out["points"] = np.round(np.asarray(obs.points, dtype=float), 3).tolist()
+    return out

@@ -1,7 +1,8 @@
 """Loading a subject under test: a built-in planner name (``dwa``), ``package.module:Attribute``
 (a class or a zero-argument factory returning a fresh planner; the harness calls it once per
-episode) or ``exec:PROGRAM [ARGS]`` (an external process). Each is checked against the planner
-protocol (see protocol.py) before any episode runs."""
+episode), ``exec:PROGRAM [ARGS]`` (an external process) or a model file ``path/to/policy.onnx``
+(a learned policy, see policies/). Each is checked against the planner protocol (see
+protocol.py) before any episode runs."""
 from __future__ import annotations
 
 import os
@@ -10,7 +11,8 @@ from typing import Any, Iterable
 from ..core.errors import SubjectLoadError
 from ..core.user_code import load_object, look_in_project, spec_module
 from ..core.interrupts import from_the_user
-from .protocol import PlannerFactory
+from .policies import is_model_spec
+from .protocol import PlannerFactory, SingleFromBatch, is_batch_planner
 
 
 BUILTIN_SUBJECTS = {
@@ -21,10 +23,11 @@ DEFAULT_SUBJECT = "dwa"
 
 
 def load_subject(spec: str, *, cwd: str | None = None, project: Iterable[str | os.PathLike] = ()) -> PlannerFactory:
-    """Resolve ``package.module:Attribute``, a built-in name such as ``dwa``, or
+    """Resolve ``package.module:Attribute``, a built-in name such as ``dwa``,
     ``exec:PROGRAM [ARGS]`` (an external planner, see external.py; resolved and started in
-    ``cwd`` when given) to a planner factory. A module that is not on sys.path is also looked
-    up in the ``project`` folders (pytest's rootdir, the CLI's current folder): see
+    ``cwd`` when given) or a model file such as ``models/nav.onnx`` (policies/: found in ``cwd``,
+    then in the ``project`` folders) to a planner factory. A module that is not on sys.path is
+    also looked up in the ``project`` folders (pytest's rootdir, the CLI's current folder): see
     core/user_code.py for the order and which one wins.
 
     Raises SubjectLoadError with what is wrong and how to fix it.
@@ -33,11 +36,15 @@ def load_subject(spec: str, *, cwd: str | None = None, project: Iterable[str | o
     if spec.startswith("exec:"):
         from .external import exec_factory
         return exec_factory(spec[len("exec:"):].strip(), cwd=cwd)
+    if is_model_spec(spec):
+        from .policies.onnx_policy import onnx_factory
+        return onnx_factory(spec, cwd=cwd, project=project)
     target = BUILTIN_SUBJECTS.get(spec, spec)
     if ":" not in target:
         raise SubjectLoadError(
             f"subject {spec!r} is not of the form 'package.module:Attribute' "
-            f"(built-in subjects: {', '.join(sorted(BUILTIN_SUBJECTS))})")
+            f"(built-in subjects: {', '.join(sorted(BUILTIN_SUBJECTS))}; an external program: exec:PROGRAM; "
+            f"a learned policy: the path of its .onnx file)")
     obj = load_object(target, what="subject", project=project)
     if not callable(obj):
         raise SubjectLoadError(
@@ -52,7 +59,7 @@ def locate_subject(spec: str | None, project: Iterable[str | os.PathLike]) -> No
     if not spec:
         return
     module = spec_module(BUILTIN_SUBJECTS.get(spec.strip(), spec))
-    if module is not None and not spec.strip().startswith("exec:"):
+    if module is not None and not spec.strip().startswith("exec:") and not is_model_spec(spec):
         look_in_project(module, project)
 
 
@@ -72,8 +79,8 @@ def make_planner(planner: Any = None, *, project: Iterable[str | os.PathLike] = 
     if isinstance(planner, str):
         spec = planner
         factory = load_subject(spec, project=project)
-    elif hasattr(planner, "act") and not isinstance(planner, type):
-        return planner, _spec_of(planner)
+    elif (hasattr(planner, "act") or is_batch_planner(planner)) and not isinstance(planner, type):
+        return _single(planner), _spec_of(planner)
     elif callable(planner):
         spec, factory = _spec_of(planner), planner
     else:
@@ -87,13 +94,23 @@ def make_planner(planner: Any = None, *, project: Iterable[str | os.PathLike] = 
             raise
         raise SubjectLoadError(f"subject {spec!r}: calling it to make a planner raised "
                                f"{type(exc).__name__}: {exc}") from exc
+    instance = _single(instance)
     missing = [m for m in ("reset", "act") if not callable(getattr(instance, m, None))]
     if missing:
         raise SubjectLoadError(
             f"subject {spec!r}: the object it makes ({type(instance).__name__}) has no "
             f"{' and no '.join(m + '()' for m in missing)} method; a planner needs reset(scenario) "
-            f"and act(observation) -> (vx, vy, wz) (see pytest_navscenario/planner.py)")
+            f"and act(observation) -> (vx, vy, wz), or the batch protocol's reset_batch(scenarios) "
+            f"and act_batch(ids, observations) (see docs/reference/planner-protocol.md)")
     return instance, spec
+
+
+def _single(planner: Any) -> Any:
+    """``planner`` itself, or, for one with only the batch methods, the adapter that runs it alone."""
+    if is_batch_planner(planner) and not (callable(getattr(planner, "reset", None))
+                                          and callable(getattr(planner, "act", None))):
+        return SingleFromBatch(planner)
+    return planner
 
 
 def _spec_of(obj: Any) -> str:

@@ -5,6 +5,8 @@ Resolution order: the ``pytest_navscenario_make_subject`` hook (a conftest.py), 
 """
 from __future__ import annotations
 
+import os
+import warnings
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -22,6 +24,9 @@ class Subject:
     _factory: Callable[[], Any] | None = field(default=None, repr=False)
     # folders a 'package.module:Attribute' spec's module is also looked up in (the rootdir)
     project: tuple[str, ...] = ()
+    # what loading it said the user should know (a planner's ``notes``), for pytest's header
+    notes: tuple[str, ...] = ()
+    _batches: bool | None = field(default=None, repr=False)   # answers the batch protocol (check())
 
     @property
     def label(self) -> str:
@@ -61,8 +66,56 @@ class Subject:
         ``keep_running`` leaves it up for this process's episodes (False when workers run them)."""
         from .external import check_start
         from .loading import make_planner
-        planner, _ = make_planner(self.runner_arg, project=self.project)
+        with warnings.catch_warnings():   # a PolicyWarning is kept as a note, shown in the header
+            warnings.simplefilter("ignore", _policy_warning())
+            planner, _ = make_planner(self.runner_arg, project=self.project)
+        self.notes = tuple(str(n) for n in getattr(planner, "notes", None) or ())
+        self._batches = _answers_batches(planner)
         check_start(planner, keep_running)
+
+    def answers_batches(self) -> bool:
+        """True if its planners answer the batch protocol (subjects/protocol.py): known from
+        ``check``, or from the class a spec names (nothing is made); True for a model file (an
+        ONNX policy answers it), False for an ``exec:`` program and for a subject this process
+        cannot load (the nodes of a Ray cluster may)."""
+        if self._batches is None:
+            from .policies import is_model_spec
+            if self.spec is not None and self.spec.strip().startswith("exec:"):
+                self._batches = False
+            elif self.spec is not None and is_model_spec(self.spec):
+                self._batches = True           # an ONNX policy always answers it (policies/)
+            else:
+                try:
+                    factory = self.factory
+                except Exception:
+                    return False
+                self._batches = isinstance(factory, type) and _answers_batches(factory)
+        return self._batches
+
+
+def _policy_warning() -> type[Warning]:
+    from .policies import PolicyWarning
+    return PolicyWarning
+
+
+def _answers_batches(planner: Any) -> bool:
+    from .protocol import SingleFromBatch, is_batch_planner
+    return is_batch_planner(planner.planner if isinstance(planner, SingleFromBatch) else planner)
+
+
+def _model_path(spec: str, project: tuple[str, ...]) -> str:
+    """A model spec found only in the rootdir becomes its absolute path, so that every process and
+    every command that re-runs it (workers, reproduce lines) finds it; any other spec is kept."""
+    from .policies import is_model_spec
+
+    if not is_model_spec(spec):
+        return spec
+    from .policies.onnx_policy import model_places
+
+    places = model_places(spec, project=project)
+    if os.path.exists(places[0]):
+        return spec
+    return next((os.path.abspath(p) for p in places[1:] if os.path.exists(p)), spec)
 
 
 def resolve_subject(config: pytest.Config, spec: str | None, origin: str) -> Subject:
@@ -83,5 +136,5 @@ def resolve_subject(config: pytest.Config, spec: str | None, origin: str) -> Sub
                 f"return a zero-argument factory or class, a 'package.module:Attribute' string, or None")
         return Subject(spec=None, origin="hook", _factory=provided)
     if spec:
-        return Subject(spec=spec, origin=origin, project=project)
+        return Subject(spec=_model_path(spec.strip(), project), origin=origin, project=project)
     return Subject(spec=DEFAULT_SUBJECT, origin="built-in default", project=project)

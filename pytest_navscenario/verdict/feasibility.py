@@ -3,7 +3,12 @@
 A scenario whose goal cannot be reached at all (walled in; a waypoint or the goal, with its whole
 tolerance, closer to an obstacle than half the robot's width) would run to its timeout and be
 blamed on the planner; one whose start already satisfies the goal passes in 0 s and tests
-nothing. ``impassable_reason`` says which, in words, or None for an ordinary scenario.
+nothing; one whose shortest way cannot be driven within its timeout even at the robot's top speed
+times out whatever the planner does (``too_slow``); one whose moving obstacle walks through a wall
+simulates the impossible (``movers.mover_through``). ``infeasible`` says which, with the field to
+fix (``impassable_reason``: the same in words), or None for an ordinary scenario. A hand-written
+scenario gets it as a setup error; the search discards such a candidate (search/space.py,
+``invalid_reason``), counted by its code.
 
 Cost: the common case is one ``paths.shortest_path`` (cached; the metrics need the same path
 after the episode, so a normal run pays nothing extra). Only when that finds no path is the
@@ -16,10 +21,13 @@ from __future__ import annotations
 
 import math
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..scenario.model import Scenario
-from .paths import INFLATION_TOLERANCE, inflation_radius, path_through_discs, shortest_path, static_obstacles
+from .paths import (INFLATION_TOLERANCE, inflation_radius, path_through_discs, reference_path, shortest_path,
+                    static_obstacles)
 
 
 def trivially_passed(scenario: Scenario) -> str | None:
@@ -41,11 +49,79 @@ def trivially_passed(scenario: Scenario) -> str | None:
               "move the goal away from the start or tighten mission.goal_tolerance")
 
 
-def impassable_reason(scenario: Scenario) -> str | None:
-    """Why no planner can pass ``scenario`` (or why it passes without one), or None."""
+@dataclass(frozen=True)
+class Infeasible:
+    """Why a scenario is not a test: ``code`` (for counting: trivial, no-path, too-slow,
+    mover-through), the dotted ``field`` to fix (None when no one field is to blame) and the words."""
+    code: str
+    field: str | None
+    message: str
+
+    def __str__(self) -> str:
+        return f"{self.field}: {self.message}" if self.field else self.message
+
+
+def infeasible(scenario: Scenario) -> Infeasible | None:
+    """Why no planner can pass ``scenario``, or why it passes without one, or why it simulates the
+    impossible; None for an ordinary scenario."""
     trivial = trivially_passed(scenario)
     if trivial is not None:
-        return trivial
+        return Infeasible("trivial", None, trivial)
+    blocked = _no_way(scenario)
+    if blocked is not None:
+        return Infeasible("no-path", None, blocked)
+    slow = too_slow(scenario)
+    if slow is not None:
+        return Infeasible("too-slow", "mission.timeout", slow)
+    from .movers import describe, mover_through
+    crossing = mover_through(scenario)
+    if crossing is not None:
+        field, message = describe(crossing)
+        return Infeasible("mover-through", field, message)
+    return None
+
+
+def impassable_reason(scenario: Scenario) -> str | None:
+    """Why no planner can pass ``scenario`` (or why it passes without one, or simulates the
+    impossible), in words with the field to fix, or None."""
+    found = infeasible(scenario)
+    return None if found is None else str(found)
+
+
+def top_speed(scenario: Scenario) -> float:
+    """The fastest the robot can drive (m/s): forward and, on an omnidirectional drive, sideways at
+    once (the drive clips each command component to its own limit)."""
+    limits = scenario.robot.limits
+    return math.hypot(limits.max_speed, limits.max_lateral_speed if scenario.robot.drive == "omni" else 0.0)
+
+
+def too_slow(scenario: Scenario) -> str | None:
+    """Why the shortest way cannot be driven within the timeout even at the robot's top speed, or
+    None. The way is a lower bound of any planner's: the shortest collision-free path of the
+    footprint's centre (obstacles grown by half its width), each waypoint counted as passed anywhere
+    within its tolerance, the goal reached at its tolerance's edge; acceleration is left out."""
+    m = scenario.mission
+    path = shortest_path(scenario)
+    if path is None:
+        return None
+    speed = top_speed(scenario)
+    slack = 2 * m.waypoint_tolerance * len(m.waypoints) + m.goal_tolerance.position
+    if (path.length - slack) <= speed * m.timeout:     # the common case: one cached path, no more
+        return None
+    ref = reference_path(scenario)                    # through the waypoints' tolerance discs
+    length = max((ref.length if ref is not None else path.length) - m.goal_tolerance.position, 0.0)
+    needed = length / speed
+    if needed <= m.timeout:
+        return None
+    suggest = math.ceil(2 * needed + 10)
+    return (f"the timeout of {m.timeout:g} s is too short: the shortest way the robot can take is {length:.1f} m "
+            f"(to the edge of the goal's tolerance), which takes at least {needed:.1f} s at its top speed of "
+            f"{speed:g} m/s, so every planner would time out; raise mission.timeout (e.g. to {suggest:g} s) or "
+            f"robot.limits.max_speed")
+
+
+def _no_way(scenario: Scenario) -> str | None:
+    """Why there is no collision-free way for the footprint at all, or None."""
     if shortest_path(scenario) is not None:
         return None
     m = scenario.mission

@@ -35,6 +35,10 @@ def classify(scenario: Scenario, trajectory: Trajectory, *, collision: Collision
     if terrain_event is not None and terrain_event.kind in ("fell", "tipped"):
         return Outcome.FALL, terrain_message(terrain_event)
     if safety_stop is not None:
+        if getattr(safety_stop, "ground", ""):
+            return Outcome.SAFETY_STOP, (
+                f"safety stop at t={safety_stop.time:.2f} s: predicted to drive into {safety_stop.ground} "
+                f"at {safety_stop.speed:.2f} m/s (seen by the 3D lidar)")
         return Outcome.SAFETY_STOP, (
             f"safety stop at t={safety_stop.time:.2f} s: predicted to hit "
             f"'{safety_stop.obstacle}' at {safety_stop.speed:.2f} m/s")

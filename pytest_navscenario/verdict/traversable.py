@@ -71,7 +71,11 @@ def _name(scenario: Scenario, element: int, what: str) -> str:
 
 
 def _piece_barriers(scenario: Scenario, cap: Capability) -> list[BoxObstacle]:
+    """Steep ramps, and the faces along every piece's four edges: all edges' points probed in one
+    call to the ground function for each side (and one for the gaps), then cut into runs."""
     out = []
+    edges = []          # (element, pose, a, b, n, first point)
+    points, normals = [], []
     for piece in ground.pieces(scenario.terrain):
         el = scenario.terrain[piece.element]
         x, y, c, s = ground.frame(el)
@@ -84,54 +88,54 @@ def _piece_barriers(scenario: Scenario, cap: Capability) -> list[BoxObstacle]:
                                    x + c * um, y + s * um, run, el.width, yaw=el.yaw, height=1.0))
         hw = el.width / 2
         corners = [(piece.u0, -hw), (piece.u1, -hw), (piece.u1, hw), (piece.u0, hw)]
-        for k in range(4):
-            (ua, va), (ub, vb) = corners[k], corners[(k + 1) % 4]
-            out += _edge_barriers(scenario, cap, piece.element, (x, y, c, s), (ua, va), (ub, vb))
-    return out
-
-
-def _edge_barriers(scenario, cap, element, pose, a, b) -> list[BoxObstacle]:
-    """Barrier boxes along one edge (from local a to b, counter-clockwise round the piece, so the
-    outside is on the right) where the ground jumps by more than max_step and no gap is bridged."""
-    x, y, c, s = pose
-    length = math.hypot(b[0] - a[0], b[1] - a[1])
-    n = max(2, int(math.ceil(length / EDGE_SPACING)) + 1)
-    t = (np.arange(n) + 0.5) / n
-    lu = a[0] + (b[0] - a[0]) * t
-    lv = a[1] + (b[1] - a[1]) * t
-    px, py = x + c * lu - s * lv, y + s * lu + c * lv
-    dx, dy = (b[0] - a[0]) / length, (b[1] - a[1]) / length
-    nx, ny = c * dy - s * -dx, s * dy + c * -dx          # outward normal (right of a -> b), world
-    inside = ground.ground_height(scenario, px - nx * PROBE, py - ny * PROBE)
-    outside = ground.ground_height(scenario, px + nx * PROBE, py + ny * PROBE)
+        for k in range(4):        # counter-clockwise round the piece: the outside is on the right
+            a, b = corners[k], corners[(k + 1) % 4]
+            length = math.hypot(b[0] - a[0], b[1] - a[1])
+            n = max(2, int(math.ceil(length / EDGE_SPACING)) + 1)
+            t = (np.arange(n) + 0.5) / n
+            lu, lv = a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t
+            dx, dy = (b[0] - a[0]) / length, (b[1] - a[1]) / length
+            edges.append((piece.element, (x, y, c, s), a, b, n, sum(len(p) for p in points)))
+            points.append(np.column_stack([x + c * lu - s * lv, y + s * lu + c * lv]))
+            normals.append(np.tile((c * dy + s * dx, s * dy - c * dx), (n, 1)))
+    if not edges:
+        return out
+    p, nrm = np.concatenate(points), np.concatenate(normals)
+    inside = ground.ground_height(scenario, p[:, 0] - nrm[:, 0] * PROBE, p[:, 1] - nrm[:, 1] * PROBE)
+    outside = ground.ground_height(scenario, p[:, 0] + nrm[:, 0] * PROBE, p[:, 1] + nrm[:, 1] * PROBE)
     jump = outside - inside
     wall = np.abs(jump) > cap.max_step + 1e-9
     if not wall.any():
-        return []
+        return out
     if cap.max_gap > 0:
         at = np.flatnonzero(wall)
-        wall[at] = ~_bridged(scenario, cap, px[at], py[at], nx, ny, inside[at], outside[at])
-    out = []
-    runs = np.flatnonzero(np.diff(np.concatenate([[0], wall.astype(int), [0]])))
-    for start, stop in zip(runs[::2], runs[1::2]):
-        t0, t1 = start / n, stop / n
-        mid = (t0 + t1) / 2
-        mu, mv = a[0] + (b[0] - a[0]) * mid, a[1] + (b[1] - a[1]) * mid
-        height = float(np.abs(jump[start:stop]).max())
-        out.append(BoxObstacle(_name(scenario, element, f"{height:.2f} m step"),
-                               x + c * mu - s * mv, y + s * mu + c * mv, (t1 - t0) * length, WALL,
-                               yaw=math.degrees(math.atan2(s * dx + c * dy, c * dx - s * dy)), height=1.0))
+        wall[at] = ~_bridged(scenario, cap, p[at], nrm[at], inside[at], outside[at])
+    for element, (x, y, c, s), a, b, n, first in edges:
+        mine = wall[first:first + n]
+        if not mine.any():
+            continue
+        length = math.hypot(b[0] - a[0], b[1] - a[1])
+        dx, dy = (b[0] - a[0]) / length, (b[1] - a[1]) / length
+        runs = np.flatnonzero(np.diff(np.concatenate([[0], mine.astype(int), [0]])))
+        for start, stop in zip(runs[::2], runs[1::2]):
+            t0, t1 = start / n, stop / n
+            mid = (t0 + t1) / 2
+            mu, mv = a[0] + (b[0] - a[0]) * mid, a[1] + (b[1] - a[1]) * mid
+            height = float(np.abs(jump[first + start:first + stop]).max())
+            out.append(BoxObstacle(_name(scenario, element, f"{height:.2f} m step"),
+                                   x + c * mu - s * mv, y + s * mu + c * mv, (t1 - t0) * length, WALL,
+                                   yaw=math.degrees(math.atan2(s * dx + c * dy, c * dx - s * dy)), height=1.0))
     return out
 
 
-def _bridged(scenario, cap, px, py, nx, ny, inside, outside) -> np.ndarray:
+def _bridged(scenario, cap, p, nrm, inside, outside) -> np.ndarray:
     """Per edge point: the face is a wall of a gap no wider than max_gap (from the upper side,
     ground within max_step of it comes back within max_gap across the lower side)."""
     high = np.maximum(inside, outside)
-    toward = np.where(outside < inside, 1.0, -1.0)       # across the lower side
-    k = np.arange(1, int(math.ceil(cap.max_gap / 0.02)) + 1) * 0.02
-    qx = px[:, None] + toward[:, None] * nx * (PROBE + k[None])
-    qy = py[:, None] + toward[:, None] * ny * (PROBE + k[None])
+    toward = np.where(outside < inside, 1.0, -1.0)[:, None]    # across the lower side
+    k = (PROBE + np.arange(1, int(math.ceil(cap.max_gap / 0.02)) + 1) * 0.02)[None]
+    qx = p[:, 0:1] + toward * nrm[:, 0:1] * k
+    qy = p[:, 1:2] + toward * nrm[:, 1:2] * k
     back = ground.ground_height(scenario, qx, qy) >= high[:, None] - cap.max_step - 1e-9
     return back.any(axis=1)
 

@@ -82,3 +82,23 @@ def test_run_has_pytests_tick_limit_and_check_planner_warns_about_a_tick_over_it
     assert cli.main(["check-planner", "nu_slow_nav:Planner", "--ticks", "2"]) == 0
     out = capsys.readouterr().out
     assert "over the 1 s a tick may take by default in pytest and navscenario run" in out
+
+
+def test_run_takes_several_files_and_batches_them(capsys):
+    files = [str(SEEDS_DIR / f"{n}.yaml") for n in ("boxes1", "corridor", "boxes2")]
+    assert cli.main(["run", *files, "--seed", "0"]) == 0
+    out = capsys.readouterr().out
+    assert out.count("outcome: success") == 3
+    assert out.rstrip().endswith("3 scenario(s): 3 passed, 0 failed; batches (--batch auto): 3 episode(s) in 1 batch(es)")
+    alone = _json_run(files, "--batch", "off", capsys=capsys)
+    batched = _json_run(files, capsys=capsys)
+    for a, b in zip(alone, batched):
+        a.pop("wall_time"), a.pop("timings"), b.pop("wall_time"), b.pop("timings")
+    assert batched == alone and [r["file"] for r in batched] == files
+    assert cli.main(["run", *files, "--batch", "none of it"]) == 2
+    assert "--batch 'none of it': expected auto" in capsys.readouterr().err
+
+
+def _json_run(files, *extra, capsys):
+    assert cli.main(["run", *files, "--json", *extra]) == 0
+    return json.loads(capsys.readouterr().out)

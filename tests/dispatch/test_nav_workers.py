@@ -24,7 +24,7 @@ def records(path: Path) -> list[dict]:
 
 
 def test_n_on_scenario_files_runs_the_episodes_on_local_workers(pytester: pytest.Pytester):
-    write_suite(pytester.path / "suite", short_timeout="1.0")
+    write_suite(pytester.path / "suite", short_timeout="1.6")
     serial = pytester.runpytest(*COMMON, "--nav-results=s.jsonl", "--nav-artifacts=art-s")
     par = pytester.runpytest(*COMMON, "-n", "2", "--nav-results=p.jsonl", "--nav-artifacts=art-p")
     serial.assert_outcomes(passed=5, failed=1)

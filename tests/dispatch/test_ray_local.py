@@ -81,7 +81,7 @@ def records(path: Path) -> list[dict]:
 
 def test_suite_on_ray_reports_like_a_serial_run(pytester: pytest.Pytester, planners: Path, monkeypatch):
     monkeypatch.syspath_prepend(str(planners))   # the serial run loads the subject here
-    write_suite(pytester.path / "suite", short_timeout="1.0")
+    write_suite(pytester.path / "suite", short_timeout="1.6")
     common = ["suite", "-v", "-p", "no:cacheprovider", "--nav-subject=killable:Planner", "--nav-plots=none"]
     serial = pytester.runpytest(*common, "--nav-results=s.jsonl", "--nav-artifacts=art-s")
     on_ray = pytester.runpytest(*common, "--nav-ray=auto", "--nav-results=r.jsonl", "--nav-artifacts=art-r")

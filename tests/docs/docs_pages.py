@@ -363,6 +363,10 @@ def command_env() -> dict[str, str]:
     themselves (an inner pytest must not think it is a worker), 80 columns, no colours."""
     env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTEST_", "PYTEST_XDIST"))}
     env.pop("COLUMNS", None)
+    # pytest prints whole short-summary lines when it sees a CI variable and cuts them to the
+    # terminal's width otherwise: the pages show a reader's terminal, so CI's runs must too.
+    for name in ("CI", "BUILD_NUMBER"):
+        env.pop(name, None)
     env.update(COLUMNS="80", LINES="24", PY_COLORS="0", NO_COLOR="1", TERM="dumb")
     return env
 

@@ -72,7 +72,7 @@ def test_a_path_family_survives_plots_artifacts_and_reloading(project):
     by a path must load again, so the failing item's plot is drawn and its artifact re-runs."""
     from pytest_navscenario.scenario.loader import load_scenario
 
-    (project.path / "examples" / "scenarios" / "slow.yaml").write_text(OK.replace("timeout: 10", "timeout: 0.3"))
+    (project.path / "examples" / "scenarios" / "slow.yaml").write_text(OK.replace("timeout: 10", "timeout: 0.65"))
     result = project.runpytest_inprocess("-p", "pytest_navscenario.plugin", ".", "--nav-html=r.html")
     result.assert_outcomes(passed=5, failed=1)
     assert "could not draw" not in result.stdout.str()

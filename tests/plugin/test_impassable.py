@@ -33,6 +33,7 @@ def test_impassable_scenarios_are_errors_that_say_why(pytester: pytest.Pytester,
     result.assert_outcomes(passed=1, errors=3)
     out = result.stdout.str()
     assert "timeout after" not in out and "subject-error" not in out   # nothing blamed on the planner
+    assert "_callers.py" not in out and "_ _ _ _" not in out   # the message, not a traceback through pytest
     result.stdout.fnmatch_lines([
         "*ERROR at setup of*at_start*",
         "*at_start.yaml: the start (0, 0) already satisfies the goal (0.1, 0)*tests nothing*",

@@ -21,7 +21,7 @@ obstacles:
   - {type: box, name: wall_a, x: 4, y: 0.9, length: 6, width: 0.2}
   - {type: box, name: wall_b, x: 4, y: -0.9, length: 6, width: 0.2}
   - {type: person, name: walker, motion: {path: [[7, 0.1], [1, 0.1]], mode: back-and-forth, start: 1}}
-  - {type: box, name: cart, x: 4, y: 3, length: 0.8, width: 0.6, motion: {velocity: [0, -0.4], start: 2}}
+  - {type: box, name: cart, length: 0.8, width: 0.6, motion: {path: [[4, 3], [4, 1.4]], speed: 0.4, start: 2}}
 """
 
 

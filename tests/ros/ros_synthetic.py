@@ -178,7 +178,7 @@ def pose_at(truth: np.ndarray, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def robot_bag(path: Path, world: World, truth: np.ndarray, *, drift: np.ndarray | None = None,
               ros1: bool = False, scans: bool = True, cloud: dict | None = None, extra=None,
               tf_map: bool = True, laser: tuple[float, float, float] = LASER, pitch: float = 0.0,
-              world_at=None, timing: ScanTiming | None = None, odom_keep=None) -> Path:
+              world_at=None, timing: ScanTiming | None = None, odom_keep=None, scan_at=None) -> Path:
     """A bag of a robot driving ``truth`` ((n, 4) t, x, y, yaw in the map frame) through ``world``.
 
     ``drift`` ((n, 3) the map -> odom transform at each time): the odometry is the truth seen
@@ -214,7 +214,9 @@ def robot_bag(path: Path, world: World, truth: np.ndarray, *, drift: np.ndarray 
                      "transform": {"translation": {"x": dx, "y": dy}, "rotation": quat(dyaw)}}]})
             lx, ly = x + math.cos(yaw) * laser[0], y + math.sin(yaw) * laser[0]
             world = world_at(t) if world_at is not None else world
-            if scans and timing is None:
+            if scan_at is not None and not scan_at(t):
+                pass
+            elif scans and timing is None:
                 bag.write("/scan", "sensor_msgs/msg/LaserScan", t, {
                     "header": {"stamp": stamp(t), "frame_id": "laser"}, "angle_min": float(SCAN_ANGLES[0]),
                     "angle_max": float(SCAN_ANGLES[-1]), "angle_increment": float(SCAN_ANGLES[1] - SCAN_ANGLES[0]),

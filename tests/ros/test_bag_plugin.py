@@ -14,10 +14,11 @@ SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 
 
 def _texts() -> tuple[str, str]:
-    """Two scenarios: cylinders as shipped (passes) and the same with a 2 s timeout (fails).
+    """Two scenarios: cylinders as shipped (passes) and the same with a 9 s timeout (fails: its 9.7 m can be
+    driven in 8.7 s at top speed, so it is a test, but dwa needs 10 s).
     Made once at import: in-process pytester runs swap modules under the loader afterwards."""
     seed = load_scenario(SCENARIOS / "cylinders.yaml")
-    late = dataclasses.replace(seed, mission=dataclasses.replace(seed.mission, timeout=2.0))
+    late = dataclasses.replace(seed, mission=dataclasses.replace(seed.mission, timeout=9.0))
     return dump_scenario(seed), dump_scenario(late)
 
 
@@ -52,7 +53,7 @@ def test_failed_writes_one_bag_per_failed_episode_under_xdist(project):
     with AnyReader([project.path / "out" / "bags" / names[0]],
                    default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
         counts = {c.topic: c.msgcount for c in reader.connections}
-    assert counts["/scan"] == 20 and counts["/navscenario/result"] == 1  # 2 s of 10 Hz ticks
+    assert counts["/scan"] == 90 and counts["/navscenario/result"] == 1  # 9 s of 10 Hz ticks
 
 
 def test_default_writes_no_bag_and_bad_values_are_usage_errors(project):

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 import os
 import stat
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -144,3 +145,11 @@ def test_the_seed_is_written_with_the_usual_mode(tmp_path):
         os.umask(old)
     for f in (out, tmp_path / "s.reference.csv", tmp_path / "s.fit.json"):
         assert stat.S_IMODE(f.stat().st_mode) == 0o644, f
+
+
+def test_a_loop_back_to_the_start_without_waypoints_is_an_error(tmp_path, capsys):
+    """The TurtleBot3 drives a loop and stops where it started: as a reference trajectory only (no
+    waypoints), the seed's goal would be its start; the error says so and how to keep the loop."""
+    tb3 = Path(__file__).resolve().parents[1] / "data" / "fuse_turtlebot3.bag"
+    err = run_cli(capsys, tmp_path, "from-bag", str(tb3), "--path-as", "reference")
+    assert "the robot drove a loop in the window" in err and "--path-as waypoints or both" in err

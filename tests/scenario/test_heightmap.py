@@ -150,3 +150,123 @@ def test_rough_ground_too_fine_for_the_grid_limit_says_what_to_change():
     assert info.value.field == "wavelength"
     with pytest.raises(ScenarioError, match=r"terrain\[r\].wavelength: a rough patch 200 x 5 m .* 3201 x 81"):
         height_grid(Rough("r", 0, 0, length=200.0, width=5.0, amplitude=0.1, wavelength=0.5))
+
+
+LOADED = """version: 1
+robot: {body: {type: wheeled}, drive: diff}
+mission: {start: {x: -8, y: 0}, goal: {x: -6, y: 0}}
+terrain:
+  - type: heightfield
+    name: yard
+    x: 0
+    y: 0
+    file: {file}
+    length: {length}
+    width: 2
+  - {type: rough, name: bumps, x: 20, y: 0, length: 4, width: 4, amplitude: 0.1, wavelength: {wavelength}}
+"""
+
+
+@pytest.mark.parametrize("file, content, length, wavelength, field, line, words", [
+    ("missing.npy", None, 2, 1.0, "terrain[0].file", 9, "does not exist"),
+    ("h.npy", np.array([[0.0, np.nan], [1.0, 2.0]]), 2, 1.0, "terrain[0].file", 9, "not finite"),
+    ("h.npy", np.zeros((3, 41)), 0.05, 1.0, "terrain[0].length", 10, "give length and width in the proportion"),
+    ("../out.npy", np.zeros((3, 3)), 2, 1.0, "terrain[0].file", 9, "leaves the scenario's folder"),
+    ("h.npy", np.zeros((3, 3)), 2, 0.001, "terrain[1].wavelength", 12, "make the patch smaller"),
+])
+def test_the_loader_names_file_line_and_field_of_a_bad_height_grid(tmp_path, file, content, length, wavelength,
+                                                                   field, line, words):
+    from pytest_navscenario.scenario.loader import load_scenario
+
+    folder = tmp_path / "s"
+    folder.mkdir()
+    if content is not None:
+        np.save((folder / file).resolve() if not file.startswith("..") else tmp_path / "out.npy", content)
+    path = folder / "yard.yaml"
+    path.write_text(LOADED.replace("{file}", file).replace("{length}", str(length))
+                    .replace("{wavelength}", str(wavelength)))
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    err = info.value
+    assert (err.path, err.line, err.field) == (str(path), line, field), str(err)
+    assert words in err.message
+
+
+def test_a_loaded_heightfield_carries_its_grid_in_the_content_hash(tmp_path):
+    from pytest_navscenario.scenario.loader import load_scenario
+    from pytest_navscenario.scenario.model import content_hash
+
+    np.save(tmp_path / "h.npy", np.arange(9.0).reshape(3, 3))
+    path = tmp_path / "yard.yaml"
+    path.write_text(LOADED.replace("{file}", "h.npy").replace("{length}", "2").replace("{wavelength}", "1.0"))
+    first = load_scenario(path)
+    assert first.terrain[0].digest == load_heightfield(tmp_path, "h.npy", 2, 2)[1]
+    np.save(tmp_path / "h.npy", np.arange(9.0).reshape(3, 3) * 2)
+    heightmap.clear_grid_cache()
+    assert content_hash(load_scenario(path)) != content_hash(first)
+    (tmp_path / "moved").mkdir()
+    np.save(tmp_path / "moved" / "g.npy", np.arange(9.0).reshape(3, 3) * 2)
+    moved = tmp_path / "moved" / "yard.yaml"
+    moved.write_text(path.read_text().replace("h.npy", "g.npy"))
+    assert content_hash(load_scenario(moved)) == content_hash(load_scenario(path))   # wherever the file is
+
+
+def test_a_frozen_failure_takes_its_heightfield_file_along(tmp_path):
+    """A failure frozen from a seed with a heightfield loads in its own folder and hashes the same."""
+    from pytest_navscenario.scenario.loader import load_scenario
+    from pytest_navscenario.scenario.model import content_hash
+    from pytest_navscenario.search.freeze import save_standalone
+
+    (tmp_path / "seeds" / "ground").mkdir(parents=True)
+    np.save(tmp_path / "seeds" / "ground" / "h.npy", np.arange(9.0).reshape(3, 3))
+    seed_path = tmp_path / "seeds" / "yard.yaml"
+    seed_path.write_text(LOADED.replace("{file}", "ground/h.npy").replace("{length}", "2")
+                         .replace("{wavelength}", "1.0"))
+    seed = load_scenario(seed_path)
+    out = tmp_path / "regressions" / "yard-1.yaml"
+    save_standalone(seed, seed, out)
+    frozen = load_scenario(out)
+    assert frozen.terrain[0].file.startswith("heightmaps/h-") and (out.parent / frozen.terrain[0].file).is_file()
+    assert content_hash(frozen) == content_hash(seed)
+
+
+def _npy_header_only(path: Path, shape: tuple) -> None:
+    """An .npy file whose header promises ``shape`` (float64) and whose data is 64 bytes."""
+    header = "{'descr': '<f8', 'fortran_order': False, 'shape': %r, }" % (shape,)
+    header = header.ljust(118) + "\n"
+    path.write_bytes(b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode() + b"\x00" * 64)
+
+
+def test_an_npy_whose_header_promises_a_huge_array_is_refused_before_its_data_is_read(tmp_path):
+    """A 200-byte file claiming 60000 x 60000 made numpy allocate 26.8 GiB (a MemoryError traceback
+    at collection); one claiming 600 x 600 over 64 bytes is a truncated file."""
+    _npy_header_only(tmp_path / "liar.npy", (60000, 60000))
+    with pytest.raises(HeightmapError, match=r"liar.npy is 60000 x 60000 samples, more than the limit of 1024"):
+        load_heightfield(tmp_path, "liar.npy", 2, 2)
+    import pickle
+    (tmp_path / "p.npy").write_bytes(pickle.dumps(np.zeros((4, 4))))
+    with pytest.raises(HeightmapError, match=r"p.npy cannot be read as a NumPy .npy array: it is a Python pickle"):
+        load_heightfield(tmp_path, "p.npy", 2, 2)
+    _npy_header_only(tmp_path / "short.npy", (600, 600))
+    with pytest.raises(HeightmapError, match=r"short.npy .*holds 64 bytes of data where its header promises 2880000"):
+        load_heightfield(tmp_path, "short.npy", 2, 2)
+
+
+def test_values_at_the_ends_of_the_float_range_map_to_the_heights_without_overflow(tmp_path):
+    """(v - low) / (high - low) overflowed for +-1e308: NaN heights, and MuJoCo refused the model."""
+    np.save(tmp_path / "h.npy", np.array([[-1e308, 0.0], [0.0, 1e308]]))
+    grid = height_grid(Heightfield("h", 0, 0, file="h.npy", length=2, width=2, max_height=1.0),
+                       _scenario(tmp_path))
+    assert np.isfinite(grid.heights).all()
+    assert sorted(grid.heights.ravel().tolist()) == pytest.approx([0.0, 0.5, 0.5, 1.0])
+
+
+def test_reading_a_png_leaves_pillows_own_limit_alone_and_warns_nothing(tmp_path, recwarn):
+    """A planner reading a large map image with Pillow in the same process must not meet our
+    limit: the size is checked from the PNG's header instead."""
+    before = Image.MAX_IMAGE_PIXELS
+    Image.new("L", (2500, 2500)).save(tmp_path / "big.png")
+    with pytest.raises(HeightmapError, match="2500 x 2500 samples, more than the limit of 1024"):
+        load_heightfield(tmp_path, "big.png", 2, 2)
+    assert Image.MAX_IMAGE_PIXELS == before
+    assert not [w for w in recwarn if "DecompressionBomb" in type(w.message).__name__]

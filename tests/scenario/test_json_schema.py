@@ -216,15 +216,24 @@ def test_check_jsonschema_refuses_them_in_ci_as_the_docs_say(tmp_path):
 
 
 def _write_part(path: Path) -> None:
-    """The files the probes name, beside the probe: a tetrahedron STL (``path``) and the small MJCF
-    robot of the body tests as robot.xml."""
+    """The files the probes name, beside the probe: a tetrahedron STL (``path``), the small MJCF
+    robot of the body tests as robot.xml, and the heightfield file their heightfield elements read
+    (the declared example's path)."""
     (path.parent / "robot.xml").write_text((Path(__file__).parents[1] / "data" / "mjcf" / "cart.xml").read_text())
+    import numpy as np
+    from PIL import Image
+    for grid in (path.parent / "ground" / "yard.png", path.parent / "ground.png"):
+        grid.parent.mkdir(exist_ok=True)
+        Image.fromarray(np.arange(25, dtype=np.uint8).reshape(5, 5)).save(grid)
     v = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
     faces = [(0, 2, 1), (0, 1, 3), (1, 2, 3), (2, 0, 3)]
     with open(path, "wb") as fh:
         fh.write(b"\0" * 80 + struct.pack("<I", len(faces)))
         for a, b, c in faces:
             fh.write(struct.pack("<3f", 0, 0, 0) + b"".join(struct.pack("<3f", *v[i]) for i in (a, b, c)) + b"\0\0")
+    # an MJCF body's file (robot.body.file: the loader reads its bytes; MuJoCo reads it at run time)
+    (path.parent / "robot.xml").write_text("<mujoco><worldbody><body><freejoint/><geom size='0.1'/></body>"
+                                           "</worldbody></mujoco>\n")
 
 
 # ------------------------------------------------------------------ every key: the same verdict
@@ -315,10 +324,14 @@ def _places(folder: Path):
 # and the reference page's "checks that need a run"): the loader's messages for them.
 RUN_ONLY = ("must be greater than", "must not be below", "physics steps", "whole number of control periods",
             "not shorter than the timeout", "overlaps obstacle", "so at most that many can be removed",
-            "could pass the limit", "is not an obstacle or mission part of this seed", "has no length",
+            "could pass the limit", "or mission part of this seed", "has no length",
             "does not increase", "does not exist", "unknown mesh format", "leaves the scenario's folder",
             "is an absolute path", "is not a file", "cannot be read",
-            "is faster than the simulation can follow")   # a mover's speed against its size, the robot's, the timestep
+            "is faster than the simulation can follow",   # a mover's speed against its size, the robot's, the timestep
+            # a heightfield's file and its stretch, a rough patch's grid (scenario/heightmap.py)
+            "unknown heightfield format", "in the proportion of its columns and rows", "needs a grid of",
+            # an obstacle's z against the ground under it (scenario/ground.obstacle_problem)
+            "above the ground under it", "lies under the ground", "the planar body's world is a flat floor")
 
 
 def _probes(key: K.Key) -> list[Any]:

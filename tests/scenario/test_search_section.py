@@ -36,7 +36,7 @@ SEED = textwrap.dedent("""\
     ("remove: 7", "search.remove", "the seed has 2 obstacle(s)"),
     ("insert_size: [0.5, 500]", "search.insert_size", "more than the limit of 100 m"),
     ("insert_margin: 1e9", "search.insert_margin", "beyond the supported magnitude"),
-    ("frozen: [crat]", "search.frozen[0]", "'crat' is not an obstacle or mission part"),
+    ("frozen: [crat]", "search.frozen[0]", "'crat' is not an obstacle, terrain element or mission part"),
     ("obstacle_yw: 5", "search.obstacle_yw", "did you mean 'obstacle_yaw'"),
     ("motion_start: [1, 5]", "search.motion_start", "do not contain 0"),
 ])
@@ -136,3 +136,18 @@ def test_range_limits_are_the_targets_limits_for_faults():
     by_name = {key.name: key for key in RANGES}
     assert by_name["drift_per_metre"].limit == 10.0 and by_name["yaw_drift_per_metre"].limit == 90.0
     assert by_name["lidar_dropout_at_max"].limit == 1.0
+
+
+def test_a_sped_up_obstacle_stays_as_fast_as_the_physics_step_can_follow():
+    """The loader refuses an obstacle faster than the step can follow (issue 26.8): a candidate the
+    search speeds up is kept at that speed, so it is simulated and loads again when frozen."""
+    from pytest_navscenario.scenario.loader import max_resolved_speed
+    seed = loads_scenario(SEED + "  motion_speed: [-1, 100]\n  insert: 0\n", "seed.yaml")
+    space = SearchSpace(seed)
+    offsets = [0.0] * len(space)
+    offsets[space.index["obstacles.walker.motion.speed"]] = 100.0
+    candidate = space.apply(offsets)
+    walker = candidate.obstacle("walker")
+    assert walker.motion.speed <= max_resolved_speed(candidate, walker) and walker.motion.speed > 10
+    assert loads_scenario(dump_scenario(candidate)).obstacle("walker").motion.speed == walker.motion.speed
+    assert invalid_reason(candidate) is None

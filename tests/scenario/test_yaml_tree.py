@@ -56,3 +56,32 @@ def test_the_shared_cache_keeps_short_texts_only():
     assert got == {"a": long_text, "b": "short-word"}
     cached = {key[0] for key in yaml_tree._SCALARS}
     assert "short-word" in cached and long_text not in cached
+
+
+# -- issue 24: a key reported at its own line -----------------------------------------------------
+
+@pytest.mark.parametrize("text, where", [
+    ("version: 1\nmission:\n  - 1\n", "f.yaml:2: mission: expected the mission (a mapping), got a list"),
+    ("version: 1\nmission:\n  start:\n    - 1\n  goal: {x: 5, y: 0}\n", "f.yaml:3: mission.start: expected the start"),
+    ("version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 5, y: 0}}\nrobot:\n  limits:\n    - 3\n",
+     "f.yaml:4: robot.limits: expected the velocity limits (a mapping)"),
+])
+def test_a_section_key_is_reported_at_its_own_line_not_its_childs(text, where):
+    """Before: the line of the section's first child (``- 1``), not of the key that is wrong."""
+    from pytest_navscenario.core.errors import ScenarioError
+    from pytest_navscenario.scenario.loader import loads_scenario
+    with pytest.raises(ScenarioError) as info:
+        loads_scenario(text, "f.yaml")
+    assert str(info.value).startswith(where)
+
+
+def test_field_line_finds_a_keys_own_line_or_its_sections():
+    from pytest_navscenario.scenario.yaml_tree import field_line
+    text = ("version: 1\nmission:\n  start: {x: 0, y: 0}\n  goal: {x: 5, y: 0}\n  timeout: 3\nobstacles:\n"
+            "  - {type: box, x: 3, y: 3, length: 1, width: 1}\n  - type: box\n    length: 1\n    width: 1\n"
+            "    motion:\n      path: [[0, 0], [1, 1]]\n      speed: 1\n")
+    assert field_line(text, "mission.timeout") == 5
+    assert field_line(text, "mission.goal_tolerance") == 2          # a default: its section's key
+    assert field_line(text, "obstacles[1].motion.path") == 12
+    assert field_line(text, "robot.limits.max_speed") is None       # nothing of it written
+    assert field_line("key: [unclosed", "key") is None

@@ -90,3 +90,43 @@ class Careful:
         if obs.tick == 0 and (hash(tuple(round(float(r), 6) for r in obs.ranges)) % 10_000) / 10_000 < self.CHANCE:
             raise RuntimeError("gave up")
         return self.inner.act(obs)
+
+
+class StraightBatch(Straight):
+    """The straight driver with the batch protocol too (issue 27): one call a tick for a batch."""
+    name = "straight-batch"
+    calls = []          # the size of every act_batch call, for the tests
+
+    def reset_batch(self, scenarios):
+        self.count = len(scenarios)
+
+    def act_batch(self, ids, observations):
+        StraightBatch.calls.append(len(ids))
+        return [self.act(obs) for obs in observations]
+
+
+class PickyBatch(Picky):
+    """``Picky`` with the batch protocol: one call a tick for a batch, each episode deciding from
+    its own noisy first scan. Where Picky gives up it stands still (the episode ends stuck, the
+    same batched or not) rather than raising, which would fail the whole batch call."""
+    name = "picky-batch"
+    calls = []          # the size of every act_batch call, for the tests
+
+    def reset(self, scenario):
+        self.stay = {}
+
+    def act(self, obs, key=0):
+        if obs.tick == 0:
+            try:
+                super().act(obs)
+                self.stay[key] = False
+            except RuntimeError:
+                self.stay[key] = True
+        return (0.0, 0.0, 0.0) if self.stay[key] else super().act(obs)
+
+    def reset_batch(self, scenarios):
+        self.stay = {}
+
+    def act_batch(self, ids, observations):
+        PickyBatch.calls.append(len(ids))
+        return [self.act(obs, i) for i, obs in zip(ids, observations)]

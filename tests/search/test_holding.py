@@ -136,3 +136,29 @@ def test_confirmation_runs_are_the_same_on_workers(tmp_path: Path):
     batched = run_search(seed, Picky, budget=40, seed_value=3, shrink_budget="50%", evaluator=chunked(3))
     assert _fingerprint(batched) == _fingerprint(serial) and serial.confirm_sims > 0
     assert [f.estimate.outcomes for f in batched.failures] == [f.estimate.outcomes for f in serial.failures]
+
+
+@pytest.mark.parametrize("x, dx, search_seed", [(0.9, "[-0.2, 0.2]", 1), (1.2, "[-1.5, 0.5]", 2)],
+                         ids=["knife-edges-rejected", "held-and-shrunk"])
+def test_confirmation_runs_in_batches_are_the_serial_ones(x, dx, search_seed):
+    """--nav-batch (search/batched.py): confirmation runs, in the search and in the shrinks, go into
+    the lockstep batches with the other candidates, each under its own noise seed: the same runs,
+    decisions and failures as one episode at a time (knife-edges rejected; failures held, shrunk)."""
+    from straight_planner import PickyBatch
+    from test_search_batches import fingerprint
+
+    from pytest_navscenario.search.batched import batch_evaluator
+
+    seed = crate_seed(x, dx)
+    kw = dict(budget=40, seed_value=search_seed, shrink_budget="50%")
+    serial = run_search(seed, PickyBatch, **kw)
+    PickyBatch.calls.clear()
+    batched = run_search(seed, PickyBatch, batch=16, evaluator=batch_evaluator(), **kw)
+    assert fingerprint(batched) == fingerprint(serial)
+    decided = [(f.status, f.estimate.outcomes) for f in serial.failures + serial.rejected + serial.unconfirmed]
+    assert [(f.status, f.estimate.outcomes) for f in batched.failures + batched.rejected + batched.unconfirmed] == decided
+    assert serial.confirm_sims > 0 and max(PickyBatch.calls) > 1
+    if serial.failures:
+        assert any(c.run > 0 for c in batched.candidates if c.phase == "shrink")   # a shrink step confirmed
+    else:
+        assert serial.rejected

@@ -34,3 +34,14 @@ class TooFew:
 class Raises:
     def control(self, command, model, data):
         raise RuntimeError("motor driver offline")
+
+
+class ReturnsText:
+    def control(self, command, model, data):
+        return "full ahead"
+
+
+class Exits:
+    def control(self, command, model, data):
+        import sys
+        sys.exit(3)

@@ -116,6 +116,13 @@ def test_a_controller_that_cannot_be_found_or_breaks_the_protocol(tmp_path):
         simulate(load_scenario(write(tmp_path, CART_BODY.replace("Cart", "TooFew"))), Straight(), 0)
     with pytest.raises(BodyControllerError, match="raised RuntimeError: motor driver offline"):
         simulate(load_scenario(write(tmp_path, CART_BODY.replace("Cart", "Raises"))), Straight(), 0)
+    with pytest.raises(BodyControllerError, match=r"'cart_controller:ReturnsText' returned 'full ahead' \(a str\)"):
+        simulate(load_scenario(write(tmp_path, CART_BODY.replace("Cart", "ReturnsText"))), Straight(), 0)
+
+
+def test_a_controller_calling_sys_exit_ends_its_episode_not_the_run(tmp_path):
+    with pytest.raises(BodyControllerError, match=r"'cart_controller:Exits' raised SystemExit: 3"):
+        simulate(load_scenario(write(tmp_path, CART_BODY.replace("Cart", "Exits"))), Straight(), 0)
 
 
 def test_the_robots_geoms_are_hidden_from_the_lidar_and_the_model_saves(tmp_path):
@@ -130,3 +137,54 @@ def test_the_robots_geoms_are_hidden_from_the_lidar_and_the_model_saves(tmp_path
     assert np.all(res.trajectory.ranges[0] > 1.0)                       # it does not see itself
     xml = model_xml(sc)
     assert '<body name="chassis"' in xml and 'name="left"' in xml        # the user's names, kept
+
+
+def test_a_frozen_failure_carries_its_robot_and_the_files_it_names(tmp_path):
+    """A failure frozen away from its seed (navsearch's output folder) has the MJCF robot and its
+    mesh copied beside it, loads, and runs."""
+    from pytest_navscenario.search.freeze import save_standalone, standalone_scenario
+
+    seed_dir = tmp_path / "seeds"
+    (seed_dir / "robot" / "parts").mkdir(parents=True)
+    mesh = Path(__file__).parents[2] / "scenarios" / "meshes" / "lathe.stl"
+    shutil.copy(mesh, seed_dir / "robot" / "parts" / "mast.stl")
+    (seed_dir / "robot" / "cart.xml").write_text(CART.read_text().replace(
+        "<default>", '<compiler meshdir="parts"/>\n  <asset><mesh name="mast" file="mast.stl" scale="0.01 0.01 0.01"/>'
+                     '</asset>\n  <default>', 1).replace(
+        '<geom name="mast" type="cylinder" size="0.03 0.15" pos="0 0 0.25"',
+        '<geom name="mast" type="mesh" mesh="mast" pos="0 0 0.15"'))
+    seed = load_scenario(write(seed_dir, CART_BODY.replace("cart.xml", "robot/cart.xml"), RAMP))
+    frozen = standalone_scenario(seed, seed, name="frozen-1", description="a frozen failure", provenance={})
+    out = tmp_path / "navsearch" / "seed" / "frozen-1.yaml"
+    save_standalone(frozen, seed, out)
+    again = load_scenario(out)
+    assert again.robot.body.file.startswith("bodies/cart-") and again.robot.body.digest == seed.robot.body.digest
+    copied = out.parent / again.robot.body.file
+    assert copied.is_file() and (copied.parent / "parts" / "mast.stl").is_file()
+    assert simulate(again, Straight(), 0, max_ticks=3).ticks == 3
+
+
+def menagerie_style(folder: Path) -> None:
+    """The cart as MuJoCo Menagerie writes its robots (the Clearpath Jackal's jackal.xml, for one):
+    every geom contype 0, conaffinity 1 (no self-collisions; the scene's floor, default bits, meets
+    them), options of its own and a model name that is also the scenario's."""
+    text = CART.read_text().replace('<mujoco model="cart">', '<mujoco model="scene">\n  <option timestep="0.005" '
+                                     'iterations="5" integrator="Euler"/>')
+    text = text.replace('<geom name="body"', '<geom contype="0" conaffinity="1" name="body"')
+    text = text.replace('<geom type="sphere"', '<geom contype="0" conaffinity="1" type="sphere"')
+    text = text.replace('mass="1"/>', 'mass="1" contype="0" conaffinity="1"/>')
+    (folder / "cart.xml").write_text(text)
+
+
+def test_a_menagerie_style_robot_whose_geoms_have_contype_0_rides_the_terrain_and_meets_obstacles(tmp_path, capfd):
+    path = write(tmp_path, CART_BODY, RAMP)
+    menagerie_style(tmp_path)
+    res = simulate(load_scenario(path), Straight(), 0)
+    assert res.end == "goal" and res.trajectory.z[-1] == pytest.approx(0.53, abs=0.01)   # up the ramp, not through it
+    path = write(tmp_path, CART_BODY, obstacles="obstacles:\n  - {type: box, name: crate, x: 5, y: 0.2, "
+                                                "length: 0.4, width: 0.1, height: 0.15}")
+    menagerie_style(tmp_path)
+    res = simulate(load_scenario(path), Straight(), 0)
+    assert res.end == "collision" and res.collision.obstacle == "crate"
+    out, err = capfd.readouterr()
+    assert "conflict" not in out + err and "parent has" not in out + err   # its options and name: no noise

@@ -140,3 +140,44 @@ def test_missing_or_unusable_program_is_a_load_error(tmp_path, monkeypatch):
         load_subject("exec:./planner.sh")
     with pytest.raises(SubjectLoadError, match="names no program"):
         load_subject("exec:")
+
+
+POINTS_CHECKER = textwrap.dedent('''\
+    import json, sys
+    for line in sys.stdin:
+        msg = json.loads(line)
+        if msg["type"] == "reset":
+            print(json.dumps({"type": "ready"}), flush=True)
+        elif msg["type"] == "shutdown":
+            break
+        else:
+            roll, pitch = msg["attitude"]
+            points = msg.get("points")
+            wall = [p for p in points or [] if abs(p[1]) < 0.5 and p[2] > -0.4]
+            if not wall or abs(min(p[0] for p in wall) - 2.0) > 0.01 or (roll, pitch) != (0.0, 0.0):
+                print(json.dumps({"type": "error", "message": f"saw {len(points or [])} points"}), flush=True)
+            else:
+                print(json.dumps({"type": "command", "vx": 0.0, "vy": 0.0, "wz": 0.0}), flush=True)
+''')
+
+
+def test_an_external_planner_gets_the_attitude_and_the_3d_lidars_points(tmp_path):
+    from dataclasses import replace
+
+    from pytest_navscenario.scenario.terrain import Lidar3D
+
+    script = tmp_path / "points.py"
+    script.write_text(POINTS_CHECKER)
+    scenario = Scenario(name="wall", mission=Mission(start=Pose(0.0, 0.0, 0.0), goal=Pose(5.0, 0.0, 0.0),
+                                                     timeout=0.5),
+                        obstacles=(BoxObstacle("wall", 2.5, 0.0, length=1.0, width=4.0, height=2.0),))
+    scenario = replace(scenario, robot=replace(scenario.robot, lidar3d=Lidar3D(mount_z=0.4)))
+    try:
+        result = run_scenario(scenario, load_subject(f"exec:{sys.executable} {script}"))
+        assert result.outcome is Outcome.TIMEOUT, result.message
+        plain = run_scenario(replace(scenario, robot=replace(scenario.robot, lidar3d=None)),
+                             load_subject(f"exec:{sys.executable} {script}"))
+        assert plain.outcome is Outcome.SUBJECT_ERROR and "saw 0 points" in plain.message
+    finally:
+        for proc in list(_PROCESSES.values()):
+            proc.stop()

@@ -10,7 +10,8 @@ function navViewer(box){
  var d=JSON.parse(box.querySelector('script.nav-view').textContent);
  var cv=box.querySelector('canvas'),ctx=cv.getContext('2d'),sl=box.querySelector('input'),lab=box.querySelector('.t');
  var xs=d.x.concat([d.goal[0]]),ys=d.y.concat([d.goal[1]]);
- d.obs.forEach(function(p){p.forEach(function(q){xs.push(q[0]);ys.push(q[1]);});});
+ d.obs.concat(d.ter||[]).forEach(function(p){p.forEach(function(q){xs.push(q[0]);ys.push(q[1]);});});
+ var gimg=null;if(d.gnd){gimg=new Image();gimg.onload=function(){draw(+sl.value);};gimg.src=d.gnd.png;}
  var mov={};(d.mov||[]).forEach(function(m){mov[m.i]=m;var n=m.dx.length-1;
   d.obs[m.i].forEach(function(q){xs.push(q[0]+m.dx[n]);ys.push(q[1]+m.dy[n]);});});
  var x0=Math.min.apply(null,xs)-1,x1=Math.max.apply(null,xs)+1,y0=Math.min.apply(null,ys)-1,y1=Math.max.apply(null,ys)+1;
@@ -20,7 +21,10 @@ function navViewer(box){
  function robot(i){var c=Math.cos(d.yaw[i]),n=Math.sin(d.yaw[i]),l=d.fp.length/2,w=d.fp.width/2;
   if(d.fp.shape==='circle'){ctx.beginPath();ctx.arc(X(d.x[i]),Y(d.y[i]),d.fp.radius*s,0,2*Math.PI);return;}
   poly([[l,w],[-l,w],[-l,-w],[l,-w]].map(function(q){return [d.x[i]+c*q[0]-n*q[1],d.y[i]+n*q[0]+c*q[1]];}));}
- function draw(i){ctx.clearRect(0,0,cv.width,cv.height);ctx.fillStyle='#9e9e9e';
+ function draw(i){ctx.clearRect(0,0,cv.width,cv.height);
+  if(gimg&&gimg.complete){var e=d.gnd.ext;ctx.drawImage(gimg,X(e[0]),Y(e[3]),(e[1]-e[0])*s,(e[3]-e[2])*s);}
+  if(d.ter){ctx.strokeStyle='#4e342e';d.ter.forEach(function(p){poly(p);ctx.stroke();});}
+  ctx.fillStyle='#9e9e9e';
   d.obs.forEach(function(p,j){var m=mov[j];if(m){ctx.fillStyle='#ffb74d';
     poly(p.map(function(q){return [q[0]+m.dx[i],q[1]+m.dy[i]];}));ctx.fill();ctx.fillStyle='#9e9e9e';}
    else{poly(p);ctx.fill();}});
@@ -29,7 +33,10 @@ function navViewer(box){
    ctx.strokeStyle='hsl('+Math.round(260-200*f)+',75%,'+(k<=i?45:80)+'%)';ctx.beginPath();
    ctx.moveTo(X(d.x[k-1]),Y(d.y[k-1]));ctx.lineTo(X(d.x[k]),Y(d.y[k]));ctx.stroke();}
   ctx.strokeStyle='#d50000';robot(i);ctx.stroke();ctx.lineWidth=1;
-  lab.textContent='t = '+d.t[i].toFixed(2)+' s, speed '+d.v[i].toFixed(2)+' m/s (drag to replay)';}
+  if(d.ev&&d.t[i]>=d.ev.t){ctx.fillStyle='#8d1b1b';ctx.beginPath();ctx.moveTo(X(d.ev.x)-7,Y(d.ev.y)-7);
+   ctx.lineTo(X(d.ev.x)+7,Y(d.ev.y)-7);ctx.lineTo(X(d.ev.x),Y(d.ev.y)+7);ctx.closePath();ctx.fill();}
+  var up=d.z?', height '+d.z[i].toFixed(2)+' m, pitch '+d.pitch[i].toFixed(1)+' deg nose up':'';
+  lab.textContent='t = '+d.t[i].toFixed(2)+' s, speed '+d.v[i].toFixed(2)+' m/s'+up+(d.ev&&d.t[i]>=d.ev.t?', '+d.ev.kind:'')+' (drag to replay)';}
  sl.max=String(d.x.length-1);sl.value=sl.max;sl.addEventListener('input',function(){draw(+sl.value);});draw(d.x.length-1);}
 document.querySelectorAll('.viewer').forEach(navViewer);
 function sortFailures(key){var box=document.getElementById('failures');

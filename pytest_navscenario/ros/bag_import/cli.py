@@ -119,6 +119,7 @@ def import_bag(args: argparse.Namespace):
         extra[csv_name] = reference_csv(seed.path)
     if seed.fit is not None:
         extra[f"{out.stem}.fit.json"] = seed.fit.to_json()
+    extra.update(seed.files)          # the ground a 3D lidar saw, as a heightfield (ground.py)
     write_seed(seed.scenario, out, extra_files=extra, force=args.force)
     for note in seed.notes:
         print(f"navscenario from-bag: {note}")

@@ -148,6 +148,9 @@ class CloudGrid:
         self.nearest: list[tuple[float, float]] = []  # t, horizontal distance to the nearest point in the band
         self.grounds: list[float] = []
         self.last_ground: float | None = None
+        from .ground import GroundMap
+        self.ground_map = GroundMap(max(res, 0.1))   # the ground itself, kept as terrain (ground.py)
+        self.layout: tuple[int, int] | None = None   # the first cloud's rows and columns (an organised one: rings, beams)
 
     def add(self, msg: Any, t: float) -> None:
         od = self.data.odom
@@ -166,7 +169,13 @@ class CloudGrid:
             self.mount, self.how = sensor_mount(self.data, self.laser_pose)
         pts, nan = cloud_xyz(msg, f"{self.data.path}: {self.data.cloud_topic}")
         self.nan += nan
+        if self.layout is None:
+            self.layout = (max(int(msg.height), 1), int(msg.width))
         pts = pts @ self.mount[:3, :3].T.astype(np.float32) + self.mount[:3, 3].astype(np.float32)
+        z, roll, pitch = _up_at(self.data, t)
+        if roll or pitch:      # levelled: on a tilted robot the ground is the ground, not a slope
+            pts = (pts @ _rp_matrix(roll, pitch).T).astype(np.float32)
+        self.ground_map.add(_levelled_to_world(pts, x, y, yaw, z))
         ground = ground_height(pts, self.s)
         ground = self.last_ground if ground is None else ground
         if ground is None:
@@ -206,12 +215,36 @@ class CloudGrid:
         return notes
 
 
+def _up_at(data: BagData, t: float) -> tuple[float, float, float]:
+    """The robot's height, roll and pitch at ``t`` (``odom_up``; 0 for planar odometry)."""
+    up = data.odom_up
+    if not len(up):
+        return 0.0, 0.0, 0.0
+    return tuple(float(np.interp(t, up[:, 0], up[:, k])) for k in (1, 2, 3))   # type: ignore[return-value]
+
+
+def _rp_matrix(roll: float, pitch: float) -> np.ndarray:
+    """Level from base: the rotation by pitch (about y) after roll (about x)."""
+    cr, sr, cp, sp = math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch)
+    return np.array([[cp, sp * sr, sp * cr], [0.0, cr, -sr], [-sp, cp * sr, cp * cr]])
+
+
+def _levelled_to_world(pts: np.ndarray, x: float, y: float, yaw: float, z: float) -> np.ndarray:
+    """Levelled base-frame points (k, 3) into the world frame: turned by yaw, moved to (x, y, z)."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    p = np.asarray(pts, dtype=float)
+    return np.column_stack([x + c * p[:, 0] - s * p[:, 1], y + s * p[:, 0] + c * p[:, 1], z + p[:, 2]])
+
+
 @dataclass
 class CloudResult:
     grid: Grid
     notes: list[str]
     nearest: np.ndarray   # (k, 2) time, horizontal distance from the base to the nearest point in the band
     how: str              # where the sensor's mounting came from
+    ground: Any = None    # ground.GroundMap: the ground the clouds saw
+    mount: Any = None     # the sensor's 4 x 4 mounting in the base frame
+    layout: tuple[int, int] | None = None   # the first cloud's rows, columns
 
 
 def grid_clouds(data: BagData, laser_pose: tuple[float, float, float] | None, s: CloudSettings,
@@ -227,4 +260,4 @@ def grid_clouds(data: BagData, laser_pose: tuple[float, float, float] | None, s:
             ns = int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec) or bag_ns
             g.add(msg, (ns - data.origin_ns) * 1e-9)
     return CloudResult(g.acc.grid(), g.notes(), np.array(g.nearest, dtype=float).reshape(-1, 2),
-                       g.how or "no cloud in the window")
+                       g.how or "no cloud in the window", g.ground_map, g.mount, g.layout)

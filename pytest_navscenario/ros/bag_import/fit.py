@@ -86,7 +86,7 @@ def cast(ox, oy, dx, dy, edges: np.ndarray, circles: np.ndarray) -> tuple[np.nda
     if len(edges):
         ex, ey = edges[:, 2] - edges[:, 0], edges[:, 3] - edges[:, 1]
         length = np.maximum(np.hypot(ex, ey), 1e-12)
-        chunk = max(1, 4_000_000 // len(edges))
+        chunk = max(1, 200_000 // len(edges))      # ray x edge pairs at once: ~20 MB of temporaries
         for a in range(0, len(ox), chunk):
             px, py = ox[a:a + chunk, None], oy[a:a + chunk, None]
             rx, ry = dx[a:a + chunk, None], dy[a:a + chunk, None]

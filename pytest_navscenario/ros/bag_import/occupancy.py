@@ -4,7 +4,7 @@ where a smeared return (or a person who walked on) landed once is cleared by the
 pass through it.
 
 Each cell holds ``log(p / (1 - p))``: a return adds ``HIT``, a beam through it adds ``FREE``, and the
-sum is kept within ``[LOW, HIGH]`` after every batch of scans (so recent evidence can still change
+sum is kept within ``[LOW, HIGH]`` after every batch of scans (a part of one for long beams) (so recent evidence can still change
 an old verdict, as OctoMap's clamping does). Beams are sampled every cell along their way, a
 cell counted once per beam, up to ``MARGIN`` short of the return, and a cell where a beam of the
 same batch ended is not carved by the batch (OctoMap's rule: a wall seen at a grazing angle is
@@ -25,7 +25,7 @@ FREE = -0.4             # log-odds of a beam passing through (p = 0.4)
 LOW, HIGH = -2.0, 3.5   # clamping (p = 0.12 .. 0.97)
 MARGIN = 2              # cells before a return that its beam does not carve
 MAX_REACH = 20.0        # m: returns and free space farther than this are not used
-CHUNK = 1_000_000       # beam samples handled at once (bounds the temporary memory)
+CHUNK = 250_000         # beam samples handled at once (bounds the temporary memory: ~15 MB)
 
 
 def reach_of(range_max: float) -> float:
@@ -73,19 +73,15 @@ class LogOdds:
         a = rays.angle[hit]
         hx = rays.ox[hit] + r * np.cos(a)
         hy = rays.oy[hit] + r * np.sin(a)
-        free_c, free_r = [], []
-        bounds = np.cumsum(steps)
-        start = 0
-        while start < len(steps):   # at most CHUNK samples at once
-            stop = int(np.searchsorted(bounds, (bounds[start - 1] if start else 0) + CHUNK, side="right"))
-            stop = max(stop, start + 1)
-            c, rr = self._samples(ox[start:stop], oy[start:stop], dx[start:stop], dy[start:stop], steps[start:stop])
-            free_c.append(c)
-            free_r.append(rr)
-            start = stop
         hc, hr = self.cells_of(hx, hy)
-        self._apply(np.concatenate(free_c) if free_c else np.zeros(0, np.int64),
-                    np.concatenate(free_r) if free_r else np.zeros(0, np.int64), hc, hr)
+        bounds = np.cumsum(steps)
+        start, first = 0, True
+        while start < len(steps) or first:   # at most CHUNK samples at once, each chunk applied at once
+            stop = int(np.searchsorted(bounds, (bounds[start - 1] if start else 0) + CHUNK, side="right"))
+            stop = min(max(stop, start + 1), len(steps))
+            c, rr = self._samples(ox[start:stop], oy[start:stop], dx[start:stop], dy[start:stop], steps[start:stop])
+            self._apply(c, rr, hc, hr, count_hits=first)
+            start, first = stop, False
 
     def _samples(self, ox, oy, dx, dy, steps) -> tuple[np.ndarray, np.ndarray]:
         """The cells each beam passes through (sampled once a cell length, each cell once per beam)."""
@@ -100,12 +96,14 @@ class LogOdds:
         fresh[1:] = (c[1:] != c[:-1]) | (r[1:] != r[:-1]) | (beam[1:] != beam[:-1])
         return c[fresh], r[fresh]
 
-    def _apply(self, fc: np.ndarray, fr: np.ndarray, hc: np.ndarray, hr: np.ndarray) -> None:
-        """Add the batch's evidence in the window of the grid it touches, then clamp that window."""
+    def _apply(self, fc: np.ndarray, fr: np.ndarray, hc: np.ndarray, hr: np.ndarray, count_hits: bool = True) -> None:
+        """Add the evidence (``fc``, ``fr``: cells beams passed; ``hc``, ``hr``: cells they ended in,
+        counted when ``count_hits``, else only kept from being carved) in the window of the grid it
+        touches, then clamp that window."""
         ok_f = (fc >= 0) & (fc < self.nx) & (fr >= 0) & (fr < self.ny)
         ok_h = (hc >= 0) & (hc < self.nx) & (hr >= 0) & (hr < self.ny)
         fc, fr, hc, hr = fc[ok_f], fr[ok_f], hc[ok_h], hr[ok_h]
-        if not (len(fc) or len(hc)):
+        if not (len(fc) or (count_hits and len(hc))):
             return
         cols, rows = np.concatenate([fc, hc]), np.concatenate([fr, hr])
         c0, c1, r0, r1 = int(cols.min()), int(cols.max()) + 1, int(rows.min()), int(rows.max()) + 1
@@ -115,7 +113,7 @@ class LogOdds:
         passes = np.bincount((fr - r0) * w + (fc - c0), minlength=size).astype(np.float32)
         # a cell that a beam of these scans ended in is not carved by the others (OctoMap's rule):
         # a wall seen at a grazing angle is crossed by the beams that end farther along it
-        upd = np.where(hits > 0, HIT * hits, FREE * passes)
+        upd = np.where(hits > 0, HIT * hits if count_hits else 0.0, FREE * passes)
         win = self.value[r0:r1, c0:c1]
         win += upd.reshape(r1 - r0, w)
         np.clip(win, LOW, HIGH, out=win)

@@ -55,6 +55,9 @@ class BagData:
     # beyond odometry and laser (times in s on the same clock as ``odom``; whole bag, not only the window)
     origin_ns: int = 0                                   # bag stamp of t = 0
     full_odom: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))  # the whole odometry, odometry frame
+    # the odometry's third dimension, row for row with ``odom``: t, z (m), roll, pitch (rad); all 0
+    # when the odometry is planar (the robot then counts as level at z = 0)
+    odom_up: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
     duration: float = 0.0                                # s, the odometry's whole span
     static_tf3: dict[str, tuple[str, tuple[float, ...]]] = field(default_factory=dict)  # child -> (parent, x,y,z,q)
     frame_tf: list[tuple[float, str, str, float, float, float]] = field(default_factory=list)  # t, parent, child, x, y, yaw
@@ -278,6 +281,7 @@ class _Collector:
     def __init__(self, odom_name: str, scan_name: str | None, roles: dict, probe_every: int = 1):
         self.odom_name, self.scan_name, self.roles = odom_name, scan_name, roles
         self.odom = array.array("d")                    # stamp (ns, as float), x, y, yaw, ...
+        self.odom_up = array.array("d")                 # z, roll, pitch of the same messages
         self.odom_bad = 0                               # odometry messages with a NaN / inf pose
         self.scan_received = array.array("q")           # every scan's receive time (ns)
         self.probe: list[tuple[int, int]] = []          # (stamp ns, receive ns) of the probed scans
@@ -306,6 +310,7 @@ class _Collector:
                 self.odom_bad += 1
                 return
             self.odom.extend((float(_stamp(msg.header, bag_ns)),) + pose)
+            self.odom_up.extend((float(p.position.z),) + _roll_pitch(p.orientation))
             self.odom_frame = self.odom_frame or msg.header.frame_id.lstrip("/")
             self.base_frame = self.base_frame or msg.child_frame_id.lstrip("/")
         else:
@@ -410,6 +415,7 @@ def _odometry(path: Path, col: _Collector, odom_name: str, start, end, at=None,
     from .motion import manoeuvre_at
 
     odom_arr = np.frombuffer(col.odom, dtype=float).reshape(-1, 4).copy()
+    up_arr = np.frombuffer(col.odom_up, dtype=float).reshape(-1, 3)
     notes = []
     if col.odom_bad:
         if not len(odom_arr):
@@ -421,7 +427,9 @@ def _odometry(path: Path, col: _Collector, odom_name: str, start, end, at=None,
         raise BagImportError(f"{path}: {odom_name} has {len(odom_arr)} usable message(s): a seed needs the robot's "
                              f"poses over time (a start and a goal apart); record longer, or choose another topic "
                              f"with --odom-topic")
-    odom_arr = odom_arr[np.argsort(odom_arr[:, 0], kind="stable")]
+    order = np.argsort(odom_arr[:, 0], kind="stable")
+    odom_arr = odom_arr[order]
+    up_arr = np.nan_to_num(up_arr[order], nan=0.0, posinf=0.0, neginf=0.0)
     origin = float(odom_arr[0, 0])
     if odom_arr[-1, 0] == origin:
         raise BagImportError(f"{path}: all {len(odom_arr)} messages on {odom_name} have the same header stamp "
@@ -430,7 +438,8 @@ def _odometry(path: Path, col: _Collector, odom_name: str, start, end, at=None,
     odom_arr[:, 0] = (odom_arr[:, 0] - origin) * 1e-9
     data = BagData(path=path, odom_topic=odom_name, odom_frame=col.odom_frame or "odom",
                    base_frame=col.base_frame or "base_link", odom=odom_arr, static_tf=col.static_tf,
-                   first_tf=col.first_tf, duration=float(odom_arr[-1, 0]), full_odom=odom_arr, notes=notes)
+                   first_tf=col.first_tf, duration=float(odom_arr[-1, 0]), full_odom=odom_arr, notes=notes,
+                   odom_up=np.column_stack([odom_arr[:, 0], up_arr]))
     if at is not None:
         if not (math.isfinite(at) and 0 < at <= data.duration):
             raise BagImportError(f"{path}: --at {at:g} is outside the bag: its odometry covers 0..{data.duration:.1f} s "
@@ -458,6 +467,7 @@ def _odometry(path: Path, col: _Collector, odom_name: str, start, end, at=None,
             raise BagImportError(f"{path}: fewer than 2 odometry messages between --start {start} and "
                                  f"--end {end} (the odometry covers 0..{odom_arr[-1, 0]:.1f} s)")
         data.odom = odom_arr[keep]
+        data.odom_up = data.odom_up[keep]
     return data, origin
 
 
@@ -488,3 +498,11 @@ def _attach_scans(data: BagData, col: _Collector, scan_name: str, origin: float,
     data.scan_timing = choose_timing(col.scan_layout, data.scan_probe[:, 0], data.scan_probe[:, 1], period,
                                      stamp, offset)
     data.notes.extend(f"warning: {w}" for w in data.scan_timing.warnings)
+
+
+def _roll_pitch(q: Any) -> tuple[float, float]:
+    """Roll and pitch (rad, Z-Y-X) of a geometry_msgs quaternion."""
+    w, x, y, z = float(q.w), float(q.x), float(q.y), float(q.z)
+    roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
+    pitch = math.asin(max(-1.0, min(1.0, 2.0 * (w * y - z * x))))
+    return roll, pitch

@@ -23,6 +23,7 @@ from ...scenario.model import (
     Scenario,
 )
 from .clouds import CloudSettings, grid_clouds
+from .ground import drop_ground_obstacles, terrain_from_ground
 from .fit import FitFigure, fit_figure
 from .footprint import footprint_from_bag, inner_radius
 from .frames import to_world_frame
@@ -60,6 +61,7 @@ class BagSeed:
     notes: list[str]
     mount: tuple[float, float, float] | None = None
     fit: FitFigure | None = None
+    files: dict[str, bytes] = dataclasses.field(default_factory=dict)   # beside the seed (a heightfield)
 
 
 def decimate_path(xy: np.ndarray, tolerance: float = 0.15, min_spacing: float = 0.5) -> np.ndarray:
@@ -125,7 +127,7 @@ def _seed(data: BagData, laser_pose, path_as, reference_file, name, robot_radius
     radius = inner_radius(fp)
     notes = list(data.notes) + [goal_note] + [f"warning: {w}" for w in fp_warnings] + [f"footprint: {fp_how}"]
     obstacles: list[Obstacle] = []
-    mount = smap = None
+    mount = smap = terrain = None
     if data.scan_topic is not None:
         mount, how = choose_mount(data, laser_pose)
         notes.append(f"laser {data.scan_frame} at x={mount[0]:.3f} y={mount[1]:.3f} "
@@ -145,9 +147,13 @@ def _seed(data: BagData, laser_pose, path_as, reference_file, name, robot_radius
         notes.extend(clouds.notes)
         grid, how = clouds.grid, clouds.how
         obstacles = _fit(data, grid, settings, notes, f"{data.cloud_count} clouds")
+        terrain = _ground(data, clouds, notes)
+        obstacles = drop_ground_obstacles(obstacles, terrain.raised, notes)
         notes += check_path_free(data, obstacles, radius, how, data.cloud_topic)
     obstacles, background = _keep_small(data, obstacles, radius, size, notes)
     scenario, summary = _scenario(data, obstacles, path_as, reference_file, name, fp, goal)
+    if terrain is not None and terrain.elements:
+        scenario = _on_terrain(scenario, terrain, clouds, notes)
     if background:
         scenario = dataclasses.replace(scenario, search={"frozen": background})
     notes.append(summary)
@@ -157,7 +163,38 @@ def _seed(data: BagData, laser_pose, path_as, reference_file, name, robot_radius
         fit = fit_figure(scenario, data, mount, smap.sample, smap.first)
     od = data.odom
     path_rows = np.stack([od[:, 0] - od[0, 0], od[:, 1], od[:, 2]], axis=1)
-    return BagSeed(scenario=scenario, path=path_rows, notes=notes, mount=mount, fit=fit)
+    return BagSeed(scenario=scenario, path=path_rows, notes=notes, mount=mount, fit=fit,
+                   files=dict(terrain.files) if terrain is not None else {})
+
+
+def _ground(data: BagData, clouds: Any, notes: list[str]) -> Any:
+    """The terrain the clouds saw (ground.py), its ground heights made relative to the floor."""
+    od = data.odom
+    up = data.odom_up
+    if len(up) and not np.any(up[:, 1:]):
+        notes.append("ground: the odometry is planar (no height, roll or pitch): the robot counts as level at z = 0, "
+                     "so ground it drove up or down is placed too low or too high; record 3D odometry for terrain")
+    guess = terrain_from_ground(clouds.ground, (float(od[0, 1]), float(od[0, 2])), od[:, 1:3])
+    notes.extend(guess.notes)
+    return guess
+
+
+def _on_terrain(scenario: Scenario, terrain: Any, clouds: Any, notes: list[str]) -> Scenario:
+    """The seed with the terrain, a body that rides it and the 3D lidar the bag had (guessed)."""
+    from ...scenario.terrain import Lidar3D, WheeledBody
+
+    m = clouds.mount if clouds.mount is not None else np.eye(4)
+    pitch = math.degrees(math.atan2(-m[2, 0], m[0, 0]))
+    rows, cols = clouds.layout or (1, 0)
+    organised = rows > 1 and cols > 1
+    lidar3d = Lidar3D(rings=rows if organised else 16, beams=min(cols, 4096) if organised else 360,
+                      mount_x=_r(m[0, 3]), mount_y=_r(m[1, 3]), mount_z=_r(m[2, 3]), mount_pitch=_r(pitch, 2))
+    notes.append(f"robot.lidar3d: mounted as the cloud's frame (x={m[0, 3]:.2f}, z={m[2, 3]:.2f} m, pitch "
+                 f"{pitch:.1f} deg); " + (f"{rows} rings x {cols} beams from the organised cloud" if organised else
+                                          "16 rings x 360 beams, -15..15 deg (a guess: the clouds are not organised)"))
+    notes.append("robot.body: wheeled (a guess: a bag does not say how the robot meets the ground; set robot.body)")
+    robot = dataclasses.replace(scenario.robot, body=WheeledBody(), lidar3d=lidar3d)
+    return dataclasses.replace(scenario, terrain=tuple(terrain.elements), robot=robot)
 
 
 def _timing_note(data: BagData, smap) -> str:
@@ -188,16 +225,24 @@ def _fit_scans(data: BagData, smap, settings: FitSettings, notes: list[str]) -> 
 
 
 def _check_moves(data: BagData, scenario: Scenario) -> None:
-    """A seed whose start already satisfies its goal tests nothing: the robot did not move."""
+    """A seed whose start already satisfies its goal tests nothing: the robot did not move, or drove
+    a loop back to where it started (with no waypoints to follow it)."""
     from ...verdict.feasibility import trivially_passed
 
-    if trivially_passed(scenario) is not None:
-        od = data.odom
-        moved = float(np.hypot(*(od[:, 1:3].max(axis=0) - od[:, 1:3].min(axis=0))))
-        raise BagImportError(f"{data.path}: the robot hardly moved in the window (t={od[0, 0]:.1f}..{od[-1, 0]:.1f} s, "
-                             f"{len(od)} poses within {moved:.2f} m) and no recorded goal lies farther: the seed's "
-                             f"start would already be at its goal; choose a window where the robot drives "
-                             f"(--start/--end, --at), or check {data.odom_topic}")
+    if trivially_passed(scenario) is None:
+        return
+    od = data.odom
+    extent = float(np.hypot(*(od[:, 1:3].max(axis=0) - od[:, 1:3].min(axis=0))))
+    window = f"t={od[0, 0]:.1f}..{od[-1, 0]:.1f} s"
+    if extent <= 2 * scenario.mission.goal_tolerance.position:
+        raise BagImportError(f"{data.path}: the robot hardly moved in the window ({window}, {len(od)} poses within "
+                             f"{extent:.2f} m) and no recorded goal lies farther: the seed's start would already be "
+                             f"at its goal; choose a window where the robot drives (--start/--end, --at), or check "
+                             f"{data.odom_topic}")
+    raise BagImportError(f"{data.path}: the robot drove a loop in the window ({window}, {extent:.1f} m across) and "
+                         f"ended where it started, with no recorded goal elsewhere: the seed's start would already "
+                         f"be at its goal; end the window before it comes back (--end), or keep the loop as "
+                         f"waypoints (--path-as waypoints or both)")
 
 
 def _fit(data: BagData, grid, settings: FitSettings, notes: list[str], what: str,

@@ -5,8 +5,11 @@ The model. ``robot.body.file`` (beside the scenario: the mesh path rules) is rea
 base (``robot.body.base``, else the first body with a free joint) and everything below it are
 attached to the scenario's world with their names, defaults, actuators, tendons and sensors kept;
 the rest of the file's world (its floor, lights, other bodies) and its options are not used: the
-scenario's timestep and gravity are. The robot's geoms are put in geom group 5 (the lidars skip the
-robot's own geoms) and keep their contact bits; a contact of any of them with an obstacle is a
+scenario's timestep, gravity and other options are (quietly: the file's are replaced before it is
+attached). The robot's geoms are put in geom group 5 (the lidars skip the robot's own geoms) and keep
+their contact bits among themselves; each that would meet a default MuJoCo floor (contype 1,
+conaffinity 1: MuJoCo Menagerie's robots have contype 0, conaffinity 1) meets the scenario's ground
+and obstacles, through a bit of its own (``_world_bit``). A contact of any of them with an obstacle is a
 collision, a contact of the base's own geoms with a terrain face is a collision with the terrain
 (wheels and feet, on bodies below the base, meet the ground freely).
 
@@ -37,6 +40,7 @@ import mujoco
 import numpy as np
 
 from ...core.errors import NavScenarioError, ScenarioError, SubjectLoadError
+from ...core.interrupts import from_the_user
 from .base import ROBOT_GROUP, FreeBase
 
 START_GAP = 0.002   # m between the lowest geom and the ground at the start
@@ -139,9 +143,24 @@ class MjcfModel(FreeBase):
 
     def build(self, spec: mujoco.MjSpec) -> None:
         child = self.child.copy()
+        child.modelname = f"{spec.modelname}:robot"        # no attach conflict with the scenario's name
+        for name in dir(spec.option):                       # the scenario's options, kept quietly
+            if not name.startswith("_"):
+                setattr(child.option, name, getattr(spec.option, name))
         base = child.body(self.base_name)
-        for geom in _subtree_geoms(base):
+        robot = _subtree_geoms(base)
+        meets_world = _world_bit(robot)
+        if not meets_world:
+            raise _fail(self.scenario, f"the geoms of {mjcf_path(self.scenario)} use every collision bit from 16 "
+                                       f"up: the scenario's world needs one", "robot.body.file",
+                        "leave one contype/conaffinity bit from 16 up unused")
+        for geom in spec.geoms:                  # the terrain and the obstacles, before the robot comes
+            if geom.contype or geom.conaffinity:
+                geom.contype |= meets_world
+        for geom in robot:
             geom.group = ROBOT_GROUP
+            if (geom.contype | geom.conaffinity) & 1:      # it would meet a default floor (1, 1)
+                geom.conaffinity |= meets_world
         base.pos = [0.0, 0.0, 0.0]
         base.quat = [1.0, 0.0, 0.0, 0.0]
         frame = spec.worldbody.add_frame()
@@ -177,32 +196,59 @@ class MjcfControl:
         self.body, self.model, self.data = body, body.model, d
         spec = body.scenario.robot.body.controller
         self.spec = spec
-        try:
-            self.controller = body.factory()
-            reset = getattr(self.controller, "reset", None)
-            if reset is not None:
-                reset(self.model, d)
-        except Exception as exc:
-            raise BodyControllerError(f"body controller {spec!r} raised {type(exc).__name__}: {exc} "
-                                      f"when made or reset") from exc
+        self.controller = _call(spec, body.factory, when=" when made or reset")
+        reset = getattr(self.controller, "reset", None)
+        if reset is not None:
+            _call(spec, reset, self.model, d, when=" when made or reset")
         self.control = getattr(self.controller, "control", None)
         if self.control is None:
             raise BodyControllerError(f"body controller {spec!r} has no control(command, model, data) method")
 
     def command(self, ctrl: np.ndarray, setpoint: tuple[float, float, float], state: Any) -> None:
-        try:
-            out = self.control(setpoint, self.model, self.data)
-        except Exception as exc:
-            raise BodyControllerError(f"body controller {self.spec!r} raised {type(exc).__name__}: {exc}") from exc
+        out = _call(self.spec, self.control, setpoint, self.model, self.data)
         if out is None:
             return
-        values = np.asarray(out, dtype=float).reshape(-1)
+        try:
+            values = np.asarray(out, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            text = repr(out) if len(repr(out)) <= 60 else repr(out)[:57] + "..."
+            raise BodyControllerError(
+                f"body controller {self.spec!r} returned {text} (a {type(out).__name__}): return model.nu "
+                f"finite numbers (a list or array), or None after writing data.ctrl") from None
         if values.shape != ctrl.shape or not np.isfinite(values).all():
             raise BodyControllerError(
                 f"body controller {self.spec!r} returned {values.size} controls "
                 f"({'not all finite' if values.shape == ctrl.shape else f'the model has {ctrl.size} actuators'}): "
                 f"return model.nu finite numbers, or None after writing data.ctrl")
         ctrl[:] = values
+
+
+def _call(spec: str, fn: Any, *args: Any, when: str = "") -> Any:
+    """Call the user's controller code: whatever it raises, ``sys.exit()`` and its own
+    ``KeyboardInterrupt`` included, is a BodyControllerError that ends the episode, not the run (as
+    for planners: ``sim/command.call_planner``); a user's Ctrl-C passes."""
+    try:
+        return fn(*args)
+    except (SystemExit, KeyboardInterrupt, GeneratorExit) as exc:
+        if from_the_user(exc):
+            raise
+        raise BodyControllerError(f"body controller {spec!r} raised {type(exc).__name__}: {exc}{when} "
+                                  f"(a controller ends its episode, not the test run)") from exc
+    except Exception as exc:
+        raise BodyControllerError(f"body controller {spec!r} raised {type(exc).__name__}: {exc}{when}") from exc
+
+
+def _world_bit(robot_geoms: list) -> int:
+    """A collision bit that none of the robot's geoms uses and the world's scheme (sim/terrain.py:
+    1, 2, 4, 8) does not either: the world's geoms get it in ``contype``, each robot geom that
+    would meet a default MuJoCo floor (contype 1, conaffinity 1) in ``conaffinity``. So the robot
+    meets the ground and the obstacles whatever its own bits (MuJoCo Menagerie's robots have
+    contype 0, conaffinity 1: they meet their scene's floor but not themselves), and its own
+    geoms meet each other exactly as in its file."""
+    used = 0
+    for geom in robot_geoms:
+        used |= int(geom.contype) | int(geom.conaffinity)
+    return next((1 << bit for bit in range(4, 31) if not used & (1 << bit)), 0)
 
 
 def _subtree_geoms(body: Any) -> list:

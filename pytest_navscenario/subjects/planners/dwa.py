@@ -150,6 +150,27 @@ class _Window:
 
 
 _TABLES: "OrderedDict[tuple, _Table]" = OrderedDict()
+_BEAM_GEOMETRY: "OrderedDict[bytes, tuple]" = OrderedDict()
+
+
+def _beam_geometry(angles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(float32 unit vectors (2, beams), detour directions (beams, 2) and their normals, float
+    angles) of a lidar's beams, computed once per beam layout and shared read-only, so that the
+    episodes of a batch with the same lidar share one array (dwa_batch groups them by it)."""
+    key = angles.dtype.str.encode() + angles.tobytes()
+    out = _BEAM_GEOMETRY.get(key)
+    if out is None:
+        unit = np.stack([np.cos(angles), np.sin(angles)]).astype(np.float32)
+        beam_angles = np.array(angles, dtype=float)
+        c, s = np.cos(beam_angles), np.sin(beam_angles)
+        out = (unit, np.stack([c, s], axis=1).astype(np.float32), np.stack([-s, c], axis=1).astype(np.float32),
+               beam_angles)
+        for a in out:
+            a.flags.writeable = False
+        _BEAM_GEOMETRY[key] = out
+        while len(_BEAM_GEOMETRY) > TABLE_CACHE_SIZE:
+            _BEAM_GEOMETRY.popitem(last=False)
+    return out
 
 
 def _table(p: RobotParams, *settings) -> _Table:
@@ -223,6 +244,14 @@ class DynamicWindowPlanner:
         self._p: RobotParams | None = None
         self._idx: tuple[int, int, int] | None = None
         self._goal_phase = False
+        self._kwargs = dict(horizon=horizon, steps=steps, window=window, reverse_speed=reverse_speed,
+                            clearance_buffer=clearance_buffer, clearance_cap=clearance_cap,
+                            progress_weight=progress_weight, heading_weight=heading_weight,
+                            clearance_weight=clearance_weight, velocity_weight=velocity_weight,
+                            turn_weight=turn_weight, lookahead=lookahead, stall_time=stall_time,
+                            stall_progress=stall_progress, route_lookahead=route_lookahead,
+                            replan_period=replan_period, route_margin=route_margin)
+        self._episodes: list[DynamicWindowPlanner] = []     # the batch protocol's episodes
 
     # -- episode set-up -------------------------------------------------------------------
     def reset(self, scenario: Scenario) -> None:
@@ -246,7 +275,7 @@ class DynamicWindowPlanner:
         rollouts' reach)."""
         t = self._t
         self._beams_shape = angles.shape
-        self._unit = np.stack([np.cos(angles), np.sin(angles)]).astype(np.float32)
+        self._unit, self._dirs, self._dirs_normal, self._beam_angles = _beam_geometry(angles)
         self._points = np.ones((3, len(angles)), dtype=np.float32)   # [px, py, 1] per beam
         self._terms = np.empty((3, self._t.max_window))                # progress, heading, room
         self._term_weights = np.array((0.0, -self.weights[1] / math.pi, self.weights[2] / self._t.cap))
@@ -255,15 +284,26 @@ class DynamicWindowPlanner:
         reach = float(t.reach.max()) - t.cap
         self._inflation = 0.5 * spacing * reach
         self._min_clear = self._p.safety_margin + self.clearance_buffer + self._inflation
-        # detour lanes: every beam direction is a candidate direction
-        self._beam_angles = np.asarray(angles, dtype=float)
-        c, s = np.cos(self._beam_angles), np.sin(self._beam_angles)
-        self._dirs = np.stack([c, s], axis=1).astype(np.float32)          # (directions, 2)
-        self._dirs_normal = np.stack([-s, c], axis=1).astype(np.float32)
+        # detour lanes: every beam direction is a candidate direction (_beam_geometry)
         self._lane = self._t.half[1] + self._t.radius + self._min_clear
         # the route keeps as far from the walls as a detour lane: where the rollouts can pass
         self._grid.set_inflation(self._lane + self.route_margin)
         self._lane_map = np.zeros((2, 3), dtype=np.float32)
+
+    # -- the batch protocol (subjects/protocol.py): many episodes, one call per tick ----------
+    def reset_batch(self, scenarios) -> None:
+        """One planner per episode (this one's parameters), each reset with its scenario."""
+        self._episodes = []
+        for scenario in scenarios:
+            planner = DynamicWindowPlanner(**self._kwargs)
+            planner.reset(scenario)
+            self._episodes.append(planner)
+
+    def act_batch(self, ids, observations) -> list[Command]:
+        """The commands ``act`` gives each episode, bit for bit, computed together (dwa_batch.py)."""
+        from .dwa_batch import act_batch
+        episodes = self._episodes
+        return act_batch([episodes[i] for i in ids], observations)
 
     # -- one tick -------------------------------------------------------------------------
     def act(self, obs: Observation) -> Command:
@@ -320,17 +360,22 @@ class DynamicWindowPlanner:
     def _aim(self, obs: Observation, points: np.ndarray | None) -> tuple[bool, float, float]:
         """(routed, tx, ty): the point to aim at in the robot frame: the next waypoint or the
         goal, a point along the grid route when stalled, or a detour around a blocked lane."""
+        routed, tx, ty = self._aim_route(obs)
+        if not routed and points is not None and self.lookahead > 0:
+            tx, ty = self._subgoal(tx, ty, points)
+        return routed, tx, ty
+
+    def _aim_route(self, obs: Observation) -> tuple[bool, float, float]:
+        """(routed, tx, ty): the next waypoint or the goal in the robot frame, or, stalled, the
+        point along the grid route (before any detour around a blocked lane)."""
         target = obs.waypoints[0] if len(obs.waypoints) else obs.goal
         pose = obs.pose
         dx, dy = float(target[0]) - float(pose[0]), float(target[1]) - float(pose[1])
         c, s = math.cos(float(pose[2])), math.sin(float(pose[2]))
         tx, ty = c * dx + s * dy, -s * dx + c * dy       # target in the robot frame
-        routed = False
         if self.stall_time > 0:
-            routed, tx, ty = self._route(obs, obs.ranges, c, s, dx, dy, tx, ty)
-        if not routed and points is not None and self.lookahead > 0:
-            tx, ty = self._subgoal(tx, ty, points)
-        return routed, tx, ty
+            return self._route(obs, obs.ranges, c, s, dx, dy, tx, ty)
+        return False, tx, ty
 
     def _score(self, obs: Observation, win: _Window, terms: np.ndarray, tx: float,
                ty: float) -> np.ndarray:
@@ -447,20 +492,29 @@ class DynamicWindowPlanner:
         target's, keeping to the side chosen before, and aim along it instead. ``points`` are
         the nearby lidar points as [px, py, 1] columns in the robot frame.
         """
-        d0 = math.hypot(tx, ty)
-        length = min(d0, self.lookahead)
-        cb, sb = tx / max(d0, 1e-9), ty / max(d0, 1e-9)
-        # the lane as the square |u| < 1, |v| < 1 in scaled lane coordinates
-        half_len = max(length / 2.0, 1e-6)
-        m = self._lane_map
-        m[0, 0], m[0, 1], m[0, 2] = cb / half_len, sb / half_len, -1.0
-        m[1, 0], m[1, 1] = -sb / self._lane, cb / self._lane
-        lane = m @ points                                    # points: [px, py, 1] rows
+        length = self._set_lane(tx, ty)
+        lane = self._lane_map @ points                       # points: [px, py, 1] rows
         np.abs(lane, out=lane)
         if np.minimum.reduce(np.maximum(lane[0], lane[1])) >= 1.0:
             self._side = 0.0
             return tx, ty
-        # blocked: check the lane along every beam direction
+        return self._detour(tx, ty, points, length)
+
+    def _set_lane(self, tx: float, ty: float) -> float:
+        """Write the map of the straight lane to (tx, ty) into ``_lane_map`` (times [px, py, 1]:
+        the lane is the square |u| < 1, |v| < 1 in scaled lane coordinates); return its length."""
+        d0 = math.hypot(tx, ty)
+        length = min(d0, self.lookahead)
+        cb, sb = tx / max(d0, 1e-9), ty / max(d0, 1e-9)
+        half_len = max(length / 2.0, 1e-6)
+        m = self._lane_map
+        m[0, 0], m[0, 1], m[0, 2] = cb / half_len, sb / half_len, -1.0
+        m[1, 0], m[1, 1] = -sb / self._lane, cb / self._lane
+        return length
+
+    def _detour(self, tx: float, ty: float, points: np.ndarray, length: float) -> tuple[float, float]:
+        """The straight lane is blocked: aim along the free lane closest to the target's direction
+        (keeping to the side chosen before), or at the target when every lane is blocked."""
         along = self._dirs @ points[:2]                      # (directions, m)
         lateral = np.abs(self._dirs_normal @ points[:2])
         blocked = ((lateral < self._lane) & (np.abs(along - length / 2) < length / 2)).any(axis=1)

@@ -1,0 +1,312 @@
+"""The observation step of a batch's episodes done for many at once (sim/lockstep.py): a cohort is
+the episodes of a batch that share the planar body, their physics steps per tick and timestep and
+their lidar's beam layout, in static worlds, without sensor faults or lidar noise.
+
+What ``Episode.observe`` and ``Episode.safety_check`` do per episode, a cohort does per tick with
+one array operation for all its running episodes where that cannot change a bit, and with the
+episode's own scalar code where it could:
+
+* the records live in cohort-wide arrays (each episode's ``pose_buf``, ``qvel_buf``, ``seen`` and
+  lidar record are views of them), so a tick's seen rows and lidar rows are one write each;
+* the lidar: the beams' world directions are one stacked matrix product (numpy calls BLAS once per
+  episode with exactly ``Lidar.scan``'s shapes), the ray cast is MuJoCo's ``mj_multiRay`` per
+  episode (one C call each, into rows of one array), the clamping is one pass;
+* the mission (waypoints, goal, time limit, stuck) and the heading's cosine and sine are the
+  episode's own Python float code (``math`` and numpy's hypot and arctan2 can differ in the last
+  bit, so no vector version of them decides anything);
+* the physics: the episodes whose models share MuJoCo's size signature step a tick in one
+  ``mujoco.rollout`` call (``step``), their states written into the records in one pass.
+"""
+from __future__ import annotations
+
+import math
+from time import perf_counter
+from typing import Any, Callable
+
+import mujoco
+import numpy as np
+
+from ..core.errors import SimulationDivergedError
+from ..subjects.protocol import Observation
+from .episode import Episode, EpisodeOver
+from .world import CONTACT_SENSOR, LIDAR_HEIGHT, MUJOCO_WARNINGS, TWO_PI, divergence_message
+
+_new = object.__new__
+USE_ROLLOUT = True     # step cohorts with mujoco.rollout (False: each episode's own step_physics)
+
+
+def cohort_key(ep: Episode) -> tuple | None:
+    """What the episodes of one cohort share, or None for an episode that runs its own steps."""
+    if (type(ep) is not Episode or ep.moving is not None or ep.faults is not None or ep.lidar.rng is not None
+            or ep.cloud is not None):     # a 3D lidar's scan is the episode's own observe_cloud
+        return None
+    return (ep.spt, ep.dt, id(ep.lidar.local_dirs))
+
+
+class Cohort:
+    """Episodes ``eps`` (positions in the batch: ``members``) observed together."""
+
+    def __init__(self, members: list[int], eps: list[Episode]):
+        self.members, self.eps = members, eps
+        k = len(eps)
+        first = eps[0]
+        self.spt, self.dt = first.spt, first.dt
+        self.local_dirs = first.lidar.local_dirs
+        beams = self.beams = first.lidar.beams
+        self.pose = np.empty((k, max(len(ep.pose_buf) for ep in eps), 3))
+        self.qvel = np.empty_like(self.pose)
+        self.seen = np.empty((k, max(len(ep.seen) for ep in eps), 6))
+        self.record = np.empty((k, max(len(ep.lidar.record) for ep in eps), beams), dtype=np.float32)
+        for j, ep in enumerate(eps):
+            self._adopt(j, ep)
+        seen_ro = self.seen.view()
+        seen_ro.flags.writeable = False
+        self.seen_pose, self.seen_vel = seen_ro[:, :, :3], seen_ro[:, :, 3:]
+        self.record_ro = self.record.view()
+        self.record_ro.flags.writeable = False
+        self.rmin = np.array([ep.lidar.range_min for ep in eps])
+        self.rmax = np.array([ep.lidar.range_max for ep in eps])
+        self.rot = np.zeros((k, 3, 3))
+        self.dirs = np.empty((k, beams, 3))
+        self.pnt = np.empty((k, 3))
+        self.pnt[:, 2] = LIDAR_HEIGHT
+        self.geom = np.empty((k, beams), dtype=np.int32)
+        self.dist = np.empty((k, beams))
+        self.safety_checks = [ep.steps()[0] for ep in eps]
+        self._physics_tables()
+
+    def _adopt(self, j: int, ep: Episode) -> None:
+        """Make the episode's records views of the cohort's arrays (keeping what place() wrote)."""
+        n = len(ep.pose_buf)
+        self.pose[j, :n] = ep.pose_buf
+        self.qvel[j, :n] = ep.qvel_buf
+        ep.pose_buf, ep.qvel_buf = self.pose[j, :n], self.qvel[j, :n]
+        ep.stepping = ep.stepping[:5] + (ep.pose_buf, ep.qvel_buf, ep.stepping[7])
+        ep.seen = self.seen[j, :len(ep.seen)]
+        lidar = ep.lidar
+        rows = len(lidar.record)
+        self.record[j, :rows] = lidar.record
+        lidar.record = self.record[j, :rows]
+        lidar.readonly = lidar.record.view()
+        lidar.readonly.flags.writeable = False
+
+    def _physics_tables(self) -> None:
+        """The rollout groups (episodes whose models share MuJoCo's size signature step in one
+        ``mujoco.rollout`` call), a scratch MjData per group, and each episode's state now."""
+        spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+        first = self.eps[0].model
+        self.nstate = mujoco.mj_stateSize(first, spec)
+        self.nq, self.nv, self.nu = first.nq, first.nv, first.nu
+        self.sensor = int(first.sensor_adr[mujoco.mj_name2id(first, mujoco.mjtObj.mjOBJ_SENSOR, CONTACT_SENSOR)])
+        self.state = np.empty((len(self.eps), self.nstate))
+        for j, ep in enumerate(self.eps):
+            mujoco.mj_getState(ep.model, ep.data, self.state[j], spec)
+        self.alone: set[int] = set()      # cohort positions stepping their own data from now on
+        self.groups: dict[int, Any] = {}
+        self.scratch: dict[int, mujoco.MjData] = {}
+        for j, ep in enumerate(self.eps):
+            sig = ep.model.signature
+            if sig not in self.scratch:
+                self.scratch[sig] = mujoco.MjData(ep.model)
+
+    # ------------------------------------------------------------ one tick
+
+    def observe(self, running: list[int], finish: Callable[[int, str], None],
+                fail: Callable[[int, Exception], None]) -> list[tuple[int, tuple, Observation]]:
+        """``Episode.observe`` then ``safety_check`` for the cohort positions ``running``: the
+        (batch index, state, observation) of each episode that goes on; the others are finished
+        (``finish(index, reason)``) or failed (``fail(index, exception)``)."""
+        eps = self.eps
+        t0 = perf_counter()
+        idx = np.array(running, dtype=np.intp)
+        tick = eps[running[0]].tick
+        i = tick * self.spt
+        states = np.concatenate([self.pose[idx, i], self.qvel[idx, i]], axis=1)
+        rows = states.tolist()
+        go: list[int] = []               # cohort positions that scan this tick
+        facts: list[tuple] = []          # (t, x, y, yaw, c, s, wvx, wvy, wz)
+        for j, (x, y, yaw_raw, wvx, wvy, wz) in zip(running, rows):
+            ep = eps[j]
+            t = ep.i * ep.dt
+            try:
+                if not math.isfinite(x + y + yaw_raw + wvx + wvy + wz):
+                    raise SimulationDivergedError(divergence_message(ep.scenario, ep.data, t))
+                yaw = (yaw_raw + math.pi) % TWO_PI - math.pi
+                if ep.mission.goal_reached(t, x, y, yaw):
+                    raise EpisodeOver("goal")
+                if tick >= ep.n_ticks:
+                    raise EpisodeOver("timeout" if tick >= ep.timeout_ticks else "max-ticks")
+                if ep.stuck_ticks:
+                    ep.check_stuck(tick, x, y)
+            except EpisodeOver as over:
+                finish(self.members[j], over.reason)
+                continue
+            except Exception as exc:
+                fail(self.members[j], exc)
+                continue
+            go.append(j)
+            facts.append((t, x, y, yaw, math.cos(yaw), math.sin(yaw), wvx, wvy, wz))
+        if not go:
+            return []
+        k = len(go)
+        g = np.array(go, dtype=np.intp)
+        f = np.array(facts)                                   # (k, 9)
+        t1 = perf_counter()
+        ranges = self._scan(go, g, f, tick)
+        t2 = perf_counter()
+        c, s, wvx, wvy = f[:, 4], f[:, 5], f[:, 6], f[:, 7]
+        seen = np.empty((k, 6))
+        seen[:, 0:3] = f[:, 1:4]
+        seen[:, 3] = c * wvx + s * wvy                         # measured velocity, robot frame
+        seen[:, 4] = -s * wvx + c * wvy
+        seen[:, 5] = f[:, 8]
+        self.seen[g, tick] = seen
+        seen_rows = seen.tolist()
+        out = []
+        for n, j in enumerate(go):
+            ep = eps[j]
+            sx, sy, syaw, vx, vy, wz = seen_rows[n]
+            state = (facts[n][0], sx, sy, syaw, vx, vy, wz)
+            obs = _new(Observation)
+            obs.__dict__.update(tick=tick, time=state[0], pose=self.seen_pose[j, tick],
+                                velocity=self.seen_vel[j, tick], ranges=ranges[n], angles=ep.lidar.angles,
+                                goal=ep.mission.goal, waypoints=ep.mission.left, obstacles=ep.obstacles)
+            out.append((j, state, obs))
+        share = (t2 - t1) / k
+        for j in go:
+            eps[j].t_rays += share
+        return self._safety(out, seen, finish, fail)
+
+    def _scan(self, go: list[int], g: np.ndarray, f: np.ndarray, tick: int) -> list[np.ndarray]:
+        """``Lidar.scan`` (no noise) of the episodes ``go``: their read-only ranges rows."""
+        k = len(go)
+        rot = self.rot[:k]
+        rot[:, 0, 0] = rot[:, 1, 1] = f[:, 4]
+        rot[:, 0, 1] = f[:, 5]
+        rot[:, 1, 0] = -f[:, 5]
+        dirs = self.dirs[:k]
+        np.matmul(self.local_dirs, rot, out=dirs)             # one BLAS call per episode, as np.dot
+        pnt = self.pnt[:k]
+        pnt[:, 0:2] = f[:, 1:3]
+        geom, dist = self.geom[:k], self.dist[:k]
+        ray = mujoco.mj_multiRay
+        beams = self.beams
+        if beams:
+            for n, j in enumerate(go):
+                lidar = self.eps[j].lidar
+                ray(lidar.model, lidar.data, pnt[n], dirs[n].reshape(-1), lidar.groups, 1, lidar.body,
+                    geom[n], dist[n], None, beams, lidar.range_max)
+        rmin, rmax = self.rmin[g][:, None], self.rmax[g][:, None]
+        np.maximum(dist, rmin, out=dist)
+        np.minimum(dist, rmax, out=dist)
+        self.record[g, tick] = np.where(geom >= 0, dist, rmax)
+        ro = self.record_ro
+        return [ro[j, tick] for j in go]
+
+    def _safety(self, out: list[tuple[int, tuple, Observation]], seen: np.ndarray, finish, fail
+                ) -> list[tuple[int, tuple, Observation]]:
+        """``Episode.safety_check`` of each episode (its own code: measured, a vectorised
+        pre-test over the batch's obstacles cost more than the checks it saved)."""
+        passed = []
+        for j, state, obs in out:
+            ep = self.eps[j]
+            try:
+                self.safety_checks[j](state)
+            except EpisodeOver as over:
+                finish(self.members[j], over.reason)
+                continue
+            except Exception as exc:
+                fail(self.members[j], exc)
+                continue
+            passed.append((self.members[j], state, obs))
+        return passed
+
+    def step(self, items: list[tuple[int, tuple[float, float, float]]], finish: Callable[[int, str], None],
+             fail: Callable[[int, Exception], None]) -> list[int]:
+        """``Episode.step_physics`` for the cohort positions and setpoints ``items``: the batch
+        indexes still running after it. The episodes whose models share a size signature take one
+        ``mujoco.rollout`` call (spt + 1 steps: the last one only for the contacts of the tick's
+        final state, as step_physics's closing mj_step1; its state is dropped). A tick with a contact
+        at any of its states, or a MuJoCo warning, is stepped again by the episode's own
+        ``step_physics`` from the tick's start (exactly as alone: the state and contacts at the start
+        are those of the last tick, which had none), and that episode steps its own data from then on."""
+        t0 = perf_counter()
+        still: list[int] = []
+        groups: dict[int, list[tuple[int, tuple]]] = {}
+        replay: list[tuple[int, tuple]] = []
+        for j, setpoint in items:
+            if j in self.alone or not USE_ROLLOUT:
+                replay.append((j, setpoint))
+            else:
+                groups.setdefault(self.eps[j].model.signature, []).append((j, setpoint))
+        spt, nq, nv = self.spt, self.nq, self.nv
+        for sig, members in groups.items():
+            g = np.array([j for j, _ in members], dtype=np.intp)
+            k = len(members)
+            control = np.empty((k, spt + 1, self.nu))
+            control[:] = np.array([sp for _, sp in members])[:, None, :]
+            states = np.empty((k, spt + 1, self.nstate))
+            sensors = np.empty((k, spt + 1, self.eps[members[0][0]].model.nsensordata))
+            MUJOCO_WARNINGS.clear()
+            scratch = self.scratch[sig]
+            _rollout_pool().rollout([self.eps[j].model for j, _ in members], [scratch], spt + 1,
+                             _CTRL, self.state[g], None, control, states, sensors, None)
+            if MUJOCO_WARNINGS or scratch.warning.number.any():   # whose? each steps alone below
+                mujoco.mj_resetData(self.eps[members[0][0]].model, scratch)
+                replay += members
+                continue
+            touched = sensors[:, 1:, self.sensor].max(axis=1) > 0.0
+            ok = ~touched
+            if ok.all():
+                keep, gk = members, g
+            else:
+                keep = [m for m, good in zip(members, ok.tolist()) if good]
+                replay += [m for m, good in zip(members, ok.tolist()) if not good]
+                gk = g[ok]
+                states = states[ok]
+            if not keep:
+                continue
+            i = self.eps[keep[0][0]].i
+            self.pose[gk, i + 1:i + 1 + spt] = states[:, :spt, 1:1 + nq]
+            self.qvel[gk, i + 1:i + 1 + spt] = states[:, :spt, 1 + nq:1 + nq + nv]
+            self.state[gk] = states[:, spt - 1]
+            for j, _ in keep:
+                self.eps[j].i = i + spt
+                still.append(self.members[j])
+        share = (perf_counter() - t0) / max(1, len(items))
+        for j, _ in items:
+            self.eps[j].t_physics += share
+        for j, setpoint in replay:
+            still += self._step_alone(j, setpoint, finish, fail)
+        return still
+
+    def _step_alone(self, j: int, setpoint: tuple, finish, fail) -> list[int]:
+        """The tick by the episode's own step_physics (its data brought to the tick's start first,
+        the first time): its batch index if it goes on."""
+        ep = self.eps[j]
+        if j not in self.alone:
+            self.alone.add(j)
+            mujoco.mj_setState(ep.model, ep.data, self.state[j], mujoco.mjtState.mjSTATE_FULLPHYSICS)
+            mujoco.mj_step1(ep.model, ep.data)
+        MUJOCO_WARNINGS.clear()
+        try:
+            ep.step_physics(setpoint)
+        except EpisodeOver as over:
+            finish(self.members[j], over.reason)
+            return []
+        except Exception as exc:
+            fail(self.members[j], exc)
+            return []
+        return [self.members[j]]
+
+
+_ROLLOUT = None
+_CTRL = int(mujoco.mjtState.mjSTATE_CTRL)
+
+
+def _rollout_pool() -> Any:
+    global _ROLLOUT
+    if _ROLLOUT is None:
+        from mujoco import _rollout
+        _ROLLOUT = _rollout.Rollout(nthread=0)
+    return _ROLLOUT

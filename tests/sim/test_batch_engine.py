@@ -1,0 +1,214 @@
+"""The CPU batch engine (sim/batch.py, lockstep.py, cohort.py): episodes stepped in lockstep with one
+planner call a tick end at different ticks with exactly the trajectories and endings they have
+alone, and a failing planner call fails the episodes of that call only (issue 27)."""
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import time
+
+import pytest
+
+from pytest_navscenario.harness.batch import NO_PROTOCOL, Batching, run_batch
+from pytest_navscenario.harness.runner import run_scenario
+from pytest_navscenario.scenario.loader import load_scenario
+from pytest_navscenario.scenario.model import BoxObstacle, Mission, Pose, Robot, Scenario
+from pytest_navscenario.scenario.terrain import WheeledBody
+from pytest_navscenario.sim.batch import BatchEpisode, batch_engine, simulate_batch
+from pytest_navscenario.sim.episode import simulate
+from pytest_navscenario.subjects.protocol import Command
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+ARRAYS = ("t", "pose", "velocity", "tick_t", "command", "ranges")
+
+
+def seed(name: str) -> Scenario:
+    return load_scenario(os.path.join(ROOT, "scenarios", f"{name}.yaml"))
+
+
+class GoTo:
+    """Omni P-controller to the next target; ``speed`` caps it (a single planner)."""
+
+    def __init__(self, heading: float | None = None):
+        self.heading = heading
+
+    def reset(self, scenario):
+        pass
+
+    def act(self, obs):
+        if self.heading is not None:           # straight ahead, whatever is there
+            return Command(1.0, 0.0, 0.0)
+        tx, ty = obs.target
+        x, y, yaw = obs.pose
+        c, s = math.cos(yaw), math.sin(yaw)
+        return Command(2 * (c * (tx - x) + s * (ty - y)), 2 * (-s * (tx - x) + c * (ty - y)), 0.3)
+
+
+class BatchOf:
+    """A batch planner made of one single planner per episode (what act_batch must be equal to),
+    which can misbehave on purpose: raise at a tick, answer NaN for one id, the wrong number of
+    commands, or sleep."""
+
+    def __init__(self, make=GoTo, *, raise_at=None, nan_for=None, short_at=None, sleep_at=None):
+        self.make, self.raise_at, self.nan_for, self.short_at, self.sleep_at = make, raise_at, nan_for, short_at, sleep_at
+        self.calls = []
+
+    def reset_batch(self, scenarios):
+        self.planners = [self.make() for _ in scenarios]
+        for p, s in zip(self.planners, scenarios):
+            p.reset(s)
+
+    def act_batch(self, ids, observations):
+        tick = observations[0].tick
+        self.calls.append(list(ids))
+        if tick == self.raise_at:
+            raise ZeroDivisionError(f"bug at tick {tick}")
+        if tick == self.sleep_at:
+            time.sleep(0.3)
+        out = [self.planners[i].act(o) for i, o in zip(ids, observations)]
+        if tick == 2 and self.nan_for in ids:
+            out[list(ids).index(self.nan_for)] = (math.nan, 0.0, 0.0)
+        if tick == self.short_at:
+            out = out[:1]
+        return out
+
+
+def same(a, b) -> bool:
+    ta, tb = a.trajectory, b.trajectory
+    return (all(getattr(ta, k).tobytes() == getattr(tb, k).tobytes() for k in ARRAYS)
+            and (a.end, a.ticks, a.collision, a.safety_stop, a.subject_failure and a.subject_failure.message)
+            == (b.end, b.ticks, b.collision, b.safety_stop, b.subject_failure and b.subject_failure.message))
+
+
+def with_robot(sc: Scenario, **parts) -> Scenario:
+    robot = sc.robot
+    changes = {k: dataclasses.replace(getattr(robot, k), **v) if isinstance(v, dict) else v for k, v in parts.items()}
+    return dataclasses.replace(sc, robot=dataclasses.replace(robot, **changes))
+
+
+def a_mixed_batch() -> list[tuple[Scenario, dict, object]]:
+    """(scenario, simulate's keyword arguments, single planner factory) of episodes that end in
+    every way and take every path of the engine (cohort, alone; rollout, stepped again)."""
+    b1 = seed("boxes1")
+    start = b1.mission.start
+    under = BoxObstacle("under", start.x, start.y, 1.0, 1.0)
+    return [
+        (b1, {}, GoTo),                                                        # goal
+        (seed("boxes2"), {"max_ticks": 7}, GoTo),                              # max-ticks
+        (dataclasses.replace(b1, obstacles=(under,)), {}, GoTo),              # collision at the start
+        (with_robot(b1, safety={"enabled": False}), {}, lambda: GoTo(0.0)),   # collision (a tick again alone)
+        (b1, {}, lambda: GoTo(0.0)),                                           # safety stop
+        (seed("person-crossing"), {}, GoTo),                                   # moving obstacles: alone
+        (with_robot(b1, latency={"observation": 1}), {}, GoTo),                # a sensor fault: alone
+        (with_robot(b1, lidar={"noise_sigma": 0.02}), {"stuck_after": 3.0}, GoTo),   # noise: alone
+    ]
+
+
+class PerEpisode(BatchOf):
+    """A batch planner whose episode i is made by ``makes[i]``."""
+
+    def __init__(self, makes):
+        super().__init__()
+        self.makes = makes
+
+    def reset_batch(self, scenarios):
+        assert len(scenarios) == len(self.makes)
+        self.planners = [make() for make in self.makes]
+        for p, s in zip(self.planners, scenarios):
+            p.reset(s)
+
+
+def test_a_batch_ends_each_episode_as_alone_at_different_ticks():
+    cases = a_mixed_batch()
+    alone = [simulate(sc, make(), 0, **kw) for sc, kw, make in cases]
+    # the collision at the start pose (case 2) never reaches the planner: reset_batch gets the others
+    planner = PerEpisode([make for i, (_, _, make) in enumerate(cases) if i != 2])
+    batched = simulate_batch([BatchEpisode(sc, 0, **kw) for sc, kw, _ in cases], planner)
+    ends = [a.end for a in alone]
+    assert {"goal", "max-ticks", "collision", "safety-stop"} <= set(ends) and alone[2].ticks == 0
+    assert [same(a, b) for a, b in zip(alone, batched)] == [True] * len(cases), ends
+    # one call a tick, for the episodes still running: fewer and fewer ids
+    sizes = [len(ids) for ids in planner.calls]
+    assert sizes[0] == len(cases) - 1 and sizes[-1] < sizes[0] and sizes == sorted(sizes, reverse=True)
+
+
+def three() -> list[BatchEpisode]:
+    b1 = seed("boxes1")
+    return [BatchEpisode(b1, 0), BatchEpisode(b1, 1, max_ticks=1), BatchEpisode(seed("corridor"), 0)]
+
+
+def test_act_batch_that_raises_fails_the_episodes_of_that_call_only():
+    planner = BatchOf(raise_at=4)
+    r = simulate_batch(three(), planner)
+    assert r[1].end == "max-ticks" and r[1].subject_failure is None      # ended before the call
+    for res in (r[0], r[2]):
+        f = res.subject_failure
+        assert res.end == "subject-error" and f.tick == 4
+        assert f.message == "planner.act_batch raised ZeroDivisionError: bug at tick 4"
+        assert "bug at tick" in f.traceback and "act_batch" in f.traceback
+    assert planner.calls[-1] == [0, 2]
+
+
+def test_one_bad_command_fails_its_episode_only():
+    r = simulate_batch(three(), BatchOf(nan_for=2))
+    assert r[2].end == "subject-error" and r[2].subject_failure.tick == 2
+    assert r[2].subject_failure.message.startswith("planner.act_batch returned for this episode a non-finite "
+                                                   "command (vx=nan")
+    assert r[0].subject_failure is None and r[0].end == simulate(seed("boxes1"), GoTo(), 0).end
+
+
+def test_the_wrong_number_of_commands_fails_the_call():
+    r = simulate_batch(three(), BatchOf(short_at=3))
+    assert [x.end for x in r] == ["subject-error", "max-ticks", "subject-error"]
+    assert r[0].subject_failure.message == ("planner.act_batch returned 1 commands for 2 episodes; expected "
+                                            "one command per id, in the order of ids")
+
+
+def test_reset_batch_that_raises_fails_every_episode_that_started():
+    class Broken(BatchOf):
+        def reset_batch(self, scenarios):
+            raise RuntimeError("no model file")
+
+    b1 = seed("boxes1")
+    start = b1.mission.start
+    inside = dataclasses.replace(b1, obstacles=(BoxObstacle("under", start.x, start.y, 1.0, 1.0),))
+    r = simulate_batch([BatchEpisode(b1, 0), BatchEpisode(inside, 0)], Broken())
+    assert r[0].end == "subject-error" and r[0].subject_failure.message == \
+        "planner.reset_batch raised RuntimeError: no model file"
+    assert r[1].end == "collision" and r[1].subject_failure is None       # never reached the planner
+
+
+def test_the_tick_limit_of_a_batch_call_is_the_limit_times_its_episodes():
+    b1 = seed("boxes1")
+    r = simulate_batch([BatchEpisode(b1, 0, tick_limit=0.05), BatchEpisode(b1, 1, tick_limit=0.05)],
+                       BatchOf(sleep_at=2))
+    for res in r:
+        assert res.end == "subject-error" and res.subject_failure.tick == 2
+        assert "0.1 s (0.05 s for each of the call's 2 episodes)" in res.subject_failure.message
+
+
+def test_a_batch_only_planner_runs_alone_as_a_batch_of_one():
+    class OnlyBatch(BatchOf):
+        name, version = "only-batch", "2"
+
+    alone = run_scenario(seed("boxes1"), OnlyBatch())
+    single = run_scenario(seed("boxes1"), GoTo())
+    assert (alone.outcome, alone.metrics) == (single.outcome, single.metrics)
+    assert (alone.subject, alone.subject_version) == ("only-batch", "2")
+
+
+def test_run_batch_runs_alone_what_it_cannot_batch_and_says_why():
+    wheeled = Scenario(mission=Mission(start=Pose(0.0, 0.0, 0.0), goal=Pose(3.0, 0.0), timeout=5.0),
+                       robot=Robot(drive="diff", body=WheeledBody(clearance=0.1)))
+    assert batch_engine().unsupported(wheeled) is not None
+    scenarios = [seed("boxes1"), wheeled, seed("corridor")]
+    batching = Batching()
+    results = run_batch(scenarios, "dwa", batching=batching, seeds=[0, 0, 0])
+    alone = [run_scenario(s, "dwa", seed=0) for s in scenarios]
+    assert [(r.outcome, r.message, r.metrics) for r in results] == [(a.outcome, a.message, a.metrics) for a in alone]
+    assert (batching.batched, batching.batches, batching.alone) == (2, 1, 1)
+    assert "rides the ground" in batching.describe()
+    plain = Batching()
+    run_batch(scenarios[:1], "potential-field", batching=plain)
+    assert plain.why_alone == {NO_PROTOCOL: 1}
