@@ -20,6 +20,7 @@ from __future__ import annotations
 import threading
 from typing import Any, Iterator, Sequence
 
+from ..core.interrupts import deferred
 from .engine import (Candidate, EvalContext, Failure, Proposal, SearchReport, _Simulator, _Stop,
                      evaluate_candidates, iter_candidates, shrink_failure, shrink_order, shrink_status, unpack)
 
@@ -114,12 +115,13 @@ class batch_evaluator:   # noqa: N801  (used like a function: evaluator=batch_ev
             sim.check_stop()
             found = report.failures[i].found
             failure, scratch = shrink.failure, shrink.scratch
-            for cand in scratch.candidates:
-                cand.metrics["subject"], cand.metrics["subject_version"] = scratch.subject, scratch.subject_version
-                sim.record(cand, "shrink")
-            sim.set_failure(i, Failure(found=found, shrunk=failure.shrunk, shrink_sims=failure.shrink_sims,
-                                       note=failure.note, status=shrink_status(failure.note),
-                                       estimate=failure.estimate))
+            with deferred():   # its simulations logged and the shrunk failure written: one step
+                for cand in scratch.candidates:
+                    cand.metrics["subject"], cand.metrics["subject_version"] = scratch.subject, scratch.subject_version
+                    sim.record(cand, "shrink")
+                sim.set_failure(i, Failure(found=found, shrunk=failure.shrunk, shrink_sims=failure.shrink_sims,
+                                           note=failure.note, status=shrink_status(failure.note),
+                                           estimate=failure.estimate))
             if progress is not None:
                 progress(report)
 

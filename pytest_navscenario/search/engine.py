@@ -353,18 +353,31 @@ class _Simulator:
         self.recorder = recorder
         self.counts = {"search": 0, "shrink": 0}
 
-    def start(self, proposals: Sequence[Proposal], phase: str) -> Iterator[Candidate]:
+    def start(self, proposals: Sequence[Proposal], phase: str,
+              then: Callable[[Candidate], None] | None = None) -> Iterator[Candidate]:
         """Hand ``proposals`` to the evaluator now (one on worker processes starts them at once);
-        the iterator records and yields each candidate in proposal order as it is consumed."""
+        the iterator records and yields each candidate in proposal order as it is consumed.
+        Recording a candidate and ``then(candidate)`` (the search's bookkeeping, which logs it)
+        are one step an interrupt waits for: a candidate counted is a candidate logged."""
         results = iter(self.evaluator(self.ctx, list(proposals)))
-        return (self.record(cand, phase) for cand in results)
+        return self._recorded(results, phase, then)
+
+    def _recorded(self, results: Iterator[Candidate], phase: str,
+                  then: Callable[[Candidate], None] | None) -> Iterator[Candidate]:
+        for cand in results:   # waiting for the next one may be interrupted; what follows may not
+            with deferred():
+                self.record(cand, phase)
+                if then is not None:
+                    then(cand)
+            yield cand
 
     def run(self, proposals: Sequence[Proposal], phase: str) -> Iterator[Candidate]:
         """Evaluate ``proposals`` and yield each recorded candidate in proposal order."""
         yield from self.start(proposals, phase)
 
     def record(self, cand: Candidate, phase: str) -> Candidate:
-        """Number ``cand`` in its phase and add it to the report."""
+        """Number ``cand`` in its phase and add it to the report (a shrink candidate is logged at
+        once; a caller recording several holds interrupts around them: ``deferred``)."""
         self.counts[phase] += 1
         cand.sim, cand.phase = self.counts[phase], phase
         subject = cand.metrics.pop("subject", None)
@@ -454,16 +467,15 @@ def _search_loop(strategy: Any, sim: _Simulator, budget: int, on_result: Callabl
                 break   # nothing to run now: wait for what is in flight (or end)
             planned += len(confirm) + len(proposals)
             new_in_flight += len(proposals)
-            in_flight.append((sim.start(confirm + proposals, "search"), bool(proposals)))
+            in_flight.append((sim.start(confirm + proposals, "search", then=on_result), bool(proposals)))
         if not in_flight:
             break
         results = []
         batch, asked = in_flight.popleft()
-        for cand in batch:
+        for cand in batch:   # each recorded and told to on_result (logged) as one step
             if cand.run == 0:
                 results.append(cand)
                 new_in_flight -= 1
-            on_result(cand)
             if report.sims_used < budget:
                 sim.check_stop()
         if asked:

@@ -19,6 +19,7 @@ import uuid
 from dataclasses import dataclass
 from typing import Any, Iterator, Sequence
 
+from ..core.interrupts import deferred
 from .engine import (Candidate, EvalContext, Failure, SearchReport, _Simulator, evaluate_candidate,
                      evaluate_candidates, shrink_failure, shrink_order, shrink_status, unpack)
 from .holding import Estimate
@@ -219,11 +220,12 @@ class executor_evaluator:   # noqa: N801  (used like a function: evaluator=execu
             found = report.failures[i].found
             index, note, used, cands, estimate = (outcome[i] if isinstance(outcome[i], tuple)
                                                   else self._take(outcome[i]))
-            for cand in cands:
-                sim.record(cand, "shrink")
-            sim.set_failure(i, Failure(found=found, shrunk=cands[index] if index >= 0 else found,
-                                       shrink_sims=used, note=note, status=shrink_status(note),
-                                       estimate=estimate if index >= 0 else report.failures[i].estimate))
+            with deferred():   # its simulations logged and the shrunk failure written: one step
+                for cand in cands:
+                    sim.record(cand, "shrink")
+                sim.set_failure(i, Failure(found=found, shrunk=cands[index] if index >= 0 else found,
+                                           shrink_sims=used, note=note, status=shrink_status(note),
+                                           estimate=estimate if index >= 0 else report.failures[i].estimate))
             if progress is not None:
                 progress(report)
         self._shrinks = []

@@ -207,3 +207,56 @@ def test_two_interrupts_on_a_local_ray_instance_keep_the_files_and_stop_ray(proj
     assert (project / "suite.xml").is_file()
     assert assert_every_failure_found_is_frozen(project / "scenarios" / "regressions" / "crate") >= 1
     assert_nothing_left(proc.pid)
+
+
+class _TermWhileWriting:
+    """A real SearchRecorder that gets a SIGTERM while it writes the first failure found (writing a
+    new frozen file is the longest write, so that is where an interrupt most likely lands)."""
+
+    def __new__(cls, space, out):
+        from pytest_navscenario.search.freeze import SearchRecorder
+
+        class Recorder(SearchRecorder):
+            sent = False
+
+            def failure(self, report, failure):
+                if failure.status == "found" and not self.sent:
+                    self.sent = True
+                    os.kill(os.getpid(), signal.SIGTERM)   # held while the write runs, raised after it
+                super().failure(report, failure)
+        return Recorder(space, out)
+
+
+@pytest.mark.parametrize("workers", [0, 2], ids=["serial", "workers"])
+def test_a_sigterm_while_a_failure_is_written_leaves_its_candidate_logged(tmp_path: Path, workers: int):
+    """The candidate that revealed a failure is counted, its failure written and the candidate
+    logged as one step: a SIGTERM arriving during the failure's write (held until the write ends)
+    used to stop the search between the two, leaving a log whose failure names a simulation the log
+    does not hold and whose end record counts one simulation more than it lists."""
+    from straight_planner import Picky
+    from test_holding import crate_seed
+
+    from pytest_navscenario.core import interrupts
+    from pytest_navscenario.dispatch.local import ProcessExecutor
+    from pytest_navscenario.search.engine import run_search
+    from pytest_navscenario.search.freeze import read_search_log
+    from pytest_navscenario.search.parallel import executor_evaluator
+    from pytest_navscenario.search.space import SearchSpace
+
+    seed = crate_seed(1.2)
+    pool = ProcessExecutor(workers) if workers else None
+    restore = interrupts.install()
+    try:
+        report = run_search(seed, Picky, budget=40, seed_value=3, shrink_budget="50%",
+                            recorder=_TermWhileWriting(SearchSpace(seed), tmp_path),
+                            evaluator=executor_evaluator(pool) if pool else None)
+    finally:
+        restore()
+        if pool is not None:
+            pool.close()
+    assert report.interrupted and report.stop_reason == "interrupted (SIGTERM)"
+    (records,) = read_search_log(tmp_path / "crate" / "search-log.jsonl").values()
+    sims = [r["sim"] for r in records if r["record"] == "candidate"]
+    found = [r["found_at_simulation"] for r in records if r["record"] == "failure"]
+    assert found and set(found) <= set(sims), (found, sims)
+    assert records[-1]["record"] == "end" and len(sims) == records[-1]["search_sims"] + records[-1]["shrink_sims"]
