@@ -609,7 +609,9 @@ _ADDED_DEFAULTS: dict[str, Any] = {"noise_per_metre": 0.0, "dropout_at_max": Non
                                    "localisation": Localisation(), "latency": Latency(),
                                    # terrain (scenario/terrain.py): field names unique to what they mean
                                    "z": None, "mount_height": 0.2, "body": PlanarBody(), "lidar3d": None,
-                                   "terrain": (), "perturb": Perturb()}
+                                   "terrain": (), "perturb": Perturb(), "com_height": None,
+                                   # an mjcf body's declared limits (a legged body's are never None)
+                                   "max_step": None, "max_slope": None, "max_gap": None}
 
 
 _CONTENT_FIELDS: dict[type, tuple[tuple[str, bool], ...]] = {}   # dataclass -> (field, added later?)
