@@ -139,12 +139,17 @@ def stability_problem(body, limits, layout: WheeledLayout) -> tuple[str, str, st
     tip = G * layout.support / h
     if accel > TIP_MARGIN * tip:
         ok = TIP_MARGIN * tip
-        return ("robot.limits.max_accel" if accel == float(limits.max_accel) else "robot.body.max_wheel_torque",
+        driven = len(layout.wheels)
+        by_torque = driven * float(body.max_wheel_torque) / (layout.radius * float(body.mass)) == accel \
+            and accel < float(limits.max_accel)      # the torque binds (else max_accel, or the grip)
+        lower = (f"lower max_wheel_torque to at most {ok * layout.radius * float(body.mass) / driven:.3g} N m"
+                 if by_torque else f"lower robot.limits.max_accel to at most {ok:.3g}")
+        return ("robot.body.max_wheel_torque" if by_torque else "robot.limits.max_accel",
                 f"the wheeled body would tip over accelerating or braking at {accel:.3g} m/s²: its mass "
                 f"{h:.3g} m up and its {'axles' if layout.skid else 'casters'} {layout.support:.3g} m ahead of "
                 f"and behind its centre tip it past {tip:.3g} m/s² (accepted: up to {100 * TIP_MARGIN:g} % of "
                 f"that, {ok:.3g})",
-                f"lower robot.limits.max_accel to at most {ok:.3g}, lower com_height, or lengthen the footprint")
+                f"{lower}, lower com_height, or lengthen the footprint")
     # sideways, the wheels slide past FRICTION * G before anything rolls over
     turn = min(float(limits.max_speed) * math.radians(float(limits.max_yaw_rate)), FRICTION * G)
     roll_tip = G * (layout.track / 2) / h

@@ -117,6 +117,13 @@ mission:
      "robot.limits.max_accel", ["would tip over accelerating or braking at 5 m/s²", "at most 3.92"]),
     ("{shape: box, length: 0.9, width: 0.5}", "{type: wheeled, com_height: 0.6, max_wheel_torque: 100}",
      "{max_accel: 8}", "robot.limits.max_accel", ["its mass 0.6 m up and its casters 0.4 m ahead"]),
+    # the wheels' grip limits it (torque to spare, max_accel above it): max_accel is the key to lower
+    ("{shape: box, length: 0.3, width: 0.3}", "{type: wheeled, drive_wheels: skid, max_wheel_torque: 1000}",
+     "{max_accel: 20}", "robot.limits.max_accel", ["accelerating or braking at 9.81 m/s²", "at most 3.92"]),
+    # the torque limits it: the torque is the key to lower
+    ("{shape: box, length: 0.3, width: 0.3}", "{type: wheeled, drive_wheels: skid, max_wheel_torque: 8}",
+     "{max_accel: 20}", "robot.body.max_wheel_torque", ["accelerating or braking at 6.4 m/s²",
+                                                         "lower max_wheel_torque to at most 4.9 N m"]),
     ("{shape: box, length: 0.9, width: 0.3}", "{type: wheeled, com_height: 0.5}",
      "{max_speed: 2, max_yaw_rate: 180}", "robot.limits.max_yaw_rate", ["would roll over turning", "widen the track"]),
 ])
