@@ -245,6 +245,9 @@ def test_a_sigterm_while_a_failure_is_written_leaves_its_candidate_logged(tmp_pa
 
     seed = crate_seed(1.2)
     pool = ProcessExecutor(workers) if workers else None
+    # as in a fresh run: a Ray test earlier in this worker process leaves Ray's SIGTERM handler
+    # (sys.exit), which install() leaves alone, and the SIGTERM below would end the test
+    previous = signal.signal(signal.SIGTERM, signal.SIG_DFL)
     restore = interrupts.install()
     try:
         report = run_search(seed, Picky, budget=40, seed_value=3, shrink_budget="50%",
@@ -252,6 +255,7 @@ def test_a_sigterm_while_a_failure_is_written_leaves_its_candidate_logged(tmp_pa
                             evaluator=executor_evaluator(pool) if pool else None)
     finally:
         restore()
+        signal.signal(signal.SIGTERM, previous)
         if pool is not None:
             pool.close()
     assert report.interrupted and report.stop_reason == "interrupted (SIGTERM)"
