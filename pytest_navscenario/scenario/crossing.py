@@ -124,12 +124,17 @@ def look_ahead(cap: Capability, move: float, spacing: float = SPACING) -> int:
 # drive (benchmarks/measure_wheeled_limits.py; default body: 50 kg, 10 N m, wheels of 0.1 m): it
 # climbed steps of 0.036 m (diff: its ball casters, 0.05 m, meet a step first; 0.047 m with
 # 0.15 m wheels and 0.075 m casters) and 0.064 m (skid), slopes of 17.2 deg (diff: the casters
-# carry load, the driven wheels lose grip) and 34.4 deg (skid), and crossed gaps of 0.17-0.18 m.
-# The estimates below stay under those figures (tests/verdict/test_traversable.py checks them).
-WHEELED_CASTER_STEP = 0.55    # of the caster's radius (diff)
-WHEELED_WHEEL_STEP = 0.55     # of the wheel's radius (skid)
-WHEELED_SLOPE = {"diff": 15.0, "skid": 30.0}   # degrees, at most the torque's limit
-WHEELED_GAP = 0.5             # of the wheel's radius
+# carry load, the driven wheels lose grip; 16.2 with 0.15 m wheels, where the torque binds) and
+# 34.4 deg (skid), and crossed gaps of 0.17-0.18 m. The estimates stay at or above those figures: the shortest path (the metrics' yardstick) and the feasibility check
+# must never rule out what the body really crosses (a path round a sill the robot drives over
+# would make its path efficiency exceed 1), so a step, slope or gap a little above them may pass
+# for crossable (tests/verdict/test_traversable.py checks both sides).
+WHEELED_CASTER_STEP = 0.8     # of the caster's radius (diff)
+WHEELED_WHEEL_STEP = 0.7      # of the wheel's radius (skid)
+WHEELED_SLOPE = {"diff": 18.0, "skid": 35.0}   # degrees, at most the torque's limit
+WHEELED_TORQUE_SLOPE = 1.1    # the torque's limit (the slope whose weight it balances), over-estimated by this
+WHEELED_GAP = 1.9             # of the wheel's radius (0.19 m: the default body crossed 0.18 m and was stuck
+                              # in 0.22 m; 0.15 m wheels crossed a rough 0.45 m, not covered: see the measure)
 
 
 def body_capability(scenario) -> Capability | None:
@@ -149,7 +154,8 @@ def body_capability(scenario) -> Capability | None:
     r = float(body.wheel_radius)
     g = 9.81
     driven = 4 if body.drive_wheels == "skid" else 2
-    torque = math.degrees(math.atan(driven * body.max_wheel_torque / (r * body.mass * g)))
+    torque = WHEELED_TORQUE_SLOPE * math.degrees(math.asin(min(driven * body.max_wheel_torque / (r * body.mass * g),
+                                                               1.0)))
     if body.drive_wheels == "skid":
         step = WHEELED_WHEEL_STEP * r
     else:
