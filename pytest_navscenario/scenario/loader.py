@@ -19,6 +19,7 @@ import difflib
 import math
 import os
 import re
+import stat
 from dataclasses import replace
 from pathlib import Path
 from typing import Any, Mapping
@@ -133,6 +134,8 @@ def _mjcf_file(ctx: _Ctx, body: Any) -> Any:
         path = resolve_mesh_path(folder, body.file, what="MJCF")
     except MeshError as exc:
         raise ctx.fail(str(exc), field, line, fix) from None
+    if path.exists() and not path.is_file():   # a folder, or a named pipe that reading would wait on
+        raise ctx.fail(f"{path} is not a file", field, line, fix)
     try:
         data = path.read_bytes()
     except FileNotFoundError:
@@ -629,8 +632,16 @@ def load_scenario(path: str | os.PathLike, *, family: str | None = None) -> Scen
     src = os.fspath(path)
     limit = int(SCENARIO_LIMITS["max_file_bytes"])
     try:
-        with open(p, "rb") as fh:
-            size = os.fstat(fh.fileno()).st_size   # read(limit + 1) alone would allocate 5 MB per file
+        # O_NONBLOCK: opening a named pipe (a FIFO named like a scenario) would wait for a writer forever
+        fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+        with open(fd, "rb") as fh:
+            info = os.fstat(fh.fileno())
+            if stat.S_ISDIR(info.st_mode):
+                raise IsADirectoryError(src)
+            if not stat.S_ISREG(info.st_mode):
+                raise ScenarioError("is not a regular file (a named pipe, socket or device)", path=src,
+                                    hint="pass the scenario's .yaml file itself")
+            size = info.st_size   # read(limit + 1) alone would allocate 5 MB per file
             data = fh.read(size + 1 if 0 < size <= limit else limit + 1)
     except FileNotFoundError:
         raise ScenarioError("no such scenario file", path=src, hint="check the path and the file name") from None

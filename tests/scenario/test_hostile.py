@@ -137,6 +137,32 @@ def test_a_directory_named_like_a_scenario(tmp_path):
         load_scenario(tmp_path / "missing.yaml")
 
 
+def _load_in_a_process(path) -> str:
+    """Load ``path`` in a fresh process (a read that blocks on a named pipe ends with it after 20 s):
+    what the loader said."""
+    import subprocess
+    import sys
+    code = ("import sys\nfrom pytest_navscenario import ScenarioError, load_scenario\n"
+            "try:\n    load_scenario(sys.argv[1])\nexcept ScenarioError as e:\n    print(repr(e.field), e)\n")
+    try:
+        done = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, text=True, timeout=20)
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"loading {path.name} hung (reading a named pipe)")
+    return done.stdout
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "mkfifo"), reason="named pipes are POSIX")
+def test_a_named_pipe_named_like_a_scenario_or_its_robot_is_an_error_not_a_hang(tmp_path):
+    import os
+    os.mkfifo(tmp_path / "pipe.yaml")
+    assert "is not a regular file" in _load_in_a_process(tmp_path / "pipe.yaml")
+    os.mkfifo(tmp_path / "robot.xml")
+    (tmp_path / "s.yaml").write_text("version: 1\nrobot: {drive: diff, body: {type: mjcf, file: robot.xml, "
+                                     "controller: 'c:C'}}\nmission: {start: {x: 0, y: 0}, goal: {x: 5, y: 0}}\n")
+    said = _load_in_a_process(tmp_path / "s.yaml")
+    assert said.startswith("'robot.body.file'") and "is not a file" in said
+
+
 def test_python_tags_are_refused_and_never_run(tmp_path):
     marker = tmp_path / "pwned"
     err = load_text(tmp_path, VALID + f"search: !!python/object/apply:os.system ['touch {marker}']\n")
