@@ -14,12 +14,14 @@ from __future__ import annotations
 from time import perf_counter
 from typing import Any, Sequence
 
-from ..core.errors import SimulationDivergedError
+import mujoco
+
+from ..core.errors import SimulationDivergedError, SimulationFatalError
 from .command import call_planner, planner_traceback, validate_command
 from .deadline import PlannerTimeout, TickDeadline
 from .episode import Episode, EpisodeOver, SimResult
 from .trajectory import SubjectFailure
-from .world import MUJOCO_WARNINGS, divergence_message
+from .world import MUJOCO_WARNINGS, divergence_message, fatal_message
 
 
 def _tick_limit(requests: Sequence[Any]) -> float | None:
@@ -264,5 +266,8 @@ class Lockstep:
 
     def _fail(self, i: int, exc: Exception) -> None:
         ep = self.episodes[i]
+        if isinstance(exc, mujoco.FatalError):   # as Episode.run: the cause and the fix; the data dropped
+            self.results[i] = SimulationFatalError(fatal_message(ep.scenario, ep.model, exc, ep.i * ep.dt))
+            return
         self.results[i] = exc
         ep.world.give_back(ep.data)
