@@ -207,3 +207,23 @@ def test_a_menagerie_style_robot_whose_geoms_have_contype_0_rides_the_terrain_an
     assert res.end == "collision" and res.collision.obstacle == "crate"
     out, err = capfd.readouterr()
     assert "conflict" not in out + err and "parent has" not in out + err   # its options and name: no noise
+
+
+def test_a_robot_using_a_name_of_the_worlds_own_or_of_an_obstacle_is_an_error_at_its_file(tmp_path):
+    # was "MuJoCo could not build the model: Error: repeated name 'floor' in body", no field or line
+    path = write(tmp_path, CART_BODY)
+    (tmp_path / "cart.xml").write_text(CART.read_text().replace('<body name="front_caster"', '<body name="floor"'))
+    with pytest.raises(ScenarioError) as err:
+        simulate(load_scenario(path), Straight(), 0)
+    assert err.value.field == "robot.body.file" and err.value.line == 6
+    assert f"{tmp_path / 'cart.xml'} has a body named 'floor', a name the scenario's world already gives its " \
+           f"own floor" in str(err.value)
+    assert err.value.hint == "rename the body 'floor' in the MJCF file, and where your controller names it"
+    shutil.copy(CART, tmp_path / "cart.xml")          # the cart's chassis geom is named 'body'
+    crate = write(tmp_path, CART_BODY, obstacles="obstacles:\n  - {type: box, name: body, x: 5, y: 3, "
+                                                 "length: 0.4, width: 0.4}")
+    with pytest.raises(ScenarioError) as err:
+        simulate(load_scenario(crate), Straight(), 0)
+    assert err.value.field == "robot.body.file" and "has a geom named 'body', a name the scenario's world " \
+                                                     "already gives obstacle 'body' (obstacles[0])" in str(err.value)
+    assert err.value.hint == "rename obstacles[0] in the scenario, or the geom in the MJCF file"
