@@ -150,6 +150,9 @@ def find_declaration(model: str, metadata: dict[str, str]) -> Declaration:
     path = declaration_path(model)
     embedded = metadata.get(METADATA_KEY)
     from_file = None
+    if os.path.exists(path) and not os.path.isfile(path) and not os.path.isdir(path):
+        raise DeclarationError(f"{path} is not a regular file (a named pipe, socket or device): reading it would "
+                               f"wait", path=None, hint=f"write the declaration as a file {os.path.basename(path)}")
     if os.path.exists(path):
         try:
             with open(path, encoding="utf-8") as f:
