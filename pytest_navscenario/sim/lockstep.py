@@ -12,7 +12,7 @@ raised them (the list is cleared before each episode's physics).
 from __future__ import annotations
 
 from time import perf_counter
-from typing import Any, Sequence
+from typing import AbstractSet, Any, Mapping, Sequence
 
 import mujoco
 
@@ -32,6 +32,14 @@ def _tick_limit(requests: Sequence[Any]) -> float | None:
 
 
 COHORTS = True     # episodes that can observe and step together do (cohort.py); False: each its own steps
+
+
+def _short(value: Any) -> str:
+    """repr(value) cut to 60 characters (a repr that raises: its type)."""
+    try:
+        return f"{value!r:.60}"
+    except Exception:
+        return f"<{type(value).__name__}>"
 
 
 class _Failed:
@@ -237,17 +245,22 @@ class Lockstep:
         for i in live:
             self.episodes[i].t_planner += share
         if failed is None:
+            unordered = isinstance(answers, (Mapping, AbstractSet, str, bytes))   # listing a dict gives its keys
             try:
-                n = len(answers)
-            except TypeError:
+                n = -1 if unordered else len(answers)
+            except Exception:
                 n = -1
             if n != len(live):
-                got = f"{n} commands" if n >= 0 else f"{type(answers).__name__} {answers!r:.60}"
-                failed = _Failed(f"planner.act_batch returned {got} for {len(live)} episodes; expected one "
-                                 f"command per id, in the order of ids")
-        if failed is not None:
-            return [failed] * len(live)
-        return list(answers)
+                got = f"{n} commands" if n >= 0 else f"{type(answers).__name__} {_short(answers)}"
+                failed = _Failed(f"planner.act_batch returned {got} for {len(live)} episodes; expected "
+                                 f"{'a list of ' if unordered else ''}one command per id, in the order of ids")
+        if failed is None:
+            try:
+                return list(answers)
+            except Exception as exc:
+                failed = _Failed(f"planner.act_batch's answer cannot be read as a list: {type(exc).__name__}: "
+                                 f"{exc}", planner_traceback(exc))
+        return [failed] * len(live)
 
     # ------------------------------------------------------------ an episode ends
 
