@@ -21,7 +21,7 @@ from .jobs import EpisodeError, EpisodeJob, Impassable, Pending, _subject_for, c
 
 EXEC_ALONE = "an exec: subject is a process of its own"
 LOST = ("WorkerDied", "RayTaskLost")   # a batch job that lost its worker: its episodes run again alone
-WORKER_DIED = "their batch's worker process died; they ran again one by one"   # the summary's reason
+WORKER_DIED = "their batch's worker process died, so they ran again one by one"   # the summary's reason
 
 
 def _key(job: EpisodeJob) -> tuple | None:

@@ -93,7 +93,7 @@ def test_a_batch_that_kills_its_worker_fails_only_that_episode(tmp_path, monkeyp
     assert all(g.outcome.value == "success" for n, g in zip(names, got) if n != "victim")
     # the summary counts the dead batch's episodes, which ran alone (they were missing from it)
     assert (batching.batched, batching.batches) == (3, 1)
-    assert batching.why_alone == {"their batch's worker process died; they ran again one by one": 3}
+    assert batching.why_alone == {"their batch's worker process died, so they ran again one by one": 3}
 
 
 def test_workers_run_their_share_in_batches_with_the_results_of_an_unbatched_run(pytester: pytest.Pytester):
