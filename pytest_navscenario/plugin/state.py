@@ -27,6 +27,7 @@ class NavState:
     executor: Any = None          # controller with --nav-ray: where episodes run (dispatch/)
     executor_notes: list[str] = field(default_factory=list)       # header lines about it
     batching: Any = None          # controller with an executor: harness.batch.Batching of the items
+    serial_items: int = 0         # scenario items run in this process, one at a time (no executor)
 
 
 STATE_KEY = pytest.StashKey[NavState]()
