@@ -263,11 +263,28 @@ def test_a_model_without_a_declaration_points_at_the_template_command(tmp_path):
      "bad.policy.yaml:8: action.components[1]: 'vz' is not one of vx, vy, wz"),
     (("navscenario-policy: 1", "navscenario-policy: 2"), "bad.policy.yaml:1: navscenario-policy: format version 2"),
     (("  - velocity", "  -velocity"), "bad.policy.yaml:"),
+    # a name or version is printed in headers, results and JUnit: one line (it went into them with its line break)
+    (("navscenario-policy: 1", 'navscenario-policy: 1\nname: "ppo\\nv2"'),
+     "bad.policy.yaml:2: name: must be one line without tabs (fix: remove the line breaks)"),
+    (("navscenario-policy: 1", "navscenario-policy: 1\nversion: " + "9" * 201),
+     "bad.policy.yaml:2: version: is 201 characters long, more than 200"),
 ])
 def test_a_wrong_declaration_names_file_line_and_field(tmp_path, change, where):
     path = write_policy(tmp_path, "bad", constant_model([0, 0, 0], 24), DECLARATION_24.replace(*change))
     text = load_error(path, "bad.policy.yaml")
     assert where in text, text
+
+
+def test_a_yaml_bomb_as_the_declaration_is_refused_with_a_hint_about_declarations(tmp_path):
+    lines = ["navscenario-policy: 1", 'a0: &a0 ["lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol"]']
+    lines += [f"a{i}: &a{i} [" + ", ".join([f"*a{i - 1}"] * 9) + "]" for i in range(1, 10)]
+    path = write_policy(tmp_path, "bomb", constant_model([0, 0, 0], 24), "\n".join(lines) + "\nobservation: *a9\n")
+    text = load_error(path, "alias bomb")
+    assert "scenario" not in text and "policy declarations need far fewer values" in text, text
+    path = write_policy(tmp_path, "deep", constant_model([0, 0, 0], 24),
+                        "navscenario-policy: 1\nobservation: " + "[" * 1000 + "]" * 1000 + "\n")
+    text = load_error(path, "nests more than 20 levels")
+    assert "scenario" not in text and "this file is not a policy declaration" in text, text
 
 
 def test_file_and_metadata_declarations_that_differ_are_refused(tmp_path):
