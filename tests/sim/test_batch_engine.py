@@ -212,3 +212,34 @@ def test_run_batch_runs_alone_what_it_cannot_batch_and_says_why():
     plain = Batching()
     run_batch(scenarios[:1], "potential-field", batching=plain)
     assert plain.why_alone == {NO_PROTOCOL: 1}
+
+
+class Seeing(GoTo):
+    """``GoTo`` that keeps every field of every observation it is handed."""
+
+    def reset(self, scenario):
+        self.seen = []
+
+    def act(self, obs):
+        fields = {}
+        for name in ("tick", "time", "pose", "velocity", "ranges", "angles", "goal", "waypoints", "obstacles",
+                     "points", "attitude"):
+            value = getattr(obs, name)
+            fields[name] = (type(value).__name__, value.dtype.str, value.shape, value.tobytes(), value.flags.writeable) \
+                if hasattr(value, "tobytes") else value
+        self.seen.append(fields)
+        return super().act(obs)
+
+
+def test_a_batch_hands_each_planner_the_observations_it_gets_alone():
+    cases = [seed("boxes1"), seed("corridor"), seed("boxes2"), seed("boxes1")]
+    alone = []
+    for sc in cases:
+        planner = Seeing()
+        simulate(sc, planner, 0)
+        alone.append(planner.seen)
+    batch = BatchOf(Seeing)
+    simulate_batch([BatchEpisode(sc, 0) for sc in cases], batch)
+    for mine, theirs in zip(alone, (p.seen for p in batch.planners)):
+        assert len(mine) == len(theirs)
+        assert mine == theirs      # attitude (0, 0) of the planar body, points None, read-only rows
