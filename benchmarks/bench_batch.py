@@ -15,9 +15,11 @@ their shrinks), else the script exits 1.
 ``episodes``: ``--count`` search-like candidates of boxes1 (every parameter drawn at random within
 half its bounds, valid ones kept) run alone and in batches of ``--batch``, chunk by chunk
 alternately, against dwa and against a planner that replays dwa's commands and costs nothing (the
-same trajectories, checked); CPU per control tick of the four, and where a batch's time goes
-(engine parts timed with process_time): its planner calls, the cohort's observation (lidar cast
-included), its physics (MuJoCo's rollout call alone beside it), the episodes' start.
+same trajectories, checked; the free planner answers tuples, as planners do); CPU per control tick
+of the four; then, in runs of their own with timers (process_time) on the engine's parts, where a
+batched episode-tick goes, with dwa and with the free planner: the episodes' start, the cohorts'
+observation (the lidar scan and MuJoCo's mj_multiRay inside it), the planner call, the commands,
+the physics (MuJoCo's rollout call inside it), the results, and the tick loop's rest.
 
 ``planner``: dwa alone, on the recorded observations of ``--batch`` episodes: ``act`` per episode
 against ``act_batch`` per tick, replayed to fresh planners (no simulation between the calls).
@@ -95,56 +97,24 @@ def _candidates(count: int):
 
 
 def part_episodes(count: int, batch: int) -> int:
-    import pytest_navscenario.sim.cohort as cohort
-    import pytest_navscenario.sim.lockstep as lockstep
     from pytest_navscenario.sim.batch import BatchEpisode, simulate_batch
     from pytest_navscenario.sim.episode import simulate
     from pytest_navscenario.subjects.planners.dwa import DynamicWindowPlanner
 
-    acc: dict[str, float] = {}
-
-    def timed(owner, name, label):
-        fn = getattr(owner, name)
-
-        def wrapper(*a, **k):
-            c0 = time.process_time()
-            try:
-                return fn(*a, **k)
-            finally:
-                acc[label] = acc.get(label, 0.0) + time.process_time() - c0
-        setattr(owner, name, wrapper)
-
-    class Rollout:      # MuJoCo's own time inside the cohort's physics
-        def __init__(self, inner):
-            self.inner = inner
-
-        def rollout(self, *args):
-            c0 = time.process_time()
-            self.inner.rollout(*args)
-            acc["  of which mujoco.rollout"] = acc.get("  of which mujoco.rollout", 0.0) + time.process_time() - c0
-
-    cohort._ROLLOUT = Rollout(cohort._rollout_pool())
-    timed(lockstep.Lockstep, "_act", "planner (act_batch)")
-    timed(cohort.Cohort, "observe", "observation, lidar and safety (cohorts)")
-    timed(cohort.Cohort, "step", "physics (cohorts)")
-    timed(lockstep.Lockstep, "_start", "start: episodes built, placed, reset_batch")
     scenarios = _candidates(count)
     cpu = {"alone": 0.0, "batched": 0.0, "alone, free planner": 0.0, "batched, free planner": 0.0}
     ticks = 0
     ratios, free_ratios = [], []
-    parts = {}
+    chunks = []
     for rep in range(2):
         for a in range(0, len(scenarios), batch):
             chunk = scenarios[a:a + batch]
             c0 = time.process_time()
             res = [simulate(s, DynamicWindowPlanner(), 0, stuck_after=15.0) for s in chunk]
             c1 = time.process_time()
-            before = dict(acc)
             batched = simulate_batch([BatchEpisode(s, 0, stuck_after=15.0) for s in chunk], DynamicWindowPlanner())
             c2 = time.process_time()
-            for key, value in acc.items():
-                parts[key] = parts.get(key, 0.0) + value - before.get(key, 0.0)
-            commands = [r.trajectory.command.tolist() for r in res]
+            commands = [[tuple(c) for c in r.trajectory.command.tolist()] for r in res]   # tuples, as planners answer
             c3 = time.process_time()
             free = [simulate(s, Replay(cmd), 0, stuck_after=15.0) for s, cmd in zip(chunk, commands)]
             c4 = time.process_time()
@@ -162,15 +132,87 @@ def part_episodes(count: int, batch: int) -> int:
             ticks += sum(r.ticks for r in res)
             ratios.append((c1 - c0) / (c2 - c1))
             free_ratios.append((c4 - c3) / (c5 - c4))
+            if rep == 0:
+                chunks.append((chunk, commands))
     per = 1e6 / ticks
     print(f"{count} candidates x 2, batches of {batch}, {ticks} episode-ticks (the same trajectories every way):")
     for key, seconds in cpu.items():
         print(f"  {key}: {seconds * per:.1f} us CPU per episode-tick")
     print(f"  median ratio per chunk, alone / batched: dwa {statistics.median(ratios):.2f}x, "
           f"free planner {statistics.median(free_ratios):.2f}x")
-    for label, seconds in parts.items():
-        print(f"  batched dwa, {label}: {seconds * per:.1f} us per episode-tick")
+    _where_it_goes(chunks, ticks // 2)
     return 0
+
+
+def _where_it_goes(chunks, ticks: int) -> None:
+    """The batches once more, with timers on the engine's parts (process_time; the timers add
+    about 1 us an episode-tick, so these runs are apart from the paired ones above)."""
+    import mujoco
+
+    import pytest_navscenario.sim.cohort as cohort
+    import pytest_navscenario.sim.lockstep as lockstep
+    from pytest_navscenario.sim.batch import BatchEpisode, simulate_batch
+    from pytest_navscenario.subjects.planners.dwa import DynamicWindowPlanner
+
+    acc: dict[str, float] = {}
+    clock = time.process_time
+
+    def timed(owner, name, label):
+        fn = getattr(owner, name)
+
+        def wrapper(*a, **k):
+            c0 = clock()
+            try:
+                return fn(*a, **k)
+            finally:
+                acc[label] = acc.get(label, 0.0) + clock() - c0
+        setattr(owner, name, wrapper)
+
+    class Rollout:      # MuJoCo's own time inside the cohort's physics
+        def __init__(self, inner):
+            self.inner = inner
+
+        def rollout(self, *args):
+            c0 = clock()
+            self.inner.rollout(*args)
+            acc["  of which mujoco.rollout (C)"] = acc.get("  of which mujoco.rollout (C)", 0.0) + clock() - c0
+
+    cast = mujoco.mj_multiRay
+
+    def multi_ray(*args):   # MuJoCo's own time of the lidar casts (the timer adds ~0.2 us a call)
+        c0 = clock()
+        cast(*args)
+        acc["  of which mj_multiRay (C)"] = acc.get("  of which mj_multiRay (C)", 0.0) + clock() - c0
+
+    cohort._ROLLOUT = Rollout(cohort._rollout_pool())
+    mujoco.mj_multiRay = multi_ray
+    timed(lockstep.Lockstep, "_act", "planner (act_batch)")
+    timed(cohort.Cohort, "observe", "observation: mission, lidar, safety layer (cohorts)")
+    timed(cohort.Cohort, "_scan", "  of which the lidar scan")
+    timed(cohort.Cohort, "step", "physics (cohorts)")
+    timed(lockstep.Lockstep, "_setpoint", "commands validated, limited, recorded")
+    timed(lockstep.Lockstep, "_start", "start: episodes built, placed, reset_batch")
+    timed(lockstep.Lockstep, "_form_cohorts", "start: cohorts formed")
+    timed(lockstep.Lockstep, "_finish", "end: results (trajectories trimmed)")
+    per = 1e6 / ticks
+    for name, make in (("dwa", lambda commands: DynamicWindowPlanner()), ("free planner", ReplayBatch)):
+        acc.clear()
+        c0 = clock()
+        for chunk, commands in chunks:
+            simulate_batch([BatchEpisode(s, 0, stuck_after=15.0) for s in chunk], make(commands))
+        total = (clock() - c0) * per
+        print(f"  where a batched episode-tick goes, {name}: {total:.1f} us with the timers, of which")
+        for label in ORDER:
+            if label in acc:
+                print(f"    {label}: {acc[label] * per:.1f} us")
+        top = sum(v for k, v in acc.items() if not k.startswith("  ")) * per
+        print(f"    the rest (the tick loop: ids, cohorts' turns, sorting): {total - top:.1f} us")
+
+
+ORDER = ("start: episodes built, placed, reset_batch", "start: cohorts formed",
+         "observation: mission, lidar, safety layer (cohorts)", "  of which the lidar scan",
+         "  of which mj_multiRay (C)", "planner (act_batch)", "commands validated, limited, recorded",
+         "physics (cohorts)", "  of which mujoco.rollout (C)", "end: results (trajectories trimmed)")
 
 
 class Replay:

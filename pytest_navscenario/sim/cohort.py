@@ -85,14 +85,15 @@ class Cohort:
     def _adopt(self, j: int, ep: Episode) -> None:
         """Make the episode's records views of the cohort's arrays (keeping what place() wrote)."""
         n = len(ep.pose_buf)
-        self.pose[j, :n] = ep.pose_buf
-        self.qvel[j, :n] = ep.qvel_buf
+        done = ep.i + 1                  # the states recorded so far (place(): the start)
+        self.pose[j, :done] = ep.pose_buf[:done]
+        self.qvel[j, :done] = ep.qvel_buf[:done]
         ep.pose_buf, ep.qvel_buf = self.pose[j, :n], self.qvel[j, :n]
         ep.stepping = ep.stepping[:5] + (ep.pose_buf, ep.qvel_buf, ep.stepping[7])
         ep.seen = self.seen[j, :len(ep.seen)]
         lidar = ep.lidar
         rows = len(lidar.record)
-        self.record[j, :rows] = lidar.record
+        self.record[j, :ep.tick] = lidar.record[:ep.tick]    # the scans so far (none at the start)
         lidar.record = self.record[j, :rows]
         lidar.readonly = lidar.record.view()
         lidar.readonly.flags.writeable = False
