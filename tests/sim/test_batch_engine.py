@@ -243,3 +243,28 @@ def test_a_batch_hands_each_planner_the_observations_it_gets_alone():
     for mine, theirs in zip(alone, (p.seen for p in batch.planners)):
         assert len(mine) == len(theirs)
         assert mine == theirs      # attitude (0, 0) of the planar body, points None, read-only rows
+
+
+class Straight:
+    """Full speed ahead, whatever is there."""
+
+    def reset(self, scenario):
+        pass
+
+    def act(self, obs):
+        return (0.8, 0.0, 0.0)
+
+
+def test_a_batch_finds_a_collision_at_every_physics_step_of_a_tick_as_alone():
+    # a wall a little farther each time: the first contact falls on every state of a tick, the
+    # tick's final state included (whose contacts the engine looks at only near an obstacle)
+    b1 = with_robot(seed("boxes1"), safety={"enabled": False})
+    start = b1.mission.start
+    cases = [dataclasses.replace(b1, obstacles=(BoxObstacle("wall", start.x + 1.0 + 0.0037 * n, start.y, 0.3, 3.0),),
+                                 mission=dataclasses.replace(b1.mission, start=Pose(start.x, start.y, 0.0)))
+             for n in range(30)]
+    alone = [simulate(sc, Straight(), 0) for sc in cases]
+    batched = simulate_batch([BatchEpisode(sc, 0) for sc in cases], PerEpisode([Straight] * len(cases)))
+    assert {a.end for a in alone} == {"collision"}
+    assert {len(a.trajectory.t) % 10 for a in alone} == set(range(10))     # spt = 10: every state
+    assert [same(a, b) for a, b in zip(alone, batched)] == [True] * len(cases)
