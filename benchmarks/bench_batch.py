@@ -26,7 +26,8 @@ against ``act_batch`` per tick, replayed to fresh planners (no simulation betwee
 
 ``physics``: MuJoCo alone for a batch of 8 boxes1 episodes x 100 ticks of 10 steps: a plain
 ``mj_step`` loop recording every state, ``mj_step(nstep=10)``, ``mujoco.rollout`` (1 and 2 threads:
-CPU and wall).
+CPU and wall), each with MuJoCo's profiler on (the bindings' default) and off (as episodes run it,
+sim/profiler.py).
 """
 from __future__ import annotations
 
@@ -347,16 +348,22 @@ def part_physics() -> int:
     rows = [("plain mj_step loop, every state recorded", plain), (f"mj_step(nstep={spt})", nstep),
             (f"mujoco.rollout, {spt} + 1 steps (the batch engine's)", lambda: roll(0)),
             ("mujoco.rollout, 2 threads", lambda: roll(2))]
+    import contextlib
+
+    from pytest_navscenario.sim.profiler import profiler_off
+
     for label, fn in rows:
-        cpu, wall = [], []
-        for _ in range(3):
-            c0, t0 = time.process_time(), time.perf_counter()
-            fn()
-            cpu.append(time.process_time() - c0)
-            wall.append(time.perf_counter() - t0)
-        n = k * ticks
-        print(f"{label}: {statistics.median(cpu) / n * 1e6:.1f} us CPU, {statistics.median(wall) / n * 1e6:.1f} us "
-              f"wall per episode-tick")
+        for profiler, scope in (("on", contextlib.nullcontext), ("off", profiler_off)):
+            cpu, wall = [], []
+            for _ in range(3):
+                with scope():
+                    c0, t0 = time.process_time(), time.perf_counter()
+                    fn()
+                    cpu.append(time.process_time() - c0)
+                    wall.append(time.perf_counter() - t0)
+            n = k * ticks
+            print(f"{label}, MuJoCo's profiler {profiler}: {statistics.median(cpu) / n * 1e6:.1f} us CPU, "
+                  f"{statistics.median(wall) / n * 1e6:.1f} us wall per episode-tick")
     return 0
 
 
