@@ -24,6 +24,14 @@ the physics (MuJoCo's rollout call inside it), the results, and the tick loop's 
 ``planner``: dwa alone, on the recorded observations of ``--batch`` episodes: ``act`` per episode
 against ``act_batch`` per tick, replayed to fresh planners (no simulation between the calls).
 
+``free``: only the batches of ``episodes`` with the free planner (``--count`` candidates, batches of
+``--batch``, ``--repeats`` runs, the least CPU per episode-tick printed): to pair two versions of
+the engine, run it alternately with ``--code`` pointing at each checkout (the package is imported
+from there; the candidates and the replayed commands are this script's)::
+
+    for i in 1 2 3 4 5; do python benchmarks/bench_batch.py free --code /tmp/old; \
+        python benchmarks/bench_batch.py free; done
+
 ``physics``: MuJoCo alone for a batch of 8 boxes1 episodes x 100 ticks of 10 steps: a plain
 ``mj_step`` loop recording every state, ``mj_step(nstep=10)``, ``mujoco.rollout`` (1 and 2 threads:
 CPU and wall), each with MuJoCo's profiler on (the bindings' default) and off (as episodes run it,
@@ -367,14 +375,40 @@ def part_physics() -> int:
     return 0
 
 
+def part_free(count: int, batch: int, repeats: int) -> int:
+    from pytest_navscenario.sim.batch import BatchEpisode, simulate_batch
+    from pytest_navscenario.sim.episode import simulate
+    from pytest_navscenario.subjects.planners.dwa import DynamicWindowPlanner
+
+    scenarios = _candidates(count)
+    commands = [[tuple(c) for c in simulate(s, DynamicWindowPlanner(), 0, stuck_after=15.0).trajectory.command.tolist()]
+                for s in scenarios]
+    ticks = sum(len(c) for c in commands)
+    runs = []
+    for _ in range(repeats):
+        c0 = time.process_time()
+        for a in range(0, count, batch):
+            simulate_batch([BatchEpisode(s, 0, stuck_after=15.0) for s in scenarios[a:a + batch]],
+                           ReplayBatch(commands[a:a + batch]))
+        runs.append(time.process_time() - c0)
+    import pytest_navscenario
+    print(f"free planner, batches of {batch}, {count} candidates, {ticks} episode-ticks: "
+          f"{min(runs) / ticks * 1e6:.2f} us CPU per episode-tick (least of {repeats}; "
+          f"package {os.path.dirname(os.path.dirname(pytest_navscenario.__file__))})")
+    return 0
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("part", choices=("search", "episodes", "planner", "physics"))
+    ap.add_argument("part", choices=("search", "episodes", "planner", "physics", "free"))
+    ap.add_argument("--code", help="import pytest_navscenario from this checkout (default: this one)")
     ap.add_argument("--budget", type=int, default=1000)
     ap.add_argument("--repeats", type=int, default=2)
     ap.add_argument("--batch", type=int, default=16)
     ap.add_argument("--count", type=int, default=128)
     a = ap.parse_args()
+    if a.code:
+        sys.path.insert(0, os.path.abspath(a.code))
     print(f"load average before: {os.getloadavg()}", flush=True)
     if a.part == "search":
         code = part_search(a.budget, a.repeats, a.batch)
@@ -382,6 +416,8 @@ def main() -> int:
         code = part_episodes(a.count, a.batch)
     elif a.part == "planner":
         code = part_planner(a.count, a.batch)
+    elif a.part == "free":
+        code = part_free(a.count, a.batch, a.repeats)
     else:
         code = part_physics()
     print(f"load average after: {os.getloadavg()}")
