@@ -2,15 +2,32 @@
 failures, generated suites, imported seeds: each starts with the YAML language server's modeline)
 validates against the scenario schema, as an editor or check-jsonschema would read it. Checked
 once per process at the end of the session, over the session's temporary folders (pytester runs
-included); a file that does not validate is an error of the session's last test."""
+included); a file that does not validate is an error of the session's last test. The check needs
+the dev extra's reference validator (jsonschema, and ruamel.yaml through check-jsonschema): without
+it the check is left out and the report header says so."""
 from __future__ import annotations
 
+import importlib.util
+
 import pytest
+
+SCHEMA_CHECK_MISSING = [name for name in ("jsonschema", "ruamel.yaml")
+                        if importlib.util.find_spec(name.split(".")[0]) is None
+                        or importlib.util.find_spec(name) is None]
+
+
+def pytest_report_header(config: pytest.Config) -> str | None:
+    if SCHEMA_CHECK_MISSING:
+        return (f"written scenario files are not checked against the schema ({', '.join(SCHEMA_CHECK_MISSING)} "
+                f"missing): pip install -e '.[dev]'")
+    return None
 
 
 @pytest.fixture(scope="session", autouse=True)
 def _written_scenarios_validate(tmp_path_factory: pytest.TempPathFactory):
     yield
+    if SCHEMA_CHECK_MISSING:
+        return
     from pytest_navscenario.scenario.modeline import PREFIX
 
     base = tmp_path_factory.getbasetemp()

@@ -622,24 +622,6 @@ class RidingEpisode(Episode):
                 raise EpisodeOver("collision")
         self._reset_planner()
 
-    def _reset_planner(self) -> None:
-        from .command import call_planner, planner_traceback
-        from .deadline import PlannerTimeout
-        from .trajectory import SubjectFailure
-        t0 = perf_counter()
-        try:
-            call_planner(self.planner.reset, self.scenario, None)
-        except (Exception, PlannerTimeout) as exc:
-            self.t_planner += perf_counter() - t0
-            self.failure = SubjectFailure(f"planner.reset raised {type(exc).__name__}: {exc}", 0, 0.0,
-                                          planner_traceback(exc))
-            raise EpisodeOver("subject-error") from None
-        self.t_planner += perf_counter() - t0
-        if self.act_fn is None:
-            self.failure = SubjectFailure(f"planner {type(self.planner).__name__} has no "
-                                          f"act(observation) method", 0, 0.0)
-            raise EpisodeOver("subject-error")
-
     def observe(self) -> tuple[tuple[float, ...], Observation]:
         state = base_state(self.base_qpos, self.base_qvel)
         if self.offset:

@@ -17,16 +17,18 @@ import textwrap
 from pathlib import Path
 from typing import Any
 
-import jsonschema
 import pytest
 import yaml
 
-from pytest_navscenario import ScenarioError, dump_scenario, load_scenario, loads_scenario
-from pytest_navscenario.scenario import keys as K
-from pytest_navscenario.scenario import reading
-from pytest_navscenario.scenario.format import SCENARIO
-from pytest_navscenario.scenario.json_schema import SCHEMA_FILE, run_only_checks, scenario_schema, schema_text
-from pytest_navscenario.scenario.modeline import PREFIX, modeline
+jsonschema = pytest.importorskip("jsonschema", reason="the schema tests check it with the reference validator: "
+                                                      "pip install -e '.[dev]'")
+
+from pytest_navscenario import ScenarioError, dump_scenario, load_scenario, loads_scenario  # noqa: E402
+from pytest_navscenario.scenario import keys as K  # noqa: E402
+from pytest_navscenario.scenario import reading  # noqa: E402
+from pytest_navscenario.scenario.format import SCENARIO  # noqa: E402
+from pytest_navscenario.scenario.json_schema import SCHEMA_FILE, run_only_checks, scenario_schema, schema_text  # noqa: E402
+from pytest_navscenario.scenario.modeline import PREFIX, modeline  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 SCHEMA = scenario_schema()
