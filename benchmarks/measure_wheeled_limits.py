@@ -4,9 +4,11 @@ The figures behind ``scenario/crossing.py``'s WHEELED_* estimates (which stay un
 
     python benchmarks/measure_wheeled_limits.py
 
-Measured (MuJoCo 4.0): default diff body (50 kg, 10 N m, wheels 0.1 m) step 0.044 m, slope 17.5 deg,
-gap 0.129 m; 30 kg: 0.036, 13.4, 0.309; 20 N m: 0.042, 17.8, 0.090; wheels 0.15 m: 0.047, 15.9,
-0.176; skid: 0.081, 32.5, 0.113. A diff body's slope is not torque-limited: its casters carry load
+Measured (MuJoCo 4.0), with the mass at the axle and preloaded caster springs (terrain4): default
+diff body (50 kg, 10 N m, wheels 0.1 m) step 0.036 m, slope 17.2 deg, gap 0.180 m; 30 kg: 0.038,
+17.5, 0.168; 20 N m: 0.036, 17.5, 0.172; wheels 0.15 m: 0.047, 16.2, 0.453; skid: 0.064, 34.4, 0.172.
+(Before, with the mass in the chassis box's middle and softer casters: step 0.044, slope 17.5, gap
+0.129; skid 0.081, 32.5, 0.113.) A diff body's slope is not torque-limited: its casters carry load
 and the driven wheels lose grip, so more torque does not help. (A gap's bisection assumes the
 outcome is monotonic in the width; it is not quite, so the gap figures are rough.)
 """

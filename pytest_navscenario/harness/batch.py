@@ -20,6 +20,7 @@ from ..scenario.model import Scenario
 from ..subjects.loading import make_planner, subject_identity
 from ..subjects.protocol import SingleFromBatch, is_batch_planner
 from ..verdict.result import EpisodeResult
+from ..scenario.perturb import perturbed
 from .runner import effective_seed, run_scenario, verdict
 
 DEFAULT_BATCH = 16     # episodes a batch: the two generations of 8 a search has in flight
@@ -172,8 +173,8 @@ def _run_chunk(chunk, scenarios, seeds, planner, call_factory, spare, engine, ti
         return
     bp = batch_planner_of(instance)
     ep_seeds = [effective_seed(scenarios[i].simulation.seed, seeds[i]) for i in chunk]
-    requests = [BatchEpisode(scenarios[i], s, tick_limit=tick_limit, stuck_after=stuck_after)
-                for i, s in zip(chunk, ep_seeds)]
+    ran = [perturbed(scenarios[i], s) for i, s in zip(chunk, ep_seeds)]   # simulation.perturb, as run_scenario
+    requests = [BatchEpisode(r, s, tick_limit=tick_limit, stuck_after=stuck_after) for r, s in zip(ran, ep_seeds)]
     facts = engine.run(requests, bp)
     name, version = subject_identity(instance, spec)     # after reset: a planner may name itself there
     del instance, bp    # a planner that ends its helpers when it is dropped has done so before the check
@@ -181,11 +182,11 @@ def _run_chunk(chunk, scenarios, seeds, planner, call_factory, spare, engine, ti
     left = processes.note_left_behind(before, f"the batch of {scenarios[chunk[0]].name or 'episodes'}",
                                       ours=running_pids())
     share = (time.perf_counter() - t0) / len(chunk)
-    for i, s, f in zip(chunk, ep_seeds, facts):
+    for i, s, f, r in zip(chunk, ep_seeds, facts, ran):
         if isinstance(f, Exception):
             out[i] = f
             continue
-        out[i] = verdict(scenarios[i], f, s, name, version, stuck_after, time.perf_counter() - share, left)
+        out[i] = verdict(scenarios[i], f, s, name, version, stuck_after, time.perf_counter() - share, left, ran=r)
         left = ()
     report.batched += len(chunk)
     report.batches += 1

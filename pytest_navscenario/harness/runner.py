@@ -19,6 +19,7 @@ from ..subjects.external import running_pids
 from ..subjects.loading import make_planner, subject_identity
 from ..verdict.result import EpisodeResult
 from ..scenario.model import Scenario
+from ..scenario.perturb import perturbed
 
 
 def check_feasibility(scenario: Scenario) -> tuple[Any, float]:
@@ -75,26 +76,31 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
     if reset_timeout and hasattr(instance, "reset_timeout"):
         instance.reset_timeout = reset_timeout
     ep_seed = effective_seed(scenario.simulation.seed, seed)
-    facts = simulate(scenario, instance, ep_seed, tick_limit=tick_limit, stuck_after=stuck_after)
+    ran = perturbed(scenario, ep_seed)   # simulation.perturb: this episode's start and timing (else itself)
+    facts = simulate(ran, instance, ep_seed, tick_limit=tick_limit, stuck_after=stuck_after)
     name, version = subject_identity(instance, spec)  # after reset: a planner may name itself there
     del instance    # a planner that ends its helpers when it is dropped has done so before the check
     left = processes.note_left_behind(before, scenario.name or "the episode", ours=running_pids())
-    return verdict(scenario, facts, ep_seed, name, version, stuck_after, t0, left)
+    return verdict(scenario, facts, ep_seed, name, version, stuck_after, t0, left, ran=ran)
 
 
 def verdict(scenario: Scenario, facts: Any, ep_seed: int, name: str, version: str | None,
-            stuck_after: float | None, t0: float, left: Any = ()) -> EpisodeResult:
+            stuck_after: float | None, t0: float, left: Any = (), ran: Scenario | None = None) -> EpisodeResult:
     """The EpisodeResult of an episode's raw facts (``sim.SimResult``): the oracle's outcome and
     message, the metrics; ``wall_time`` counted from ``t0``; ``left``: the processes it left
-    running (core/processes.py)."""
+    running (core/processes.py). ``ran``: the scenario as simulated (``perturbed(scenario,
+    ep_seed)``, computed when not given): judged and measured; ``scenario`` is reported."""
     from ..verdict import metrics, oracle
+
+    if ran is None:
+        ran = perturbed(scenario, ep_seed)
 
     t1 = time.perf_counter()
     outcome, message = oracle.classify(
-        scenario, facts.trajectory, collision=facts.collision, safety_stop=facts.safety_stop,
+        ran, facts.trajectory, collision=facts.collision, safety_stop=facts.safety_stop,
         subject_failure=facts.subject_failure, goal_reached=facts.goal_reached,
         stuck_after=stuck_after if facts.end == "stuck" else None, terrain_event=facts.terrain_event)
-    figures = metrics.compute_metrics(scenario, facts.trajectory, collision=facts.collision)
+    figures = metrics.compute_metrics(ran, facts.trajectory, collision=facts.collision)
     t2 = time.perf_counter()
     timings = dict(facts.timings)
     timings["metrics"] = t2 - t1

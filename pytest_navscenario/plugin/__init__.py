@@ -357,10 +357,15 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
         for line in format_summary(state.records).splitlines():
             tr.write_line(line)
     if state.settings.repeat > 1 and state.records:
-        from ..report.flaky import format_flaky
+        from ..report.flaky import format_flaky, format_holding, holding_rows
         tr.write_sep("=", "navscenario flaky scenarios")
         for line in format_flaky(state.records).splitlines():
             tr.write_line(line)
+        rows = holding_rows(state.records, state.frozen) if state.frozen else []
+        if rows:
+            tr.write_sep("=", "navscenario frozen failures: do they still hold?")
+            for line in format_holding(rows).splitlines():
+                tr.write_line(line, red="NO LONGER" in line)
     if state.results_error is not None:
         tr.write_line(state.results_error, red=True, bold=True)
     elif state.settings.results is not None and not config.option.collectonly:

@@ -19,6 +19,7 @@ from typing import Any, Iterator
 import pytest
 
 from ..core.errors import NavScenarioError, ScenarioError
+from ..core.seeds import repeat_seed
 from .state import STATE_KEY, get_state
 
 _TOP_KEY = re.compile(r"^(version|mission)\s*:", re.MULTILINE)
@@ -173,7 +174,14 @@ class ScenarioFile(pytest.File):
         family_from_folder = not scenario.family
         if family_from_folder:  # may become the folder's path: see separate_families
             scenario = dataclasses.replace(scenario, family=self.path.parent.name)
+        model = get_state(self.config).settings.sensor_model
+        if model:   # --nav-sensor-model: a lidar noise model for scenarios that declare none
+            from ..scenario.sensor_model import with_sensor_model
+            scenario = with_sensor_model(scenario, model)
         repeats = get_state(self.config).settings.repeat
+        provenance = scenario.provenance or {}
+        if repeats > 1 and "confirmation" in provenance:   # a frozen failure: does it still hold?
+            get_state(self.config).frozen[(rel_path(self.config, self.path), name)] = dict(provenance)
         for repeat in range(repeats):
             item = ScenarioItem.from_parent(self, name=name if repeats == 1 else f"{name}[r{repeat}]",
                                             scenario=scenario, repeat=repeat)
@@ -216,16 +224,6 @@ def separate_families(config: pytest.Config, items: list[pytest.Item]) -> None:
                 family = item.path.parent.name
             item.scenario = dataclasses.replace(item.scenario, family=family)
             item.extra_keyword_matches.add(family)
-
-
-def repeat_seed(base_seed: int, repeat: int) -> int:
-    """The base seed of one --nav-repeat run: the run's own seed for repeat 0, else a stable
-    63-bit mix of (base seed, repeat) so every repeat draws different sensor noise."""
-    if repeat == 0:
-        return base_seed
-    import hashlib
-    digest = hashlib.sha256(f"navscenario-repeat:{base_seed}:{repeat}".encode()).digest()
-    return int.from_bytes(digest[:8], "big") >> 1
 
 
 class ScenarioFailed(Exception):

@@ -56,6 +56,11 @@ OPTIONS = (
      "(`ray start --head` prints the address). Items still report one per scenario in the usual "
      "order, with the same results as a serial run. Every node must have pytest-navscenario and "
      "the subject; this is checked before any episode. Default: none."),
+    ("--nav-sensor-model", "nav_sensor_model",
+     "give every scenario whose lidar declares no noise model this one (the files stay as they are): "
+     "'realistic' (a typical 2D lidar: 2 cm Gaussian range noise, 1 % of beams without a return), "
+     "or lidar noise keys as key=value,... (noise_sigma, noise_per_metre, dropout, dropout_at_max, "
+     "spurious). Recommended for --navsearch, so that a failure must hold under noise. Default: none."),
     ("--nav-workers", "nav_workers",
      "run the scenario items' episodes on N local worker processes started by this pytest "
      "process ('auto': one per core; 0 or 1: in this process, the default). Collection and "
@@ -123,9 +128,11 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     metavars = {"nav_subject": "SPEC", "nav_seed": "N", "nav_results": "PATH", "nav_artifacts": "DIR",
                 "nav_summary": "{yes,no}", "nav_tick_limit": "SECONDS", "nav_repeat": "N",
                 "nav_reset_timeout": "SECONDS", "nav_ray": "ADDRESS", "nav_workers": "N",
-                "nav_batch": "N", "nav_isolate": "{yes,no}", "nav_batch_engine": "{cpu,warp}"}
+                "nav_batch": "N", "nav_isolate": "{yes,no}", "nav_batch_engine": "{cpu,warp}",
+                "nav_sensor_model": "SPEC"}
     for opt, ini, text in OPTIONS:
-        group.addoption(opt, dest=ini, default=None, metavar=metavars[ini], help=text + f" [ini: {ini}]")
+        group.addoption(opt, dest=ini, default=None, metavar=metavars[ini],   # argparse %-formats help
+                        help=(text + f" [ini: {ini}]").replace("%", "%%"))
     parser.addini("nav_subject", helps["nav_subject"], default="")
     parser.addini("nav_seed", helps["nav_seed"], type=ini_type("int"), default=0)
     parser.addini("nav_results", helps["nav_results"], default="")
@@ -141,6 +148,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addini("nav_batch", helps["nav_batch"], default="auto")
     parser.addini("nav_batch_engine", helps["nav_batch_engine"], default="cpu")
     parser.addini("nav_isolate", helps["nav_isolate"], type="bool", default=False)
+    parser.addini("nav_sensor_model", helps["nav_sensor_model"], default="")
     parser.addini("nav_scenario_glob",
                   "file name patterns of scenario files (space separated); files matching them are "
                   "collected when they are a YAML mapping with 'version' and 'mission' keys "
@@ -164,6 +172,7 @@ class Settings:
     scenario_paths: tuple[Path, ...]
     reset_timeout: float = DEFAULT_RESET_TIMEOUT   # s an exec: planner may take to answer reset
     ray: str | None = None            # --nav-ray: "auto" or "HOST:PORT"; None: no Ray
+    sensor_model: "dict[str, float] | None" = None   # --nav-sensor-model: lidar noise keys; None: off
     batch: int = 16                   # --nav-batch: episodes a batch at most (1: no batches)
     batch_engine: str = "cpu"         # --nav-batch-engine: "cpu" or "warp" (sim/batch.py)
 
@@ -268,7 +277,20 @@ def read_settings(config: pytest.Config) -> Settings:
     return Settings(subject_spec=subject, seed=seed, results=results, artifacts=artifacts,
                     summary=summary, tick_limit=tick_limit, repeat=repeat, globs=globs,
                     scenario_paths=paths, reset_timeout=reset_timeout, ray=read_ray_address(config),
-                    batch=read_batch(config), batch_engine=read_batch_engine(config))
+                    sensor_model=read_sensor_model(config), batch=read_batch(config),
+                    batch_engine=read_batch_engine(config))
+
+
+def read_sensor_model(config: pytest.Config) -> "dict[str, float] | None":
+    """--nav-sensor-model / ini nav_sensor_model: lidar noise keys and values, None when off."""
+    raw, where, _ = _value(config, "nav_sensor_model")
+    if raw.strip().lower() in ("", "none", "off", "no"):
+        return None
+    from ..scenario.sensor_model import parse_sensor_model   # light: the scenario model only
+    try:
+        return parse_sensor_model(raw)
+    except ValueError as exc:
+        raise pytest.UsageError(f"{where}: {exc}") from None
 
 
 DEFAULT_BATCH = 16   # = harness.batch.DEFAULT_BATCH (not imported: plugin load stays light)

@@ -26,6 +26,7 @@ DEFAULT_BUDGET = 100
 DEFAULT_SHRINK_BUDGET = "25%"   # = search.engine.DEFAULT_SHRINK_BUDGET
 DEFAULT_OUT = "scenarios/regressions"
 DEFAULT_STUCK_AFTER = 15.0   # = search.engine.DEFAULT_STUCK_AFTER
+DEFAULT_HOLD = 0.9           # = search.holding.DEFAULT_HOLD
 STRATEGY_NAMES = ("evolve", "random", "hillclimb")   # = search.engine.STRATEGIES (not imported: plugin load stays light)
 OLD_OUT_INI = "nav_regressions_dir"     # the old name of the ini option navsearch_out, still read
 
@@ -51,6 +52,12 @@ OPTIONS = (
      f"starts, most severe and earliest failure first (failures it does not reach are kept as "
      f"found); 0 = keep every failure as found; a whole number N = at most N simulations for "
      f"each failure (the old form)."),
+    ("--navsearch-hold", "navsearch_hold", "P",
+     f"a failure counts (is distinct, shrunk and frozen) only when it holds: when repeats under fresh "
+     f"noise seeds (confirmation runs, simulations of the budget) decide, by a sequential test, that "
+     f"it fails with probability at least P rather than at most the P whose odds are 9 times smaller "
+     f"(default {DEFAULT_HOLD}: 0.9 against 0.5); 0 = every failure counts after one run. A seed "
+     f"without randomness (no sensor noise, drift or perturbation) needs no confirmation."),
     ("--navsearch-stuck-after", "navsearch_stuck_after", "SECONDS",
      f"end a search episode early, as a timeout, when the robot has covered no new ground for "
      f"this long (default {DEFAULT_STUCK_AFTER:g}; 0 = run every episode to its timeout)."),
@@ -77,7 +84,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
         group.addoption(opt, dest=dest, default=None, metavar=metavar,   # argparse %-formats help: 25% -> 25%%
                         help=f"{text} [ini: {dest}]".replace("%", "%%"), **kwargs)
         kind = ("args" if dest == "navsearch" else ini_type("int") if dest in _INT_OPTIONS
-                else ini_type("float") if dest == "navsearch_stuck_after" else "string")
+                else ini_type("float") if dest in ("navsearch_stuck_after", "navsearch_hold") else "string")
         parser.addini(dest, text, type=kind,
                       default=[] if dest == "navsearch" else "")
 
@@ -109,6 +116,7 @@ class SearchSettings:
     junit: Path | None
     stuck_after: float | None = DEFAULT_STUCK_AFTER
     suite: Path | None = None
+    hold: float = DEFAULT_HOLD
 
 
 @dataclass
@@ -198,7 +206,22 @@ def read_search_settings(config: pytest.Config) -> SearchSettings:
         if junit.is_dir():
             raise pytest.UsageError(f"{where}: {raw!r} is a folder; give a file name such as navsearch.xml")
     return SearchSettings(names, budget, seed, strategy, shrink, out, junit, _stuck_after(config),
-                          _suite_dir(config, out))
+                          _suite_dir(config, out), _hold(config))
+
+
+def _hold(config: pytest.Config) -> float:
+    """--navsearch-hold / navsearch_hold: a failure probability from 0 (off) to below 1."""
+    raw, where, _ = _raw(config, "navsearch_hold")
+    if raw in ("", None):
+        return DEFAULT_HOLD
+    try:
+        value = float(str(raw).strip())
+    except ValueError:
+        value = math.nan
+    if not 0.0 <= value < 1.0:
+        raise pytest.UsageError(f"{where}: the hold threshold is a failure probability from 0 to below 1, "
+                                f"got {raw!r} (e.g. 0.9, the default; 0 counts every failure after one run)")
+    return value
 
 
 def _suite_dir(config: pytest.Config, out: Path) -> Path | None:
@@ -276,13 +299,14 @@ def find_seed(name: str, scenario_paths: tuple[Path, ...], rootdir: Path) -> Pat
           "nav_scenario_paths.")
 
 
-def _make_job(name: str, path: Path) -> Job:
+def _make_job(name: str, path: Path, sensor_model: Any = None) -> Job:
     from ..core.errors import NavScenarioError
     from ..scenario.loader import load_scenario
+    from ..scenario.sensor_model import with_sensor_model
     from ..search.space import SearchSpace, invalid_reason
 
     try:
-        seed = load_scenario(path)
+        seed = with_sensor_model(load_scenario(path), sensor_model)   # --nav-sensor-model
         if not seed.name:
             import dataclasses
             seed = dataclasses.replace(seed, name=path.stem)
@@ -311,7 +335,7 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     jobs = {}
     for name in settings.names:
         path = find_seed(name, core.settings.scenario_paths, Path(config.rootpath))
-        jobs[name] = _make_job(name, path)
+        jobs[name] = _make_job(name, path, core.settings.sensor_model)
     config.stash[STATE_KEY] = SearchState(settings, jobs, hasattr(config, "workerinput"))
 
 
@@ -364,7 +388,7 @@ class NavSearchItem(pytest.Item):
                             strategy=s.strategy, shrink_budget=s.shrink_budget, space=job.space,
                             subject=subject, episode_seed=core.settings.seed, stuck_after=s.stuck_after,
                             progress=None if state.is_worker else _Progress(self.config, job.name, s.budget),
-                            evaluator=evaluator, recorder=recorder, batch=batch,
+                            evaluator=evaluator, recorder=recorder, hold=s.hold, batch=batch,
                             engine=core.settings.batch_engine)
         self.navsearch_payload = report_to_payload(report)
         if report.interrupted and report.stop_reason.startswith("interrupted"):
@@ -402,6 +426,8 @@ class _Progress:
     def line(self, report: Any) -> str:
         n, nf = report.sims_used, len(report.failures)
         out = f"navsearch {self.name}: {n}/{self.budget} sims, {nf} distinct failure(s)"
+        if report.under_test or report.rejected:
+            out += f" ({report.under_test} being confirmed, {len(report.rejected)} did not hold)"
         if math.isfinite(report.best_clearance):
             out += f", lowest clearance so far {report.best_clearance:.3f} m"
         rob = report.best_robustness
@@ -450,8 +476,12 @@ def report_to_payload(report: Any) -> dict[str, Any]:
                             for k, v in c.metrics.items()},
                 "scenario_hash": c.scenario_hash, "wall_time": c.wall_time,
                 "robustness": c.robustness if math.isfinite(c.robustness) else None,
-                "signature": list(c.signature), "progress": c.progress}
+                "signature": list(c.signature), "progress": c.progress, "run": c.run}
     index = {id(c): i for i, c in enumerate(report.candidates)}
+
+    def failure(f):
+        return {"found": index[id(f.found)], "shrunk": index[id(f.shrunk)], "shrink_sims": f.shrink_sims,
+                "note": f.note, "status": f.status, "estimate": f.estimate.to_data()}
     return {
         "seed_name": report.seed_name, "seed_source": report.seed_source, "subject": report.subject,
         "subject_version": report.subject_version, "strategy": report.strategy,
@@ -464,14 +494,17 @@ def report_to_payload(report: Any) -> dict[str, Any]:
         "episode_seed": report.episode_seed, "first_failure": report.first_failure,
         "batching": report.batching,
         "candidates": [cand(c) for c in report.candidates],
-        "failures": [{"found": index[id(f.found)], "shrunk": index[id(f.shrunk)],
-                      "shrink_sims": f.shrink_sims, "note": f.note} for f in report.failures],
+        "failures": [failure(f) for f in report.failures],
+        "rejected": [failure(f) for f in report.rejected],
+        "unconfirmed": [failure(f) for f in report.unconfirmed],
+        "hold": report.hold, "randomness": list(report.randomness), "confirm_sims": report.confirm_sims,
     }
 
 
 def payload_to_report(data: dict[str, Any], space: Any) -> Any:
     """Inverse of report_to_payload; candidate scenarios are rebuilt from the seed + offsets."""
     from ..search.engine import Candidate, Failure, SearchReport
+    from ..search.holding import Estimate
 
     cands = []
     for c in data["candidates"]:
@@ -481,7 +514,7 @@ def payload_to_report(data: dict[str, Any], space: Any) -> Any:
                                math.nan if c["clearance"] is None else c["clearance"], c["culprit"],
                                c["message"], metrics, c["scenario_hash"], c["wall_time"], space.apply(offsets),
                                math.inf if c.get("robustness") is None else c["robustness"],
-                               tuple(c.get("signature", ())), c.get("progress", 0.0)))
+                               tuple(c.get("signature", ())), c.get("progress", 0.0), run=c.get("run", 0)))
     fields = {k: data[k] for k in ("seed_name", "seed_source", "subject", "subject_version", "strategy",
                                    "seed_value", "budget", "shrink_budget", "params", "sims_used",
                                    "shrink_sims", "discarded", "interrupted", "stop_reason", "wall_time",
@@ -493,8 +526,15 @@ def payload_to_report(data: dict[str, Any], space: Any) -> Any:
     report.shrink_total = data.get("shrink_total", 0)
     report.batching = data.get("batching", "")
     report.candidates = cands
-    report.failures = [Failure(cands[f["found"]], cands[f["shrunk"]], f["shrink_sims"], f["note"])
-                       for f in data["failures"]]
+    report.hold, report.randomness = data.get("hold", 0.0), tuple(data.get("randomness", ()))
+    report.confirm_sims = data.get("confirm_sims", 0)
+
+    def failures(key: str) -> list[Any]:
+        return [Failure(cands[f["found"]], cands[f["shrunk"]], f["shrink_sims"], f["note"],
+                        f.get("status", "found"), Estimate.from_data(f.get("estimate")))
+                for f in data.get(key, [])]
+    report.failures, report.rejected, report.unconfirmed = failures("failures"), failures("rejected"), \
+        failures("unconfirmed")
     return report
 
 
@@ -612,6 +652,29 @@ def _rel(config: pytest.Config, path: Path) -> str:
         return str(path)
 
 
+def _holding_lines(r: Any) -> list[str]:
+    """What the confirmation of failures under the seed's randomness did (search/holding.py)."""
+    if not r.randomness:
+        return ["  the seed has no randomness (no sensor noise, drift or perturbation): one run decides each "
+                "failure; search under noise with --nav-sensor-model realistic"] if r.failures else []
+    noise = ", ".join(r.randomness)
+    if not r.hold:
+        return [f"  confirmation off (--navsearch-hold 0): each failure counted after one run, though {noise} "
+                f"may make it pass the next time"]
+    out = [f"  failures that hold (fail with probability >= {r.hold:g} under {noise}, decided by a "
+           f"sequential test): {len(r.failures)}; {r.confirm_sims} confirmation run(s)"
+           + (f", {r.confirm_sims / len(r.failures):.1f} per failure that holds" if r.failures else "")]
+    if r.rejected:
+        out.append(f"  {len(r.rejected)} failure(s) did not hold (failed once, then passed under fresh noise: "
+                   f"knife-edges, not frozen)")
+    if r.unconfirmed:
+        cut = r.interrupted and any(f.status == "found" for f in r.unconfirmed)
+        out.append(f"  {len(r.unconfirmed)} failure(s) still under test when the search "
+                   + ("was cut short (frozen as found, unconfirmed)" if cut else
+                      "ran out of budget (not frozen; a larger --budget confirms them)"))
+    return out
+
+
 def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
     from .search_report import lowest_clearance_text
 
@@ -623,8 +686,10 @@ def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
              f"{r.sims_used}/{r.budget} sims, {r.discarded_total} discarded" + (f" ({disc})" if disc else "")
              + f", {len(r.failures)} distinct failure(s) ({by}), " + lowest_clearance_text(r)
              + (f", first at sim {r.first_failure}" if r.first_failure else "")
-             + f", {r.sims_used} sims searching + {r.shrink_sims} shrinking"
+             + f", {r.sims_used} sims searching" + (f" ({r.confirm_sims} of them confirming)" if r.confirm_sims else "")
+             + f" + {r.shrink_sims} shrinking"
              + (f" (shrink budget {r.shrink_total})" if r.shrink_total else "") + f", {r.wall_time:.1f} s"]
+    lines += _holding_lines(r)
     unshrunk = sum(1 for f in r.failures if f.note.startswith("not shrunk: the shrink budget"))
     if unshrunk:
         lines.append(f"  {unshrunk} of {len(r.failures)} failure(s) frozen as found: the shrink budget "
@@ -643,8 +708,9 @@ def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
     for f in entry["files"]:
         state = "new " if f.new else "kept"
         c = f.clearance
+        held = f", {f.estimate.describe()}" if f.estimate is not None and f.estimate.runs else ""
         lines.append(f"  {state} {_rel(config, f.path)}  {f.outcome}, clearance "
-                     + (f"{c:.3f} m" if math.isfinite(c) else "n/a") + ("" if f.new else " (already frozen)"))
+                     + (f"{c:.3f} m" if math.isfinite(c) else "n/a") + held + ("" if f.new else " (already frozen)"))
     pictures = [row.picture for row in entry.get("rows") or [] if row.picture]
     if pictures:
         folders = sorted({str(Path(p).parent) for p in pictures})

@@ -111,6 +111,9 @@ def failure_rows(config: pytest.Config, entry: dict[str, Any]) -> list[Any]:
             clearance=frozen.clearance, found_at=failure.found.sim if failure else 0,
             shrink_sims=failure.shrink_sims if failure else 0, note=failure.note if failure else "",
             reproduce=_reproduce(config, Path(frozen.path)))
+        estimate = failure.estimate if failure is not None else None
+        if estimate is not None and estimate.runs:   # confirmed under the seed's randomness (search/holding.py)
+            row.probability, row.interval = estimate.probability, estimate.interval
         if make:
             try:
                 _picture(config, row, Path(frozen.path), to_file)

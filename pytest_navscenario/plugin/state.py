@@ -26,6 +26,8 @@ class NavState:
     scenario_folders: set[str] = field(default_factory=set)   # folders holding collected scenarios
     executor: Any = None          # controller with --nav-ray: where episodes run (dispatch/)
     executor_notes: list[str] = field(default_factory=list)       # header lines about it
+    # frozen failures of the search among the collected scenarios: (path, name) -> provenance
+    frozen: dict[tuple[str, str], dict[str, Any]] = field(default_factory=dict)
     batching: Any = None          # controller with an executor: harness.batch.Batching of the items
 
 

@@ -1,5 +1,6 @@
 """Repeated runs (``--nav-repeat``): which scenarios are flaky, i.e. gave different outcomes
-under different noise seeds. Pure functions of results-file records."""
+under different noise seeds, and which frozen failures of the search no longer hold. Pure
+functions of results-file records (and, for the frozen failures, their provenance)."""
 from __future__ import annotations
 
 from collections import Counter, defaultdict
@@ -43,4 +44,50 @@ def format_flaky(records: list[dict[str, Any]]) -> str:
         runs = sum(c.values())
         detail = ", ".join(f"{outcome} {n}/{runs}" for outcome, n in c.most_common())
         lines.append(f"  {path}::{name}: {detail}")
+    return "\n".join(lines)
+
+
+def holding_rows(records: list[dict[str, Any]], measured: dict[tuple[str, str], dict[str, Any]]
+                 ) -> list[dict[str, Any]]:
+    """Per frozen failure of the search (``measured``: scenario key -> its provenance, with the
+    ``failure_probability`` the search measured) that ran here: how often it failed now, its 95 %
+    interval, and whether it still holds. It no longer holds when the whole interval lies below
+    the threshold it was confirmed against (``hold_threshold``): the planner now passes it too
+    often for a failure that held (one that passes every run is fixed)."""
+    from ..core.rates import clopper_pearson
+
+    runs: dict[tuple[str, str], list[bool]] = {}
+    for rec in records:
+        key = scenario_key(rec)
+        if key in measured:
+            runs.setdefault(key, []).append(rec["outcome"] not in ("success", "skipped"))
+    rows = []
+    for key, fails in sorted(runs.items()):
+        prov = measured[key]
+        k, n = sum(fails), len(fails)
+        lo, hi = clopper_pearson(k, n)
+        threshold = float(prov.get("hold_threshold") or 0.0)
+        rows.append({"path": key[0], "scenario": key[1], "failed": k, "runs": n, "interval": (lo, hi),
+                     "measured": prov.get("failure_probability"), "measured_interval":
+                     prov.get("failure_probability_interval"), "measured_runs": prov.get("confirmation_runs"),
+                     "threshold": threshold, "holds": not (threshold and hi < threshold) and k > 0})
+    return rows
+
+
+def format_holding(rows: list[dict[str, Any]]) -> str:
+    """One line per frozen failure run with repeats: does it still hold?"""
+    lost = [r for r in rows if not r["holds"]]
+    lines = [f"{len(rows) - len(lost)} of {len(rows)} frozen failure(s) still hold"
+             + (f"; {len(lost)} no longer hold:" if lost else ":")]
+    for r in sorted(rows, key=lambda r: r["holds"]):
+        lo, hi = r["interval"]
+        was = ""
+        if r["measured"] is not None:
+            mlo, mhi = r["measured_interval"] or (0.0, 1.0)
+            was = (f"; the search measured {r['measured']:.2f} ({mlo:.2f}-{mhi:.2f}) over "
+                   f"{r['measured_runs'] or 1} run(s)")
+        verdict = ("holds" if r["holds"] else "FIXED (passes every run)" if not r["failed"]
+                   else f"NO LONGER HOLDS (below the threshold {r['threshold']:g})")
+        lines.append(f"  {r['path']}::{r['scenario']}: fails in {r['failed']}/{r['runs']} runs "
+                     f"(95 % {lo:.2f}-{hi:.2f}){was}: {verdict}")
     return "\n".join(lines)

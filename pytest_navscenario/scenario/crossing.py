@@ -16,12 +16,22 @@ apart), walked from a *level* (the height the body's foot, or centre, stands at 
   "drop" barrier: a body that goes on falls.
 
 Distances are exact to the spacing (SPACING, 2 cm, in the simulation). No MuJoCo, no I/O.
+
+A profile sees the slope along its line only. *Steep ground* (``steep_ground``) is the slope in
+every direction: ground steeper than ``max_slope`` whose height spans more than ``max_step`` (a
+steep ramp's whole surface, a steep patch of a height grid). The path search makes it a wall
+(verdict/traversable.py) and the legged body does not walk onto it from level ground, whichever way
+it comes (``walk``'s ``steep``): across a bank or up it diagonally, where the rise along its way is
+within ``max_slope``, as well as straight up.
 """
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Sequence
+
+import numpy as np
 
 SPACING = 0.02    # m between the samples of a profile (a threshold of 5 cm is seen)
 FOOT = 0.1        # m: a steep stretch narrower than this is a step's face, wider a slope (words only)
@@ -40,7 +50,8 @@ class Capability:
 @dataclass(frozen=True)
 class Barrier:
     """Where a profile stops the body: ``index`` is the last sample it stands on before it;
-    ``kind`` "step" or "slope" (a rise it cannot climb: it is stopped) or "drop" (a drop deeper
+    ``kind`` "step" or "slope" (a rise it cannot climb: it is stopped), "steep" (onto steep ground
+    the line itself rises within max_slope on: it is stopped) or "drop" (a drop deeper
     than max_step with no ground back within max_gap: it falls if it goes on); ``height`` the rise
     or the depth (m), ``width`` the steep stretch's or the gap's width (inf: no far side seen)."""
     kind: str
@@ -49,10 +60,13 @@ class Barrier:
     width: float
 
 
-def walk(h: Sequence[float], spacing: float, level: float, cap: Capability) -> tuple[list[float], Barrier | None]:
+def walk(h: Sequence[float], spacing: float, level: float, cap: Capability,
+         steep: Sequence[bool] | None = None) -> tuple[list[float], Barrier | None]:
     """Walk the profile ``h`` (heights at 0, spacing, 2 spacing ...) from ``level`` at its first
     sample: (the support height at each sample up to the first barrier, NaN beyond; the barrier or
-    None). The support is the ground, or the straight line across a gap it strides over."""
+    None). The support is the ground, or the straight line across a gap it strides over.
+    ``steep`` (per sample: on steep ground, ``steep_ground``): walkable ground along the line that
+    leads from level ground onto steep ground is a "steep" barrier (height 0, width 0)."""
     n = len(h)
     tol = spacing * math.tan(math.radians(min(cap.max_slope, 89.9))) + EPS
     step = cap.max_step + EPS
@@ -63,6 +77,8 @@ def walk(h: Sequence[float], spacing: float, level: float, cap: Capability) -> t
     while k < n - 1:
         nxt = h[k + 1]
         if abs(nxt - cur) <= tol:               # walkable ground
+            if steep is not None and steep[k + 1] and not steep[k]:
+                return support, Barrier("steep", k, 0.0, 0.0)
             k += 1
             support[k] = cur = nxt
             continue
@@ -106,11 +122,12 @@ def look_ahead(cap: Capability, move: float, spacing: float = SPACING) -> int:
 
 # The wheeled body's limits are estimates from its wheels, measured in MuJoCo with a straight
 # drive (benchmarks/measure_wheeled_limits.py; default body: 50 kg, 10 N m, wheels of 0.1 m): it
-# climbed steps of 0.044 m (diff: its ball casters, 0.05 m, meet a step first) and 0.081 m (skid),
-# slopes of 17.5 deg (diff: the casters carry load, the driven wheels lose grip) and 32.5 deg
-# (skid), and crossed gaps of 0.09-0.13 m. The estimates below stay under those figures.
-WHEELED_CASTER_STEP = 0.8     # of the caster's radius (diff)
-WHEELED_WHEEL_STEP = 0.7      # of the wheel's radius (skid)
+# climbed steps of 0.036 m (diff: its ball casters, 0.05 m, meet a step first; 0.047 m with
+# 0.15 m wheels and 0.075 m casters) and 0.064 m (skid), slopes of 17.2 deg (diff: the casters
+# carry load, the driven wheels lose grip) and 34.4 deg (skid), and crossed gaps of 0.17-0.18 m.
+# The estimates below stay under those figures (tests/verdict/test_traversable.py checks them).
+WHEELED_CASTER_STEP = 0.55    # of the caster's radius (diff)
+WHEELED_WHEEL_STEP = 0.55     # of the wheel's radius (skid)
 WHEELED_SLOPE = {"diff": 15.0, "skid": 30.0}   # degrees, at most the torque's limit
 WHEELED_GAP = 0.5             # of the wheel's radius
 
@@ -118,10 +135,15 @@ WHEELED_GAP = 0.5             # of the wheel's radius
 def body_capability(scenario) -> Capability | None:
     """What the scenario's body can cross: a legged body's declared limits, a wheeled body's
     estimated ones (see WHEELED_*), None for a body that declares none (planar: no terrain;
-    mjcf: its limits are the user's model's, unknown here)."""
+    mjcf: its declared ones, None when undeclared: the harness cannot estimate them from a model)."""
     body = scenario.robot.body
     if body.kind == "legged":
         return Capability(float(body.max_step), float(body.max_slope), float(body.max_gap))
+    if body.kind == "mjcf":
+        if body.max_step is None or body.max_slope is None:
+            return None
+        return Capability(float(body.max_step), float(body.max_slope),
+                          float(body.max_gap) if body.max_gap is not None else 0.0)
     if body.kind != "wheeled":
         return None
     r = float(body.wheel_radius)
@@ -131,7 +153,104 @@ def body_capability(scenario) -> Capability | None:
     if body.drive_wheels == "skid":
         step = WHEELED_WHEEL_STEP * r
     else:
-        caster = max(0.02, min(body.clearance, r / 2))      # sim/bodies/wheeled.py's casters
-        step = WHEELED_CASTER_STEP * caster
+        from .chassis import wheeled_layout
+        step = WHEELED_CASTER_STEP * wheeled_layout(body, scenario.robot.footprint).caster_radius
     return Capability(min(step, float(body.clearance)), min(torque, WHEELED_SLOPE[body.drive_wheels]),
                       WHEELED_GAP * r)
+
+
+# ---------------------------------------------------------------- steep ground, in every direction
+
+
+def steep_piece(rise: float, run: float, cap: Capability) -> bool:
+    """A ramp's surface (rising ``rise`` over ``run``) is steep ground for ``cap``."""
+    return abs(rise) > cap.max_step and math.degrees(math.atan2(abs(rise), run)) > cap.max_slope
+
+
+def steep_cells(h: np.ndarray, dx: float, dy: float, cap: Capability) -> np.ndarray:
+    """Cells of a height grid (rows along y, ``dx`` by ``dy`` apart) on steep ground: connected
+    (8 neighbours) cells whose slope (the gradient's size) passes max_slope, in patches whose
+    heights span more than max_step."""
+    gx = np.gradient(h, dx, axis=1) if h.shape[1] > 1 else np.zeros_like(h)
+    gy = np.gradient(h, dy, axis=0) if h.shape[0] > 1 else np.zeros_like(h)
+    steep = np.hypot(gx, gy) > math.tan(math.radians(min(cap.max_slope, 89.9)))
+    out = np.zeros(h.shape, dtype=bool)
+    if steep.any():
+        labels = _label(steep)
+        for lab in np.unique(labels[steep]):
+            patch = labels == lab
+            if float(h[patch].max() - h[patch].min()) > cap.max_step:
+                out |= patch
+    return out
+
+
+def _label(mask: np.ndarray) -> np.ndarray:
+    """Connected components (8-neighbours) of ``mask``: each cell's label is the smallest flat
+    index in its component (-1 outside), by propagating minima until nothing changes."""
+    big = mask.size
+    labels = np.where(mask, np.arange(big).reshape(mask.shape), big)
+    while True:
+        padded = np.pad(labels, 1, constant_values=big)
+        best = labels.copy()
+        for oy in (-1, 0, 1):
+            for ox in (-1, 0, 1):
+                best = np.minimum(best, padded[1 + oy:1 + oy + mask.shape[0], 1 + ox:1 + ox + mask.shape[1]])
+        best = np.where(mask, best, big)
+        if np.array_equal(best, labels):
+            return np.where(mask, labels, -1)
+        labels = best
+
+
+def steep_areas(scenario, cap: Capability) -> tuple:
+    """The scenario's steep ground for ``cap``: (element index, piece or None, steep cell mask or
+    None) for each steep ramp piece and each height grid with steep cells. Cached per terrain,
+    folder and capability (the legged body asks every tick)."""
+    key = (scenario.terrain, getattr(scenario, "source", None), cap)
+    try:
+        return _STEEP[key]
+    except KeyError:
+        pass
+    from . import ground
+    from .heightmap import height_grid
+
+    out = []
+    for piece in ground.pieces(scenario.terrain):
+        if steep_piece(piece.top1 - piece.top0, piece.u1 - piece.u0, cap):
+            out.append((piece.element, piece, None))
+    for i in ground.grid_elements(scenario.terrain):
+        grid = height_grid(scenario.terrain[i], scenario)
+        cells = steep_cells(np.asarray(grid.heights, dtype=float), grid.cell[0], grid.cell[1], cap)
+        if cells.any():
+            out.append((i, None, cells))
+    if len(_STEEP) >= 256:
+        _STEEP.popitem(last=False)
+    _STEEP[key] = out = tuple(out)
+    return out
+
+
+_STEEP: OrderedDict = OrderedDict()
+
+
+def steep_ground(scenario, cap: Capability, px, py) -> np.ndarray:
+    """Per world point (arrays of one shape): on steep ground for ``cap`` (see ``steep_areas``)."""
+    px, py = np.asarray(px, dtype=float), np.asarray(py, dtype=float)
+    out = np.zeros(np.broadcast(px, py).shape, dtype=bool)
+    areas = steep_areas(scenario, cap) if scenario.terrain else ()
+    if not areas:
+        return out
+    from . import ground
+    from .heightmap import height_grid
+
+    for i, piece, cells in areas:
+        el = scenario.terrain[i]
+        u, v = ground.to_local(el, px, py)
+        if piece is not None:
+            out |= (u >= piece.u0) & (u <= piece.u1) & (np.abs(v) <= el.width / 2)
+            continue
+        grid = height_grid(el, scenario)
+        rows, cols = cells.shape
+        col = np.rint((u + el.length / 2) / grid.cell[0]).astype(int)
+        row = np.rint((v + el.width / 2) / grid.cell[1]).astype(int)
+        inside = (col >= 0) & (col < cols) & (row >= 0) & (row < rows)
+        out |= inside & cells[np.clip(row, 0, rows - 1), np.clip(col, 0, cols - 1)]
+    return out

@@ -11,7 +11,7 @@ import yaml
 from ..core.files import atomic_write_text
 from . import keys as K
 from .loader import LATENCY_KEYS, LIDAR_KEYS, LIMITS_KEYS, LOCALISATION_KEYS
-from .model import LIDAR, BoxObstacle, Mark, MeshObstacle, Motion, Obstacle, PolygonObstacle, Pose, Scenario
+from .model import LIDAR, PERTURB, BoxObstacle, Mark, MeshObstacle, Motion, Obstacle, PolygonObstacle, Pose, Scenario
 from .terrain import BODY, LIDAR3D, PlanarBody
 
 
@@ -154,6 +154,8 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
         out["terrain"] = [{"type": e.kind, **_declared(e, TERRAIN.element(e.kind).section)} for e in s.terrain]
     sim = s.simulation
     out["simulation"] = {"timestep": _f(sim.timestep), "control_rate": _f(sim.control_rate), "seed": int(sim.seed)}
+    if sim.perturb.any:     # written when set (files without it stay as they were)
+        out["simulation"]["perturb"] = _declared(sim.perturb, PERTURB)
     if s.reference is not None:
         if s.reference.file is not None:
             out["reference"] = {"file": str(s.reference.file)}

@@ -305,7 +305,8 @@ def body_problem(scenario) -> tuple[str, str, str] | None:
         return ("robot.body", "the planar body (the default) slides on a flat floor and cannot ride terrain",
                 "give the robot a body that meets the ground: robot.body: {type: wheeled} "
                 "(or legged, or mjcf with your own robot)")
-    return None
+    from .chassis import wheeled_problem
+    return wheeled_problem(scenario)
 
 
 def mission_problem(scenario) -> tuple[str, str, str] | None:

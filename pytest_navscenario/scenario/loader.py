@@ -397,7 +397,10 @@ def check_scenario(scenario: Scenario, *, _ctx: _Ctx | None = None) -> None:
                    or obstacle_problem(scenario))
         if problem is not None:
             field, message, fix = problem
-            raise ctx.fail(message, field, lines.get(field, lines.get(field.split(".")[0])), fix)
+            parts = field.split(".")
+            line = next((lines[key] for key in (".".join(parts[:n]) for n in range(len(parts), 0, -1))
+                         if key in lines), None)
+            raise ctx.fail(message, field, line, fix)
 
 
 STEP_SHARE = 0.2   # of the obstacle's and the robot's smallest widths: the farthest a mover may go in a step

@@ -474,10 +474,36 @@ MISSION = section(Mission, "mission", "drive from start through the waypoints to
 
 
 @dataclass(frozen=True)
+class Perturb:
+    """Opt-in randomness of the episode beyond its sensors (all off by default): each episode draws,
+    from its noise seed, a start pose up to ``start_xy`` metres away from the mission's start along
+    each axis and ``start_yaw`` degrees off its heading, and shifts each moving obstacle's start
+    time by up to ``motion_time`` seconds earlier or later (never before 0), all uniform. A start
+    drawn onto an obstacle is drawn nearer (scenario/perturb.py)."""
+    start_xy: float = 0.0           # m
+    start_yaw: float = 0.0          # deg
+    motion_time: float = 0.0        # s
+
+    @property
+    def any(self) -> bool:
+        return bool(self.start_xy or self.start_yaw or self.motion_time)
+
+
+PERTURB = section(Perturb, "simulation.perturb", "small random changes of each episode, drawn from its noise "
+                  "seed: the start pose and moving obstacles' timing", [
+    Number("start_xy", "m", "the start moves by up to this along x and along y (uniform)", ge=0, le=1.0),
+    Number("start_yaw", "deg", "the start heading turns by up to this either way (uniform)", ge=0, le=45.0),
+    Number("motion_time", "s", "each moving obstacle starts up to this much earlier or later (uniform, never "
+           "before 0)", ge=0, le=10.0),
+], what="the perturbation (a mapping)")
+
+
+@dataclass(frozen=True)
 class Simulation:
     timestep: float = 0.01          # s, physics step
     control_rate: float = 10.0      # Hz, planner ticks; must divide 1/timestep into whole steps
     seed: int = 0                   # noise seed of the episode (the run's base seed is mixed in)
+    perturb: Perturb = Perturb()    # opt-in: the start pose and moving obstacles' timing vary per episode
 
 
 SIMULATION = section(Simulation, "simulation", "the physics step, the planner's rate and the noise seed", [
@@ -485,7 +511,30 @@ SIMULATION = section(Simulation, "simulation", "the physics step, the planner's 
     Number("control_rate", "Hz", "planner ticks per second; 1 / (timestep × control_rate) must be a whole "
            "number of physics steps", gt=0, le=1000.0),
     Integer("seed", "", "the episode's noise seed (the run's base seed is mixed in)", ge=0, le=2**63 - 1),
+    Sub("perturb", "", "small random changes of each episode: start pose, moving obstacles' timing (absent: "
+        "none)", section=PERTURB),
 ], what="the simulation settings (a mapping)")
+
+
+def randomness(scenario: "Scenario") -> tuple[str, ...]:
+    """What in ``scenario`` changes with the episode's noise seed (empty: every run of it is the
+    same, for a deterministic planner): the lidar's noise, dropout and spurious returns, the
+    localisation drift, and the opt-in perturbations of ``simulation.perturb``."""
+    lid, loc, per = scenario.robot.lidar, scenario.robot.localisation, scenario.simulation.perturb
+    out = []
+    if lid.noise_sigma or lid.noise_per_metre:
+        out.append("lidar noise")
+    if lid.dropout or lid.dropout_at_max:
+        out.append("lidar dropout")
+    if lid.spurious:
+        out.append("spurious returns")
+    if loc.drifts:
+        out.append("localisation drift")
+    if per.start_xy or per.start_yaw:
+        out.append("start perturbation")
+    if per.motion_time and any(getattr(o, "motion", None) is not None for o in scenario.obstacles):
+        out.append("timing perturbation")
+    return tuple(out)
 
 
 @dataclass(frozen=True)
@@ -560,7 +609,9 @@ _ADDED_DEFAULTS: dict[str, Any] = {"noise_per_metre": 0.0, "dropout_at_max": Non
                                    "localisation": Localisation(), "latency": Latency(),
                                    # terrain (scenario/terrain.py): field names unique to what they mean
                                    "z": None, "mount_height": 0.2, "body": PlanarBody(), "lidar3d": None,
-                                   "terrain": ()}
+                                   "terrain": (), "perturb": Perturb(), "com_height": None,
+                                   # an mjcf body's declared limits (a legged body's are never None)
+                                   "max_step": None, "max_slope": None, "max_gap": None}
 
 
 _CONTENT_FIELDS: dict[type, tuple[tuple[str, bool], ...]] = {}   # dataclass -> (field, added later?)

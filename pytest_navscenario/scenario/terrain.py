@@ -164,8 +164,9 @@ class WheeledBody:
     low-level controller in the harness turns the planner's velocity command into wheel torques
     within ``max_wheel_torque`` (N m per wheel) and ``max_wheel_speed`` (rad/s; None: the speed
     that gives limits.max_speed). ``track`` (lateral wheel spacing) and ``wheelbase`` (skid: axle
-    spacing) default to the footprint's size (the wheels inside it). The robot counts as tipped over when its roll or
-    pitch passes ``tip_angle`` degrees."""
+    spacing) default to the footprint's size (the wheels inside it); the mass centre sits
+    ``com_height`` above the ground (None: at the wheels' axle). The robot counts as tipped over when
+    its roll or pitch passes ``tip_angle`` degrees (scenario/chassis.py: the layout)."""
     drive_wheels: Literal["diff", "skid"] = "diff"
     wheel_radius: float = 0.1            # m
     wheel_width: float = 0.05            # m
@@ -177,6 +178,7 @@ class WheeledBody:
     clearance: float = 0.1               # m, chassis underside above the ground on a flat floor (0.05 with a
                                          # 0.9 m footprint: a 6 deg approach angle, no 10 deg ramp)
     tip_angle: float = 45.0              # degrees of roll or pitch that count as tipped over
+    com_height: float | None = None      # m, the mass centre above the ground; None: the wheels' axle
     kind: Literal["wheeled"] = field(default="wheeled", init=False)
 
 
@@ -202,11 +204,17 @@ class MjcfBody:
     (``pkg.mod:Attr``, loaded like a subject), which turns each velocity command into the model's
     actuator controls. ``digest`` is what the loader read from the file (a hash of its bytes): it
     makes the model part of the content, wherever the file lives (files it includes are not
-    hashed)."""
+    hashed). What it can cross is the user's to declare (the harness cannot estimate it from an
+    arbitrary model): ``max_step`` and ``max_slope`` together, and ``max_gap`` (None: no gap), and the
+    path search and the feasibility check then treat it as a legged body's limits
+    (scenario/crossing.py); undeclared, they ignore the terrain for it."""
     file: str
     controller: str
     base: str | None = None
     tip_angle: float = 45.0              # degrees of roll or pitch that count as tipped over
+    max_step: float | None = None        # m, the highest step it climbs (None: undeclared)
+    max_slope: float | None = None       # degrees, the steepest slope it drives (with max_step)
+    max_gap: float | None = None         # m, the widest gap it crosses (None: none)
     digest: str = ""                     # what the loader read from the file (a hash of its bytes)
     kind: Literal["mjcf"] = field(default="mjcf", init=False)
 
@@ -305,6 +313,25 @@ TERRAIN = Elements("terrain", "", "ground that is not the flat floor: ramps, ste
                        ("ramp", RAMP), ("steps", STEPS), ("platform", PLATFORM), ("pit", PIT),
                        ("rough", ROUGH), ("heightfield", HEIGHTFIELD))))
 
+def _mjcf_limits(values: Any, given: Any) -> tuple[str, str, str] | None:
+    step, slope = values["max_step"] is not None, values["max_slope"] is not None
+    if step != slope or (values["max_gap"] is not None and not step):
+        missing = "max_slope" if step else "max_step"
+        return (missing, f"an mjcf body's limits are partly declared: declare max_step and max_slope together "
+                f"(max_gap may be left out: no gap); {missing} is missing",
+                f"add {missing}, or leave all three out (then the path search ignores the terrain for it)")
+    return None
+
+
+def _mjcf_limits_schema(sec: Any, required: list[str]) -> dict[str, Any]:
+    """A number (not null: undeclared) for one of them needs numbers for the others."""
+    def given(key: str) -> dict[str, Any]:
+        return {"required": [key], "properties": {key: {"type": "number"}}}
+    return {"allOf": [{"if": given("max_step"), "then": given("max_slope")},
+                      {"if": given("max_slope"), "then": given("max_step")},
+                      {"if": given("max_gap"), "then": given("max_step")}]}
+
+
 _TIP = Number("tip_angle", "deg", "roll or pitch that counts as tipped over", gt=0, le=90.0)
 WHEELED_BODY = section(WheeledBody, "robot.body (wheeled)", "a wheeled robot riding the terrain on real wheel "
                        "contacts", [
@@ -319,7 +346,9 @@ WHEELED_BODY = section(WheeledBody, "robot.body (wheeled)", "a wheeled robot rid
     Number("max_wheel_speed", "rad/s", "wheel speed limit (none: limits.max_speed / wheel_radius)", gt=0,
            nullable=True),
     Number("clearance", "m", "the chassis underside above a flat floor", ge=0),
-    _TIP])
+    _TIP,
+    Number("com_height", "m", "the mass centre above the ground (none: the wheels' axle, batteries and "
+           "drives low between the wheels)", gt=0, nullable=True)])
 LEGGED_BODY = section(LeggedBody, "robot.body (legged)", "a walking robot declared by what it can cross", [
     Number("max_step", "m", "the highest step it climbs", ge=0),
     Number("max_slope", "deg", "the steepest slope it walks", ge=0, le=90.0),
@@ -332,7 +361,15 @@ MJCF_BODY = section(MjcfBody, "robot.body (mjcf)", "the user's own MJCF robot an
     Text("controller", "", "pkg.mod:Attr of the controller turning velocity commands into actuator controls",
          example="controller: mypkg.control:Controller"),
     Text("base", "", "the robot's base body (none: the first body with a free joint)", default=None),
-    _TIP])
+    _TIP,
+    Number("max_step", "m", "the highest step it climbs, for the path search and the feasibility check "
+           "(none: undeclared, the terrain is ignored there)", ge=0, nullable=True),
+    Number("max_slope", "deg", "the steepest slope it drives (declared with max_step)", ge=0, le=90.0,
+           nullable=True),
+    Number("max_gap", "m", "the widest gap it crosses (none: no gap; declared with max_step)", ge=0,
+           nullable=True)],
+    rules=[Rule("max_step and max_slope are declared together; max_gap only with them", _mjcf_limits,
+                _mjcf_limits_schema)])
 PLANAR_BODY = section(PlanarBody, "robot.body (planar)", "today's body: planar joints, gravity off", [])
 
 BODY = Variant("body", "", "how the robot meets the ground: planar (the default), wheeled, legged or mjcf",

@@ -20,10 +20,11 @@ from __future__ import annotations
 import threading
 from typing import Any, Iterator, Sequence
 
-from .engine import (Candidate, EvalContext, Failure, SearchReport, _Simulator, _Stop, evaluate_candidates,
-                     iter_candidates, shrink_failure, shrink_order, shrink_status)
+from ..core.interrupts import deferred
+from .engine import (Candidate, EvalContext, Failure, Proposal, SearchReport, _Simulator, _Stop,
+                     evaluate_candidates, iter_candidates, shrink_failure, shrink_order, shrink_status, unpack)
 
-Proposals = Sequence[tuple[tuple[float, ...], str]]
+Proposals = Sequence[Proposal]   # (offsets, origin[, noise run]): confirmation runs batch like the rest
 
 
 class _Queued:
@@ -107,31 +108,38 @@ class batch_evaluator:   # noqa: N801  (used like a function: evaluator=batch_ev
             shrink_all(sim.ctx.space, sim, caps, progress)   # nothing to batch: the serial shrink
             return
         rounds = _Rounds(sim.ctx, sim.check_stop, self.batching)
-        shrinks = [_Shrink(rounds, k, sim.ctx, report.failures[i].found, caps[i]) for k, i in enumerate(order)]
+        shrinks = [_Shrink(rounds, k, sim.ctx, report.failures[i].found, caps[i], report.failures[i].estimate)
+                   for k, i in enumerate(order)]
         rounds.run(shrinks)
         for i, shrink in zip(order, shrinks):
             sim.check_stop()
             found = report.failures[i].found
             failure, scratch = shrink.failure, shrink.scratch
-            for cand in scratch.candidates:
-                cand.metrics["subject"], cand.metrics["subject_version"] = scratch.subject, scratch.subject_version
-                sim.record(cand, "shrink")
-            sim.set_failure(i, Failure(found=found, shrunk=failure.shrunk, shrink_sims=failure.shrink_sims,
-                                       note=failure.note, status=shrink_status(failure.note)))
+            with deferred():   # its simulations logged and the shrunk failure written: one step
+                for cand in scratch.candidates:
+                    cand.metrics["subject"], cand.metrics["subject_version"] = scratch.subject, scratch.subject_version
+                    sim.record(cand, "shrink")
+                sim.set_failure(i, Failure(found=found, shrunk=failure.shrunk, shrink_sims=failure.shrink_sims,
+                                           note=failure.note, status=shrink_status(failure.note),
+                                           estimate=failure.estimate))
             if progress is not None:
                 progress(report)
 
 
 class _ThreadSimulator(_Simulator):
-    """A shrink thread's simulator: each simulation is asked of the coordinator and waited for."""
+    """A shrink thread's simulator: each simulation (a layout, or its confirmation runs under
+    fresh noise seeds, holding.py) is asked of the coordinator and waited for."""
 
     def __init__(self, shrink: "_Shrink", ctx: EvalContext, report: SearchReport):
         super().__init__(ctx, report, None)
         self.shrink = shrink
 
-    def simulate(self, offsets: Sequence[float], phase: str, origin: str) -> Candidate:
-        cand = self.shrink.ask(tuple(offsets))
-        return self.record(cand, phase)
+    def run(self, proposals: Sequence[Proposal], phase: str) -> Iterator[Candidate]:
+        cands = self.shrink.ask([unpack(p) for p in proposals])
+        return iter([self.record(cand, phase) for cand in cands])
+
+    def simulate(self, offsets: Sequence[float], phase: str, origin: str, run: int = 0) -> Candidate:
+        return next(self.run([(tuple(offsets), origin, run)], phase))
 
     def check_stop(self) -> None:
         if self.shrink.rounds.stopping:
@@ -141,20 +149,22 @@ class _ThreadSimulator(_Simulator):
 class _Shrink:
     """One failure's shrink, run by its own thread."""
 
-    def __init__(self, rounds: "_Rounds", key: int, ctx: EvalContext, found: Candidate, cap: int):
+    def __init__(self, rounds: "_Rounds", key: int, ctx: EvalContext, found: Candidate, cap: int,
+                 estimate: Any = None):
         self.rounds, self.key, self.ctx, self.found, self.cap = rounds, key, ctx, found, cap
+        self.estimate = estimate                          # the found layout's (holding.py)
         self.scratch = SearchReport(seed_name="", seed_source=None, subject="", subject_version=None,
                                     strategy="", seed_value=0, budget=0, shrink_budget=cap, params=[])
         self.failure: Failure | None = None
         self.error: BaseException | None = None
-        self.asked: tuple[float, ...] | None = None      # the simulation it waits for
-        self.answer: Candidate | None = None
+        self.asked: list[tuple] | None = None            # the simulations it waits for (proposals)
+        self.answer: list[Candidate] | None = None
         self.done = False
         self.turn = threading.Event()                     # set: this thread may run
 
-    def ask(self, offsets: tuple[float, ...]) -> Candidate:
-        """Hand the turn back with a simulation to run; wait for its candidate."""
-        self.asked = offsets
+    def ask(self, proposals: list[tuple]) -> list[Candidate]:
+        """Hand the turn back with simulations to run; wait for their candidates."""
+        self.asked = proposals
         self.turn.clear()
         self.rounds.handed_back.set()
         self.turn.wait()
@@ -168,7 +178,7 @@ class _Shrink:
         try:
             if not self.rounds.stopping:
                 sim = _ThreadSimulator(self, self.ctx, self.scratch)
-                self.failure = shrink_failure(self.ctx.space, sim, self.found, self.cap)
+                self.failure = shrink_failure(self.ctx.space, sim, self.found, self.cap, self.estimate)
         except BaseException as exc:   # handed to the coordinator, raised there
             self.error = exc
         finally:
@@ -202,9 +212,9 @@ class _Rounds:
                 if not waiting:
                     break
                 self.check_stop()
-                cands = evaluate_candidates(self.ctx, [(s.asked, "shrink") for s in waiting], self.batching)
-                for s, cand in zip(waiting, cands):
-                    s.answer = cand
+                cands = iter(evaluate_candidates(self.ctx, [p for s in waiting for p in s.asked], self.batching))
+                for s in waiting:
+                    s.answer = [next(cands) for _ in s.asked]
                     s.asked = None
                     self._give_turn(s)
         except BaseException:

@@ -32,7 +32,10 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable, Iterator, Protocol, Sequence
 
 from ..core.interrupts import deferred, first_signal
+from ..core.rates import Sprt
+from ..core.seeds import repeat_seed
 from ..scenario.model import Scenario
+from .holding import Estimate, decide
 from .space import FLAG_ON, SearchSpace, invalid_reason, offsets_strategy
 
 STRATEGIES = ("evolve", "random", "hillclimb")
@@ -71,6 +74,7 @@ class Candidate:
     progress: float = 0.0         # 0..1 along the seed's route where the episode ended
     path: tuple = field(default=(), repr=False)      # robot centre samples (x, y)
     closest: tuple = field(default=(), repr=False)   # (t, x, y) of the closest approach
+    run: int = 0                  # noise run: 0 the search's own, k >= 1 the k-th confirmation run
 
     @property
     def failed(self) -> bool:
@@ -88,7 +92,8 @@ class Candidate:
                 "clearance": _finite(self.clearance), "culprit": self.culprit,
                 "message": self.message, "metrics": {k: _finite(v) for k, v in self.metrics.items()},
                 "scenario_hash": self.scenario_hash, "wall_time": round(self.wall_time, 6),
-                "robustness": _finite(round(self.robustness, 6)), "signature": list(self.signature)}
+                "robustness": _finite(round(self.robustness, 6)), "signature": list(self.signature),
+                "run": self.run}
 
 
 @dataclass
@@ -96,14 +101,23 @@ class Failure:
     """A distinct failure: as found, and after shrinking toward the seed.
 
     ``status`` says how far the search got with it (and is written in its frozen file's
-    provenance): "found" (as found: the search was still running, or was cut short, before it was
-    done with it), "shrunk" (final: shrunk toward the seed) or "unshrunk" (final: kept as found,
-    ``note`` says why)."""
+    provenance): "found" (failed once: not yet confirmed nor shrunk; the search was still running,
+    or was cut short, before it was done with it), "confirmed" (it holds under the scenario's
+    randomness, holding.py; not yet shrunk), "shrunk" (final: shrunk toward the seed, still
+    holding), "unshrunk" (final: kept as found, ``note`` says why); or, not frozen, "rejected" (it
+    does not hold: a knife-edge) and "unconfirmed" (the budget ran out before the test decided).
+    ``estimate`` is what the confirmation runs of its current layout (``shrunk``) showed."""
     found: Candidate
     shrunk: Candidate
     shrink_sims: int = 0
     note: str = ""                # e.g. "shrink cap reached", "did not reproduce"
     status: str = "found"
+    estimate: Estimate = field(default_factory=lambda: Estimate(decision="off", threshold=0.0))
+
+    @property
+    def key(self) -> int:
+        """Names the failure for the whole search: the simulation that found it."""
+        return self.found.sim
 
 
 @dataclass
@@ -126,7 +140,13 @@ class SearchReport:
     discard_log: list[tuple[int, str]] = field(default_factory=list)
     skipped: int = 0              # repeats of a simulated candidate, redrawn without simulating
     candidates: list[Candidate] = field(default_factory=list)  # search + shrink sims, in order
-    failures: list[Failure] = field(default_factory=list)
+    failures: list[Failure] = field(default_factory=list)     # distinct failures that hold, in order confirmed
+    hold: float = 0.0             # the failure probability a failure must show to count (0: one run counts)
+    randomness: tuple[str, ...] = ()   # what varies between runs of the seed (scenario.model.randomness)
+    confirm_sims: int = 0         # of sims_used: confirmation runs (holding.py)
+    rejected: list[Failure] = field(default_factory=list)     # failed once, did not hold (knife-edges)
+    unconfirmed: list[Failure] = field(default_factory=list)  # the test undecided when the search ended
+    under_test: int = 0           # failures being confirmed now (the live progress line)
     interrupted: bool = False
     stop_reason: str = ""
     wall_time: float = 0.0
@@ -184,13 +204,20 @@ def _finite(v: Any) -> Any:
 # -- one simulation: a pure function of the candidate (any process may run it) -----------------
 @dataclass(frozen=True)
 class EvalContext:
-    """What evaluating a candidate needs besides its offsets (picklable for worker processes)."""
+    """What evaluating a candidate needs besides its offsets (picklable for worker processes);
+    ``hold`` the confirmation test (holding.py; None: one run decides) and its threshold."""
     space: SearchSpace
     subject_factory: Any
     episode_seed: int | None = None
     stuck_after: float | None = DEFAULT_STUCK_AFTER
+    hold: Sprt | None = None
+    hold_threshold: float = 0.0
     batch: int = 1        # candidates simulated together (harness/batch.py) by evaluate_candidates
     engine: str = "cpu"   # the batch engine that steps them (sim/batch.py: "cpu" or "warp")
+
+    def run_seed(self, run: int) -> int | None:
+        """The base seed of noise run ``run`` (0: the search's own, the run's --nav-seed)."""
+        return repeat_seed(self.episode_seed or 0, run) if run else self.episode_seed
 
 
 _ROUTES: dict[int, Any] = {}
@@ -205,22 +232,32 @@ def _route(space: SearchSpace) -> Any:
     return _ROUTES[key][1]
 
 
-def evaluate_candidate(ctx: EvalContext, offsets: Sequence[float], origin: str) -> Candidate:
-    """Simulate one candidate; never raises for a harness failure (recorded as harness-error)."""
+Proposal = tuple  # (offsets, origin) from a strategy, or (offsets, origin, run) with a noise run
+
+
+def unpack(proposal: Proposal) -> tuple[tuple[float, ...], str, int]:
+    """(offsets, origin, run) of a proposal (run 0, the search's own noise, when it names none)."""
+    offsets, origin, *run = proposal
+    return tuple(offsets), origin, (run[0] if run else 0)
+
+
+def evaluate_candidate(ctx: EvalContext, offsets: Sequence[float], origin: str, run: int = 0) -> Candidate:
+    """Simulate one candidate under noise run ``run``; never raises for a harness failure
+    (recorded as harness-error)."""
     from ..harness.runner import run_scenario
 
     scenario = ctx.space.apply(offsets)
     t0 = time.perf_counter()
     try:
-        res = run_scenario(scenario, ctx.subject_factory(), seed=ctx.episode_seed, stuck_after=ctx.stuck_after)
+        res = run_scenario(scenario, ctx.subject_factory(), seed=ctx.run_seed(run), stuck_after=ctx.stuck_after)
     except KeyboardInterrupt:
         raise
     except Exception as exc:  # the harness itself failed: record, never raise inside the loop
         res = exc
-    return _candidate(ctx, offsets, origin, scenario, res, t0)
+    return _candidate(ctx, offsets, origin, scenario, res, t0, run)
 
 
-def evaluate_candidates(ctx: EvalContext, proposals: Sequence[tuple[tuple[float, ...], str]],
+def evaluate_candidates(ctx: EvalContext, proposals: Sequence[Proposal],
                         batching: Any = None) -> list[Candidate]:
     """``evaluate_candidate`` for each proposal, in order, the episodes run ``ctx.batch`` at a time
     in lockstep when the subject answers the batch protocol (harness/batch.py): the same
@@ -228,18 +265,19 @@ def evaluate_candidates(ctx: EvalContext, proposals: Sequence[tuple[tuple[float,
     return list(iter_candidates(ctx, proposals, batching))
 
 
-def iter_candidates(ctx: EvalContext, proposals: Sequence[tuple[tuple[float, ...], str]],
+def iter_candidates(ctx: EvalContext, proposals: Sequence[Proposal],
                     batching: Any = None) -> Iterator[Candidate]:
     """``evaluate_candidates``'s candidates, each as soon as its episode is known (harness/batch.
     iter_batch: alone, one by one; in a batch, when the batch ends)."""
     from ..harness.batch import iter_batch
 
-    scenarios = [ctx.space.apply(offsets) for offsets, _ in proposals]
+    proposals = [unpack(p) for p in proposals]
+    scenarios = [ctx.space.apply(offsets) for offsets, _, _ in proposals]
     t0 = time.perf_counter()
-    results = iter_batch(scenarios, ctx.subject_factory, seeds=[ctx.episode_seed] * len(scenarios),
+    results = iter_batch(scenarios, ctx.subject_factory, seeds=[ctx.run_seed(run) for _, _, run in proposals],
                          stuck_after=ctx.stuck_after, batch=ctx.batch, call_factory=True, batching=batching,
                          engine=ctx.engine)
-    for (offsets, origin), sc in zip(proposals, scenarios):
+    for (offsets, origin, run), sc in zip(proposals, scenarios):
         try:
             res = next(results)
         except KeyboardInterrupt:
@@ -247,13 +285,14 @@ def iter_candidates(ctx: EvalContext, proposals: Sequence[tuple[tuple[float, ...
         except Exception as exc:   # the harness itself failed: every candidate left records it
             results = iter([exc] * len(scenarios))
             res = exc
-        yield _candidate(ctx, offsets, origin, sc, res, t0)
+        yield _candidate(ctx, offsets, origin, sc, res, t0, run)
         t0 = time.perf_counter()
 
 
 def _candidate(ctx: EvalContext, offsets: Sequence[float], origin: str, scenario: Scenario, res: Any,
-               t0: float) -> Candidate:
-    """The Candidate of an episode's result (or of the exception the harness raised for it)."""
+               t0: float, run: int = 0) -> Candidate:
+    """The Candidate of an episode's result under noise run ``run`` (or of the exception the
+    harness raised for it)."""
     from ..scenario.model import content_hash
     from .fitness import read_episode
 
@@ -267,39 +306,39 @@ def _candidate(ctx: EvalContext, offsets: Sequence[float], origin: str, scenario
     if isinstance(res, Exception):   # the harness itself failed: record, never raise inside the loop
         return Candidate(0, "", origin, tuple(offsets), "harness-error", math.nan, "",
                          f"{type(res).__name__}: {res}", {}, content_hash(scenario),
-                         time.perf_counter() - t0, scenario, signature=("harness-error", "", 0, 0))
+                         time.perf_counter() - t0, scenario, signature=("harness-error", "", 0, 0), run=run)
     cand = Candidate(0, "", origin, tuple(offsets), res.outcome.value, float(res.metrics.min_clearance),
                      culprit, res.message, res.metrics.as_dict(), content_hash(scenario),
                      time.perf_counter() - t0, scenario, reading.robustness, reading.signature,
-                     reading.progress, reading.path, reading.closest)
+                     reading.progress, reading.path, reading.closest, run)
     cand.metrics["subject"], cand.metrics["subject_version"] = res.subject, res.subject_version
     return cand
 
 
-def serial_evaluator(ctx: EvalContext, proposals: Sequence[tuple[tuple[float, ...], str]]) -> Iterator[Candidate]:
+def serial_evaluator(ctx: EvalContext, proposals: Sequence[Proposal]) -> Iterator[Candidate]:
     """The default evaluator: one candidate after the other, in proposal order (with ``ctx.batch``
     > 1, the generation in one batch)."""
     if ctx.batch > 1:
         yield from iter_candidates(ctx, proposals)
         return
-    for offsets, origin in proposals:
-        yield evaluate_candidate(ctx, offsets, origin)
+    for proposal in proposals:
+        yield evaluate_candidate(ctx, *proposal)
 
 
-Evaluator = Callable[[EvalContext, Sequence[tuple[tuple[float, ...], str]]], Iterable[Candidate]]
+Evaluator = Callable[[EvalContext, Sequence[Proposal]], Iterable[Candidate]]
 
 
 class Recorder(Protocol):
     """What ``run_search(..., recorder=...)`` tells while the search runs, so that what it found is
     on disk at every moment (search/freeze.py: ``SearchRecorder``). Each call is made whole: a
     Ctrl-C waits until it returns. The order: ``start``; per simulated candidate, first
-    ``failure`` if it is a new distinct failure, then ``simulated``; ``failure`` again whenever a
-    failure changes (shrunk, or final as found); ``finish`` last, also when the search was cut
-    short."""
+    ``failure`` if it is a new failure (status "found"), then ``simulated``; ``failure`` again
+    whenever a failure changes (Failure.status: confirmed, rejected, shrunk, ...); ``finish`` last,
+    also when the search was cut short."""
 
     def start(self, report: SearchReport) -> None: ...
     def simulated(self, report: SearchReport, cand: Candidate) -> None: ...
-    def failure(self, report: SearchReport, index: int) -> None: ...
+    def failure(self, report: SearchReport, failure: Failure) -> None: ...
     def finish(self, report: SearchReport) -> None: ...
 
 
@@ -314,18 +353,31 @@ class _Simulator:
         self.recorder = recorder
         self.counts = {"search": 0, "shrink": 0}
 
-    def start(self, proposals: Sequence[tuple[tuple[float, ...], str]], phase: str) -> Iterator[Candidate]:
+    def start(self, proposals: Sequence[Proposal], phase: str,
+              then: Callable[[Candidate], None] | None = None) -> Iterator[Candidate]:
         """Hand ``proposals`` to the evaluator now (one on worker processes starts them at once);
-        the iterator records and yields each candidate in proposal order as it is consumed."""
+        the iterator records and yields each candidate in proposal order as it is consumed.
+        Recording a candidate and ``then(candidate)`` (the search's bookkeeping, which logs it)
+        are one step an interrupt waits for: a candidate counted is a candidate logged."""
         results = iter(self.evaluator(self.ctx, list(proposals)))
-        return (self.record(cand, phase) for cand in results)
+        return self._recorded(results, phase, then)
 
-    def run(self, proposals: Sequence[tuple[tuple[float, ...], str]], phase: str) -> Iterator[Candidate]:
+    def _recorded(self, results: Iterator[Candidate], phase: str,
+                  then: Callable[[Candidate], None] | None) -> Iterator[Candidate]:
+        for cand in results:   # waiting for the next one may be interrupted; what follows may not
+            with deferred():
+                self.record(cand, phase)
+                if then is not None:
+                    then(cand)
+            yield cand
+
+    def run(self, proposals: Sequence[Proposal], phase: str) -> Iterator[Candidate]:
         """Evaluate ``proposals`` and yield each recorded candidate in proposal order."""
         yield from self.start(proposals, phase)
 
     def record(self, cand: Candidate, phase: str) -> Candidate:
-        """Number ``cand`` in its phase and add it to the report."""
+        """Number ``cand`` in its phase and add it to the report (a shrink candidate is logged at
+        once; a caller recording several holds interrupts around them: ``deferred``)."""
         self.counts[phase] += 1
         cand.sim, cand.phase = self.counts[phase], phase
         subject = cand.metrics.pop("subject", None)
@@ -337,6 +389,7 @@ class _Simulator:
         self.report.candidates.append(cand)
         if phase == "search":
             self.report.sims_used += 1
+            self.report.confirm_sims += cand.run > 0
             if cand.failed and not self.report.first_failure:
                 self.report.first_failure = cand.sim
         else:
@@ -347,7 +400,7 @@ class _Simulator:
     def set_failure(self, index: int, failure: Failure) -> None:
         """Replace failure ``index`` (shrunk, or kept as found) and tell the recorder."""
         self.report.failures[index] = failure
-        self.tell_recorder("failure", index)
+        self.tell_recorder("failure", failure)
 
     def tell_recorder(self, event: str, *args: Any) -> None:
         """``recorder.<event>(report, *args)``, whole: an interrupt waits until it has written."""
@@ -355,8 +408,8 @@ class _Simulator:
             with deferred():
                 getattr(self.recorder, event)(self.report, *args)
 
-    def simulate(self, offsets: Sequence[float], phase: str, origin: str) -> Candidate:
-        return next(iter(self.run([(tuple(offsets), origin)], phase)))
+    def simulate(self, offsets: Sequence[float], phase: str, origin: str, run: int = 0) -> Candidate:
+        return next(iter(self.run([(tuple(offsets), origin, run)], phase)))
 
     def check_stop(self) -> None:
         if self.stop is not None and self.stop():
@@ -378,41 +431,180 @@ def is_near_failure(space: SearchSpace, offsets: Sequence[float], failures: Sequ
 
 
 # -- the ask/tell loop ----------------------------------------------------------------------------
-def _search_loop(strategy: Any, sim: _Simulator, budget: int, on_result: Callable[[Candidate], None]) -> None:
+def _search_loop(strategy: Any, sim: _Simulator, budget: int, on_result: Callable[[Candidate], None],
+                 confirming: "_Confirming | None" = None) -> None:
     """Ask generations, evaluate them, tell the results back in order, until the budget is spent.
 
     With the strategy's ``lag`` L (read before each ask: it may change), up to L + 1 generations
     are in flight: the next one is asked for (and handed to the evaluator) before the results of
-    the last L are told. Serial or on
-    workers, the strategy sees the same results at the same point, so the search is the same."""
+    the last L are told. Serial or on workers, the strategy sees the same results at the same
+    point, so the search is the same. Each generation begins with the confirmation runs the
+    failures under test need next (``_Confirming``: they come out of the budget, before new
+    candidates); the strategy is asked for the rest, less what the failures under test may still
+    need, and told only its own candidates' results."""
     from .strategies import GaveUp
 
     report = sim.report
-    in_flight: deque[Iterator[Candidate]] = deque()
+    in_flight: deque[tuple[Iterator[Candidate], bool]] = deque()   # (results, the strategy's generation?)
     planned, asking = report.sims_used, True
+    new_in_flight = 0   # the strategy's candidates handed over, results not yet read
     while True:
-        while asking and len(in_flight) <= max(0, int(getattr(strategy, "lag", 0))) and planned < budget:
+        while len(in_flight) <= max(0, int(getattr(strategy, "lag", 0))) and planned < budget:
             sim.check_stop()
-            try:
-                with deferred():
-                    proposals = strategy.ask(budget - planned)[: budget - planned]
-            except GaveUp:   # the strategy set stop_reason; what is in flight still counts
-                proposals = []
-            if not proposals:
-                report.stop_reason = report.stop_reason or "the strategy had no new candidate to propose"
-                asking = False
-                break
-            planned += len(proposals)
-            in_flight.append(sim.start(proposals, "search"))
+            confirm = confirming.requests(budget - planned) if confirming is not None else []
+            room = budget - planned - len(confirm) - (confirming.reserve(new_in_flight) if confirming is not None else 0)
+            proposals: list = []
+            if asking and room > 0:
+                try:
+                    with deferred():
+                        proposals = [(tuple(o), origin, 0) for o, origin in strategy.ask(room)[:room]]
+                except GaveUp:   # the strategy set stop_reason; what is in flight still counts
+                    proposals = []
+                if not proposals:
+                    report.stop_reason = report.stop_reason or "the strategy had no new candidate to propose"
+                    asking = False
+            if not confirm and not proposals:
+                break   # nothing to run now: wait for what is in flight (or end)
+            planned += len(confirm) + len(proposals)
+            new_in_flight += len(proposals)
+            in_flight.append((sim.start(confirm + proposals, "search", then=on_result), bool(proposals)))
         if not in_flight:
             break
         results = []
-        for cand in in_flight.popleft():
-            results.append(cand)
-            on_result(cand)
+        batch, asked = in_flight.popleft()
+        for cand in batch:   # each recorded and told to on_result (logged) as one step
+            if cand.run == 0:
+                results.append(cand)
+                new_in_flight -= 1
             if report.sims_used < budget:
                 sim.check_stop()
-        strategy.tell(results)
+        if asked:
+            strategy.tell(results)
+
+
+class _Confirming:
+    """The failures of the search phase under confirmation (holding.py), oldest first: which
+    confirmation runs to ask for next, and what their results decide.
+
+    A candidate that fails in a way no failure holds yet becomes a failure "found"; with a test
+    (the seed has randomness and the threshold is not 0) it waits for its confirmation runs, else
+    it holds at once. While one failure of a way of failing is under test, the first other
+    candidate failing that way is kept aside and tried next if the first is rejected; a way of
+    failing rejected MAX_REJECTIONS times is not tried again. ``on_decided(failure)`` is called
+    when a failure holds or is rejected."""
+
+    def __init__(self, ctx: EvalContext, report: SearchReport, exact: str, on_decided: Callable[[Failure], None]):
+        from .holding import MAX_REJECTIONS
+
+        self.test, self.exact, self.report = ctx.hold, exact, report
+        self.threshold = ctx.hold_threshold
+        self.on_decided = on_decided
+        self.pending: list[Failure] = []
+        self.flight: dict[int, int] = {}            # failure key -> runs asked for, results not yet in
+        self.by_offsets: dict[tuple, Failure] = {}  # the layout under test -> its failure
+        self.aside: dict[tuple, Candidate] = {}     # signature -> a later candidate failing that way
+        self.held: set[tuple] = set()
+        self.rejections: dict[tuple, int] = {}
+        self.max_rejections = MAX_REJECTIONS
+        self.seen = self.begun = 0    # the strategy's candidates read, failures begun (reserve's rate)
+
+    def counted(self, cand: Candidate) -> None:
+        """A strategy's candidate came back (the rate of new failures, for ``reserve``)."""
+        self.seen += 1
+
+    def failed(self, cand: Candidate) -> Failure | None:
+        """A search candidate failed: the new failure it starts (None: a way of failing known)."""
+        sig = cand.signature
+        if sig in self.held or self.rejections.get(sig, 0) >= self.max_rejections:
+            return None
+        if any(f.found.signature == sig for f in self.pending):
+            self.aside.setdefault(sig, cand)
+            return None
+        return self._begin(cand)
+
+    def _begin(self, cand: Candidate) -> Failure:
+        self.begun += 1
+        failure = Failure(found=cand, shrunk=cand, estimate=Estimate(threshold=self.threshold))
+        if self.test is None:
+            failure.estimate.decision = self.exact
+            failure.status = "confirmed"
+            self.held.add(cand.signature)
+        else:
+            self.pending.append(failure)
+            self.by_offsets[tuple(cand.offsets)] = failure
+        return failure
+
+    def requests(self, room: int) -> list[Proposal]:
+        """The confirmation runs to start now, oldest failure first: for each failure with no run
+        in flight, the fewest runs that could decide its test (Sprt.runs_to_decide)."""
+        out: list[Proposal] = []
+        for failure in self.pending:
+            if self.flight.get(failure.key) or len(out) >= room:
+                continue
+            est = failure.estimate
+            n = min(self.test.runs_to_decide(est.outcomes), room - len(out))
+            out += [(tuple(failure.found.offsets), "confirm", est.runs + 1 + k) for k in range(n)]
+            self.flight[failure.key] = n
+        return out
+
+    def reserve(self, new_in_flight: int = 0) -> int:
+        """Runs kept out of the strategy's room so that the failures found can be decided before
+        the budget ends: what the failures under test still need beyond the runs in flight if
+        each keeps failing (the runs a failure that holds takes), and what the new failures
+        expected among the ``new_in_flight`` candidates not yet read would need (at the rate new
+        failures have come so far)."""
+        need = 0
+        for failure in self.pending:
+            est = failure.estimate
+            need += max(self._to_accept(est.outcomes) - self.flight.get(failure.key, 0), 0)
+        if self.seen and new_in_flight:
+            need += math.ceil(new_in_flight * self.begun / self.seen * self._to_accept([]) - 1e-9)
+        return need
+
+    def _to_accept(self, outcomes: list[bool]) -> int:
+        """Runs to accept after ``outcomes`` if every one fails (at most the test's last run)."""
+        runs = math.ceil((self.test.accept_at - self.test.llr(outcomes)) / self.test.up - 1e-9)
+        return max(0, min(runs, self.test.max_runs - len(outcomes)))
+
+    def result(self, cand: Candidate) -> None:
+        """A confirmation run came back: note it; decide when the runs asked for are all in."""
+        failure = self.by_offsets[tuple(cand.offsets)]
+        failure.estimate.outcomes.append(cand.failed)
+        self.flight[failure.key] -= 1
+        if self.flight[failure.key]:
+            return
+        del self.flight[failure.key]
+        decide(self.test, failure.estimate)
+        if failure.estimate.decision == "pending":
+            return
+        self.pending.remove(failure)
+        del self.by_offsets[tuple(failure.found.offsets)]
+        sig = failure.found.signature
+        if failure.estimate.decision == "held":
+            failure.status = "confirmed"
+            self.held.add(sig)
+            self.aside.pop(sig, None)
+        else:
+            failure.status = "rejected"
+            self.rejections[sig] = self.rejections.get(sig, 0) + 1
+        self.on_decided(failure)
+
+    def next_aside(self, failure: Failure) -> Failure | None:
+        """After ``failure`` was rejected: the candidate kept aside for its way of failing, begun."""
+        sig = failure.found.signature
+        cand = self.aside.pop(sig, None)
+        if cand is None or self.rejections.get(sig, 0) >= self.max_rejections:
+            return None
+        return self._begin(cand)
+
+    def close(self, interrupted: bool) -> list[Failure]:
+        """The search phase is over: the failures still under test (marked unconfirmed unless the
+        search was cut short, when they stay as found)."""
+        left, self.pending = self.pending, []
+        for failure in left:
+            failure.estimate.decision = "pending" if interrupted else "unconfirmed"
+            failure.status = "found" if interrupted else "unconfirmed"
+        return left
 
 
 # -- shrinking --------------------------------------------------------------------------------
@@ -500,7 +692,7 @@ def shrink_all(space: SearchSpace, sim: "_Simulator", caps: Sequence[int], progr
         if caps[i] <= 0:
             continue
         sim.check_stop()
-        sim.set_failure(i, shrink_failure(space, sim, report.failures[i].found, caps[i]))
+        sim.set_failure(i, shrink_failure(space, sim, report.failures[i].found, caps[i], report.failures[i].estimate))
         if progress is not None:
             progress(report)
 
@@ -513,19 +705,27 @@ def _note_unshrunk(report: "SearchReport", caps: Sequence[int], budget: ShrinkBu
                       f"{budget.describe(report.budget)}) went to failures that matter more")
 
 
-def shrink_failure(space: SearchSpace, sim: _Simulator, found: Candidate, cap: int) -> Failure:
+def shrink_failure(space: SearchSpace, sim: _Simulator, found: Candidate, cap: int,
+                   estimate: Estimate | None = None) -> Failure:
     """Reduce ``found`` toward the seed with at most ``cap`` simulations: first drop inserted
     obstacles and restore removed ones, one at a time, then Hypothesis's shrinker on the offset
-    vector. The result fails with the same cause signature as ``found``."""
-    failure = Failure(found=found, shrunk=found, status="unshrunk")
+    vector. The result fails with the same cause signature as ``found``, and holds as ``found``
+    did: with a confirmation test (``sim.ctx.hold``), a simpler layout that fails that way counts
+    only once its own confirmation runs (simulations of the cap) decide that it holds.
+    ``estimate`` is ``found``'s (kept when nothing simpler holds; None: left to the caller)."""
+    failure = Failure(found=found, shrunk=found, status="unshrunk", estimate=estimate or Estimate())
     if cap <= 0 or not any(found.offsets):
         return failure
-    best, used = [found], [0]
+    test, threshold = sim.ctx.hold, sim.ctx.hold_threshold
+    best, best_estimate, used = [found], [failure.estimate], [0]
+    answers: dict[tuple, bool] = {}   # Hypothesis may ask about one layout twice (clipped values)
 
     def still_fails(offsets) -> bool:
         offsets = tuple(offsets)
         if offsets == tuple(found.offsets) and used[0] > 0:
             return True
+        if offsets in answers:   # (only with a test: without one, a repeat costs one run, as it always did)
+            return answers[offsets]
         sim.check_stop()
         if used[0] >= cap:
             failure.note = f"shrink cap of {cap} simulations reached"
@@ -535,8 +735,22 @@ def shrink_failure(space: SearchSpace, sim: _Simulator, found: Candidate, cap: i
         used[0] += 1
         cand = sim.simulate(offsets, "shrink", "shrink")
         ok = cand.signature == found.signature
+        est = None
+        if ok and test is not None and offsets != tuple(found.offsets):   # it must hold, not fail once
+            est = Estimate(threshold=threshold)
+            while est.decision == "pending":
+                n = min(test.runs_to_decide(est.outcomes), cap - used[0])
+                if n <= 0:
+                    failure.note = f"shrink cap of {cap} simulations reached"
+                    raise _Stop()
+                runs = list(sim.run([(offsets, "confirm", est.runs + 1 + k) for k in range(n)], "shrink"))
+                used[0] += n
+                est.outcomes += [c.failed for c in runs]
+                decide(test, est)
+            ok = est.decision == "held"
+            answers[offsets] = ok
         if ok and _simpler(offsets, best[0].offsets):
-            best[0] = cand
+            best[0], best_estimate[0] = cand, est or best_estimate[0]
         return ok
 
     try:
@@ -546,7 +760,7 @@ def shrink_failure(space: SearchSpace, sim: _Simulator, found: Candidate, cap: i
         pass
     except _NoExample:
         failure.note = "did not reproduce when re-simulated: kept as found"
-    failure.shrunk = best[0]
+    failure.shrunk, failure.estimate = best[0], best_estimate[0]
     failure.status = shrink_status(failure.note)
     failure.shrink_sims = used[0]
     return failure
@@ -650,7 +864,8 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
                stop: Callable[[], bool] | None = None, space: SearchSpace | None = None,
                subject: str = "", episode_seed: int | None = None,
                stuck_after: float | None = DEFAULT_STUCK_AFTER, evaluator: Evaluator | None = None,
-               recorder: Recorder | None = None, batch: int = 1, engine: str = "cpu") -> SearchReport:
+               recorder: Recorder | None = None, hold: float | None = None, batch: int = 1,
+               engine: str = "cpu") -> SearchReport:
     """Search for failures of ``subject_factory()`` planners around ``seed``.
 
     Exactly ``budget`` simulations of valid candidates (fewer only if interrupted or if the
@@ -675,41 +890,85 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
     trajectories agree with the CPU's within a tolerance, not bit for bit).
     ``recorder`` (``Recorder``) is told every candidate and failure as the search goes, so that a
     search killed at any moment has written what it found (search/freeze.py: ``SearchRecorder``).
+    ``hold`` (default holding.DEFAULT_HOLD, 0.9): a failure counts (is distinct, shrunk, frozen) only
+    when a sequential test over confirmation runs under fresh noise seeds decides that it fails
+    with at least this probability (holding.py); the confirmation runs are simulations of the
+    budget, and a shrink step must hold too (its runs come out of the shrink budget). A seed
+    without randomness needs none (one run decides), nor does ``hold=0`` (every failure counts).
     Deterministic given ``seed_value`` (and a deterministic subject).
     """
+    from .holding import DEFAULT_HOLD, hold_test
     from .strategies import GaveUp, make_strategy
+    from ..scenario.model import randomness
 
     space = space if space is not None else SearchSpace(seed)
     _check_inputs(seed, strategy, budget, space)
     shrink = ShrinkBudget.parse(shrink_budget)
+    hold = DEFAULT_HOLD if hold is None else float(hold)
+    test = hold_test(hold)   # ValueError for a threshold outside [0, 1)
+    noisy = randomness(space.seed)
     report = SearchReport(seed_name=seed.name, seed_source=seed.source, subject=subject or "?",
                           subject_version=None, strategy=strategy, seed_value=seed_value, budget=budget,
                           shrink_budget=str(shrink_budget), params=[p.name for p in space.params],
-                          episode_seed=episode_seed)
-    sim = _Simulator(EvalContext(space, subject_factory, episode_seed, stuck_after, batch, engine), report, stop,
-                     evaluator,
-                     recorder)
-    signatures: set[tuple] = set()
+                          episode_seed=episode_seed, hold=hold, randomness=noisy)
+    ctx = EvalContext(space, subject_factory, episode_seed, stuck_after, test if noisy else None, hold,
+                      batch=batch, engine=engine)
+    sim = _Simulator(ctx, report, stop, evaluator, recorder)
+    searcher = make_strategy(strategy, space, report, budget, seed_value)
+    told = getattr(searcher, "confirmed", None)   # strategies.py: prefer failures that hold
 
     start_shrink = getattr(evaluator, "start_shrink", None)   # parallel.py: shrink while searching
     early_cap, early_count = _early_shrink(shrink, budget)
 
+    def holds(failure: Failure) -> None:
+        report.failures.append(failure)
+        if start_shrink is not None and early_cap > 0 and any(failure.found.offsets) \
+                and len(report.failures) <= early_count:
+            start_shrink(sim.ctx, failure.found, early_cap, estimate=failure.estimate)
+
+    def decided(failure: Failure) -> None:
+        sim.tell_recorder("failure", failure)
+        if told is not None:
+            told(failure.found, failure.estimate)
+        if failure.status == "confirmed":
+            holds(failure)
+            return
+        report.rejected.append(failure)
+        nxt = confirming.next_aside(failure)   # the next candidate that failed this way, if any
+        if nxt is not None:
+            sim.tell_recorder("failure", nxt)
+
+    confirming = _Confirming(ctx, report, "exact" if test is not None else "off", decided)
+
     def on_result(cand: Candidate) -> None:
-        if cand.failed and cand.signature not in signatures:   # distinct: a new cause signature
-            signatures.add(cand.signature)
-            report.failures.append(Failure(found=cand, shrunk=cand))
-            sim.tell_recorder("failure", len(report.failures) - 1)   # on disk before it is logged
-            if start_shrink is not None and early_cap > 0 and any(cand.offsets) \
-                    and len(report.failures) <= early_count:
-                start_shrink(sim.ctx, cand, early_cap)
+        if cand.run:
+            confirming.result(cand)
+        else:
+            confirming.counted(cand)
+        if not cand.run and cand.failed:
+            failure = confirming.failed(cand)
+            if failure is not None:
+                sim.tell_recorder("failure", failure)   # on disk before it is logged
+                if failure.status == "confirmed":       # no test to pass: it holds at once
+                    if told is not None:
+                        told(failure.found, failure.estimate)
+                    holds(failure)
         sim.tell_recorder("simulated", cand)
+        report.under_test = len(confirming.pending)
         if progress is not None:
             progress(report)
+
+    def close_confirming() -> None:
+        for failure in confirming.close(report.interrupted):
+            report.unconfirmed.append(failure)
+            sim.tell_recorder("failure", failure)
+        report.under_test = 0
 
     t0 = time.perf_counter()
     try:
         sim.tell_recorder("start")
-        _search_loop(make_strategy(strategy, space, report, budget, seed_value), sim, budget, on_result)
+        _search_loop(searcher, sim, budget, on_result, confirming if ctx.hold is not None else None)
+        close_confirming()
         report.shrink_total = shrink.total(budget, len(report.failures))
         caps = shrink_plan(report.failures, report.shrink_total, shrink)
         _note_unshrunk(report, caps, shrink)
@@ -730,6 +989,9 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
         discard = getattr(evaluator, "discard", None)   # jobs still in flight if it ended early
         if discard is not None:
             discard()
+        if confirming.pending:   # cut short during the search phase
+            report.interrupted = True
+            close_confirming()
         batching = getattr(evaluator, "batching", None)
         if batching is not None and batching.batched:
             report.batching = batching.describe()

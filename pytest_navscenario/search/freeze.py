@@ -31,6 +31,7 @@ from typing import Any, Iterable
 from ..core.files import atomic_write_text
 from ..scenario.model import Scenario, content_hash
 from .engine import Candidate, Failure, SearchReport
+from .holding import Estimate
 from .space import SearchSpace
 
 DEFAULT_OUT = "scenarios/regressions"
@@ -45,6 +46,7 @@ class FrozenFile:
     new: bool                # False: the same failure was already frozen (file kept as it was)
     outcome: str
     clearance: float
+    estimate: Estimate | None = None   # how often it fails under the seed's randomness (holding.py)
 
 
 def _clean(value: Any) -> Any:
@@ -123,6 +125,7 @@ def frozen_scenario(report: SearchReport, failure: Failure, space: SearchSpace, 
     provenance = candidate_provenance(report, cand, space, subject=subject, root=root)
     provenance.update({
         "status": failure.status,
+        **failure.estimate.provenance(report.episode_seed or 0),
         "found_offsets": space.as_mapping(failure.found.offsets),
         "found_at_simulation": failure.found.sim,
         "shrink_simulations": failure.shrink_sims,
@@ -166,7 +169,7 @@ def freeze_failures(report: SearchReport, space: SearchSpace, out_dir: str | Pat
         new = not path.exists()
         if new:
             save_standalone(scenario, space.seed, path)
-        written.append(FrozenFile(path, new, failure.shrunk.outcome, failure.shrunk.clearance))
+        written.append(FrozenFile(path, new, failure.shrunk.outcome, failure.shrunk.clearance, failure.estimate))
     return written
 
 
@@ -217,7 +220,8 @@ def _head(report: SearchReport, search_id: str) -> dict[str, Any]:
 def start_record(report: SearchReport, search_id: str) -> dict[str, Any]:
     """The log's first line of a search: what was searched, with what, from when."""
     return {"record": "start", **_head(report, search_id), "date": _now(), "shrink_budget": report.shrink_budget,
-            "nav_seed": report.episode_seed or 0, "params": list(report.params)}
+            "nav_seed": report.episode_seed or 0, "params": list(report.params), "hold": report.hold,
+            "randomness": list(report.randomness)}
 
 
 def candidate_record(report: SearchReport, cand: Candidate, space: SearchSpace, search_id: str) -> dict[str, Any]:
@@ -225,11 +229,23 @@ def candidate_record(report: SearchReport, cand: Candidate, space: SearchSpace, 
     return {"record": "candidate", **_head(report, search_id), **cand.to_dict(space)}
 
 
+def failure_record(report: SearchReport, failure: Failure, search_id: str, path: Path | None) -> dict[str, Any]:
+    """A failure's change as a log line: found, confirmed, rejected, shrunk ... and its file."""
+    est = failure.estimate
+    return {"record": "failure", **_head(report, search_id), "found_at_simulation": failure.found.sim,
+            "status": failure.status, "file": path.name if path is not None else None,
+            "signature": list(failure.found.signature), "confirmation": est.decision,
+            "confirmation_runs": est.runs, "confirmation_failures": est.failed,
+            "failure_probability": None if est.probability is None else round(est.probability, 6)}
+
+
 def end_record(report: SearchReport, search_id: str) -> dict[str, Any]:
     """The log's last line of a search: how the simulations were spent and why it ended."""
     return {"record": "end", **_head(report, search_id), "search_sims": report.sims_used,
-            "shrink_sims": report.shrink_sims, "shrink_budget": report.shrink_total,
-            "failures": len(report.failures), "interrupted": report.interrupted,
+            "confirm_sims": report.confirm_sims, "shrink_sims": report.shrink_sims,
+            "shrink_budget": report.shrink_total, "failures": len(report.failures),
+            "rejected": len(report.rejected), "unconfirmed": len(report.unconfirmed),
+            "hold": report.hold, "randomness": list(report.randomness), "interrupted": report.interrupted,
             "stop_reason": report.stop_reason, "wall_time": round(report.wall_time, 3)}
 
 
@@ -303,6 +319,9 @@ def read_search_log(path: str | Path) -> dict[str, list[dict[str, Any]]]:
     return searches
 
 
+FROZEN_STATUSES = ("found", "confirmed", "shrunk", "unshrunk")   # a failure with a file (engine.Failure)
+
+
 class SearchRecorder:
     """Writes a search's frozen failures and its log while it runs (``run_search(...,
     recorder=SearchRecorder(space, out))``; see the module docstring). Errors writing (a full disk,
@@ -319,9 +338,9 @@ class SearchRecorder:
         self.error = ""
         self.files: list[FrozenFile] = []
         self._log: _AppendLog | None = None
-        self._mine: dict[int, Path] = {}          # failure index -> the file this search wrote for it
+        self._mine: dict[int, Path] = {}          # failure key -> the file this search wrote for it
         self._held: dict[Path, int] = {}          # path -> the failure whose file it is (ours or kept)
-        self._kept: dict[int, Path] = {}          # failure index -> a file of an earlier search it maps to
+        self._kept: dict[int, Path] = {}          # failure key -> a file of an earlier search it maps to
         self._causes: dict[tuple, int] = {}       # cause signature -> the failure frozen for it
 
     # -- Recorder ------------------------------------------------------------------------------
@@ -336,13 +355,17 @@ class SearchRecorder:
         if self._log is not None:
             self._guard(lambda: self._log.write(candidate_record(report, cand, self.space, self.search_id)))
 
-    def failure(self, report: SearchReport, index: int) -> None:
-        self._guard(lambda: self._sync(report, index))
+    def failure(self, report: SearchReport, failure: Failure) -> None:
+        def go() -> None:
+            path = self._sync(report, failure)
+            if self._log is not None:
+                self._log.write(failure_record(report, failure, self.search_id, path))
+        self._guard(go)
 
     def finish(self, report: SearchReport) -> None:
         def go() -> None:
-            for i in range(len(report.failures)):   # anything not yet on disk (after an error)
-                self._sync(report, i)
+            for failure in report.failures:   # anything not yet on disk (after an error)
+                self._sync(report, failure)
             if self._log is not None:
                 self._log.write(end_record(report, self.search_id))
         self._guard(go)
@@ -359,40 +382,49 @@ class SearchRecorder:
         except Exception as exc:   # never lose the search: say what could not be written
             self.error = f"could not write under {self.folder}: {type(exc).__name__}: {exc}"
 
-    def _sync(self, report: SearchReport, index: int) -> None:
-        """Put failure ``index`` on disk in its current form: write its file, unless another
-        failure's file holds that layout or way of failing (frozen once) or an earlier search's
-        file holds that layout (kept as it was); then remove the file this search wrote for an
-        earlier form of it (the new form is on disk first, so a kill in between loses nothing)."""
-        failure = report.failures[index]
-        scenario = frozen_scenario(report, failure, self.space, subject=self.subject, root=self.root)
-        path = self.folder / f"{scenario.name}.yaml"
-        cause = tuple(failure.shrunk.signature)
-        old_mine, old_kept = self._mine.pop(index, None), self._kept.pop(index, None)
-        others = {self._held.get(path, index), self._causes.get(cause, index) if cause else index} - {index}
-        if not others:
-            if path == old_mine or not path.exists():
-                save_standalone(scenario, self.space.seed, path)
-                self._mine[index] = path
+    def _sync(self, report: SearchReport, failure: Failure) -> Path | None:
+        """Put ``failure`` on disk in its current form: write its file, unless another failure's
+        file holds that layout or way of failing (frozen once) or an earlier search's file holds
+        that layout (kept as it was); then remove the file this search wrote for an earlier form
+        of it (the new form is on disk first, so a kill in between loses nothing). A failure that
+        did not hold loses its file. Returns the failure's file now (None: none)."""
+        key = failure.key
+        old_mine, old_kept = self._mine.pop(key, None), self._kept.pop(key, None)
+        path = None
+        if failure.status in FROZEN_STATUSES:
+            scenario = frozen_scenario(report, failure, self.space, subject=self.subject, root=self.root)
+            path = self.folder / f"{scenario.name}.yaml"
+            cause = tuple(failure.shrunk.signature)
+            others = {self._held.get(path, key), self._causes.get(cause, key) if cause else key} - {key}
+            if others:
+                path = None                            # frozen once, as the other failure
             else:
-                self._kept[index] = path
-            self._held[path] = index
-            if cause:
-                self._causes.setdefault(cause, index)
+                if path == old_mine or not path.exists():
+                    save_standalone(scenario, self.space.seed, path)
+                    self._mine[key] = path
+                else:
+                    self._kept[key] = path
+                self._held[path] = key
+                if cause:
+                    self._causes.setdefault(cause, key)
+        else:   # rejected, unconfirmed: its way of failing is free for another failure
+            self._causes = {c: k for c, k in self._causes.items() if k != key}
         for old in (old_mine, old_kept):
             if old is not None and old != path:
                 self._held.pop(old, None)
                 if old == old_mine:
                     old.unlink(missing_ok=True)
+        return path
 
     def _frozen(self, report: SearchReport) -> list[FrozenFile]:
         out, seen = [], set()
-        for i, failure in enumerate(report.failures):
-            path = self._mine.get(i) or self._kept.get(i)
+        for failure in report.failures:
+            path = self._mine.get(failure.key) or self._kept.get(failure.key)
             if path is None or path in seen:
                 continue
             seen.add(path)
-            out.append(FrozenFile(path, i in self._mine, failure.shrunk.outcome, failure.shrunk.clearance))
+            out.append(FrozenFile(path, failure.key in self._mine, failure.shrunk.outcome, failure.shrunk.clearance,
+                                  failure.estimate))
         return out
 
 
@@ -405,7 +437,7 @@ def write_junit(items: Iterable[tuple[SearchReport, SearchSpace]], path: str | P
     for report, space in items:
         cases = []
         for c in report.candidates:
-            if c.phase != "search":
+            if c.phase != "search" or c.run:   # a confirmation run repeats a case: not a case of its own
                 continue
             tc = TestCase(name=f"{report.seed_name}[sim{c.sim:04d}-{c.scenario_hash}]",
                           classname=f"navsearch.{report.seed_name}", elapsed_sec=round(c.wall_time, 6),

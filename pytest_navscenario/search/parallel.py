@@ -19,8 +19,10 @@ import uuid
 from dataclasses import dataclass
 from typing import Any, Iterator, Sequence
 
+from ..core.interrupts import deferred
 from .engine import (Candidate, EvalContext, Failure, SearchReport, _Simulator, evaluate_candidate,
-                     evaluate_candidates, shrink_failure, shrink_order, shrink_status)
+                     evaluate_candidates, shrink_failure, shrink_order, shrink_status, unpack)
+from .holding import Estimate
 
 _CONTEXTS: dict[str, EvalContext] = {}   # worker side: the first copy of each context received
 _MAX_CONTEXTS = 4
@@ -33,9 +35,10 @@ class CandidateJob:
     offsets: tuple[float, ...]
     origin: str
     token: str          # names ``ctx``: a worker reuses its first copy, so per-space caches survive
+    noise_run: int = 0  # 0: the search's own run; k: the k-th confirmation run (holding.py)
 
     def run(self) -> Candidate:
-        cand = evaluate_candidate(_context(self.token, self.ctx), self.offsets, self.origin)
+        cand = evaluate_candidate(_context(self.token, self.ctx), self.offsets, self.origin, self.noise_run)
         cand.scenario = None    # rebuilt from the offsets here: no need to send it back
         return cand
 
@@ -59,7 +62,7 @@ class CandidateBatchJob:
     """Several candidates simulated together in a worker (``engine.evaluate_candidates``: in
     lockstep when the subject answers the batch protocol): one worker's share of a generation."""
     ctx: EvalContext
-    proposals: tuple[tuple[tuple[float, ...], str], ...]
+    proposals: tuple[tuple[tuple[float, ...], str, int], ...]   # (offsets, origin, noise run)
     token: str
 
     def run(self) -> list[Candidate]:
@@ -69,7 +72,7 @@ class CandidateBatchJob:
         return cands
 
     def restore(self, cands: list[Candidate]) -> list[Candidate]:
-        for cand, (offsets, _) in zip(cands, self.proposals):
+        for cand, (offsets, *_) in zip(cands, self.proposals):
             cand.scenario = self.ctx.space.apply(offsets)
         return cands
 
@@ -83,23 +86,25 @@ class ShrinkJob:
     cap: int
     token: str
     known: tuple[Candidate, ...] = ()   # simulations a shorter shrink of this failure already ran
+    estimate: Estimate | None = None    # the found layout's (holding.py)
 
-    def run(self) -> tuple[int, str, int, list[Candidate]]:
+    def run(self) -> tuple[int, str, int, list[Candidate], Estimate]:
         """(index of the shrunk candidate among the shrink candidates, -1: as found; note;
-        simulations used; the shrink candidates in the order they ran, scenarios stripped)."""
+        simulations used; the shrink candidates in the order they ran, scenarios stripped; the
+        estimate of the shrunk layout)."""
         ctx = _context(self.token, self.ctx)
         scratch = SearchReport(seed_name="", seed_source=None, subject="", subject_version=None,
                                strategy="", seed_value=0, budget=0, shrink_budget=self.cap, params=[])
         sim = _Replay(ctx, scratch, self.known) if self.known else _Simulator(ctx, scratch, None)
-        failure = shrink_failure(ctx.space, sim, self.found, self.cap)
+        failure = shrink_failure(ctx.space, sim, self.found, self.cap, self.estimate)
         cands = scratch.candidates
         index = next((i for i, c in enumerate(cands) if c is failure.shrunk), -1)
         for cand in cands:
             cand.metrics["subject"], cand.metrics["subject_version"] = scratch.subject, scratch.subject_version
             cand.scenario = None
-        return index, failure.note, failure.shrink_sims, cands
+        return index, failure.note, failure.shrink_sims, cands, failure.estimate
 
-    def restore(self, outcome: tuple[int, str, int, list[Candidate]]) -> tuple[int, str, int, list[Candidate]]:
+    def restore(self, outcome: tuple) -> tuple:
         for cand in outcome[3]:
             cand.scenario = self.ctx.space.apply(cand.offsets)
         return outcome
@@ -113,14 +118,18 @@ class _Replay(_Simulator):
 
     def __init__(self, ctx: EvalContext, report: SearchReport, known: Sequence[Candidate]):
         super().__init__(ctx, report, None)
-        self.known: dict[tuple[float, ...], Candidate] = {}
+        self.known: dict[tuple, Candidate] = {}
         for cand in known:
-            self.known.setdefault(tuple(cand.offsets), cand)
+            self.known.setdefault((tuple(cand.offsets), cand.run), cand)
 
-    def simulate(self, offsets: Sequence[float], phase: str, origin: str) -> Candidate:
-        cand = self.known.pop(tuple(offsets), None)
+    def run(self, proposals: Sequence[tuple], phase: str) -> Iterator[Candidate]:
+        for offsets, origin, *run in proposals:
+            yield self.simulate(offsets, phase, origin, *run)
+
+    def simulate(self, offsets: Sequence[float], phase: str, origin: str, run: int = 0) -> Candidate:
+        cand = self.known.pop((tuple(offsets), run), None)
         if cand is None:
-            return super().simulate(offsets, phase, origin)
+            return next(iter(super().run([(tuple(offsets), origin, run)], phase)))
         return self.record(dataclasses.replace(cand, metrics=dict(cand.metrics)), phase)
 
 
@@ -151,26 +160,27 @@ class executor_evaluator:   # noqa: N801  (used like a function: evaluator=execu
         self._open.pop(id(pending), None)
         return pending.result()
 
-    def __call__(self, ctx: EvalContext, proposals: Sequence[tuple[tuple[float, ...], str]]) -> Iterator[Candidate]:
+    def __call__(self, ctx: EvalContext, proposals: Sequence[tuple]) -> Iterator[Candidate]:
         """Submit the generation now; the iterator waits for each candidate in proposal order."""
         token = self._token_for(ctx)
+        proposals = [unpack(p) for p in proposals]
         if ctx.batch > 1 and len(proposals) > 1 and _answers_batches(ctx):   # each worker's share as a batch
             workers = max(1, int(getattr(self.executor, "workers", 1)))
             size = min(ctx.batch, -(-len(proposals) // workers))
-            chunks = [tuple((tuple(o), origin) for o, origin in proposals[i:i + size])
-                      for i in range(0, len(proposals), size)]
+            chunks = [tuple(proposals[i:i + size]) for i in range(0, len(proposals), size)]
             pending = self._submit([CandidateBatchJob(ctx, chunk, token) for chunk in chunks])
             self.batching.batched += len(proposals)
             self.batching.batches += len(chunks)
             return (cand for p in pending for cand in self._take(p))
-        pending = self._submit([CandidateJob(ctx, tuple(offsets), origin, token) for offsets, origin in proposals])
+        pending = self._submit([CandidateJob(ctx, offsets, origin, token, run) for offsets, origin, run in proposals])
         return (self._take(p) for p in pending)
 
-    def start_shrink(self, ctx: EvalContext, found: Candidate, cap: int, known: Sequence[Candidate] = ()) -> None:
-        """Submit the shrinking of a failure (during the search: just found; its simulations are
-        recorded later, by ``shrink_failures``, after the search's own, as in a serial run)."""
+    def start_shrink(self, ctx: EvalContext, found: Candidate, cap: int, known: Sequence[Candidate] = (),
+                     estimate: Estimate | None = None) -> None:
+        """Submit the shrinking of a failure (during the search: just confirmed; its simulations
+        are recorded later, by ``shrink_failures``, after the search's own, as in a serial run)."""
         token = self._token_for(ctx)
-        job = ShrinkJob(ctx, _stripped(found), cap, token, tuple(_stripped(c) for c in known))
+        job = ShrinkJob(ctx, _stripped(found), cap, token, tuple(_stripped(c) for c in known), estimate)
         self._shrinks.append((found, cap, self._submit([job])[0]))
 
     def shrink_failures(self, sim: _Simulator, caps: Sequence[int], progress: Any) -> None:
@@ -185,12 +195,12 @@ class executor_evaluator:   # noqa: N801  (used like a function: evaluator=execu
         self._shrinks = []
         outcome: dict[int, Any] = {}
         for i in order:   # jobs with the planned cap, and fresh ones, first
-            found = report.failures[i].found
+            found, estimate = report.failures[i].found, report.failures[i].estimate
             cap, p = started.get(id(found), (0, None))
             if p is not None and cap == caps[i]:
                 outcome[i] = started.pop(id(found))[1]
             elif p is None or cap > caps[i]:
-                self.start_shrink(sim.ctx, found, caps[i])
+                self.start_shrink(sim.ctx, found, caps[i], estimate=estimate)
                 outcome[i] = self._shrinks[-1][2]
         for i in order:   # begun with a smaller cap: continue where it stopped, unless it had finished
             if i not in outcome:
@@ -199,7 +209,8 @@ class executor_evaluator:   # noqa: N801  (used like a function: evaluator=execu
                 if early[2] < cap:   # the shrinker finished below its cap: a larger one changes nothing
                     outcome[i] = early
                 else:
-                    self.start_shrink(sim.ctx, report.failures[i].found, caps[i], early[3])
+                    self.start_shrink(sim.ctx, report.failures[i].found, caps[i], early[3],
+                                      report.failures[i].estimate)
                     outcome[i] = self._shrinks[-1][2]
         for _, p in started.values():   # failures the plan gives no simulation
             self._open.pop(id(p), None)
@@ -207,11 +218,14 @@ class executor_evaluator:   # noqa: N801  (used like a function: evaluator=execu
         for i in order:
             sim.check_stop()
             found = report.failures[i].found
-            index, note, used, cands = outcome[i] if isinstance(outcome[i], tuple) else self._take(outcome[i])
-            for cand in cands:
-                sim.record(cand, "shrink")
-            sim.set_failure(i, Failure(found=found, shrunk=cands[index] if index >= 0 else found,
-                                       shrink_sims=used, note=note, status=shrink_status(note)))
+            index, note, used, cands, estimate = (outcome[i] if isinstance(outcome[i], tuple)
+                                                  else self._take(outcome[i]))
+            with deferred():   # its simulations logged and the shrunk failure written: one step
+                for cand in cands:
+                    sim.record(cand, "shrink")
+                sim.set_failure(i, Failure(found=found, shrunk=cands[index] if index >= 0 else found,
+                                           shrink_sims=used, note=note, status=shrink_status(note),
+                                           estimate=estimate if index >= 0 else report.failures[i].estimate))
             if progress is not None:
                 progress(report)
         self._shrinks = []

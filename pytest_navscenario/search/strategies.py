@@ -49,6 +49,7 @@ PATH_OPERATORS = frozenset({"place", "insert", "squeeze", "retime", "barrier"}) 
 MIN_SHARE = 0.04               # every usable operator keeps at least this share
 EXPLORE_SHARE = 0.2            # uniform exploration keeps at least this share: never far below random
 PICK_PENALTY = 0.03            # robustness added per earlier pick of an archive cell (novelty)
+FAILURE_CREDIT = 3.0           # an operator's credit for a new way of failing (that holds)
 NEAR_COPY = 0.5                # m: a failure's child whose culprit moved less (same quarter) is skipped
 FAILURE_FLOOR = -0.3           # failure cells compete for parenthood as if this robust
 HILLCLIMB_STEP = 0.25          # initial step, fraction of the range
@@ -226,11 +227,13 @@ class HillClimb:
 
 # -- evolve (quality diversity) ----------------------------------------------------------------
 class _Cells:
-    """MAP-Elites archive: the elite (lowest robustness) of each cause signature."""
+    """MAP-Elites archive: the elite (lowest robustness) of each cause signature; a cell whose
+    failure did not hold (``fragile``) competes as a near miss (robustness at least 0)."""
 
     def __init__(self):
         self.elites: dict[tuple, Any] = {}
         self.picks: dict[tuple, int] = {}
+        self.fragile: set[tuple] = set()
 
     def add(self, cand: Any) -> bool:
         """Keep ``cand`` if its cell is new or it beats the elite; True for a new cell."""
@@ -246,7 +249,8 @@ class _Cells:
         """Tournament of three cells on robustness plus a penalty per earlier pick."""
         keys = sorted(self.elites, key=repr)
         best = min((keys[rnd.randrange(len(keys))] for _ in range(3)),
-                   key=lambda k: max(self.elites[k].robustness, FAILURE_FLOOR) + PICK_PENALTY * self.picks.get(k, 0))
+                   key=lambda k: max(self.elites[k].robustness, 0.0 if k in self.fragile else FAILURE_FLOOR)
+                   + PICK_PENALTY * self.picks.get(k, 0))
         self.picks[best] = self.picks.get(best, 0) + 1
         return self.elites[best]
 
@@ -299,6 +303,9 @@ class Evolve:
         self.moving = [g for g in space.groups if _has(space, g, "start") or _has(space, g, "speed")]
         self.timing: _Targets | None = None
         self.failure_signatures: set[tuple] = set()
+        self.fragile: set[tuple] = set()                # failed, did not hold (holding.py), none held since
+        self.held_early: set[tuple] = set()             # proposals known to hold before they are told
+        self.credited: dict[tuple, tuple[str, Any]] = {}   # a new failure under test -> (operator, aim)
         self.route: Any = None
         self.targets: _Targets | None = None
         self.aims: dict[tuple, tuple[Any, tuple[str, int]]] = {}   # proposal -> (bandit, arm) it aimed at
@@ -523,7 +530,7 @@ class Evolve:
         arms = [a for a in self._arms().arms if (a[0] == "inserted") == inserted]
         if not arms:
             return None
-        self.aim = self.targets.pick(rnd, arms, self.failure_signatures)
+        self.aim = self.targets.pick(rnd, arms, self._filled())
         self.aim_bandit = self.targets
         return self.aim
 
@@ -684,7 +691,7 @@ class Evolve:
 
     def _inserted_failures(self, quarter: int) -> int:
         """Known failing signatures of an inserted box in that quarter of the route."""
-        return sum(1 for sig in self.failure_signatures if _in_cell(sig, ("inserted", quarter)))
+        return sum(1 for sig in self._filled() if _in_cell(sig, ("inserted", quarter)))
 
     def _shiftable(self) -> list[Any]:
         """The archive's failures whose culprit is an inserted box (the parents ``shift`` uses)."""
@@ -775,7 +782,7 @@ class Evolve:
 
         space, route = self.space, self._route()
         timing = self._timing_arms()
-        arm = self.aim = timing.pick(rnd, timing.arms, self.failure_signatures)
+        arm = self.aim = timing.pick(rnd, timing.arms, self._filled())
         self.aim_bandit = timing
         group = next(g for g in self.moving if space.params[g[0]].part == f"obstacle:{arm[0]}")
         at = {space.params[i].attr: i for i in group}
@@ -826,18 +833,51 @@ class Evolve:
             before = self.cells.elites.get(cand.signature)
             self.cells.add(cand)
             new_failure = cand.failed and cand.signature not in self.failure_signatures
+            tested = new_failure or (cand.failed and cand.signature in self.fragile)   # the engine tests it
             if cand.failed:
                 self.failure_signatures.add(cand.signature)
             improved = (not cand.failed and math.isfinite(cand.robustness)
                         and (before is None or cand.robustness < before.robustness))
             # credit: new ways of failing, and moves toward failing; not for the first generation,
-            # chosen for looking likely to fail, not drawn as its operator draws
+            # chosen for looking likely to fail, not drawn as its operator draws. A new failure
+            # under confirmation earns a third now, the rest when it holds (``confirmed``).
+            key = _key(cand.offsets)
+            aim = self.aims.pop(key, None)
+            credit = (FAILURE_CREDIT if key in self.held_early else FAILURE_CREDIT / 3) if new_failure else 0.0
+            if tested and key not in self.held_early:
+                self.credited[key] = (cand.origin, aim if new_failure else None, credit)
+            self.held_early.discard(key)
             if cand.origin in self.stats and self.told > 1:
                 self.stats[cand.origin][0] += 1
-                self.stats[cand.origin][1] += (3.0 if new_failure else 0.0) + (0.2 if improved else 0.0)
-            aim = self.aims.pop(_key(cand.offsets), None)
+                self.stats[cand.origin][1] += credit + (0.2 if improved else 0.0)
             if aim is not None:
                 aim[0].tell(aim[1], cand, new_failure)
+
+    def confirmed(self, cand: Any, estimate: Any) -> None:
+        """The engine decided whether a failure holds under the seed's randomness (holding.py):
+        the operator that found one that holds gets the rest of its credit; one that did not hold
+        takes back its target's credit, its way of failing is not taken as found (its cell and
+        route quarter stay open to failures that hold) and its cell competes for parenthood as a
+        near miss, not as a failure."""
+        key, sig = _key(cand.offsets), cand.signature
+        origin, aim, given = self.credited.pop(key, (None, None, 0.0))
+        if estimate.holds:
+            self.fragile.discard(sig)
+            self.cells.fragile.discard(sig)
+            if origin is None:
+                self.held_early.add(key)   # decided before it is told (no test to pass): full credit then
+            elif origin in self.stats and self.told > 1:
+                self.stats[origin][1] += FAILURE_CREDIT - given
+            return
+        self.fragile.add(sig)
+        self.cells.fragile.add(sig)
+        if aim is not None:
+            aim[0].credit[aim[1]] -= 1.0
+
+    def _filled(self) -> set[tuple]:
+        """The ways of failing the targets count as found: every failing signature but those that
+        did not hold."""
+        return self.failure_signatures - self.fragile if self.fragile else self.failure_signatures
 
 
 def _weighted_pick(items: Sequence[Any], weights: Sequence[float], ticket: float) -> Any:

@@ -66,7 +66,7 @@ def write_suite(report: SearchReport, space: SearchSpace, out_dir: str | Path, *
     folder = Path(out_dir) / space.seed.name
     done = SuiteFolder(folder)
     for cand in report.candidates:
-        if cand.phase != "search":
+        if cand.phase != "search" or cand.run:   # confirmation runs repeat a case already written
             continue
         scenario = suite_scenario(report, cand, space, root=root)
         path = folder / f"{scenario.name}.yaml"

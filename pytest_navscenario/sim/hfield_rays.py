@@ -153,9 +153,29 @@ U0, V0, Z0, DU, DV, DZ, TA, TB, IDX, MT, MP, MD, MQ, ME, MS, MA = range(16)
 
 
 def _cast_one(g: _Grid, pnt: np.ndarray, dirs: np.ndarray, rmax: float, out: np.ndarray) -> None:
-    """Lower ``out`` where a ray meets grid ``g`` nearer."""
-    n = len(dirs)
+    """Lower ``out`` where a ray meets grid ``g`` nearer. Rays that start above the grid's highest
+    point and do not come down to it within rmax (or what they met already) are left out first,
+    in two array operations: a level 2D lidar riding the grid casts few rays that can reach it
+    (each ray's answer is the same either way: ``_clip`` would drop them)."""
     pnt = np.asarray(pnt, dtype=float)
+    z0 = pnt[..., 2] - g.base
+    dz = dirs[:, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t_top = np.where(dz < 0, (g.zmax - z0) / dz, np.inf)
+    reach = (z0 <= g.zmax) | (t_top <= np.minimum(out, rmax))
+    if not reach.all():
+        if not reach.any():
+            return
+        sub = out[reach]
+        _cast_rays(g, pnt[reach] if pnt.ndim == 2 else pnt, dirs[reach], rmax, sub)
+        out[reach] = sub
+        return
+    _cast_rays(g, pnt, dirs, rmax, out)
+
+
+def _cast_rays(g: _Grid, pnt: np.ndarray, dirs: np.ndarray, rmax: float, out: np.ndarray) -> None:
+    """``_cast_one`` for rays that may reach the grid."""
+    n = len(dirs)
     st = np.empty((16, n))
     # into the grid's frame, in grid units (u along columns, v along rows), z in metres above base
     px, py = pnt[..., 0] - g.cx, pnt[..., 1] - g.cy

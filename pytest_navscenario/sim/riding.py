@@ -11,7 +11,7 @@ from collections import deque
 import numpy as np
 
 from ..scenario import ground
-from ..scenario.crossing import SPACING, Capability, walk
+from ..scenario.crossing import SPACING, Capability, steep_ground, walk
 from .trajectory import TerrainEvent
 
 ON_GROUND = 0.08          # m: a base this close above the ground under it stands on it
@@ -40,9 +40,12 @@ def resting_pose(scenario, x: float, y: float, yaw: float) -> tuple[float, float
 
 class GroundProbe:
     """The ground height at one point, fast (plain floats; called a few times a tick): the same
-    answer as ``scenario.ground.ground_height``."""
+    answer as ``scenario.ground.ground_height`` (bit for bit where there are height grids: the
+    same operations in the same order; tests/sim/test_ground_probe.py)."""
 
     def __init__(self, scenario):
+        from ..scenario.heightmap import height_grid
+
         self.scenario = scenario
         self.rows = []
         for p in ground.pieces(scenario.terrain):
@@ -50,11 +53,24 @@ class GroundProbe:
             x, y, c, s = ground.frame(el)
             slope = (p.top1 - p.top0) / (p.u1 - p.u0)
             self.rows.append((x, y, c, s, p.u0, p.u1, el.width / 2, p.top0, slope, p.cut, p.element))
-        self.grids = bool(ground.grid_elements(scenario.terrain))
+        self.grids = []
+        for i in ground.grid_elements(scenario.terrain):
+            el = scenario.terrain[i]
+            grid = height_grid(el, scenario)
+            x, y, c, s = ground.frame(el)
+            rows, cols = grid.heights.shape
+            length, width = grid.extent
+            self.grids.append((x, y, c, s, el.length / 2 + 1e-9, el.width / 2 + 1e-9, float(el.z), grid.heights,
+                               length / 2.0, width / 2.0, float(grid.cell[0]), float(grid.cell[1]), rows, cols,
+                               ground.grid_low(el, scenario) < ground.FLOOR))
+        self.pieces = [(p, scenario.terrain[p.element]) for p in ground.pieces(scenario.terrain)]
+        self.exact = all(g[7].dtype == np.float64 for g in self.grids)   # else numpy's promotions differ
 
     def height(self, px: float, py: float) -> float:
         if self.grids:
-            return float(ground.ground_height(self.scenario, px, py))
+            if not self.exact:
+                return float(ground.ground_height(self.scenario, px, py))
+            return self._height_on_grids(float(px), float(py))
         solid, floor = -math.inf, 0.0
         for x, y, c, s, u0, u1, hw, top0, slope, cut, _ in self.rows:
             dx, dy = px - x, py - y
@@ -67,6 +83,48 @@ class GroundProbe:
             elif h > solid:
                 solid = h
         return solid if solid > floor else floor
+
+    def _height_on_grids(self, px: float, py: float) -> float:
+        """``ground.ground_height`` at one point, in plain floats with its operations (its
+        pieces' heights as ``ground._piece_height``, the grids' as ``HeightGrid.sample``)."""
+        floor, solid = ground.FLOOR, -math.inf
+        for piece, el in self.pieces:
+            x, y, c, s = ground.frame(el)
+            dx, dy = px - x, py - y
+            u, v = c * dx + s * dy, -s * dx + c * dy
+            if not (u >= piece.u0 - 1e-9 and u <= piece.u1 + 1e-9 and abs(v) <= el.width / 2 + 1e-9):
+                continue
+            if piece.top0 == piece.top1:
+                h = piece.top0
+            else:
+                h = piece.top0 + (piece.top1 - piece.top0) * (u - piece.u0) / (piece.u1 - piece.u0)
+            if piece.cut:
+                floor = min(floor, h)
+            else:
+                solid = _nanmax(solid, h)
+        for x, y, c, s, hl, hw, z, h, half_x, half_y, dx_cell, dy_cell, rows, cols, cuts in self.grids:
+            dx, dy = px - x, py - y
+            u, v = c * dx + s * dy, -s * dx + c * dy
+            if not (abs(u) <= hl and abs(v) <= hw):
+                continue
+            gu, gv = (u + half_x) / dx_cell, (v + half_y) / dy_cell
+            if 0 <= gu <= cols - 1 and 0 <= gv <= rows - 1:
+                col = min(max(math.floor(gu), 0), cols - 2)
+                row = min(max(math.floor(gv), 0), rows - 2)
+                fx, fy = min(max(gu - col, 0.0), 1.0), min(max(gv - row, 0.0), 1.0)
+                h00, h11 = h.item(row, col), h.item(row + 1, col + 1)
+                if fx >= fy:
+                    h10 = h.item(row, col + 1)
+                    g = h00 + (h10 - h00) * fx + (h11 - h10) * fy
+                else:
+                    h01 = h.item(row + 1, col)
+                    g = h00 + (h11 - h01) * fx + (h01 - h00) * fy
+            else:
+                g = math.nan
+            solid = _nanmax(solid, z + g)
+            if cuts:                                  # a grid dipping below the floor cuts it
+                floor = -math.inf
+        return _nanmax(solid, floor)
 
     def element(self, px: float, py: float) -> int | None:
         """The element whose top is the ground at (px, py) (None: the floor)."""
@@ -81,6 +139,11 @@ class GroundProbe:
         if best is None and self.grids:
             return ground.element_at(self.scenario, px, py)
         return best
+
+
+def _nanmax(a: float, b: float) -> float:
+    """``np.maximum`` of two floats: NaN if either is."""
+    return a if (a != a or a >= b) and b == b else b
 
 
 class TerrainStop(Exception):
@@ -109,7 +172,8 @@ class TerrainWatch:
         self.level_at = (0.0, 0.0)
         self.pushing = 0            # ticks driven in a row
         self.tick_dt = tick_dt
-        self.trail: deque = deque(maxlen=self.stuck_ticks + 1)   # (x, y, setpoint speed) of those ticks
+        self.trail: deque = deque(maxlen=self.stuck_ticks + 1)   # (x, y) of those ticks
+        self.speeds: deque = deque(maxlen=self.stuck_ticks + 1)  # and their setpoint speeds
         self.event: TerrainEvent | None = None
         fp = scenario.robot.footprint
         self.front = fp.length / 2 if fp.shape == "box" else fp.radius
@@ -131,12 +195,14 @@ class TerrainWatch:
         if speed < STUCK_COMMAND:
             self.pushing = 0
             self.trail.clear()
+            self.speeds.clear()
             return
         self.pushing += 1
-        self.trail.append((x, y, speed))
+        self.trail.append((x, y))
+        self.speeds.append(speed)
         if self.pushing >= self.stuck_ticks:
-            x0, y0, _ = self.trail[0]
-            asked = sum(v for _, _, v in self.trail) * self.tick_dt
+            x0, y0 = self.trail[0]
+            asked = sum(self.speeds) * self.tick_dt         # in order: the same sum, without a generator
             if math.hypot(x - x0, y - y0) < STUCK_MOVING * asked:
                 self._stuck(t, x, y, z, roll, pitch, yaw, setpoint, touching)
 
@@ -160,6 +226,12 @@ class TerrainWatch:
         c, s = math.cos(yaw), math.sin(yaw)
         d = ahead * np.arange(int((self.front + LOOK_AHEAD) / SPACING) + 1) * SPACING
         px, py = x + c * d, y + s * d
+        steep = self._steep_ahead(x, y, c, s, d)
+        if steep is not None:
+            el = self.probe.element(*steep[:2])
+            self._end(TerrainEvent("stuck", t, self._name(el), x, y, z, roll=math.degrees(roll),
+                                   pitch=math.degrees(pitch),
+                                   detail=f"cannot walk the {steep[2]:.0f} deg slope across its way"))
         h = ground.ground_height(self.scenario, px, py).tolist()
         _, barrier = walk(h, SPACING, h[0], FEATURE)
         slope = math.degrees(max(abs(pitch), abs(roll)))
@@ -179,6 +251,32 @@ class TerrainWatch:
             detail = "high-centred: its chassis rests on the ground" if touching else "its wheels slip"
         self._end(TerrainEvent("stuck", t, self._name(el), x, y, z, roll=math.degrees(roll),
                                pitch=math.degrees(pitch), detail=detail))
+
+    def _steep_ahead(self, x, y, c, s, d) -> tuple[float, float, float] | None:
+        """(x, y, slope in degrees) of the first steep ground (``crossing.steep_ground``, for a
+        body that declares what it crosses: ``cap``) ahead of the centre or a foot, when it stands
+        off it and that ground is within max_slope along its way (across it or diagonally: a
+        slope straight ahead is described by the walk below); None otherwise."""
+        cap = getattr(self.body, "cap", None)
+        if cap is None or not self.scenario.terrain:
+            return None
+        feet = getattr(self.body, "feet", np.zeros((0, 2)))
+        ox = np.concatenate([[0.0], c * feet[:, 0] - s * feet[:, 1]])[:, None]
+        oy = np.concatenate([[0.0], s * feet[:, 0] + c * feet[:, 1]])[:, None]
+        px, py = x + ox + c * d, y + oy + s * d
+        steep = steep_ground(self.scenario, cap, px, py)
+        first = [int(np.argmax(row)) for row in steep if row.any() and not row[0]]
+        if not first or steep[:, 0].any():
+            return None
+        row = next(i for i, r in enumerate(steep) if r.any() and not r[0] and int(np.argmax(r)) == min(first))
+        k = min(min(first) + 2, steep.shape[1] - 1)
+        qx, qy, e = float(px[row, k]), float(py[row, k]), 0.005
+        h = ground.ground_height(self.scenario, np.array([qx + e, qx - e, qx, qx]), np.array([qy, qy, qy + e, qy - e]))
+        along = abs((h[0] - h[1]) * c + (h[2] - h[3]) * s) / (2 * e)
+        if math.degrees(math.atan(along)) > cap.max_slope:
+            return None                     # too steep along its way as well: a slope it cannot climb
+        slope = math.degrees(math.atan(math.hypot(h[0] - h[1], h[2] - h[3]) / (2 * e)))
+        return float(px[row, min(first)]), float(py[row, min(first)]), slope
 
     def _end(self, event: TerrainEvent) -> None:
         self.event = event

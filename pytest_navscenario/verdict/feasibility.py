@@ -198,7 +198,7 @@ def _terrain_words(scenario: Scenario, a, b) -> str | None:
             if wall.name not in crossed:
                 crossed.append(wall.name)
     kind = scenario.robot.body.kind
-    limits = (f"{'its' if kind == 'legged' else 'its estimated'} limits: a {cap.max_step:.2g} m step, a "
+    limits = (f"{'its estimated' if kind == 'wheeled' else 'its'} limits: a {cap.max_step:.2g} m step, a "
               f"{cap.max_slope:.3g} deg slope, a {cap.max_gap:.2g} m gap")
     named = ", ".join(crossed[:3]) + (f" and {len(crossed) - 3} more" if len(crossed) > 3 else "")
     return (f"the terrain the {kind} body cannot cross closes every way between them"

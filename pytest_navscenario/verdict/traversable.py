@@ -31,7 +31,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..scenario import ground
-from ..scenario.crossing import Capability, body_capability
+from ..scenario.crossing import Capability, body_capability, steep_cells, steep_piece
 from ..scenario.model import BoxObstacle, Scenario
 
 EDGE_SPACING = 0.05     # m between the points along an element's edge where faces are measured
@@ -81,7 +81,7 @@ def _piece_barriers(scenario: Scenario, cap: Capability) -> list[BoxObstacle]:
         x, y, c, s = ground.frame(el)
         rise = piece.top1 - piece.top0
         run = piece.u1 - piece.u0
-        if abs(rise) > cap.max_step and math.degrees(math.atan2(abs(rise), run)) > cap.max_slope:
+        if steep_piece(rise, run, cap):
             um = (piece.u0 + piece.u1) / 2
             out.append(BoxObstacle(_name(scenario, piece.element, f"{math.degrees(math.atan2(abs(rise), run)):.0f} "
                                                                    f"deg slope"),
@@ -169,7 +169,8 @@ def _grid_barriers(scenario: Scenario, cap: Capability) -> list[BoxObstacle]:
 
 def _blocked_cells(h: np.ndarray, dx: float, dy: float, cap: Capability) -> np.ndarray:
     """Cells of a height grid the body cannot cross: a jump of more than max_step to a neighbour,
-    or a connected patch steeper than max_slope whose heights span more than max_step."""
+    or steep ground (``crossing.steep_cells``: a connected patch steeper than max_slope whose
+    heights span more than max_step)."""
     blocked = np.zeros(h.shape, dtype=bool)
     jx = np.abs(np.diff(h, axis=1)) > cap.max_step
     jy = np.abs(np.diff(h, axis=0)) > cap.max_step
@@ -177,33 +178,7 @@ def _blocked_cells(h: np.ndarray, dx: float, dy: float, cap: Capability) -> np.n
     blocked[:, :-1] |= jx
     blocked[1:, :] |= jy
     blocked[:-1, :] |= jy
-    gx = np.gradient(h, dx, axis=1) if h.shape[1] > 1 else np.zeros_like(h)
-    gy = np.gradient(h, dy, axis=0) if h.shape[0] > 1 else np.zeros_like(h)
-    steep = np.hypot(gx, gy) > math.tan(math.radians(min(cap.max_slope, 89.9)))
-    if steep.any():
-        labels = _label(steep)
-        for lab in np.unique(labels[steep]):
-            patch = labels == lab
-            if float(h[patch].max() - h[patch].min()) > cap.max_step:
-                blocked |= patch
-    return blocked
-
-
-def _label(mask: np.ndarray) -> np.ndarray:
-    """Connected components (8-neighbours) of ``mask``: each cell's label is the smallest flat
-    index in its component (-1 outside), by propagating minima until nothing changes."""
-    big = mask.size
-    labels = np.where(mask, np.arange(big).reshape(mask.shape), big)
-    while True:
-        padded = np.pad(labels, 1, constant_values=big)
-        best = labels.copy()
-        for oy in (-1, 0, 1):
-            for ox in (-1, 0, 1):
-                best = np.minimum(best, padded[1 + oy:1 + oy + mask.shape[0], 1 + ox:1 + ox + mask.shape[1]])
-        best = np.where(mask, best, big)
-        if np.array_equal(best, labels):
-            return np.where(mask, labels, -1)
-        labels = best
+    return blocked | steep_cells(h, dx, dy, cap)
 
 
 def lenient(cap: Capability) -> Capability:

@@ -7,7 +7,7 @@ import re
 
 import pytest
 
-UNITS = {"N", "SECONDS", "PATH", "DIR", "SPEC", "NAME", "ADDRESS", "SHARE"}   # ADDRESS: auto or HOST:PORT (--nav-ray); SHARE: 25% or N (--navsearch-shrink-budget)
+UNITS = {"N", "SECONDS", "PATH", "DIR", "SPEC", "NAME", "ADDRESS", "SHARE", "P"}   # ADDRESS: auto or HOST:PORT (--nav-ray); SHARE: 25% or N (--navsearch-shrink-budget); P: a probability (--navsearch-hold)
 
 
 @pytest.fixture

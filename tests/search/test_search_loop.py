@@ -482,7 +482,7 @@ def chunked(size, reverse=True):
     def evaluator(ctx, proposals):
         for i in range(0, len(proposals), size):
             chunk = list(enumerate(proposals[i:i + size]))
-            done = {j: evaluate_candidate(ctx, o, origin) for j, (o, origin) in (reversed(chunk) if reverse else chunk)}
+            done = {j: evaluate_candidate(ctx, *p) for j, p in (reversed(chunk) if reverse else chunk)}
             yield from (done[j] for j in range(len(chunk)))
     return evaluator
 
@@ -510,7 +510,7 @@ def test_the_next_generation_is_handed_over_before_this_one_is_told(lane, strate
 
     def eager(ctx, proposals):   # evaluates when handed over, as worker processes start at once
         events.append("evaluate")
-        return [evaluate_candidate(ctx, o, origin) for o, origin in proposals]
+        return [evaluate_candidate(ctx, *p) for p in proposals]
 
     space = SearchSpace(lane, {"insert": 0, "remove": 0})
     report = _report(space, budget=40)

@@ -90,6 +90,27 @@ def test_one_search_on_two_processes_writes_what_a_serial_run_writes(project: py
     assert_same_search_output(project.path / "serial", project.path / "parallel")
     line = re.compile(r"crate vs .*: 40/40 sims.*")
     assert line.search(serial.stdout.str()) and line.search(parallel.stdout.str())
+    assert "of them confirming" not in serial.stdout.str()
+
+
+def test_a_search_under_noise_writes_the_same_files_serial_or_not_batched_or_not(project: pytest.Pytester):
+    """Under sensor noise each failure is confirmed by runs under fresh noise seeds within the
+    generation (search/holding.py), here by a planner whose failures are partly knife-edges (it
+    reads its noisy first scan; PickyBatch): the same runs, decisions and files on two processes,
+    with each worker's share in lockstep batches or not, as one episode at a time."""
+    args = ["-p", "no:cacheprovider", "--nav-subject=straight_planner:PickyBatch", "--navsearch", "crate",
+            "--budget", "40", "--navsearch-seed", "2", "--nav-sensor-model", "realistic"]
+    runs = {name: project.runpytest(*args, *extra, "--navsearch-out", name) for name, extra in [
+        ("serial", ["--nav-batch", "off"]), ("batched", []), ("parallel", ["-n", "2", "--nav-batch", "off"]),
+        ("parallel-batched", ["-n", "2"])]}
+    for name, result in runs.items():
+        assert result.ret == 0, (name, result.stdout.str())
+        assert re.search(r"crate vs .*: 40/40 sims.* searching \(\d+ of them confirming\)", result.stdout.str()), name
+        assert ("batches (--nav-batch)" in result.stdout.str()) == name.endswith("batched"), name
+        if name != "serial":
+            assert_same_search_output(project.path / "serial", project.path / name)
+    log = (project.path / "serial" / "crate" / "search-log.jsonl").read_text()
+    assert '"status": "rejected"' in log or '"status": "unconfirmed"' in log   # not every failure held
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["ctrl-c", "sigterm"])

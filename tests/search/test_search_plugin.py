@@ -257,3 +257,21 @@ def test_the_search_report_shows_a_failure_probability_column_when_rows_have_one
     row.probability, row.interval = 0.6, (0.31, 0.83)
     page = build_search_html([section])
     assert "<th>fails in</th>" in page and "60% <small>[31&ndash;83]</small>" in page
+
+
+def test_two_searches_into_one_folder_keep_both_logs_and_all_frozen_files(project):
+    """Issue 26: the log held only the last search's lines; now each search appends its own,
+    between a start and an end record carrying its id."""
+    from pytest_navscenario.search.freeze import read_search_log
+
+    folder = project.path / "scenarios" / "regressions" / "crate"
+    kept = []
+    for seed in ("3", "4"):
+        result = run(project, "--navsearch", "crate", "--budget", "6", "--navsearch-seed", seed)
+        assert result.ret == 0, result.stdout.str()
+        kept.append({p.name for p in folder.glob("crate-*.yaml")})
+    searches = list(read_search_log(folder / "search-log.jsonl").values())
+    assert [(s[0]["record"], s[0]["search_seed"], s[-1]["record"]) for s in searches] == \
+        [("start", 3, "end"), ("start", 4, "end")]
+    assert all(sum(r["record"] == "candidate" and r["phase"] == "search" for r in s) == 6 for s in searches)
+    assert kept[0] <= kept[1]                                   # the first search's files are all still there

@@ -114,3 +114,30 @@ def test_a_ray_that_met_something_nearer_stops_looking_there():
     assert np.isfinite(free).all()
     limited = cast_grids(placed, pnt, dirs, 30.0, within=np.array([1.0, np.inf]))
     assert limited[0] == 1.0 and limited[1] == free[1]     # the limit kept: nothing nearer on the grid
+
+
+def test_rays_that_cannot_come_down_to_the_grid_are_left_out_with_every_answer_unchanged():
+    """A tilted 2D lidar fan and a 16-ring scan from above a rough patch: the cast that first leaves
+    out the rays starting above the grid's top that do not come down to it within range gives the
+    same distances, bit for bit, as casting every ray."""
+    from pytest_navscenario.sim import hfield_rays
+
+    element = Rough("yard", 1.0, 0.5, length=6.0, width=5.0, amplitude=0.1, wavelength=0.6, seed=7, yaw=20.0)
+    placed = placed_grid(element, height_grid(element))
+    grid = hfield_rays._prepared(placed)
+    a = np.radians(np.arange(360.0))
+    tilt = math.radians(8.0)          # pitched nose down: the front half of the fan comes down
+    fan = np.column_stack([np.cos(a) * np.cos(tilt * np.cos(a)), np.sin(a),
+                           -np.sin(tilt * np.cos(a))])
+    fan /= np.linalg.norm(fan, axis=1)[:, None]
+    el = np.radians(np.linspace(-15, 15, 16))[:, None]
+    rings = np.stack([np.cos(el) * np.cos(a), np.cos(el) * np.sin(a), np.sin(el) * np.ones_like(a)], -1).reshape(-1, 3)
+    for pnt, dirs in ((np.array([0.5, 0.0, 0.35]), fan), (np.array([1.0, 1.0, 0.6]), rings)):
+        for within in (None, np.full(len(dirs), 4.0)):
+            every = np.full(len(dirs), np.inf) if within is None else within.copy()
+            hfield_rays._cast_rays(grid, pnt, dirs, 30.0, every)
+            mine = cast_grids([placed], pnt, dirs, 30.0, within=within)
+            assert np.array_equal(mine, every)
+            assert np.isfinite(mine).sum() > 20
+        z0 = pnt[2] - grid.base
+        assert z0 > grid.zmax and (dirs[:, 2] >= 0).sum() > len(dirs) // 3     # rays it leaves out

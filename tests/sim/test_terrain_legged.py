@@ -163,3 +163,24 @@ def test_moving_obstacles_walk_on_the_ground_or_at_their_own_height():
     assert rows[0, 1, 2] == 1.5
     res = simulate(sc, Straight(), 0, max_ticks=2)           # the episode writes them so
     assert res.ticks == 2
+
+
+def test_a_slope_steeper_than_max_slope_stops_it_across_its_way_as_the_path_search_says():
+    """Diagonally across a bank (rising 38 deg toward +y; max_slope 30) the ground rises only 29 deg
+    along its way: it used to walk up it although the path search calls the bank a wall. Now it stops
+    at the bank's low edge, stuck, and a 25 deg bank is walked."""
+    from pytest_navscenario.verdict.paths import shortest_path
+
+    def bank(deg):
+        rise = 6.0 * math.tan(math.radians(deg))
+        return scene([Ramp("bank", 5.0, 0.0, length=6.0, width=6.0, rise=rise, yaw=90.0)],
+                     start=(2.0, -5.0, 45.0), goal=(7.0, 0.0))
+
+    assert shortest_path(bank(38.0)) is None
+    steep = simulate(bank(38.0), Straight(), 0)
+    assert steep.end == "stuck-terrain", steep.end
+    event = steep.terrain_event
+    assert event.element == "ramp 'bank'" and event.detail == "cannot walk the 38 deg slope across its way", event
+    assert -3.6 < event.y < -3.0 and event.z == pytest.approx(0.0, abs=1e-6)   # at the low edge, not on it
+    gentle = simulate(bank(25.0), Straight(), 0)
+    assert gentle.end == "goal" and shortest_path(bank(25.0)).length == pytest.approx(math.hypot(5.0, 5.0))

@@ -73,15 +73,20 @@ def test_it_falls_into_a_pit_and_off_a_loading_dock_with_the_drop():
 
 
 def test_it_tips_over_on_a_steep_side_slope_and_not_on_a_gentle_one():
-    def bank(deg):
+    # a robot carrying its load high (its mass 0.3 m up, its wheels 0.35 m apart: it tips past ~30 deg)
+    def bank(deg, com_height=0.3):
         rise = 6.0 * math.tan(math.radians(deg))
         return scene([Ramp("bank", 5.0, 0.0, length=6.0, width=10.0, rise=rise, yaw=90.0)],
-                     start=(2.0, 0.5, 0.0), goal=(9.0, 0.5), footprint=Footprint(length=0.9, width=0.4))
+                     start=(2.0, 0.5, 0.0), goal=(9.0, 0.5), footprint=Footprint(length=0.9, width=0.4),
+                     body=WheeledBody(com_height=com_height))
     steep = simulate(bank(38.0), Straight(), 0)
     assert steep.end == "tipped" and steep.terrain_event.element == "ramp 'bank'"
     assert abs(steep.terrain_event.roll) > 45.0
     gentle = simulate(bank(12.0), Straight(), 0)
     assert gentle.end != "tipped" and np.degrees(np.abs(gentle.trajectory.roll)).max() < 20.0
+    # the default body carries its mass at its axle: on the same bank it slides and stalls, upright
+    low = simulate(bank(38.0, com_height=None), Straight(), 0)
+    assert low.end == "stuck-terrain" and np.degrees(np.abs(low.trajectory.roll)).max() < 45.0
 
 
 def test_the_chassis_hitting_an_obstacle_on_a_ramp_is_a_collision_and_the_obstacle_stands_on_it():
@@ -135,7 +140,8 @@ def test_the_verdict_names_what_happened_where_and_the_metrics_see_height():
     assert "stuck on terrain at t=" in stuck.message and "cannot climb the 0.15 m step of platform 'kerb'" in stuck.message
     bank = run_scenario(scene([Ramp("bank", 5.0, 0.0, length=6.0, width=10.0, rise=6.0 * math.tan(math.radians(38)),
                                     yaw=90.0)], start=(2.0, 0.5, 0.0), goal=(9.0, 0.5),
-                              footprint=Footprint(length=0.9, width=0.4)), Straight)
+                              footprint=Footprint(length=0.9, width=0.4), body=WheeledBody(com_height=0.3)),
+                        Straight)
     assert bank.outcome is Outcome.FALL and bank.message.startswith("tipped over on ramp 'bank'")
     up = run_scenario(scene(ramp_to(10.0), goal=(10.0, 0.0)), Straight)
     assert up.outcome is Outcome.SUCCESS

@@ -65,7 +65,7 @@ def test_stairs_are_a_wall_to_the_wheeled_body():
     reason = impassable_reason(scene(upper_level(Steps("stairs", 8.25, 0.0, count=5, rise=0.17, run=0.3,
                                                          width=20.0)), WheeledBody()))
     assert "the terrain the wheeled body cannot cross" in reason and "steps 'stairs' (0.17 m step)" in reason
-    assert "its estimated limits: a 0.04 m step, a 15 deg slope, a 0.05 m gap" in reason
+    assert "its estimated limits: a 0.028 m step, a 15 deg slope, a 0.05 m gap" in reason
 
 
 def test_a_pit_is_a_hole_and_a_narrow_trench_is_strode_over_by_the_legged_body():
@@ -119,3 +119,37 @@ def test_the_legged_simulation_agrees_with_the_path_where_it_can_and_cannot_go()
     assert simulate(up, Straight(), 0).end == "goal"
     blocked = scene(upper_level(), LEGGED)
     assert simulate(blocked, Straight(), 0).end == "stuck-terrain"
+
+
+@pytest.mark.parametrize("body", [WheeledBody(), WheeledBody(drive_wheels="skid"),
+                                  WheeledBody(wheel_radius=0.15, clearance=0.15)], ids=["diff", "skid", "big-wheels"])
+def test_the_wheeled_bodys_estimated_step_and_slope_are_crossed_in_the_simulation(body):
+    """The estimates stay under what the body does: a step or ramp the path search calls passable is
+    one the simulated body gets up, so an episode on it never blames a planner for the terrain."""
+    from pytest_navscenario.scenario.model import Safety
+    from pytest_navscenario.sim.episode import simulate
+
+    def crosses(terrain):
+        sc = Scenario(mission=Mission(start=Pose(0.0, 0.0, 0.0), goal=Pose(10.0, 0.0), timeout=20.0),
+                      terrain=tuple(terrain), robot=Robot(footprint=Footprint(), drive="diff", body=body,
+                                                          safety=Safety(enabled=False)))
+        return simulate(sc, Straight(), 0).end
+
+    cap = body_capability(scene([], body))
+    assert crosses([Platform("kerb", 8.0, 0.0, length=4.0, width=3.0, height=cap.max_step)]) == "goal"
+    rise = 3.0 * math.tan(math.radians(cap.max_slope))
+    assert crosses([Ramp("r", 5.0, 0.0, length=3.0, width=3.0, rise=rise),
+                    Platform("t", 9.5, 0.0, length=6.0, width=3.0, height=rise)]) == "goal"
+
+
+def test_an_mjcf_body_that_declares_its_limits_gets_the_same_barriers_as_a_legged_one():
+    """A user's own robot has no limits the harness can estimate; declared (max_step, max_slope and
+    optionally max_gap), the path search and the feasibility check use them as for a legged body."""
+    body = MjcfBody(file="robot.xml", controller="m:C", max_step=0.2, max_slope=30.0, max_gap=0.3)
+    assert body_capability(scene([], body)) == body_capability(scene([], LEGGED))
+    assert barriers(scene(upper_level(), body)) == barriers(scene(upper_level(), LEGGED))
+    reason = impassable_reason(scene(upper_level(), body))
+    assert ("the terrain the mjcf body cannot cross closes every way between them: in the way, platform 'upper' "
+            "(0.85 m step); its limits: a 0.2 m step, a 30 deg slope, a 0.3 m gap") in reason
+    no_gap = MjcfBody(file="robot.xml", controller="m:C", max_step=0.05, max_slope=15.0)
+    assert body_capability(scene([], no_gap)).max_gap == 0.0               # none declared: it crosses none

@@ -8,7 +8,10 @@ What it simulates. The robot is declared by what it can do (``LeggedBody``: ``ma
   each foot (one at each corner of the footprint) and from the centre;
 * a rise higher than ``max_step`` (a step, or a slope steeper than ``max_slope`` rising more than
   that) stops it, its feet at the face: the robot stands there while commanded on, which the
-  episode calls *stuck on terrain* after a few seconds;
+  episode calls *stuck on terrain* after a few seconds; so does steep ground (``crossing.
+  steep_ground``: steeper than ``max_slope`` in any direction, over more than ``max_step`` of
+  height) that it would walk onto across or diagonally, its feet at the edge (the path search's
+  wall there);
 * a drop deeper than ``max_step`` with ground back within ``max_gap`` (a trench, a gap between two
   platforms) is strode over; a deeper or wider one is walked into: when the centre passes its edge
   the support goes and the base *falls* under gravity (MuJoCo's physics from then on);
@@ -39,7 +42,7 @@ import mujoco
 import numpy as np
 
 from ...scenario import ground
-from ...scenario.crossing import SPACING, Capability, look_ahead, walk
+from ...scenario.crossing import SPACING, Capability, look_ahead, steep_ground, walk
 from ..terrain import GEAR_BITS
 from ..world import steps_per_tick
 from .base import ROBOT_GROUP, FreeBase, quat_to_rpy, rpy_to_quat
@@ -180,11 +183,13 @@ class LeggedGait:
         fx, fy = self._feet(x, y, yaw)
         sx = np.concatenate([[x], fx])
         sy = np.concatenate([[y], fy])
-        h = ground.ground_height(self.scenario, sx[:, None] + ex * dist, sy[:, None] + ey * dist).tolist()
+        px, py = sx[:, None] + ex * dist, sy[:, None] + ey * dist
+        h = ground.ground_height(self.scenario, px, py).tolist()
+        steep = steep_ground(self.scenario, cap, px, py)
         levels = [z] + self.holds.tolist()
         allowed, centre_walk = move, None
         for i, (profile, level) in enumerate(zip(h, levels)):
-            support, barrier = walk(profile, SPACING, level, cap)
+            support, barrier = walk(profile, SPACING, level, cap, steep[i] if steep[i].any() else None)
             if i == 0:
                 centre_walk = (support, barrier)
             if barrier is not None and barrier.kind != "drop":

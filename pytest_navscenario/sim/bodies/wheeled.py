@@ -1,13 +1,19 @@
 """The wheeled body: a chassis on a free joint riding the terrain under gravity on real wheel
 contacts, and its low-level controller (the planner's velocity command -> wheel speeds -> torques).
 
-Geometry (robot frame, the base's origin on the ground under the centre):
+Geometry (robot frame, the base's origin on the ground under the centre; ``scenario/chassis.py``
+places the parts and the loader refuses a body that cannot stand within its limits):
 
 * the chassis: the footprint (a box, or a cylinder for a circle) from ``clearance`` above the
-  ground up to ROBOT_HEIGHT (0.5 m, as the planar body), carrying the mass less the wheels';
-* ``diff``: two driven wheels on one axle through the centre, ``track`` apart, and two spring-loaded
-  ball casters at the front and back of the footprint (frictionless spheres on a vertical spring:
-  they keep the chassis level and carry little load, so the driven wheels keep their traction);
+  ground up to ROBOT_HEIGHT (0.5 m, as the planar body) is its collision shape; its mass sits at
+  ``com_height`` (default: the wheels' axle: batteries and drives low between the wheels), so the
+  chassis balances on its axle instead of standing on it like an inverted pendulum;
+* ``diff``: two driven wheels on one axle through the centre, ``track`` apart, and two sprung ball
+  casters at the front and the back of the footprint (frictionless spheres on vertical springs with
+  a small preload: they steady the chassis's pitch and carry little load, so the driven wheels keep
+  their traction); the springs are stiff enough that accelerating at 2 m/s² pitches a 0.3 m long
+  robot about 5 degrees and a 0.9 m one under 1, and soft enough that the wheels keep their load
+  where the ground bends by up to SUSPENSION_SLOPE (the foot and the top of a ramp);
 * ``skid``: four driven wheels, ``wheelbase`` apart front to back, ``track`` apart side to side;
   it turns by skidding (the wheels' sideways friction resists, as on a real skid-steer).
 
@@ -16,8 +22,11 @@ concrete). Each is driven by a MuJoCo velocity actuator, the low-level controlle
 wheel-speed loop whose torque saturates at ``max_wheel_torque``; its gain gives the wheel the
 planar body's tracking time constant (TRACKING_TAU) for its share of the robot's inertia. Each
 control tick the planner's setpoint (vx, wz) becomes the wheel speeds (vx -+ wz track / 2) / r,
-scaled down together when one would pass ``max_wheel_speed``. So a slope slows the robot when the
-torque saturates, a step taller than a wheel can climb stops it, and nothing is scripted.
+scaled down together when one would pass ``max_wheel_speed``, and the loop's target ramps to them
+over the tick (an integrator in the actuator) rather than jumping: the drive's acceleration limit
+holds within the tick as well as from tick to tick, so the wheels do not kick the chassis at full
+torque each tick. So a slope slows the robot when the torque saturates, a step taller than a wheel
+can climb stops it, and nothing is scripted.
 """
 from __future__ import annotations
 
@@ -27,14 +36,23 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from ...scenario.chassis import G, wheeled_layout
 from ..terrain import CHASSIS_BITS, GEAR_BITS
+from ..world import steps_per_tick
 from .base import ROBOT_GROUP, FreeBase
 
 ROBOT_HEIGHT = 0.5        # m: the chassis's top, as the planar body's
 WHEEL_MASS_SHARE = 0.04   # of the body's mass, per wheel
-CASTER_MASS = 0.3         # kg
-CASTER_STIFFNESS = 8000.0  # N/m (measured: see the docstring)
-CASTER_DAMPING = 400.0    # N s/m
+CASTER_MASS_SHARE = 0.01  # of the body's mass, per caster
+DECK = 0.1                # m: the thickness of the slab the chassis's mass is spread over (its inertia)
+CASTER_PRELOAD = 0.05     # of the body's weight, carried by each caster standing on flat ground
+SUSPENSION_SLOPE = 15.0   # degrees: a bend of the ground under the casters that leaves the wheels loaded
+# MuJoCo's contacts are soft in proportion to the mass behind them: a caster's own small mass would
+# make its contact softer than its spring (measured: a 0.3 kg caster sank 8 mm into the floor and let
+# a 0.3 m robot pitch 10 degrees accelerating at 2 m/s²). The slide's armature (inertia felt by the
+# spring's motion, not by gravity) puts a tenth of the robot's mass behind it, so the spring sets the
+# pitch (5 degrees there).
+CASTER_ARMATURE_SHARE = 0.1
 TRACKING_TAU = 0.02       # s: the wheel speed loop's time constant (steady error ~1 % at full torque)
 
 
@@ -44,39 +62,40 @@ class WheeledModel(FreeBase):
     def __init__(self, scenario):
         super().__init__(scenario)
         b = self.spec_body
-        fp = scenario.robot.footprint
-        self.length = fp.length if fp.shape == "box" else 2 * fp.radius
-        self.width = fp.width if fp.shape == "box" else 2 * fp.radius
-        self.radius = float(b.wheel_radius)
-        self.track = float(b.track) if b.track is not None else self.width - b.wheel_width
-        self.wheelbase = float(b.wheelbase) if b.wheelbase is not None else 0.6 * self.length
-        self.skid = b.drive_wheels == "skid"
+        self.layout = wheeled_layout(b, scenario.robot.footprint)
+        self.radius = self.layout.radius
+        self.track = self.layout.track
+        self.skid = self.layout.skid
         limits = scenario.robot.limits
         self.max_speed = (float(b.max_wheel_speed) if b.max_wheel_speed is not None
                           else limits.max_speed / self.radius * 1.2)   # 20 % headroom over the limit
         self.drop_limit = self.radius
-        self.caster_radius = max(0.02, min(b.clearance, self.radius / 2))
+        self.tick_dt = steps_per_tick(scenario) * scenario.simulation.timestep
 
     def wheel_positions(self) -> list[tuple[float, float]]:
         """(x, y) of each driven wheel's centre in the robot frame, left first."""
-        h = self.track / 2
-        if self.skid:
-            w = self.wheelbase / 2
-            return [(w, h), (-w, h), (w, -h), (-w, -h)]
-        return [(0.0, h), (0.0, -h)]
+        return list(self.layout.wheels)
 
     def build(self, spec: mujoco.MjSpec) -> None:
-        b, fp = self.spec_body, self.scenario.robot.footprint
-        r = self.radius
-        wheels = self.wheel_positions()
-        wheel_mass = WHEEL_MASS_SHARE * b.mass
+        b, fp, lay = self.spec_body, self.scenario.robot.footprint, self.layout
+        r, m = self.radius, float(b.mass)
+        wheels = lay.wheels
+        wheel_mass = WHEEL_MASS_SHARE * m
         casters = 0 if self.skid else 2
-        chassis_mass = max(b.mass - wheel_mass * len(wheels) - CASTER_MASS * casters, 0.1 * b.mass)
+        caster_mass = CASTER_MASS_SHARE * m
+        chassis_mass = max(m - wheel_mass * len(wheels) - caster_mass * casters, 0.1 * m)
         top = max(ROBOT_HEIGHT, b.clearance + 0.1)
         robot = spec.worldbody.add_body(name="robot", pos=[0.0, 0.0, 0.0])
         robot.add_freejoint(name="base")
+        # the chassis's mass: a slab over the footprint centred at com_height (its geoms carry none)
+        robot.explicitinertial = True
+        robot.mass = chassis_mass
+        robot.ipos = [0.0, 0.0, lay.com_height]
+        lx, ly = lay.length, lay.width
+        robot.inertia = [chassis_mass / 12 * (ly * ly + DECK * DECK), chassis_mass / 12 * (lx * lx + DECK * DECK),
+                         chassis_mass / 12 * (lx * lx + ly * ly)]
         chassis = dict(contype=CHASSIS_BITS[0], conaffinity=CHASSIS_BITS[1], group=ROBOT_GROUP,
-                       rgba=[0.2, 0.4, 0.9, 1], mass=chassis_mass)
+                       rgba=[0.2, 0.4, 0.9, 1])
         if fp.shape == "circle":
             robot.add_geom(name="footprint", type=mujoco.mjtGeom.mjGEOM_CYLINDER,
                            size=[fp.radius, (top - b.clearance) / 2, 0], pos=[0, 0, (top + b.clearance) / 2],
@@ -88,8 +107,7 @@ class WheeledModel(FreeBase):
         robot.add_site(name="centre", pos=[0.0, 0.0, 0.0])
         gear = dict(contype=GEAR_BITS[0], conaffinity=GEAR_BITS[1], group=ROBOT_GROUP)
         # wheel speed loop: the wheel's share of the robot's inertia, reflected through its radius
-        inertia = b.mass / len(wheels) * r * r
-        kv = inertia / TRACKING_TAU
+        kv = m / len(wheels) * r * r / TRACKING_TAU
         for k, (wx, wy) in enumerate(wheels):
             wheel = robot.add_body(name=f"wheel{k}", pos=[wx, wy, r])
             wheel.add_joint(name=f"wheel{k}", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 1, 0])
@@ -98,29 +116,46 @@ class WheeledModel(FreeBase):
                            mass=wheel_mass, friction=[1.0, 0.005, 0.0001], rgba=[0.1, 0.1, 0.1, 1], **gear)
             act = spec.add_actuator(name=f"wheel{k}", trntype=mujoco.mjtTrn.mjTRN_JOINT, target=f"wheel{k}")
             act.set_to_velocity(kv=kv)
+            act.dyntype = mujoco.mjtDyn.mjDYN_INTEGRATOR    # the target (act) ramps at the rate ctrl
             act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
             act.forcerange = [-b.max_wheel_torque, b.max_wheel_torque]
-        rc = self.caster_radius
-        for k in range(casters):
-            cx = (1 if k == 0 else -1) * (self.length / 2 - rc)
+        if casters:
+            self._add_casters(robot, chassis_mass, caster_mass, gear)
+
+    def _add_casters(self, robot, chassis_mass: float, caster_mass: float, gear: dict) -> None:
+        """Two ball casters on vertical springs at the front and back (see the module docstring):
+        stiffness from SUSPENSION_SLOPE, damping critical for the chassis's pitch on them, a preload
+        of CASTER_PRELOAD of the weight each, travel of the caster's radius either way."""
+        lay, m = self.layout, float(self.spec_body.mass)
+        rc, d = lay.caster_radius, lay.caster_x
+        stiffness = m * G / (d * math.tan(math.radians(SUSPENSION_SLOPE)))
+        pitch_inertia = chassis_mass / 12 * (lay.length ** 2 + DECK * DECK) + chassis_mass * (lay.com_height - lay.radius) ** 2
+        damping = max(math.sqrt(stiffness * d * d * pitch_inertia) / (d * d),
+                      stiffness * self.scenario.simulation.timestep)   # the latter: stable at any step
+        for k, cx in enumerate((d, -d)):
             caster = robot.add_body(name=f"caster{k}", pos=[cx, 0.0, rc])
             joint = caster.add_joint(name=f"caster{k}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1])
-            joint.stiffness = [CASTER_STIFFNESS, 0.0, 0.0]
-            joint.damping = [CASTER_DAMPING, 0.0, 0.0]
+            joint.stiffness = [stiffness, 0.0, 0.0]
+            joint.damping = [damping, 0.0, 0.0]
+            joint.springref = -CASTER_PRELOAD * m * G / stiffness
+            joint.armature = CASTER_ARMATURE_SHARE * m
             joint.limited = mujoco.mjtLimited.mjLIMITED_TRUE
             joint.range = [-rc, rc]
             # frictionless: a ball caster rolls any way (condim 1, and its priority makes the
             # contact take the caster's settings rather than the ground's)
             caster.add_geom(name=f"caster{k}", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[rc, 0, 0],
-                            mass=CASTER_MASS, condim=1, priority=1, rgba=[0.3, 0.3, 0.3, 1], **gear)
+                            mass=caster_mass, condim=1, priority=1, rgba=[0.3, 0.3, 0.3, 1], **gear)
 
     def bind(self, model: mujoco.MjModel) -> None:
         super().bind(model)
-        self.n_wheels = len(self.wheel_positions())
-        self.half = len(self.wheel_positions()) // 2          # left wheels first
+        self.n_wheels = len(self.layout.wheels)
+        self.half = self.n_wheels // 2          # left wheels first
 
-    def command(self, ctrl: np.ndarray, setpoint: tuple[float, float, float], state: Any = None) -> None:
-        """Wheel speed targets for the setpoint (vx, wz) (a wheeled body has no vy)."""
+    def begin(self, d: mujoco.MjData) -> "WheelSpeeds":
+        return WheelSpeeds(self, d)
+
+    def wheel_speeds(self, setpoint: tuple[float, float, float]) -> tuple[float, float]:
+        """(left, right) wheel speeds (rad/s) for the setpoint (vx, wz) (a wheeled body has no vy)."""
         vx, _, wz = setpoint
         r, half_track = self.radius, self.track / 2
         left = (vx - wz * half_track) / r
@@ -128,6 +163,24 @@ class WheeledModel(FreeBase):
         peak = max(abs(left), abs(right))
         if peak > self.max_speed:
             left, right = left * self.max_speed / peak, right * self.max_speed / peak
-        n = self.half
-        ctrl[:n] = left
-        ctrl[n:2 * n] = right
+        return left, right
+
+    def command(self, ctrl: np.ndarray, setpoint: tuple[float, float, float], state: Any = None) -> None:
+        raise RuntimeError("a wheeled body is commanded through its wheel speed loop (begin)")
+
+
+class WheelSpeeds:
+    """One episode's low-level controller of a wheeled body: each tick, the rates (``ctrl``) that
+    ramp the wheel-speed loops' targets (``act``) from where they are to the setpoint's wheel
+    speeds over exactly one control tick."""
+
+    def __init__(self, body: WheeledModel, d: mujoco.MjData):
+        self.body, self.act = body, d.act
+        self.half, self.n = body.half, body.n_wheels
+        self.rate = 1.0 / body.tick_dt
+
+    def command(self, ctrl: np.ndarray, setpoint: tuple[float, float, float], state: Any = None) -> None:
+        left, right = self.body.wheel_speeds(setpoint)
+        act, rate, half = self.act, self.rate, self.half
+        for k in range(self.n):
+            ctrl[k] = ((left if k < half else right) - act[k]) * rate
