@@ -331,7 +331,7 @@ def main() -> None:
     ap.add_argument("--reuse", default=None, help="a JSON file of an earlier run: its rows of strategies "
                     "not run now are shown beside the new ones (random and hillclimb are deterministic)")
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
-    ap.add_argument("--out", default="bench_search.json")
+    ap.add_argument("--out", default=str(Path(__file__).parent / "out" / "bench_search.json"))
     a = ap.parse_args()
     print(f"load average before: {os.getloadavg()}")
     out: dict = {"subject": a.subject, "command": " ".join(sys.argv)}
@@ -359,6 +359,7 @@ def main() -> None:
         out["power"] = rows
         print(table(rows, a.subject, a.budget, a.search_seeds, seeds))
     print(f"load average after: {os.getloadavg()}")
+    Path(a.out).parent.mkdir(parents=True, exist_ok=True)
     Path(a.out).write_text(json.dumps(out, indent=1, default=lambda v: None if isinstance(v, float)
                                       and not math.isfinite(v) else str(v)))
 

@@ -20,7 +20,8 @@ def run(args: argparse.Namespace) -> int:
     from ..subjects.policies.template import template_text, write_template
 
     if not os.path.isfile(args.model):
-        raise SubjectLoadError(f"no such model file {args.model!r}")
+        what = "is not a regular model file" if os.path.exists(args.model) else "no such model file"
+        raise SubjectLoadError(f"{what} {args.model!r}" if what.startswith("no") else f"{args.model!r} {what}")
     if args.print_only:
         sys.stdout.write(template_text(args.model))
         return 0

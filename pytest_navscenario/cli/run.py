@@ -12,6 +12,7 @@ import json
 import math
 import os
 import sys
+from pathlib import Path
 from typing import Any
 
 from ..sim.deadline import DEFAULT_TICK_LIMIT
@@ -28,7 +29,8 @@ _SUBJECT_HELP = (f"planner under test: a built-in name ({', '.join(sorted(BUILTI
 def add_arguments_run(p: argparse.ArgumentParser) -> None:
     p.add_argument("scenario", metavar="SCENARIO.yaml", nargs="+",
                    help="scenario YAML file(s); several run one after the other, in batches when "
-                        "the subject implements the batch protocol (see --batch)")
+                        "the subject implements the batch protocol (see --batch); of several, a file "
+                        "that cannot be loaded is reported as that file's error and the others run")
     p.add_argument("--subject", "-s", default=DEFAULT_SUBJECT, metavar="SPEC", help=_SUBJECT_HELP)
     p.add_argument("--seed", type=int, default=None, metavar="N",
                    help="base seed (integer >= 0) mixed with the scenario's simulation.seed "
@@ -123,7 +125,10 @@ def run_run(args: argparse.Namespace) -> int:
 
     files = list(args.scenario)
     batch = _batch_size(args.batch)
-    scenarios = [load_scenario(path) for path in files]
+    if len(files) == 1:
+        scenarios = [load_scenario(files[0])]
+    else:   # each file that cannot load is that file's error; the others run
+        scenarios = [_load_or_error(load_scenario, path) for path in files]
     look_in_current_folder(args.subject)
     tick_limit = args.tick_limit or None
     if len(files) == 1:
@@ -136,17 +141,20 @@ def run_run(args: argparse.Namespace) -> int:
     from ..harness.batch import Batching, run_batch
 
     batching = Batching()
-    results = run_batch(scenarios, args.subject, seeds=[args.seed] * len(files), tick_limit=tick_limit,
-                        batch=batch, batching=batching, engine=_engine(args.batch_engine))
+    loaded = [s for s in scenarios if not isinstance(s, Exception)]
+    ran = iter(run_batch(loaded, args.subject, seeds=[args.seed] * len(loaded), tick_limit=tick_limit,
+                         batch=batch, batching=batching, engine=_engine(args.batch_engine)) if loaded else [])
+    results = [s if isinstance(s, Exception) else next(ran) for s in scenarios]
     failed = errors = 0
     records = []
     for scenario, path, result in zip(scenarios, files, results):
         if isinstance(result, Exception):
             errors += 1
+            name = Path(path).stem if isinstance(scenario, Exception) else scenario.name
             if args.json:
-                records.append({"scenario": scenario.name, "file": path, "error": f"{type(result).__name__}: {result}"})
+                records.append({"scenario": name, "file": path, "error": f"{type(result).__name__}: {result}"})
             else:
-                print(f"{scenario.name} ({path}): error: {result}\n")
+                print(f"{name} ({path}): error: {result}\n")
             continue
         failed += not result.passed
         if args.json:
@@ -163,6 +171,15 @@ def run_run(args: argparse.Namespace) -> int:
               + (f", --batch-engine {args.batch_engine}" if args.batch_engine != "cpu" else "")
               + f"): {batching.describe()}")
     return 2 if errors else (1 if failed else 0)
+
+
+def _load_or_error(load: Any, path: str) -> Any:
+    """The scenario of ``path``, or the ScenarioError saying why it cannot be loaded."""
+    from ..core.errors import ScenarioError
+    try:
+        return load(path)
+    except ScenarioError as exc:
+        return exc
 
 
 def _record(scenario: Any, path: str, result: Any) -> dict[str, Any]:

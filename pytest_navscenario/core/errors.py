@@ -54,6 +54,11 @@ class SimulationDivergedError(NavScenarioError):
     """MuJoCo produced NaN/inf state or warnings: the physics cannot be trusted."""
 
 
+class SimulationFatalError(NavScenarioError):
+    """MuJoCo stopped an episode with a fatal error (mju_error: e.g. its memory arena overflowed):
+    the model cannot be simulated as it is. Ends that episode as an error, not the run."""
+
+
 class ImpassableScenarioError(NavScenarioError):
     """No planner can pass the scenario (its goal cannot be reached), or it passes without one:
     a defect of the scenario, reported before any episode runs, never a planner failure."""

@@ -21,6 +21,7 @@ from .jobs import EpisodeError, EpisodeJob, Impassable, Pending, _subject_for, c
 
 EXEC_ALONE = "an exec: subject is a process of its own"
 LOST = ("WorkerDied", "RayTaskLost")   # a batch job that lost its worker: its episodes run again alone
+WORKER_DIED = "their batch's worker process died, so they ran again one by one"   # the summary's reason
 
 
 def _key(job: EpisodeJob) -> tuple | None:
@@ -99,6 +100,8 @@ class _Shared:
                     if got.type_name in LOST:
                         # the batch took its worker with it: each episode again, alone
                         self.alone = self.executor.submit(self.jobs)
+                        if self.batching is not None:
+                            self.batching.note_alone(WORKER_DIED, len(self.jobs))
                     else:
                         self.outcomes = [got] * len(self.jobs)
                 else:

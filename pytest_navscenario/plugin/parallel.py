@@ -303,6 +303,8 @@ def pytest_runtestloop(session: pytest.Session) -> Any:
     """Submit every scenario item's episode, in item order, before the first item runs."""
     state = session.config.stash.get(STATE_KEY, None)
     executor = state.executor if state is not None else None
+    if state is not None and executor is None and not session.config.option.collectonly:
+        state.serial_items = sum(1 for i in session.items if hasattr(i, "episode_job"))
     if executor is not None and not session.config.option.collectonly:
         # scenario items (collect.ScenarioItem, known by its method: no import, no cycle)
         from ..dispatch.batches import submit_batched
@@ -334,11 +336,26 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
     """The line saying how the scenario items' episodes were batched on the workers."""
     state = config.stash.get(STATE_KEY, None)
     batching = getattr(state, "batching", None) if state is not None else None
+    if batching is None and state is not None and state.serial_items:
+        _note_unused_batch_options(terminalreporter, state.settings)
     if batching is None or not (batching.batched or batching.alone):
         return
     engine = state.settings.batch_engine
     flags = f"--nav-batch {state.settings.batch}" + (f", --nav-batch-engine {engine}" if engine != "cpu" else "")
     terminalreporter.write_line(f"navscenario: batches ({flags}): {batching.describe()}")
+
+
+def _note_unused_batch_options(terminalreporter: Any, settings: Any) -> None:
+    """A serial suite runs its items one at a time: say so when --nav-batch (other than its default)
+    or --nav-batch-engine warp asked for batches, rather than ignore them silently."""
+    from .options import DEFAULT_BATCH
+
+    given = ([f"--nav-batch {settings.batch}"] if settings.batch not in (1, DEFAULT_BATCH) else []) + \
+        ([f"--nav-batch-engine {settings.batch_engine}"] if settings.batch_engine != "cpu" else [])
+    if given:
+        terminalreporter.write_line(f"navscenario: {', '.join(given)} not used: a suite without workers runs its "
+                                    f"items one at a time, each on the CPU (batches need -n N, --nav-workers N, "
+                                    f"--nav-ray or --nav-isolate)")
 
 
 @pytest.hookimpl(tryfirst=True)

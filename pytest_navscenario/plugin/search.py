@@ -652,6 +652,18 @@ def _rel(config: pytest.Config, path: Path) -> str:
         return str(path)
 
 
+def _one_way_everywhere(r: Any) -> str:
+    """"outcome: message" when every simulation of the search phase (two at least) was a subject or
+    harness error with the same message (its tick aside): a broken subject, not the layouts; else ""."""
+    import re
+
+    ran = [c for c in r.candidates if c.phase == "search"]
+    if len(ran) < 2 or any(c.outcome not in ("subject-error", "harness-error") for c in ran):
+        return ""
+    said = {(c.outcome, re.sub(r"^planner error at tick \d+ \(t=[^)]*\): ", "", c.message)) for c in ran}
+    return "" if len(said) != 1 else "{}: {}".format(*said.pop())
+
+
 def _holding_lines(r: Any) -> list[str]:
     """What the confirmation of failures under the seed's randomness did (search/holding.py)."""
     if not r.randomness:
@@ -695,6 +707,10 @@ def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
         lines.append(f"  {unshrunk} of {len(r.failures)} failure(s) frozen as found: the shrink budget "
                      f"({r.shrink_total} simulations) went to the most severe and earliest ones (raise "
                      f"--navsearch-shrink-budget, e.g. 50%, to shrink more)")
+    same = _one_way_everywhere(r)
+    if same:
+        lines.append(f"  every one of the {r.sims_used} simulations ended the same way: {same}; the subject fails "
+                     f"whatever the layout: fix it (navscenario check-planner SPEC) before searching")
     if r.batching:
         lines.append(f"  batches (--nav-batch): {r.batching}")
     if r.skipped:

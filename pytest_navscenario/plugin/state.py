@@ -29,6 +29,7 @@ class NavState:
     # frozen failures of the search among the collected scenarios: (path, name) -> provenance
     frozen: dict[tuple[str, str], dict[str, Any]] = field(default_factory=dict)
     batching: Any = None          # controller with an executor: harness.batch.Batching of the items
+    serial_items: int = 0         # scenario items run in this process, one at a time (no executor)
 
 
 STATE_KEY = pytest.StashKey[NavState]()

@@ -18,11 +18,12 @@ ground under it, the base's height and pitch against the distance driven) is dra
 """
 from __future__ import annotations
 
+import functools
 import io
 import math
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 import numpy as np
 
@@ -43,6 +44,19 @@ A_COLOUR, B_COLOUR = "#7f9fbf", "#1f4e79"
 SPEED_CMAP = "viridis"
 MAX_NAMED_OBSTACLES = 40   # more obstacles than this: only the ones involved are named
 MAX_GAP_SEARCH = 200       # touching obstacles: look for the narrowest real gap among at most this many
+
+
+def as_written(build: Callable[..., "Figure"]) -> Callable[..., "Figure"]:
+    """Build the figure with matplotlib's mathtext off: the names it shows are the user's, drawn as
+    written ('$' in an obstacle's name started mathtext: 'x$\\frac{$y' made the plot fail, 'cost $5
+    and $x' lost its dollars). matplotlib's rcParams are left as they were."""
+    @functools.wraps(build)
+    def wrapper(*args: Any, **kwargs: Any) -> "Figure":
+        import matplotlib
+
+        with matplotlib.rc_context({"text.parse_math": False}):
+            return build(*args, **kwargs)
+    return wrapper
 
 
 def _figure(width: float, height: float, constrained: bool = True) -> "Figure":
@@ -732,6 +746,7 @@ def _colorbar(fig: "Figure", mapping: Any, cax: "Axes") -> None:
     fig.colorbar(mapping, cax=cax, orientation="horizontal", label="speed (m/s)")
 
 
+@as_written
 def trajectory_figure(result: EpisodeResult, *, outline_every: float | None = None) -> "Figure":
     """One episode: the figure (see the module docstring for what it shows)."""
     fig, (ax,), cax = _map_figure([result])
@@ -748,6 +763,7 @@ def save_trajectory(result: EpisodeResult, path: str | os.PathLike, **kwargs: An
     return save_figure(trajectory_figure(result, **kwargs), path)
 
 
+@as_written
 def comparison_figure(a: EpisodeResult, b: EpisodeResult, labels: tuple[str, str] = ("A", "B")) -> "Figure":
     """The same scenario under A and B side by side, same axes and the same speed colours."""
     fig, axes, cax = _map_figure([a, b])
@@ -783,6 +799,7 @@ def save_comparison(a: EpisodeResult, b: EpisodeResult, path: str | os.PathLike,
 FAILURE_HATCHES = {"safety-stop": "///", "timeout": "..", "collision": "xx", "subject-error": "--"}
 
 
+@as_written
 def bars_figure(cmp: "Comparison") -> "Figure":
     """The paper's two-sided bar chart, with every way of failing: per family, the success rate
     up and the failures down, stacked by outcome (safety stop, timeout, collision, subject error;

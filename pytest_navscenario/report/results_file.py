@@ -109,8 +109,9 @@ def read_results(path: str | os.PathLike) -> list[dict[str, Any]]:
             continue
         try:
             rec = json.loads(line)
-        except json.JSONDecodeError as exc:
-            raise ResultsFileError(f"{path}:{lineno}: not JSON ({exc.msg}); is this a --nav-results file?") from None
+        except (json.JSONDecodeError, RecursionError) as exc:
+            why = exc.msg if isinstance(exc, json.JSONDecodeError) else "nested too deeply"
+            raise ResultsFileError(f"{path}:{lineno}: not JSON ({why}); is this a --nav-results file?") from None
         if not isinstance(rec, dict) or rec.get("format") != FORMAT:
             raise ResultsFileError(f"{path}:{lineno}: not a navscenario results record (no \"format\": \"{FORMAT}\")")
         version = rec.get("format_version")

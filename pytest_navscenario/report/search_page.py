@@ -93,7 +93,14 @@ class SearchSection:
 def progress_figure(progress: Progress, title: str = "") -> "Figure":
     """How the search went, over its simulations: distinct failures found so far (top); each
     candidate's robustness, coloured by outcome, and the lowest so far (middle; below 0 = it
-    failed); candidates discarded before simulation so far (bottom)."""
+    failed); candidates discarded before simulation so far (bottom). The title (the scenario's
+    name) drawn as written."""
+    from .plots import as_written
+
+    return as_written(_progress_figure)(progress, title)
+
+
+def _progress_figure(progress: Progress, title: str) -> "Figure":
     import numpy as np
 
     from .plots import OUTCOME_COLOURS, _figure

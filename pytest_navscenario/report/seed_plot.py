@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..scenario.geometry import obstacle_polygon
-from .plots import _draw_mission, _figure, draw_obstacles, save_figure
+from .plots import _draw_mission, _figure, as_written, draw_obstacles, save_figure
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -40,6 +40,7 @@ def _extent(scenario: Any, recorded: np.ndarray, margin: float = 0.5) -> tuple[f
     return float(x.min() - margin), float(x.max() + margin), float(y.min() - margin), float(y.max() + margin)
 
 
+@as_written
 def seed_figure(scenario: Any, recorded: np.ndarray, title: str = "") -> "Figure":
     """Seed (left) beside the recorded path (right); ``recorded``: (n, 3) rows t, x, y."""
     x0, x1, y0, y1 = _extent(scenario, recorded)

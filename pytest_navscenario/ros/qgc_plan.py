@@ -55,6 +55,8 @@ def read_plan(path: str | Path) -> Plan:
         doc = json.loads(path.read_text(encoding="utf-8"))
     except json.JSONDecodeError as exc:
         raise PlanError(f"{path}:{exc.lineno}: not valid JSON ({exc.msg}); expected a QGroundControl .plan") from None
+    except RecursionError:
+        raise PlanError(f"{path}: not valid JSON (nested too deeply); expected a QGroundControl .plan") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise PlanError(f"{path}: cannot read: {exc}") from None
     mission = doc.get("mission") if isinstance(doc, dict) else None

@@ -50,6 +50,8 @@ SCENARIO_LIMITS: Mapping[str, float] = MappingProxyType({
     "max_reference_points": 50_000,
     "max_abs_value": 1e6,               # any coordinate, size, time or angle (m, s, deg)
     "max_lidar_beams": 10_000,
+    "max_lidar3d_rays": 262_144,        # rings x beams of robot.lidar3d (128 x 2048, the densest units)
+    "max_lidar3d_record_bytes": 2**30,  # its ranges recorded over an episode (float32 a ray a tick)
     "max_episode_steps": 10_000_000,    # timeout / timestep
     "max_name_length": 200,
 })

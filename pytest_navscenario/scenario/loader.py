@@ -19,6 +19,7 @@ import difflib
 import math
 import os
 import re
+import stat
 from dataclasses import replace
 from pathlib import Path
 from typing import Any, Mapping
@@ -133,6 +134,8 @@ def _mjcf_file(ctx: _Ctx, body: Any) -> Any:
         path = resolve_mesh_path(folder, body.file, what="MJCF")
     except MeshError as exc:
         raise ctx.fail(str(exc), field, line, fix) from None
+    if path.exists() and not path.is_file():   # a folder, or a named pipe that reading would wait on
+        raise ctx.fail(f"{path} is not a file", field, line, fix)
     try:
         data = path.read_bytes()
     except FileNotFoundError:
@@ -347,6 +350,29 @@ def _steps_per_tick(sim: Simulation) -> float:
     return 1.0 / (sim.timestep * sim.control_rate)
 
 
+def _check_lidar3d(ctx: _Ctx, scenario: Scenario) -> None:
+    """A 3D lidar's rays a scan (each costs ~0.3 us of CPU: 256 x 10000 rays took 0.9 s a scan) and
+    the ranges an episode records (a float32 a ray a tick, kept for bags: 3 GB for 30 s of those)
+    within SCENARIO_LIMITS."""
+    lidar, lines = scenario.robot.lidar3d, ctx.lines
+    rays = int(lidar.rings) * int(lidar.beams)
+    limit = int(SCENARIO_LIMITS["max_lidar3d_rays"])
+    if rays > limit:
+        raise ctx.fail(f"{lidar.rings} rings x {lidar.beams} beams = {rays} rays a scan, more than the limit "
+                       f"of {limit} (128 x 2048, the densest spinning lidars)", "robot.lidar3d.beams",
+                       lines.get("robot.lidar3d.beams", lines.get("robot.lidar3d")),
+                       f"fewer rings or beams: rings x beams at most {limit}")
+    sim = scenario.simulation
+    scans = math.ceil(scenario.mission.timeout * sim.control_rate - 1e-9) + 1
+    size, budget = scans * rays * 4, int(SCENARIO_LIMITS["max_lidar3d_record_bytes"])
+    if size > budget:
+        raise ctx.fail(f"{scans} scans of {lidar.rings} x {lidar.beams} ranges (float32) would record "
+                       f"{size / 2**30:.1f} GiB, more than the limit of {budget / 2**30:g} GiB",
+                       "robot.lidar3d", lines.get("robot.lidar3d", lines.get("robot")),
+                       "fewer rings or beams, a shorter mission.timeout or a lower simulation.control_rate "
+                       f"(scans x rings x beams at most {budget // 4})")
+
+
 def check_scenario(scenario: Scenario, *, _ctx: _Ctx | None = None) -> None:
     """Checks across fields: whole physics steps per tick, episode length, start/goal/waypoints clear
     of obstacles. Run by the loader; call it on scenarios built in code (e.g. generated layouts)."""
@@ -371,6 +397,8 @@ def check_scenario(scenario: Scenario, *, _ctx: _Ctx | None = None) -> None:
                        f"{episode_steps:.3g} physics steps, more than {SCENARIO_LIMITS['max_episode_steps']:g}",
                        "mission.timeout", lines.get("mission.timeout", lines.get("mission")),
                        "shorten the timeout or lengthen the timestep")
+    if scenario.robot.lidar3d is not None:
+        _check_lidar3d(ctx, scenario)
     for key in ("observation", "command"):
         delay = getattr(scenario.robot.latency, key)
         ticks = delay * sim.control_rate
@@ -632,8 +660,16 @@ def load_scenario(path: str | os.PathLike, *, family: str | None = None) -> Scen
     src = os.fspath(path)
     limit = int(SCENARIO_LIMITS["max_file_bytes"])
     try:
-        with open(p, "rb") as fh:
-            size = os.fstat(fh.fileno()).st_size   # read(limit + 1) alone would allocate 5 MB per file
+        # O_NONBLOCK: opening a named pipe (a FIFO named like a scenario) would wait for a writer forever
+        fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+        with open(fd, "rb") as fh:
+            info = os.fstat(fh.fileno())
+            if stat.S_ISDIR(info.st_mode):
+                raise IsADirectoryError(src)
+            if not stat.S_ISREG(info.st_mode):
+                raise ScenarioError("is not a regular file (a named pipe, socket or device)", path=src,
+                                    hint="pass the scenario's .yaml file itself")
+            size = info.st_size   # read(limit + 1) alone would allocate 5 MB per file
             data = fh.read(size + 1 if 0 < size <= limit else limit + 1)
     except FileNotFoundError:
         raise ScenarioError("no such scenario file", path=src, hint="check the path and the file name") from None

@@ -407,4 +407,7 @@ LIDAR3D = section(Lidar3D, "robot.lidar3d", "a spinning multi-ring lidar whose p
            le=1.0, nullable=True),
     Number("spurious", "", "probability of a spurious return short of the true one", ge=0, le=1.0),
 ], what="the 3D lidar settings (a mapping)", rules=[
-    Rule("range_max is greater than range_min, fov_high not below fov_low", _lidar3d_ranges)])
+    Rule("range_max is greater than range_min, fov_high not below fov_low", _lidar3d_ranges),
+    Rule(f"rings x beams at most {int(_LIMITS['max_lidar3d_rays'])} rays a scan, and its ranges recorded over "
+         f"the episode (scans x rings x beams x 4 bytes) at most {int(_LIMITS['max_lidar3d_record_bytes']) >> 30} "
+         f"GiB", None)])

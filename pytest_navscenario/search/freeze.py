@@ -308,12 +308,14 @@ def write_search_log(report: SearchReport, space: SearchSpace, out_dir: str | Pa
 def read_search_log(path: str | Path) -> dict[str, list[dict[str, Any]]]:
     """The records of a search log, by search id in the order the searches started (each list
     from its start record to its end record; a search killed before its end has none). A line
-    cut short by a kill is skipped."""
+    cut short by a kill, or that is no JSON object, is skipped."""
     searches: dict[str, list[dict[str, Any]]] = {}
     for line in Path(path).read_text(encoding="utf-8").splitlines():
         try:
             record = json.loads(line)
-        except ValueError:
+        except (ValueError, RecursionError):
+            continue
+        if not isinstance(record, dict):      # not a record of ours
             continue
         searches.setdefault(str(record.get("search", "")), []).append(record)
     return searches

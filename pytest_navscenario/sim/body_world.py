@@ -118,6 +118,9 @@ def build_body_world(scenario: Scenario, body: Any) -> BodyWorld:
     try:
         model = _compile(spec, body)
     except Exception as exc:
+        clash = _name_clash(scenario, str(exc))
+        if clash is not None:
+            raise clash from None
         raise ScenarioError(f"MuJoCo could not build the model: {exc}", path=scenario.source,
                             hint="check the terrain's and the obstacles' sizes, and the robot's body") from exc
     body.bind(model)
@@ -136,6 +139,34 @@ def build_body_world(scenario: Scenario, body: Any) -> BodyWorld:
     return BodyWorld(model, robot_body, robot_geom, obstacle_of_geom, safety, groups, body=body,
                      terrain_of_geom=terrain_of_geom(model), chassis_sensor=int(model.sensor_adr[sensor]),
                      element_names=names)
+
+
+def _name_clash(scenario: Scenario, error: str) -> ScenarioError | None:
+    """The error for MuJoCo's 'repeated name' of a robot MJCF that uses a name the scenario's world
+    uses (its floor, an obstacle, a sensor): the file, its line in the scenario, the owner and the
+    fix; None for any other error."""
+    import re
+
+    found = re.search(r"repeated name '([^']*)' in (\w+)", error)
+    if found is None or scenario.robot.body.kind != "mjcf":
+        return None
+    from ..scenario.loader import field_line
+    from .bodies.mjcf import mjcf_path
+
+    name, kind = found.groups()
+    field, owner, fix = "robot.body.file", None, None
+    for i, names in enumerate(obstacle_geom_names(scenario)):
+        if name in names or name == f"moving:{names[0]}":
+            obstacle = scenario.obstacles[i]
+            owner = f"obstacle {obstacle.name!r} (obstacles[{i}])"
+            fix = f"rename obstacles[{i}] in the scenario, or the {kind} in the MJCF file"
+            break
+    if owner is None:
+        owner = "its own floor" if name.startswith("floor") else "its own elements"
+        fix = f"rename the {kind} {name!r} in the MJCF file, and where your controller names it"
+    return ScenarioError(f"{mjcf_path(scenario)} has a {kind} named {name!r}, a name the scenario's world "
+                         f"already gives {owner}", path=scenario.source,
+                         line=field_line(scenario.source, field), field=field, hint=fix)
 
 
 def rides_the_ground(scenario: Scenario) -> bool:

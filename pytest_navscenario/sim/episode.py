@@ -23,7 +23,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from ..core.errors import SimulationDivergedError
+from ..core.errors import SimulationDivergedError, SimulationFatalError
 from ..scenario.model import Mission, Scenario
 from ..subjects.protocol import Observation
 from .command import Drive, call_planner, planner_traceback, validate_command
@@ -35,8 +35,8 @@ from .faults import Faults
 from .moving import MovingObstacles, describe_collision
 from .profiler import profiler_off
 from .trajectory import Collision, SafetyStop, SubjectFailure, TerrainEvent, Trajectory
-from .world import (MUJOCO_WARNINGS, TWO_PI, compiled_world, divergence_message, on_mujoco_warning,
-                    steps_per_tick)
+from .world import (MUJOCO_WARNINGS, TWO_PI, compiled_world, divergence_message, fatal_message,
+                    on_mujoco_warning, steps_per_tick)
 from ..scenario import ground
 from .bodies.base import base_state, quat_to_rpy, world_yaw_rate
 from .body_world import compiled_body_world, rides_the_ground
@@ -215,19 +215,25 @@ class Episode:
         deadline = self.deadline
         if deadline is not None:
             deadline.__enter__()
+        fatal = False
         try:
             try:
                 self.start()
                 self.run_ticks()
             except EpisodeOver as over:
                 self.end = over.reason
+            except mujoco.FatalError as exc:   # mju_error (an arena overflow...): this episode ends
+                fatal = True
+                raise SimulationFatalError(
+                    fatal_message(self.scenario, self.model, exc, self.i * self.dt)) from None
             if self.warn_count.any():   # the authoritative per-data counters, once per episode
                 raise SimulationDivergedError(
                     divergence_message(self.scenario, self.data, self.i * self.dt))
         finally:
             if deadline is not None:
                 deadline.__exit__(None, None, None)
-            self.world.give_back(self.data)
+            if not fatal:                # a data MuJoCo gave up on is not reused
+                self.world.give_back(self.data)
         return self.result()
 
     def start(self) -> None:

@@ -12,15 +12,17 @@ raised them (the list is cleared before each episode's physics).
 from __future__ import annotations
 
 from time import perf_counter
-from typing import Any, Sequence
+from typing import AbstractSet, Any, Mapping, Sequence
 
-from ..core.errors import SimulationDivergedError
+import mujoco
+
+from ..core.errors import SimulationDivergedError, SimulationFatalError
 from .command import call_planner, planner_traceback, validate_command
 from .deadline import PlannerTimeout, TickDeadline
 from .episode import Episode, EpisodeOver, SimResult
 from .profiler import profiler_off
 from .trajectory import SubjectFailure
-from .world import MUJOCO_WARNINGS, divergence_message
+from .world import MUJOCO_WARNINGS, divergence_message, fatal_message
 
 
 def _tick_limit(requests: Sequence[Any]) -> float | None:
@@ -31,6 +33,14 @@ def _tick_limit(requests: Sequence[Any]) -> float | None:
 
 
 COHORTS = True     # episodes that can observe and step together do (cohort.py); False: each its own steps
+
+
+def _short(value: Any) -> str:
+    """repr(value) cut to 60 characters (a repr that raises: its type)."""
+    try:
+        return f"{value!r:.60}"
+    except Exception:
+        return f"<{type(value).__name__}>"
 
 
 class _Failed:
@@ -241,17 +251,22 @@ class Lockstep:
         for i in live:
             self.episodes[i].t_planner += share
         if failed is None:
+            unordered = isinstance(answers, (Mapping, AbstractSet, str, bytes))   # listing a dict gives its keys
             try:
-                n = len(answers)
-            except TypeError:
+                n = -1 if unordered else len(answers)
+            except Exception:
                 n = -1
             if n != len(live):
-                got = f"{n} commands" if n >= 0 else f"{type(answers).__name__} {answers!r:.60}"
-                failed = _Failed(f"planner.act_batch returned {got} for {len(live)} episodes; expected one "
-                                 f"command per id, in the order of ids")
-        if failed is not None:
-            return [failed] * len(live)
-        return list(answers)
+                got = f"{n} commands" if n >= 0 else f"{type(answers).__name__} {_short(answers)}"
+                failed = _Failed(f"planner.act_batch returned {got} for {len(live)} episodes; expected "
+                                 f"{'a list of ' if unordered else ''}one command per id, in the order of ids")
+        if failed is None:
+            try:
+                return list(answers)
+            except Exception as exc:
+                failed = _Failed(f"planner.act_batch's answer cannot be read as a list: {type(exc).__name__}: "
+                                 f"{exc}", planner_traceback(exc))
+        return [failed] * len(live)
 
     # ------------------------------------------------------------ an episode ends
 
@@ -270,5 +285,8 @@ class Lockstep:
 
     def _fail(self, i: int, exc: Exception) -> None:
         ep = self.episodes[i]
+        if isinstance(exc, mujoco.FatalError):   # as Episode.run: the cause and the fix; the data dropped
+            self.results[i] = SimulationFatalError(fatal_message(ep.scenario, ep.model, exc, ep.i * ep.dt))
+            return
         self.results[i] = exc
         ep.world.give_back(ep.data)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import logging
 import math
+import re
 from collections import OrderedDict, deque
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -357,6 +358,33 @@ def _lidar_groups(model: mujoco.MjModel) -> np.ndarray | None:
 
 def clear_model_cache() -> None:
     _CACHE.clear()
+
+
+def fatal_message(scenario: Scenario, model: mujoco.MjModel, exc: BaseException, t: float) -> str:
+    """What SimulationFatalError says: where, when, MuJoCo's own text, and the fix (for an arena that
+    overflowed, the ``<size memory>`` that holds what MuJoCo asked for, or a smaller model)."""
+    where = scenario.name or "<unnamed scenario>"
+    if scenario.source:
+        where += f" ({scenario.source})"
+    text = " ".join(str(exc).split())
+    size = f"{model.nbody} bodies, {model.ngeom} geoms"
+    body = scenario.robot.body
+    mjcf = getattr(body, "file", None) if getattr(body, "kind", None) == "mjcf" else None
+    asked = re.search(r"requested = (\d+)", text)
+    if "out of memory" in text or "size memory" in text:
+        need = int(asked.group(1)) + int(model.narena) if asked else 2 * int(model.narena)
+        mega = 1 << max(0, (need - 1) // 2**20).bit_length()      # MB, a power of two that holds it
+        memory = f"{mega // 1024}G" if mega >= 1024 else f"{mega}M"
+        fix = (f'add <size memory="{memory}"/> to the robot\'s MJCF file {mjcf} (robot.body.file), or '
+               f"simplify it" if mjcf else "simplify the scenario (fewer or simpler obstacles and terrain)")
+        arena = int(model.narena)
+        shown = f"{arena / 2**20:.0f} MB" if arena >= 2**20 else f"{arena / 1024:.0f} KB"
+        why = f"the model ({size}) needs more memory than MuJoCo's arena of {shown}"
+    else:
+        fix = (f"simplify the robot's MJCF file {mjcf} (robot.body.file) until it runs in MuJoCo's own "
+               f"simulate viewer" if mjcf else "simplify the scenario (obstacles and terrain)")
+        why = f"the model ({size}) cannot be simulated"
+    return f"MuJoCo stopped scenario {where} at t={t:.3f} s: {why}: {text} (fix: {fix})"
 
 
 def divergence_message(scenario: Scenario, d: mujoco.MjData, t: float) -> str:

@@ -146,11 +146,12 @@ class ExternalProcess:
         line = self._read_line(timeout, what)
         try:
             reply = json.loads(line)
-        except (json.JSONDecodeError, UnicodeDecodeError):
+        except (json.JSONDecodeError, UnicodeDecodeError, RecursionError) as exc:
             shown = line[:80].decode("utf-8", "replace")
             self.stop(grace=0.2)
+            why = " (nested too deeply)" if isinstance(exc, RecursionError) else ""
             raise PlannerProtocolError(
-                f"external planner printed something that is not JSON in answer to {what}: {shown!r} "
+                f"external planner printed something that is not JSON{why} in answer to {what}: {shown!r} "
                 f"(print logs to stderr, one JSON object per line to stdout)") from None
         if not isinstance(reply, dict):
             self.stop(grace=0.2)

@@ -102,3 +102,22 @@ def test_run_takes_several_files_and_batches_them(capsys):
 def _json_run(files, *extra, capsys):
     assert cli.main(["run", *files, "--json", *extra]) == 0
     return json.loads(capsys.readouterr().out)
+
+
+def test_run_of_several_files_reports_every_file_that_cannot_load_and_runs_the_others(tmp_path, capsys):
+    # the first broken file stopped the run before any episode, and hid the next broken one
+    broken = tmp_path / "broken.yaml"
+    broken.write_text("version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 5, y: 0}}\nobstacles:\n"
+                      "  - {type: box, x: 2, y: 0, length: -1, width: 1}\n")
+    files = [str(SEEDS_DIR / "boxes1.yaml"), str(broken), str(tmp_path / "gone.yaml"), str(SEEDS_DIR / "corridor.yaml")]
+    assert cli.main(["run", *files]) == 2
+    out = capsys.readouterr().out
+    assert out.count("outcome: success") == 2
+    assert f"broken ({broken}): error: {broken}:4: obstacles[0].length: must be > 0" in out
+    assert f"gone ({tmp_path / 'gone.yaml'}): error: {tmp_path / 'gone.yaml'}: no such scenario file" in out
+    assert "4 scenario(s): 2 passed, 0 failed, 2 error(s); batches (--batch auto): 2 episode(s) in 1 batch(es)" in out
+    assert cli.main(["run", *files, "--json"]) == 2
+    records = json.loads(capsys.readouterr().out)
+    assert [r["file"] for r in records] == files
+    assert records[1]["error"].startswith(f"ScenarioError: {broken}:4: obstacles[0].length")
+    assert records[0]["outcome"] == records[3]["outcome"] == "success"

@@ -83,13 +83,17 @@ def test_a_batch_that_kills_its_worker_fails_only_that_episode(tmp_path, monkeyp
     work = [EpisodeJob(loads_scenario(scenario_text(n, x), f"{n}.yaml"), "crashing:Planner", keep_trajectory="none")
             for n, x in SUITE]
     pool = ProcessExecutor(2)
+    batching = Batching()
     try:
-        got = [p.outcome() for p in submit_batched(pool, work, 3)]
+        got = [p.outcome() for p in submit_batched(pool, work, 3, batching)]
     finally:
         pool.close(cancel=True)
     died = [n for n, g in zip(names, got) if getattr(g, "type_name", "") == "WorkerDied"]
     assert died == ["victim"]
     assert all(g.outcome.value == "success" for n, g in zip(names, got) if n != "victim")
+    # the summary counts the dead batch's episodes, which ran alone (they were missing from it)
+    assert (batching.batched, batching.batches) == (3, 1)
+    assert batching.why_alone == {"their batch's worker process died, so they ran again one by one": 3}
 
 
 def test_workers_run_their_share_in_batches_with_the_results_of_an_unbatched_run(pytester: pytest.Pytester):

@@ -88,6 +88,24 @@ def test_trajectory_plot_size_and_content(tmp_path):
     assert outlines[0].get_paths()[0].get_extents().height == pytest.approx(0.9)  # 0.9 m long, heading +y
 
 
+def test_names_with_dollar_signs_are_drawn_as_written(tmp_path):
+    # matplotlib reads '$...$' as mathtext: a scenario named 'cost $5 and $x' lost its dollars and went
+    # italic, and an obstacle named 'x$\\frac{$y' made the plot fail ("could not draw ...: ValueError")
+    import dataclasses
+    from pytest_navscenario.report.plots import comparison_figure, save_figure, trajectory_figure
+
+    result = make_episode("collision", name="cost $5 and $x")
+    odd = BoxObstacle("x$\\frac{$y", 1.5, 5, 1, 1)
+    result.scenario = dataclasses.replace(result.scenario, obstacles=(result.scenario.obstacles[0], odd,
+                                                                      result.scenario.obstacles[2]))
+    for fig in (trajectory_figure(result), comparison_figure(result, result)):
+        assert_picture(save_figure(fig, tmp_path / "odd.png"))
+        texts = [t for ax in fig.axes for t in (*ax.texts, ax.title)] + list(fig.texts)
+        assert any(t.get_text() == "x$\\frac{$y" for t in texts)
+        assert any("cost $5 and $x" in t.get_text() for t in texts)
+        assert not any(t.get_parse_math() and "$" in t.get_text() for t in texts)
+
+
 def test_plot_without_trajectory_still_shows_the_layout(tmp_path):
     """Results rebuilt without a trajectory (not requested) still plot the scene and markers."""
     from pytest_navscenario.sim.trajectory import Trajectory

@@ -305,3 +305,20 @@ def test_expected_failures_apart_under_xdist(pytester: pytest.Pytester, monkeypa
     assert result.ret == pytest.ExitCode.OK
     page = (pytester.path / "r.html").read_text()
     assert "<h2>Failures (0)</h2>" in page and "<h2>Expected failures (xfail) (1)</h2>" in page
+
+
+def test_json_files_nested_too_deeply_are_errors_naming_the_file(tmp_path):
+    # json.loads raised RecursionError: a traceback from navscenario compare, the baseline, imports
+    from pytest_navscenario.report.results_file import ResultsFileError, read_results
+    from pytest_navscenario.ros.qgc_plan import PlanError, read_plan
+    from pytest_navscenario.search.freeze import read_search_log
+
+    deep = tmp_path / "deep.jsonl"
+    deep.write_text("[" * 100000 + "]" * 100000 + "\n")
+    with pytest.raises(ResultsFileError, match=rf"{re.escape(str(deep))}:1: not JSON \(nested too deeply\)"):
+        read_results(deep)
+    with pytest.raises(PlanError, match=rf"{re.escape(str(deep))}: not valid JSON \(nested too deeply\)"):
+        read_plan(deep)
+    log = tmp_path / "search-log.jsonl"
+    log.write_text('[1, 2]\n' + deep.read_text() + json.dumps({"search": "s1", "type": "start"}) + "\n")
+    assert read_search_log(log) == {"s1": [{"search": "s1", "type": "start"}]}    # the others skipped

@@ -137,6 +137,32 @@ def test_a_directory_named_like_a_scenario(tmp_path):
         load_scenario(tmp_path / "missing.yaml")
 
 
+def _load_in_a_process(path) -> str:
+    """Load ``path`` in a fresh process (a read that blocks on a named pipe ends with it after 20 s):
+    what the loader said."""
+    import subprocess
+    import sys
+    code = ("import sys\nfrom pytest_navscenario import ScenarioError, load_scenario\n"
+            "try:\n    load_scenario(sys.argv[1])\nexcept ScenarioError as e:\n    print(repr(e.field), e)\n")
+    try:
+        done = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, text=True, timeout=20)
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"loading {path.name} hung (reading a named pipe)")
+    return done.stdout
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "mkfifo"), reason="named pipes are POSIX")
+def test_a_named_pipe_named_like_a_scenario_or_its_robot_is_an_error_not_a_hang(tmp_path):
+    import os
+    os.mkfifo(tmp_path / "pipe.yaml")
+    assert "is not a regular file" in _load_in_a_process(tmp_path / "pipe.yaml")
+    os.mkfifo(tmp_path / "robot.xml")
+    (tmp_path / "s.yaml").write_text("version: 1\nrobot: {drive: diff, body: {type: mjcf, file: robot.xml, "
+                                     "controller: 'c:C'}}\nmission: {start: {x: 0, y: 0}, goal: {x: 5, y: 0}}\n")
+    said = _load_in_a_process(tmp_path / "s.yaml")
+    assert said.startswith("'robot.body.file'") and "is not a file" in said
+
+
 def test_python_tags_are_refused_and_never_run(tmp_path):
     marker = tmp_path / "pwned"
     err = load_text(tmp_path, VALID + f"search: !!python/object/apply:os.system ['touch {marker}']\n")
@@ -231,3 +257,26 @@ def test_fuzz_scenario_mappings_raise_only_scenario_error(paths, replacement, ex
         except ScenarioError:
             continue
         assert loads_scenario(dump_scenario(s)) == s  # whatever loads also round-trips
+
+
+def test_a_3d_lidar_too_dense_to_scan_or_to_record_is_refused_at_load_with_its_field(tmp_path):
+    # 256 x 10000 rays passed before: 0.9 s CPU a scan, 10 MB recorded a tick (3 GB for 30 s)
+    robot = "robot: {drive: diff, lidar3d: {rings: %d, beams: %d}}\n"
+    base = "version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 5, y: 0}, timeout: %g}\n"
+    err = load_text(tmp_path, base % 30 + robot % (256, 10000))
+    assert err.field == "robot.lidar3d.beams" and err.line == 3
+    assert "256 rings x 10000 beams = 2560000 rays a scan, more than the limit of 262144" in err.message
+    assert "fix: " in str(err) and "rings x beams" in err.hint
+    err = load_text(tmp_path, base % 300 + robot % (128, 2048))      # 3001 scans of 1 MB: 3.1 GB
+    assert err.field == "robot.lidar3d" and err.line == 3
+    assert "3001 scans of 128 x 2048 ranges (float32) would record 2.9 GiB, more than the limit of 1 GiB" \
+        in err.message
+    assert "mission.timeout" in err.hint and "control_rate" in err.hint
+    assert load_scenario(_write(tmp_path, base % 30 + robot % (128, 2048))).robot.lidar3d.beams == 2048
+    assert load_scenario(_write(tmp_path, base % 4600 + robot % (16, 360))).robot.lidar3d.rings == 16
+
+
+def _write(folder, text: str):
+    path = folder / "fine.yaml"
+    path.write_text(text)
+    return path

@@ -275,3 +275,25 @@ def test_two_searches_into_one_folder_keep_both_logs_and_all_frozen_files(projec
         [("start", 3, "end"), ("start", 4, "end")]
     assert all(sum(r["record"] == "candidate" and r["phase"] == "search" for r in s) == 6 for s in searches)
     assert kept[0] <= kept[1]                                   # the first search's files are all still there
+
+
+BROKEN = '''
+class Broken:
+    def reset(self, scenario):
+        raise RuntimeError("map server unreachable")
+
+    def act(self, obs):
+        return (0.0, 0.0, 0.0)
+'''
+
+
+def test_a_search_whose_every_simulation_is_the_same_subject_error_says_so(project):
+    # the planner fails whatever the layout: the summary only said "4 distinct failure(s) (subject-error 4)"
+    # and froze them as regressions, without saying that the subject itself is broken, nor how
+    project.makepyfile(broken_planner=BROKEN)
+    result = project.runpytest_inprocess("-p", "pytest_navscenario.plugin", "--nav-subject=broken_planner:Broken",
+                                         "--navsearch", "crate", "--budget", "4")
+    result.stdout.fnmatch_lines(["*every one of the 4 simulations ended the same way: subject-error: planner.reset "
+                                 "raised RuntimeError: map server unreachable; the subject fails whatever the "
+                                 "layout: fix it (navscenario check-planner SPEC) before searching*"])
+    assert "ended the same way" not in run(project, "--navsearch", "crate", "--budget", "4").stdout.str()

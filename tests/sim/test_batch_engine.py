@@ -165,6 +165,35 @@ def test_the_wrong_number_of_commands_fails_the_call():
                                             "one command per id, in the order of ids")
 
 
+def test_an_answer_that_is_a_mapping_or_cannot_be_listed_fails_the_call_saying_what_it_got():
+    # a dict {id: command} has the right length, and listing it gave its keys: "returned for this episode
+    # int 0"; an answer whose len() or iteration raised escaped the batch and ended every episode in it
+    class Keyed(BatchOf):
+        def act_batch(self, ids, observations):
+            return dict(zip(ids, super().act_batch(ids, observations)))
+
+    class Broken:
+        def __len__(self):
+            return 3
+
+        def __iter__(self):
+            raise ValueError("lazy answers failed")
+
+    class Lazy(BatchOf):
+        def act_batch(self, ids, observations):
+            return Broken()
+
+    r = simulate_batch(three(), Keyed())
+    assert [x.end for x in r] == ["subject-error"] * 3 and r[0].subject_failure.tick == 0
+    assert r[0].subject_failure.message.startswith("planner.act_batch returned dict {0: ")
+    assert r[0].subject_failure.message.endswith("for 3 episodes; expected a list of one command per id, in the "
+                                                 "order of ids")
+    r = simulate_batch(three(), Lazy())
+    assert [x.end for x in r] == ["subject-error"] * 3
+    assert r[2].subject_failure.message == ("planner.act_batch's answer cannot be read as a list: ValueError: "
+                                            "lazy answers failed")
+
+
 def test_reset_batch_that_raises_fails_every_episode_that_started():
     class Broken(BatchOf):
         def reset_batch(self, scenarios):

@@ -125,6 +125,25 @@ def test_a_controller_calling_sys_exit_ends_its_episode_not_the_run(tmp_path):
         simulate(load_scenario(write(tmp_path, CART_BODY.replace("Cart", "Exits"))), Straight(), 0)
 
 
+def test_mujocos_fatal_error_ends_the_episode_with_the_cause_and_the_size_memory_that_fixes_it(tmp_path):
+    # an arena too small for the model's contacts (as a 20000-body robot overflows the default one:
+    # mj_stackAlloc in mj_step1): a SimulationFatalError, not a raw mujoco.FatalError traceback
+    from pytest_navscenario.core.errors import SimulationFatalError
+
+    path = write(tmp_path, CART_BODY)
+    small = CART.read_text().replace('<mujoco model="cart">', '<mujoco model="cart"><size memory="2K"/>')
+    (tmp_path / "cart.xml").write_text(small)
+    with pytest.raises(SimulationFatalError) as err:
+        simulate(load_scenario(path), Straight(), 0)
+    text = str(err.value)
+    assert f"MuJoCo stopped scenario scene ({path}) at t=0.000 s" in text
+    assert "needs more memory than MuJoCo's arena of 2 KB: mj_stackAlloc: out of memory" in text
+    assert text.endswith('(fix: add <size memory="1M"/> to the robot\'s MJCF file cart.xml (robot.body.file), '
+                         'or simplify it)')
+    (tmp_path / "cart.xml").write_text(small.replace('"2K"', '"1M"'))     # the fix it gives works
+    assert simulate(load_scenario(path), Straight(), 0).end == "goal"
+
+
 def test_the_robots_geoms_are_hidden_from_the_lidar_and_the_model_saves(tmp_path):
     from pytest_navscenario.sim.body_world import compiled_body_world, model_xml
     from pytest_navscenario.sim.bodies.base import ROBOT_GROUP
@@ -188,3 +207,23 @@ def test_a_menagerie_style_robot_whose_geoms_have_contype_0_rides_the_terrain_an
     assert res.end == "collision" and res.collision.obstacle == "crate"
     out, err = capfd.readouterr()
     assert "conflict" not in out + err and "parent has" not in out + err   # its options and name: no noise
+
+
+def test_a_robot_using_a_name_of_the_worlds_own_or_of_an_obstacle_is_an_error_at_its_file(tmp_path):
+    # was "MuJoCo could not build the model: Error: repeated name 'floor' in body", no field or line
+    path = write(tmp_path, CART_BODY)
+    (tmp_path / "cart.xml").write_text(CART.read_text().replace('<body name="front_caster"', '<body name="floor"'))
+    with pytest.raises(ScenarioError) as err:
+        simulate(load_scenario(path), Straight(), 0)
+    assert err.value.field == "robot.body.file" and err.value.line == 6
+    assert f"{tmp_path / 'cart.xml'} has a body named 'floor', a name the scenario's world already gives its " \
+           f"own floor" in str(err.value)
+    assert err.value.hint == "rename the body 'floor' in the MJCF file, and where your controller names it"
+    shutil.copy(CART, tmp_path / "cart.xml")          # the cart's chassis geom is named 'body'
+    crate = write(tmp_path, CART_BODY, obstacles="obstacles:\n  - {type: box, name: body, x: 5, y: 3, "
+                                                 "length: 0.4, width: 0.4}")
+    with pytest.raises(ScenarioError) as err:
+        simulate(load_scenario(crate), Straight(), 0)
+    assert err.value.field == "robot.body.file" and "has a geom named 'body', a name the scenario's world " \
+                                                     "already gives obstacle 'body' (obstacles[0])" in str(err.value)
+    assert err.value.hint == "rename obstacles[0] in the scenario, or the geom in the MJCF file"

@@ -169,6 +169,21 @@ def test_nav_batch_engine_accepts_cpu_and_warp_only(pytester):
     assert result.ret != 0
 
 
+def test_a_serial_suite_says_that_it_did_not_use_the_batch_options_it_was_given(pytester):
+    # a serial suite runs its items one at a time: --nav-batch-engine warp (or --nav-batch 4) had no
+    # effect, and nothing said so
+    pytester.makefile(".yaml", boxes="version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 1, y: 0}, timeout: 5}\n")
+    used = "*navscenario: --nav-batch 4 not used: a suite without workers runs its items one at a time, each " \
+           "on the CPU (batches need -n N, --nav-workers N, --nav-ray or --nav-isolate)*"
+    result = pytester.runpytest("--nav-batch=4", "-p", "no:cacheprovider")
+    result.stdout.fnmatch_lines([used])
+    assert "not used" not in pytester.runpytest("-p", "no:cacheprovider").stdout.str()
+    assert "not used" not in pytester.runpytest("--nav-batch=off", "-p", "no:cacheprovider").stdout.str()
+    if missing() is None:
+        result = pytester.runpytest("--nav-batch-engine=warp", "-p", "no:cacheprovider")
+        result.stdout.fnmatch_lines([used.replace("--nav-batch 4", "--nav-batch-engine warp")])
+
+
 def test_navscenario_run_with_an_unknown_or_missing_engine_says_so(capsys, monkeypatch):
     from pytest_navscenario import cli
 

@@ -62,6 +62,9 @@ MISBEHAVE = textwrap.dedent('''\
                 reply = {"type": "error", "message": "localisation lost"}
             if mode == "list":
                 reply = [1, 2, 3]
+            if mode == "deep":
+                print("[" * 100000 + "]" * 100000, flush=True)
+                continue
         print(json.dumps(reply), flush=True)
 ''')
 
@@ -98,6 +101,7 @@ def test_example_external_planner_avoids_a_box():
     ("wrongtype", "'vx' is 'fast', expected a number"),
     ("error", "localisation lost"),
     ("list", "expected a JSON object"),
+    ("deep", "nested too deeply"),     # json.loads raised RecursionError, which ended the run
     ("reset-crash", "exited with status 7"),
 ])
 def test_each_misbehaviour_is_a_subject_error_and_the_next_episode_runs(misbehave, mode, expected):

@@ -263,11 +263,28 @@ def test_a_model_without_a_declaration_points_at_the_template_command(tmp_path):
      "bad.policy.yaml:8: action.components[1]: 'vz' is not one of vx, vy, wz"),
     (("navscenario-policy: 1", "navscenario-policy: 2"), "bad.policy.yaml:1: navscenario-policy: format version 2"),
     (("  - velocity", "  -velocity"), "bad.policy.yaml:"),
+    # a name or version is printed in headers, results and JUnit: one line (it went into them with its line break)
+    (("navscenario-policy: 1", 'navscenario-policy: 1\nname: "ppo\\nv2"'),
+     "bad.policy.yaml:2: name: must be one line without tabs (fix: remove the line breaks)"),
+    (("navscenario-policy: 1", "navscenario-policy: 1\nversion: " + "9" * 201),
+     "bad.policy.yaml:2: version: is 201 characters long, more than 200"),
 ])
 def test_a_wrong_declaration_names_file_line_and_field(tmp_path, change, where):
     path = write_policy(tmp_path, "bad", constant_model([0, 0, 0], 24), DECLARATION_24.replace(*change))
     text = load_error(path, "bad.policy.yaml")
     assert where in text, text
+
+
+def test_a_yaml_bomb_as_the_declaration_is_refused_with_a_hint_about_declarations(tmp_path):
+    lines = ["navscenario-policy: 1", 'a0: &a0 ["lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol"]']
+    lines += [f"a{i}: &a{i} [" + ", ".join([f"*a{i - 1}"] * 9) + "]" for i in range(1, 10)]
+    path = write_policy(tmp_path, "bomb", constant_model([0, 0, 0], 24), "\n".join(lines) + "\nobservation: *a9\n")
+    text = load_error(path, "alias bomb")
+    assert "scenario" not in text and "policy declarations need far fewer values" in text, text
+    path = write_policy(tmp_path, "deep", constant_model([0, 0, 0], 24),
+                        "navscenario-policy: 1\nobservation: " + "[" * 1000 + "]" * 1000 + "\n")
+    text = load_error(path, "nests more than 20 levels")
+    assert "scenario" not in text and "this file is not a policy declaration" in text, text
 
 
 def test_file_and_metadata_declarations_that_differ_are_refused(tmp_path):
@@ -352,3 +369,72 @@ def test_the_template_refuses_a_model_whose_output_is_not_a_command(tmp_path, ca
     assert main(["policy-template", str(path)]) == 2
     assert "has shape [batch, 5]: 5 values, but a command is 3 (vx, vy, wz) or 2 (vx, wz) values" in \
         capsys.readouterr().err
+
+
+# ------------------------------------------------------------------------------------ hostile models
+
+def _with_last_node(model: bytes, node_type: str, out_shape: list, elem: int | None = None, **attrs) -> bytes:
+    """``model`` with one more node after its output ``action`` (its inputs: the output, then the
+    initializers given as numpy arrays in ``attrs['inits']``), whose result is the new output."""
+    import onnx
+    from onnx import helper, numpy_helper
+
+    m = onnx.load_from_string(model)
+    inits = attrs.pop("inits", {})
+    for name, value in inits.items():
+        m.graph.initializer.append(numpy_helper.from_array(value, name))
+    old = m.graph.output[0]
+    m.graph.node.append(helper.make_node(node_type, [old.name, *inits], ["answer"], **attrs))
+    elem = old.type.tensor_type.elem_type if elem is None else elem
+    m.graph.output.remove(old)
+    m.graph.output.append(helper.make_tensor_value_info("answer", elem, out_shape))
+    return m.SerializeToString()
+
+
+def test_a_model_answering_fewer_rows_than_its_batch_ends_those_episodes_saying_both_shapes(tmp_path):
+    # it passes the 2-row trial at load (it answers the first 2 rows); a batch of 3 got "act_batch raised
+    # ValueError: cannot reshape array of size 9 into shape (2,3)" from our own code
+    from pytest_navscenario.harness.batch import run_batch
+
+    model = _with_last_node(constant_model([0.1, 0, 0], 24), "Slice", ["n", 3], inits={
+        "s0": np.array([0]), "s2": np.array([2]), "ax": np.array([0])})
+    path = write_policy(tmp_path, "two", model, UNIT_SCALE)
+    scenarios = [load_scenario(SEEDS / f"{s}.yaml") for s in ("boxes1", "corridor", "L-corridor")]
+    results = run_batch(scenarios, str(path), batch=3)
+    for r in results:
+        assert r.outcome == "subject-error", r
+        assert ("the model answered shape [2, 3] for 3 input rows of 24 values: one row of 3 values per "
+                "input row is needed") in r.message, r.message
+        assert "ValueError" not in r.message and "reshape" not in r.message
+
+
+def test_an_output_that_is_not_floats_is_refused_at_load(tmp_path):
+    # an int64 output (a discrete action's index, say) was read as velocities: tanh's outputs cast to 0,
+    # the robot stood still to its timeout; a string output was parsed as numbers
+    from onnx import TensorProto
+
+    for elem, name in ((TensorProto.INT64, "tensor(int64)"), (TensorProto.STRING, "tensor(string)")):
+        model = _with_last_node(constant_model([0.1, 0, 0], 24), "Cast", ["batch", 3], elem, to=elem)
+        path = write_policy(tmp_path / str(elem), "ints", model, UNIT_SCALE)
+        text = load_error(path, f"output 'answer' is of type {name}")
+        assert "navscenario reads the action as floats" in text
+
+
+@pytest.mark.parametrize("fifo", ["nav.onnx", "nav.policy.yaml"])
+def test_a_named_pipe_as_the_model_or_its_declaration_is_an_error_not_a_hang(tmp_path, fifo):
+    import os
+    if not hasattr(os, "mkfifo"):
+        pytest.skip("named pipes are POSIX")
+    write_policy(tmp_path, "nav", constant_model([0, 0, 0], 24), UNIT_SCALE)
+    (tmp_path / fifo).unlink()
+    os.mkfifo(tmp_path / fifo)
+    code = ("import sys\nfrom pytest_navscenario.subjects.loading import load_subject\n"
+            "try:\n    load_subject(sys.argv[1])\nexcept Exception as e:\n    print(type(e).__name__, e)\n")
+    try:
+        done = subprocess.run([sys.executable, "-c", code, str(tmp_path / "nav.onnx")], capture_output=True,
+                              text=True, timeout=30)
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"loading the policy hung on the named pipe {fifo}")
+    finally:
+        (tmp_path / fifo).unlink()
+    assert f"{tmp_path / fifo} is not a regular file" in done.stdout, done.stdout + done.stderr

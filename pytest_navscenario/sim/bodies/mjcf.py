@@ -147,6 +147,8 @@ class MjcfModel(FreeBase):
         for name in dir(spec.option):                       # the scenario's options, kept quietly
             if not name.startswith("_"):
                 setattr(child.option, name, getattr(spec.option, name))
+        if self.child.memory > spec.memory:      # the file's <size memory> (attach would drop it)
+            spec.memory = self.child.memory
         base = child.body(self.base_name)
         robot = _subtree_geoms(base)
         meets_world = _world_bit(robot)

@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ...core.errors import ScenarioError, SubjectLoadError
+from ...scenario.keys import SCENARIO_LIMITS
 from ...scenario.yaml_tree import YMap, YNode, YScalar, YSeq, describe, parse_yaml
 
 FORMAT_KEY = "navscenario-policy"
@@ -57,6 +58,7 @@ _FIELD_KEYS = {
 }
 ACTION_KEYS = ("components", "clip", "scale")
 _LIMITS = 50_000          # nodes: a declaration is a few dozen
+MAX_LABEL = int(SCENARIO_LIMITS["max_name_length"])   # characters of a name or version
 
 
 class DeclarationError(SubjectLoadError):
@@ -150,6 +152,9 @@ def find_declaration(model: str, metadata: dict[str, str]) -> Declaration:
     path = declaration_path(model)
     embedded = metadata.get(METADATA_KEY)
     from_file = None
+    if os.path.exists(path) and not os.path.isfile(path) and not os.path.isdir(path):
+        raise DeclarationError(f"{path} is not a regular file (a named pipe, socket or device): reading it would "
+                               f"wait", path=None, hint=f"write the declaration as a file {os.path.basename(path)}")
     if os.path.exists(path):
         try:
             with open(path, encoding="utf-8") as f:
@@ -282,14 +287,31 @@ def _did_you_mean(word: str, options: tuple[str, ...]) -> str:
     return f"did you mean '{close[0]}'?" if close else "use one of: " + ", ".join(options)
 
 
+def _of_a_declaration(hint: str) -> str:
+    """A hint of the YAML reader (written for scenarios) said of a policy declaration."""
+    for old, new in (("this file is not a scenario", "this file is not a policy declaration"),
+                     ("scenario files", "policy declarations"), ("a scenario", "a policy declaration"),
+                     ("the scenario", "the declaration")):
+        hint = hint.replace(old, new)
+    return hint
+
+
+def _one_line(r: "_Reader", text: str, key: str, line: int | None) -> None:
+    """A name or version: one line of at most MAX_LABEL characters (the scenario names' rule)."""
+    if any(ch in text for ch in "\n\r\t\x00"):
+        raise r.fail("must be one line without tabs", key, line, "remove the line breaks")
+    if len(text) > MAX_LABEL:
+        raise r.fail(f"is {len(text)} characters long, more than {MAX_LABEL}", key, line, "shorten it")
+
+
 def read_declaration(text: str, source: str) -> Declaration:
     """The declaration in ``text`` (read from ``source``, named in messages). Raises DeclarationError."""
     r = _Reader(source)
     try:
         root = parse_yaml(text, source, max_depth=20, max_nodes=_LIMITS)
-    except ScenarioError as exc:
+    except ScenarioError as exc:   # the YAML reader's limits and errors, said of a declaration
         raise DeclarationError(exc.message, path=source, line=exc.line, field=exc.field,
-                               hint=exc.hint and exc.hint.replace("the scenario", "the declaration")) from None
+                               hint=exc.hint and _of_a_declaration(exc.hint)) from None
     if root is None:
         raise r.fail("the policy declaration is empty", None, None,
                      f"start from `navscenario policy-template MODEL` ({FORMAT_KEY}: {FORMAT_VERSION}, "
@@ -307,6 +329,8 @@ def read_declaration(text: str, source: str) -> Declaration:
     for key in ("name", "version", "input", "output"):
         if key in top:
             texts[key] = r.text(top[key][1], key)
+            if key in ("name", "version"):      # printed in headers, results files and JUnit
+                _one_line(r, texts[key], key, top[key][1].line)
     for key in ("observation", "action"):
         if key not in top:
             raise r.fail(f"'{key}' is missing", None, root.line,

@@ -43,6 +43,9 @@ def locate_model(spec: str, *, cwd: str | None = None, project: Iterable[str | o
     for place in places:
         if os.path.isdir(place):
             raise SubjectLoadError(f"subject {spec!r}: {place} is a folder, not an ONNX model file")
+        if os.path.exists(place) and not os.path.isfile(place):   # reading a named pipe would wait forever
+            raise SubjectLoadError(f"subject {spec!r}: {place} is not a regular file (a named pipe, socket or "
+                                   f"device); name the ONNX model file itself")
         if os.path.exists(place):
             if not os.access(place, os.R_OK):
                 raise SubjectLoadError(f"subject {spec!r}: cannot read the model file {place} "
@@ -165,6 +168,11 @@ def _load(spec: str, path: str) -> LoadedModel:
                                f"'output: NAME' in the declaration")
     else:
         out = next(iter(outputs.values()))
+    if out.type not in _FLOAT_TYPES:
+        raise SubjectLoadError(f"subject {where}: output {out.name!r} is of type {out.type}; navscenario reads the "
+                               f"action as floats (tensor(float), tensor(double) or tensor(float16)): a "
+                               f"velocity command, not a discrete action's index (export the continuous action, "
+                               f"or name it with 'output: NAME' in the declaration)")
     if inp.type not in _FLOAT_TYPES:
         raise SubjectLoadError(f"subject {where}: input {inp.name!r} is of type {inp.type}; navscenario "
                                f"feeds floats (tensor(float), tensor(double) or tensor(float16))")
@@ -238,6 +246,10 @@ def _shapes(infos: Iterable[Any]) -> str:
     return ", ".join(f"{i.name!r} {shape_text(i.shape)}" for i in infos)
 
 
+class ModelOutputError(ValueError):
+    """The model's output does not fit its batch (each episode of the batch gets it as its answer)."""
+
+
 class OnnxPolicy:
     """A planner (and batch planner) running a loaded model: each tick, the observations become
     input rows (features.py), one inference call answers all of them, and the outputs become
@@ -291,9 +303,18 @@ class OnnxPolicy:
 
     def _commands(self, episodes: Sequence[Any], observations: Sequence[Any]) -> list[tuple[float, float, float]]:
         """One inference call (or the fixed batch's slices) for these episodes' observations."""
+        import numpy as np
+
         model = self.model
         rows = model.featurizer.rows(episodes, observations)
-        outputs = model.infer(rows)
+        outputs = np.asarray(model.infer(rows))
+        wanted = (len(rows), model.decl.action.width)
+        if outputs.shape != wanted:      # the load's trial (2 rows) cannot see every batch size
+            wrong = ModelOutputError(
+                f"the model answered shape {shape_text(list(outputs.shape))} for {len(rows)} input rows of "
+                f"{rows.shape[1]} values: one row of {wanted[1]} values per input row is needed (fix: export "
+                f"the model so that its output follows the input's batch dimension)")
+            return [wrong] * len(episodes)
         return list(map(tuple, model.featurizer.commands(episodes, outputs).tolist()))
 
 
