@@ -15,16 +15,27 @@ their shrinks), else the script exits 1.
 ``episodes``: ``--count`` search-like candidates of boxes1 (every parameter drawn at random within
 half its bounds, valid ones kept) run alone and in batches of ``--batch``, chunk by chunk
 alternately, against dwa and against a planner that replays dwa's commands and costs nothing (the
-same trajectories, checked); CPU per control tick of the four, and where a batch's time goes
-(engine parts timed with process_time): its planner calls, the cohort's observation (lidar cast
-included), its physics (MuJoCo's rollout call alone beside it), the episodes' start.
+same trajectories, checked; the free planner answers tuples, as planners do); CPU per control tick
+of the four; then, in runs of their own with timers (process_time) on the engine's parts, where a
+batched episode-tick goes, with dwa and with the free planner: the episodes' start, the cohorts'
+observation (the lidar scan and MuJoCo's mj_multiRay inside it), the planner call, the commands,
+the physics (MuJoCo's rollout call inside it), the results, and the tick loop's rest.
 
 ``planner``: dwa alone, on the recorded observations of ``--batch`` episodes: ``act`` per episode
 against ``act_batch`` per tick, replayed to fresh planners (no simulation between the calls).
 
+``free``: only the batches of ``episodes`` with the free planner (``--count`` candidates, batches of
+``--batch``, ``--repeats`` runs, the least CPU per episode-tick printed): to pair two versions of
+the engine, run it alternately with ``--code`` pointing at each checkout (the package is imported
+from there; the candidates and the replayed commands are this script's)::
+
+    for i in 1 2 3 4 5; do python benchmarks/bench_batch.py free --code /tmp/old; \
+        python benchmarks/bench_batch.py free; done
+
 ``physics``: MuJoCo alone for a batch of 8 boxes1 episodes x 100 ticks of 10 steps: a plain
 ``mj_step`` loop recording every state, ``mj_step(nstep=10)``, ``mujoco.rollout`` (1 and 2 threads:
-CPU and wall).
+CPU and wall), each with MuJoCo's profiler on (the bindings' default) and off (as episodes run it,
+sim/profiler.py).
 """
 from __future__ import annotations
 
@@ -95,56 +106,24 @@ def _candidates(count: int):
 
 
 def part_episodes(count: int, batch: int) -> int:
-    import pytest_navscenario.sim.cohort as cohort
-    import pytest_navscenario.sim.lockstep as lockstep
     from pytest_navscenario.sim.batch import BatchEpisode, simulate_batch
     from pytest_navscenario.sim.episode import simulate
     from pytest_navscenario.subjects.planners.dwa import DynamicWindowPlanner
 
-    acc: dict[str, float] = {}
-
-    def timed(owner, name, label):
-        fn = getattr(owner, name)
-
-        def wrapper(*a, **k):
-            c0 = time.process_time()
-            try:
-                return fn(*a, **k)
-            finally:
-                acc[label] = acc.get(label, 0.0) + time.process_time() - c0
-        setattr(owner, name, wrapper)
-
-    class Rollout:      # MuJoCo's own time inside the cohort's physics
-        def __init__(self, inner):
-            self.inner = inner
-
-        def rollout(self, *args):
-            c0 = time.process_time()
-            self.inner.rollout(*args)
-            acc["  of which mujoco.rollout"] = acc.get("  of which mujoco.rollout", 0.0) + time.process_time() - c0
-
-    cohort._ROLLOUT = Rollout(cohort._rollout_pool())
-    timed(lockstep.Lockstep, "_act", "planner (act_batch)")
-    timed(cohort.Cohort, "observe", "observation, lidar and safety (cohorts)")
-    timed(cohort.Cohort, "step", "physics (cohorts)")
-    timed(lockstep.Lockstep, "_start", "start: episodes built, placed, reset_batch")
     scenarios = _candidates(count)
     cpu = {"alone": 0.0, "batched": 0.0, "alone, free planner": 0.0, "batched, free planner": 0.0}
     ticks = 0
     ratios, free_ratios = [], []
-    parts = {}
+    chunks = []
     for rep in range(2):
         for a in range(0, len(scenarios), batch):
             chunk = scenarios[a:a + batch]
             c0 = time.process_time()
             res = [simulate(s, DynamicWindowPlanner(), 0, stuck_after=15.0) for s in chunk]
             c1 = time.process_time()
-            before = dict(acc)
             batched = simulate_batch([BatchEpisode(s, 0, stuck_after=15.0) for s in chunk], DynamicWindowPlanner())
             c2 = time.process_time()
-            for key, value in acc.items():
-                parts[key] = parts.get(key, 0.0) + value - before.get(key, 0.0)
-            commands = [r.trajectory.command.tolist() for r in res]
+            commands = [[tuple(c) for c in r.trajectory.command.tolist()] for r in res]   # tuples, as planners answer
             c3 = time.process_time()
             free = [simulate(s, Replay(cmd), 0, stuck_after=15.0) for s, cmd in zip(chunk, commands)]
             c4 = time.process_time()
@@ -162,15 +141,87 @@ def part_episodes(count: int, batch: int) -> int:
             ticks += sum(r.ticks for r in res)
             ratios.append((c1 - c0) / (c2 - c1))
             free_ratios.append((c4 - c3) / (c5 - c4))
+            if rep == 0:
+                chunks.append((chunk, commands))
     per = 1e6 / ticks
     print(f"{count} candidates x 2, batches of {batch}, {ticks} episode-ticks (the same trajectories every way):")
     for key, seconds in cpu.items():
         print(f"  {key}: {seconds * per:.1f} us CPU per episode-tick")
     print(f"  median ratio per chunk, alone / batched: dwa {statistics.median(ratios):.2f}x, "
           f"free planner {statistics.median(free_ratios):.2f}x")
-    for label, seconds in parts.items():
-        print(f"  batched dwa, {label}: {seconds * per:.1f} us per episode-tick")
+    _where_it_goes(chunks, ticks // 2)
     return 0
+
+
+def _where_it_goes(chunks, ticks: int) -> None:
+    """The batches once more, with timers on the engine's parts (process_time; the timers add
+    about 1 us an episode-tick, so these runs are apart from the paired ones above)."""
+    import mujoco
+
+    import pytest_navscenario.sim.cohort as cohort
+    import pytest_navscenario.sim.lockstep as lockstep
+    from pytest_navscenario.sim.batch import BatchEpisode, simulate_batch
+    from pytest_navscenario.subjects.planners.dwa import DynamicWindowPlanner
+
+    acc: dict[str, float] = {}
+    clock = time.process_time
+
+    def timed(owner, name, label):
+        fn = getattr(owner, name)
+
+        def wrapper(*a, **k):
+            c0 = clock()
+            try:
+                return fn(*a, **k)
+            finally:
+                acc[label] = acc.get(label, 0.0) + clock() - c0
+        setattr(owner, name, wrapper)
+
+    class Rollout:      # MuJoCo's own time inside the cohort's physics
+        def __init__(self, inner):
+            self.inner = inner
+
+        def rollout(self, *args):
+            c0 = clock()
+            self.inner.rollout(*args)
+            acc["  of which mujoco.rollout (C)"] = acc.get("  of which mujoco.rollout (C)", 0.0) + clock() - c0
+
+    cast = mujoco.mj_multiRay
+
+    def multi_ray(*args):   # MuJoCo's own time of the lidar casts (the timer adds ~0.2 us a call)
+        c0 = clock()
+        cast(*args)
+        acc["  of which mj_multiRay (C)"] = acc.get("  of which mj_multiRay (C)", 0.0) + clock() - c0
+
+    cohort._ROLLOUT = Rollout(cohort._rollout_pool())
+    mujoco.mj_multiRay = multi_ray
+    timed(lockstep.Lockstep, "_act", "planner (act_batch)")
+    timed(cohort.Cohort, "observe", "observation: mission, lidar, safety layer (cohorts)")
+    timed(cohort.Cohort, "_scan", "  of which the lidar scan")
+    timed(cohort.Cohort, "step", "physics (cohorts)")
+    timed(lockstep.Lockstep, "_setpoint", "commands validated, limited, recorded")
+    timed(lockstep.Lockstep, "_start", "start: episodes built, placed, reset_batch")
+    timed(lockstep.Lockstep, "_form_cohorts", "start: cohorts formed")
+    timed(lockstep.Lockstep, "_finish", "end: results (trajectories trimmed)")
+    per = 1e6 / ticks
+    for name, make in (("dwa", lambda commands: DynamicWindowPlanner()), ("free planner", ReplayBatch)):
+        acc.clear()
+        c0 = clock()
+        for chunk, commands in chunks:
+            simulate_batch([BatchEpisode(s, 0, stuck_after=15.0) for s in chunk], make(commands))
+        total = (clock() - c0) * per
+        print(f"  where a batched episode-tick goes, {name}: {total:.1f} us with the timers, of which")
+        for label in ORDER:
+            if label in acc:
+                print(f"    {label}: {acc[label] * per:.1f} us")
+        top = sum(v for k, v in acc.items() if not k.startswith("  ")) * per
+        print(f"    the rest (the tick loop: ids, cohorts' turns, sorting): {total - top:.1f} us")
+
+
+ORDER = ("start: episodes built, placed, reset_batch", "start: cohorts formed",
+         "observation: mission, lidar, safety layer (cohorts)", "  of which the lidar scan",
+         "  of which mj_multiRay (C)", "planner (act_batch)", "commands validated, limited, recorded",
+         "physics (cohorts)", "  of which mujoco.rollout (C)", "end: results (trajectories trimmed)")
 
 
 class Replay:
@@ -305,27 +356,59 @@ def part_physics() -> int:
     rows = [("plain mj_step loop, every state recorded", plain), (f"mj_step(nstep={spt})", nstep),
             (f"mujoco.rollout, {spt} + 1 steps (the batch engine's)", lambda: roll(0)),
             ("mujoco.rollout, 2 threads", lambda: roll(2))]
+    import contextlib
+
+    from pytest_navscenario.sim.profiler import profiler_off
+
     for label, fn in rows:
-        cpu, wall = [], []
-        for _ in range(3):
-            c0, t0 = time.process_time(), time.perf_counter()
-            fn()
-            cpu.append(time.process_time() - c0)
-            wall.append(time.perf_counter() - t0)
-        n = k * ticks
-        print(f"{label}: {statistics.median(cpu) / n * 1e6:.1f} us CPU, {statistics.median(wall) / n * 1e6:.1f} us "
-              f"wall per episode-tick")
+        for profiler, scope in (("on", contextlib.nullcontext), ("off", profiler_off)):
+            cpu, wall = [], []
+            for _ in range(3):
+                with scope():
+                    c0, t0 = time.process_time(), time.perf_counter()
+                    fn()
+                    cpu.append(time.process_time() - c0)
+                    wall.append(time.perf_counter() - t0)
+            n = k * ticks
+            print(f"{label}, MuJoCo's profiler {profiler}: {statistics.median(cpu) / n * 1e6:.1f} us CPU, "
+                  f"{statistics.median(wall) / n * 1e6:.1f} us wall per episode-tick")
+    return 0
+
+
+def part_free(count: int, batch: int, repeats: int) -> int:
+    from pytest_navscenario.sim.batch import BatchEpisode, simulate_batch
+    from pytest_navscenario.sim.episode import simulate
+    from pytest_navscenario.subjects.planners.dwa import DynamicWindowPlanner
+
+    scenarios = _candidates(count)
+    commands = [[tuple(c) for c in simulate(s, DynamicWindowPlanner(), 0, stuck_after=15.0).trajectory.command.tolist()]
+                for s in scenarios]
+    ticks = sum(len(c) for c in commands)
+    runs = []
+    for _ in range(repeats):
+        c0 = time.process_time()
+        for a in range(0, count, batch):
+            simulate_batch([BatchEpisode(s, 0, stuck_after=15.0) for s in scenarios[a:a + batch]],
+                           ReplayBatch(commands[a:a + batch]))
+        runs.append(time.process_time() - c0)
+    import pytest_navscenario
+    print(f"free planner, batches of {batch}, {count} candidates, {ticks} episode-ticks: "
+          f"{min(runs) / ticks * 1e6:.2f} us CPU per episode-tick (least of {repeats}; "
+          f"package {os.path.dirname(os.path.dirname(pytest_navscenario.__file__))})")
     return 0
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("part", choices=("search", "episodes", "planner", "physics"))
+    ap.add_argument("part", choices=("search", "episodes", "planner", "physics", "free"))
+    ap.add_argument("--code", help="import pytest_navscenario from this checkout (default: this one)")
     ap.add_argument("--budget", type=int, default=1000)
     ap.add_argument("--repeats", type=int, default=2)
     ap.add_argument("--batch", type=int, default=16)
     ap.add_argument("--count", type=int, default=128)
     a = ap.parse_args()
+    if a.code:
+        sys.path.insert(0, os.path.abspath(a.code))
     print(f"load average before: {os.getloadavg()}", flush=True)
     if a.part == "search":
         code = part_search(a.budget, a.repeats, a.batch)
@@ -333,6 +416,8 @@ def main() -> int:
         code = part_episodes(a.count, a.batch)
     elif a.part == "planner":
         code = part_planner(a.count, a.batch)
+    elif a.part == "free":
+        code = part_free(a.count, a.batch, a.repeats)
     else:
         code = part_physics()
     print(f"load average after: {os.getloadavg()}")

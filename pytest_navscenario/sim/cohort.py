@@ -29,6 +29,7 @@ import numpy as np
 from ..core.errors import SimulationDivergedError
 from ..subjects.protocol import Observation
 from .episode import Episode, EpisodeOver
+from .lidar3d import LEVEL
 from .world import CONTACT_SENSOR, LIDAR_HEIGHT, MUJOCO_WARNINGS, TWO_PI, divergence_message
 
 _new = object.__new__
@@ -64,28 +65,35 @@ class Cohort:
         self.seen_pose, self.seen_vel = seen_ro[:, :, :3], seen_ro[:, :, 3:]
         self.record_ro = self.record.view()
         self.record_ro.flags.writeable = False
-        self.rmin = np.array([ep.lidar.range_min for ep in eps])
-        self.rmax = np.array([ep.lidar.range_max for ep in eps])
+        self.rmin_col = np.array([ep.lidar.range_min for ep in eps])[:, None]
+        self.rmax_col = np.array([ep.lidar.range_max for ep in eps])[:, None]
         self.rot = np.zeros((k, 3, 3))
         self.dirs = np.empty((k, beams, 3))
         self.pnt = np.empty((k, 3))
         self.pnt[:, 2] = LIDAR_HEIGHT
         self.geom = np.empty((k, beams), dtype=np.int32)
         self.dist = np.empty((k, beams))
+        self.seen_now = np.empty((k, 6))
+        # the arguments of each mj_multiRay call, made once: the episode's (model, data, groups,
+        # body, range_max), and the row views of the n-th scan of a tick (pnt, dirs, geom, dist)
+        self.rays = [(ep.lidar.model, ep.lidar.data, ep.lidar.groups, ep.lidar.body, ep.lidar.range_max)
+                     for ep in eps]
+        self.slots = [(self.pnt[n], self.dirs[n].reshape(-1), self.geom[n], self.dist[n]) for n in range(k)]
         self.safety_checks = [ep.steps()[0] for ep in eps]
         self._physics_tables()
 
     def _adopt(self, j: int, ep: Episode) -> None:
         """Make the episode's records views of the cohort's arrays (keeping what place() wrote)."""
         n = len(ep.pose_buf)
-        self.pose[j, :n] = ep.pose_buf
-        self.qvel[j, :n] = ep.qvel_buf
+        done = ep.i + 1                  # the states recorded so far (place(): the start)
+        self.pose[j, :done] = ep.pose_buf[:done]
+        self.qvel[j, :done] = ep.qvel_buf[:done]
         ep.pose_buf, ep.qvel_buf = self.pose[j, :n], self.qvel[j, :n]
         ep.stepping = ep.stepping[:5] + (ep.pose_buf, ep.qvel_buf, ep.stepping[7])
         ep.seen = self.seen[j, :len(ep.seen)]
         lidar = ep.lidar
         rows = len(lidar.record)
-        self.record[j, :rows] = lidar.record
+        self.record[j, :ep.tick] = lidar.record[:ep.tick]    # the scans so far (none at the start)
         lidar.record = self.record[j, :rows]
         lidar.readonly = lidar.record.view()
         lidar.readonly.flags.writeable = False
@@ -102,12 +110,17 @@ class Cohort:
         for j, ep in enumerate(self.eps):
             mujoco.mj_getState(ep.model, ep.data, self.state[j], spec)
         self.alone: set[int] = set()      # cohort positions stepping their own data from now on
-        self.groups: dict[int, Any] = {}
         self.scratch: dict[int, mujoco.MjData] = {}
-        for j, ep in enumerate(self.eps):
-            sig = ep.model.signature
+        self.models = [ep.model for ep in self.eps]
+        self.sig = [m.signature for m in self.models]     # MuJoCo's size signature of each model
+        for sig, model in zip(self.sig, self.models):
             if sig not in self.scratch:
-                self.scratch[sig] = mujoco.MjData(ep.model)
+                self.scratch[sig] = mujoco.MjData(model)
+        # a tick's rollout buffers, made once (a cohort's planar models share nu and nstate)
+        k, n = len(self.eps), self.spt + 1
+        self.control = np.empty((k, n, self.nu))
+        self.states = np.empty((k, n, self.nstate))
+        self.sensors = {sig: np.empty((k, n, model.nsensordata)) for sig, model in zip(self.sig, self.models)}
 
     # ------------------------------------------------------------ one tick
 
@@ -117,21 +130,25 @@ class Cohort:
         (batch index, state, observation) of each episode that goes on; the others are finished
         (``finish(index, reason)``) or failed (``fail(index, exception)``)."""
         eps = self.eps
-        t0 = perf_counter()
-        idx = np.array(running, dtype=np.intp)
         tick = eps[running[0]].tick
         i = tick * self.spt
-        states = np.concatenate([self.pose[idx, i], self.qvel[idx, i]], axis=1)
-        rows = states.tolist()
+        t = i * self.dt                  # every running episode is at step i (lockstep)
+        idx = np.array(running, dtype=np.intp)
+        raw = np.concatenate([self.pose[idx, i], self.qvel[idx, i]], axis=1)
+        finite = bool(np.isfinite(raw).all())
+        # the heading wrapped to [-pi, pi) as Python's float % does it (np.remainder is the same
+        # fmod-and-adjust, bit for bit), for all at once
+        raw[:, 2] = (raw[:, 2] + math.pi) % TWO_PI - math.pi
+        rows = raw.tolist()
         go: list[int] = []               # cohort positions that scan this tick
-        facts: list[tuple] = []          # (t, x, y, yaw, c, s, wvx, wvy, wz)
-        for j, (x, y, yaw_raw, wvx, wvy, wz) in zip(running, rows):
+        facts: list[tuple] = []          # (x, y, yaw, c, s, wvx, wvy, wz)
+        cos, sin = math.cos, math.sin
+        for j, row in zip(running, rows):
+            x, y, yaw, wvx, wvy, wz = row
             ep = eps[j]
-            t = ep.i * ep.dt
             try:
-                if not math.isfinite(x + y + yaw_raw + wvx + wvy + wz):
+                if not finite and not math.isfinite(x + y + yaw + wvx + wvy + wz):
                     raise SimulationDivergedError(divergence_message(ep.scenario, ep.data, t))
-                yaw = (yaw_raw + math.pi) % TWO_PI - math.pi
                 if ep.mission.goal_reached(t, x, y, yaw):
                     raise EpisodeOver("goal")
                 if tick >= ep.n_ticks:
@@ -145,81 +162,72 @@ class Cohort:
                 fail(self.members[j], exc)
                 continue
             go.append(j)
-            facts.append((t, x, y, yaw, math.cos(yaw), math.sin(yaw), wvx, wvy, wz))
+            facts.append((x, y, yaw, cos(yaw), sin(yaw), wvx, wvy, wz))
         if not go:
             return []
         k = len(go)
-        g = np.array(go, dtype=np.intp)
-        f = np.array(facts)                                   # (k, 9)
+        f = np.array(facts)                                   # (k, 8)
         t1 = perf_counter()
-        ranges = self._scan(go, g, f, tick)
-        t2 = perf_counter()
-        c, s, wvx, wvy = f[:, 4], f[:, 5], f[:, 6], f[:, 7]
-        seen = np.empty((k, 6))
-        seen[:, 0:3] = f[:, 1:4]
+        ranges = self._scan(go, f, tick)
+        share = (perf_counter() - t1) / k
+        c, s, wvx, wvy = f[:, 3], f[:, 4], f[:, 5], f[:, 6]
+        seen = self.seen_now[:k]
+        seen[:, 0:3] = f[:, 0:3]
         seen[:, 3] = c * wvx + s * wvy                         # measured velocity, robot frame
         seen[:, 4] = -s * wvx + c * wvy
-        seen[:, 5] = f[:, 8]
-        self.seen[g, tick] = seen
+        seen[:, 5] = f[:, 7]
+        self.seen[go, tick] = seen
         seen_rows = seen.tolist()
+        seen_pose, seen_vel, members, checks = self.seen_pose, self.seen_vel, self.members, self.safety_checks
         out = []
         for n, j in enumerate(go):
             ep = eps[j]
-            sx, sy, syaw, vx, vy, wz = seen_rows[n]
-            state = (facts[n][0], sx, sy, syaw, vx, vy, wz)
-            obs = _new(Observation)
-            obs.__dict__.update(tick=tick, time=state[0], pose=self.seen_pose[j, tick],
-                                velocity=self.seen_vel[j, tick], ranges=ranges[n], angles=ep.lidar.angles,
-                                goal=ep.mission.goal, waypoints=ep.mission.left, obstacles=ep.obstacles)
-            out.append((j, state, obs))
-        share = (t2 - t1) / k
-        for j in go:
-            eps[j].t_rays += share
-        return self._safety(out, seen, finish, fail)
-
-    def _scan(self, go: list[int], g: np.ndarray, f: np.ndarray, tick: int) -> list[np.ndarray]:
-        """``Lidar.scan`` (no noise) of the episodes ``go``: their read-only ranges rows."""
-        k = len(go)
-        rot = self.rot[:k]
-        rot[:, 0, 0] = rot[:, 1, 1] = f[:, 4]
-        rot[:, 0, 1] = f[:, 5]
-        rot[:, 1, 0] = -f[:, 5]
-        dirs = self.dirs[:k]
-        np.matmul(self.local_dirs, rot, out=dirs)             # one BLAS call per episode, as np.dot
-        pnt = self.pnt[:k]
-        pnt[:, 0:2] = f[:, 1:3]
-        geom, dist = self.geom[:k], self.dist[:k]
-        ray = mujoco.mj_multiRay
-        beams = self.beams
-        if beams:
-            for n, j in enumerate(go):
-                lidar = self.eps[j].lidar
-                ray(lidar.model, lidar.data, pnt[n], dirs[n].reshape(-1), lidar.groups, 1, lidar.body,
-                    geom[n], dist[n], None, beams, lidar.range_max)
-        rmin, rmax = self.rmin[g][:, None], self.rmax[g][:, None]
-        np.maximum(dist, rmin, out=dist)
-        np.minimum(dist, rmax, out=dist)
-        self.record[g, tick] = np.where(geom >= 0, dist, rmax)
-        ro = self.record_ro
-        return [ro[j, tick] for j in go]
-
-    def _safety(self, out: list[tuple[int, tuple, Observation]], seen: np.ndarray, finish, fail
-                ) -> list[tuple[int, tuple, Observation]]:
-        """``Episode.safety_check`` of each episode (its own code: measured, a vectorised
-        pre-test over the batch's obstacles cost more than the checks it saved)."""
-        passed = []
-        for j, state, obs in out:
-            ep = self.eps[j]
+            ep.t_rays += share
+            state = (t, *seen_rows[n])
             try:
-                self.safety_checks[j](state)
+                checks[j](state)   # the safety layer, its own code (a vectorised pre-test cost more than it saved)
             except EpisodeOver as over:
-                finish(self.members[j], over.reason)
+                finish(members[j], over.reason)
                 continue
             except Exception as exc:
-                fail(self.members[j], exc)
+                fail(members[j], exc)
                 continue
-            passed.append((self.members[j], state, obs))
-        return passed
+            obs = _new(Observation)
+            obs.__dict__.update(tick=tick, time=t, pose=seen_pose[j, tick], velocity=seen_vel[j, tick],
+                                ranges=ranges[n], angles=ep.lidar.angles, goal=ep.mission.goal,
+                                waypoints=ep.mission.left, obstacles=ep.obstacles, points=None, attitude=LEVEL)
+            out.append((members[j], state, obs))
+        return out
+
+    def _scan(self, go: list[int], f: np.ndarray, tick: int) -> list[np.ndarray]:
+        """``Lidar.scan`` (no noise) of the cohort positions ``go`` at the rows ``f`` of (x, y,
+        yaw, cos, sin, ...): their read-only ranges rows."""
+        k = len(go)
+        rot = self.rot[:k]
+        rot[:, 0, 0] = rot[:, 1, 1] = f[:, 3]
+        rot[:, 0, 1] = f[:, 4]
+        rot[:, 1, 0] = -f[:, 4]
+        np.matmul(self.local_dirs, rot, out=self.dirs[:k])     # one BLAS call per episode, as np.dot
+        self.pnt[:k, 0:2] = f[:, 0:2]
+        if self.beams:
+            ray, beams, slots, rays = mujoco.mj_multiRay, self.beams, self.slots, self.rays
+            for n, j in enumerate(go):
+                model, data, groups, body, rmax = rays[j]
+                pnt, dirs, geom, dist = slots[n]
+                ray(model, data, pnt, dirs, groups, 1, body, geom, dist, None, beams, rmax)
+        geom, dist = self.geom[:k], self.dist[:k]
+        if k == len(self.eps) and go[-1] == k - 1:       # everyone: no gathering
+            rmin, rmax, rows = self.rmin_col, self.rmax_col, self.record[:, tick]
+            np.maximum(dist, rmin, out=dist)
+            np.minimum(dist, rmax, out=dist)
+            np.copyto(rows, np.where(geom >= 0, dist, rmax), casting="same_kind")
+        else:
+            rmin, rmax = self.rmin_col[go], self.rmax_col[go]
+            np.maximum(dist, rmin, out=dist)
+            np.minimum(dist, rmax, out=dist)
+            self.record[go, tick] = np.where(geom >= 0, dist, rmax)
+        ro = self.record_ro
+        return [ro[j, tick] for j in go]
 
     def step(self, items: list[tuple[int, tuple[float, float, float]]], finish: Callable[[int, str], None],
              fail: Callable[[int, Exception], None]) -> list[int]:
@@ -232,50 +240,51 @@ class Cohort:
         are those of the last tick, which had none), and that episode steps its own data from then on."""
         t0 = perf_counter()
         still: list[int] = []
-        groups: dict[int, list[tuple[int, tuple]]] = {}
         replay: list[tuple[int, tuple]] = []
-        for j, setpoint in items:
-            if j in self.alone or not USE_ROLLOUT:
-                replay.append((j, setpoint))
-            else:
-                groups.setdefault(self.eps[j].model.signature, []).append((j, setpoint))
-        spt, nq, nv = self.spt, self.nq, self.nv
+        if self.alone or not USE_ROLLOUT or len(self.scratch) > 1:
+            groups: dict[int, list[tuple[int, tuple]]] = {}
+            for item in items:
+                j = item[0]
+                if j in self.alone or not USE_ROLLOUT:
+                    replay.append(item)
+                else:
+                    groups.setdefault(self.sig[j], []).append(item)
+        else:
+            groups = {self.sig[0]: items}
+        spt, nq, nv, eps, members_of = self.spt, self.nq, self.nv, self.eps, self.members
         for sig, members in groups.items():
-            g = np.array([j for j, _ in members], dtype=np.intp)
             k = len(members)
-            control = np.empty((k, spt + 1, self.nu))
+            go = [j for j, _ in members]
+            control, states, sensors = self.control[:k], self.states[:k], self.sensors[sig][:k]
             control[:] = np.array([sp for _, sp in members])[:, None, :]
-            states = np.empty((k, spt + 1, self.nstate))
-            sensors = np.empty((k, spt + 1, self.eps[members[0][0]].model.nsensordata))
             MUJOCO_WARNINGS.clear()
             scratch = self.scratch[sig]
-            _rollout_pool().rollout([self.eps[j].model for j, _ in members], [scratch], spt + 1,
-                             _CTRL, self.state[g], None, control, states, sensors, None)
+            _rollout_pool().rollout([self.models[j] for j in go], [scratch], spt + 1,
+                                    _CTRL, self.state[go], None, control, states, sensors, None)
             if MUJOCO_WARNINGS or scratch.warning.number.any():   # whose? each steps alone below
-                mujoco.mj_resetData(self.eps[members[0][0]].model, scratch)
+                mujoco.mj_resetData(eps[go[0]].model, scratch)
                 replay += members
                 continue
             touched = sensors[:, 1:, self.sensor].max(axis=1) > 0.0
-            ok = ~touched
-            if ok.all():
-                keep, gk = members, g
-            else:
-                keep = [m for m, good in zip(members, ok.tolist()) if good]
-                replay += [m for m, good in zip(members, ok.tolist()) if not good]
-                gk = g[ok]
-                states = states[ok]
-            if not keep:
-                continue
-            i = self.eps[keep[0][0]].i
-            self.pose[gk, i + 1:i + 1 + spt] = states[:, :spt, 1:1 + nq]
-            self.qvel[gk, i + 1:i + 1 + spt] = states[:, :spt, 1 + nq:1 + nq + nv]
-            self.state[gk] = states[:, spt - 1]
-            for j, _ in keep:
-                self.eps[j].i = i + spt
-                still.append(self.members[j])
+            if touched.any():
+                ok = (~touched).tolist()
+                replay += [m for m, good in zip(members, ok) if not good]
+                members = [m for m, good in zip(members, ok) if good]
+                go = [j for j, _ in members]
+                states = states[~touched]
+                if not members:
+                    continue
+            i = eps[go[0]].i
+            self.pose[go, i + 1:i + 1 + spt] = states[:, :spt, 1:1 + nq]
+            self.qvel[go, i + 1:i + 1 + spt] = states[:, :spt, 1 + nq:1 + nq + nv]
+            self.state[go] = states[:, spt - 1]
+            i += spt
+            for j in go:
+                eps[j].i = i
+                still.append(members_of[j])
         share = (perf_counter() - t0) / max(1, len(items))
         for j, _ in items:
-            self.eps[j].t_physics += share
+            eps[j].t_physics += share
         for j, setpoint in replay:
             still += self._step_alone(j, setpoint, finish, fail)
         return still

@@ -33,6 +33,7 @@ from .lidar import Lidar, base_rotation
 from .lidar3d import CloudLidar, LEVEL
 from .faults import Faults
 from .moving import MovingObstacles, describe_collision
+from .profiler import profiler_off
 from .trajectory import Collision, SafetyStop, SubjectFailure, TerrainEvent, Trajectory
 from .world import (MUJOCO_WARNINGS, TWO_PI, compiled_world, divergence_message, fatal_message,
                     on_mujoco_warning, steps_per_tick)
@@ -205,8 +206,12 @@ class Episode:
     # ------------------------------------------------------------ the episode
 
     def run(self) -> SimResult:
-        """Start, then tick until a step ends the episode (call once); the MjData goes back to the
-        pool."""
+        """Start, then tick until a step ends the episode (call once), MuJoCo's profiler off
+        (profiler.py); the MjData goes back to the pool."""
+        with profiler_off():
+            return self._run()
+
+    def _run(self) -> SimResult:
         deadline = self.deadline
         if deadline is not None:
             deadline.__enter__()

@@ -20,6 +20,7 @@ from ..core.errors import SimulationDivergedError, SimulationFatalError
 from .command import call_planner, planner_traceback, validate_command
 from .deadline import PlannerTimeout, TickDeadline
 from .episode import Episode, EpisodeOver, SimResult
+from .profiler import profiler_off
 from .trajectory import SubjectFailure
 from .world import MUJOCO_WARNINGS, divergence_message, fatal_message
 
@@ -64,6 +65,11 @@ class Lockstep:
     # ------------------------------------------------------------ the batch
 
     def run(self) -> list[SimResult | Exception]:
+        """The batch, MuJoCo's profiler off (profiler.py)."""
+        with profiler_off():
+            return self._run()
+
+    def _run(self) -> list[SimResult | Exception]:
         deadline = self._deadline = TickDeadline(self.limit) if self.limit else None
         if deadline is not None:
             deadline.__enter__()

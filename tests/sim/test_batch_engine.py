@@ -13,7 +13,7 @@ import pytest
 from pytest_navscenario.harness.batch import NO_PROTOCOL, Batching, run_batch
 from pytest_navscenario.harness.runner import run_scenario
 from pytest_navscenario.scenario.loader import load_scenario
-from pytest_navscenario.scenario.model import BoxObstacle, Mission, Pose, Robot, Scenario
+from pytest_navscenario.scenario.model import BoxObstacle, CylinderObstacle, Mission, Pose, Robot, Scenario
 from pytest_navscenario.scenario.terrain import WheeledBody
 from pytest_navscenario.sim.batch import BatchEpisode, batch_engine, simulate_batch
 from pytest_navscenario.sim.episode import simulate
@@ -241,3 +241,90 @@ def test_run_batch_runs_alone_what_it_cannot_batch_and_says_why():
     plain = Batching()
     run_batch(scenarios[:1], "potential-field", batching=plain)
     assert plain.why_alone == {NO_PROTOCOL: 1}
+
+
+class Seeing(GoTo):
+    """``GoTo`` that keeps every field of every observation it is handed."""
+
+    def reset(self, scenario):
+        self.seen = []
+
+    def act(self, obs):
+        fields = {}
+        for name in ("tick", "time", "pose", "velocity", "ranges", "angles", "goal", "waypoints", "obstacles",
+                     "points", "attitude"):
+            value = getattr(obs, name)
+            fields[name] = (type(value).__name__, value.dtype.str, value.shape, value.tobytes(), value.flags.writeable) \
+                if hasattr(value, "tobytes") else value
+        self.seen.append(fields)
+        return super().act(obs)
+
+
+def test_a_batch_hands_each_planner_the_observations_it_gets_alone():
+    cases = [seed("boxes1"), seed("corridor"), seed("boxes2"), seed("boxes1")]
+    alone = []
+    for sc in cases:
+        planner = Seeing()
+        simulate(sc, planner, 0)
+        alone.append(planner.seen)
+    batch = BatchOf(Seeing)
+    simulate_batch([BatchEpisode(sc, 0) for sc in cases], batch)
+    for mine, theirs in zip(alone, (p.seen for p in batch.planners)):
+        assert len(mine) == len(theirs)
+        assert mine == theirs      # attitude (0, 0) of the planar body, points None, read-only rows
+
+
+class Straight:
+    """Full speed ahead, whatever is there."""
+
+    def reset(self, scenario):
+        pass
+
+    def act(self, obs):
+        return (0.8, 0.0, 0.0)
+
+
+def test_a_batch_finds_a_collision_at_every_physics_step_of_a_tick_as_alone():
+    # a wall a little farther each time: the first contact falls on every state of a tick, the
+    # tick's final state included (whose contacts the engine looks at only near an obstacle)
+    b1 = with_robot(seed("boxes1"), safety={"enabled": False})
+    start = b1.mission.start
+    cases = [dataclasses.replace(b1, obstacles=(BoxObstacle("wall", start.x + 1.0 + 0.0037 * n, start.y, 0.3, 3.0),),
+                                 mission=dataclasses.replace(b1.mission, start=Pose(start.x, start.y, 0.0)))
+             for n in range(30)]
+    alone = [simulate(sc, Straight(), 0) for sc in cases]
+    batched = simulate_batch([BatchEpisode(sc, 0) for sc in cases], PerEpisode([Straight] * len(cases)))
+    assert {a.end for a in alone} == {"collision"}
+    assert {len(a.trajectory.t) % 10 for a in alone} == set(range(10))     # spt = 10: every state
+    assert [same(a, b) for a, b in zip(alone, batched)] == [True] * len(cases)
+
+
+class Ahead:
+    """Straight ahead at ``speed``, turning at ``turn``."""
+
+    def __init__(self, speed: float, turn: float = 0.0):
+        self.speed, self.turn = speed, turn
+
+    def reset(self, scenario):
+        pass
+
+    def act(self, obs):
+        return (self.speed, 0.0, self.turn)
+
+
+def test_a_batch_halts_each_robot_where_its_safety_layer_does_alone():
+    # round robots driving at posts at several speeds, the safety layer on: the cohort skips the
+    # checks of robots with nothing within reach, and must never skip one that halts (circles on
+    # circles: the layer's reach is tight, a skip one tick too many moves the halt)
+    b1 = with_robot(seed("boxes1"), footprint={"shape": "circle", "radius": 0.3})
+    start = b1.mission.start
+    cases, makes = [], []
+    for n in range(24):
+        posts = (CylinderObstacle("post", start.x + 1.5 + 0.013 * n, start.y + 0.05 * (n % 3), 0.2),)
+        cases.append(dataclasses.replace(b1, obstacles=posts,
+                                         mission=dataclasses.replace(b1.mission, start=Pose(start.x, start.y, 0.0))))
+        makes.append(lambda speed=0.3 + 0.05 * n: Ahead(speed))
+    alone = [simulate(sc, make(), 0) for sc, make in zip(cases, makes)]
+    batched = simulate_batch([BatchEpisode(sc, 0) for sc in cases], PerEpisode(makes))
+    assert {a.end for a in alone} == {"safety-stop"}
+    assert [same(a, b) for a, b in zip(alone, batched)] == [True] * len(cases)
