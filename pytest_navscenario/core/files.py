@@ -43,6 +43,24 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
         raise
 
 
+def data_file_size(path: Path, error: type[Exception], limit: int, advice: str) -> int:
+    """The size in bytes of a data file a scenario names (a mesh, a heightfield), checked before
+    anything reads it: ``error`` (the caller's error class) when it is missing, unreadable, not a
+    regular file (a folder, a named pipe: reading one would hang), or larger than ``limit`` bytes
+    (the message ends with ``advice``, what to do about it)."""
+    try:
+        size = path.stat().st_size
+    except FileNotFoundError:
+        raise error(f"{path} does not exist") from None
+    except OSError as exc:
+        raise error(f"{path} cannot be read: {exc.strerror or exc}") from None
+    if not path.is_file():
+        raise error(f"{path} is not a file")
+    if size > limit:
+        raise error(f"{path.name} is {size / 1e6:.1f} MB, more than the limit of {limit / 1e6:.0f} MB; {advice}")
+    return size
+
+
 def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)

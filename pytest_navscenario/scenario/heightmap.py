@@ -28,6 +28,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from ..core.files import data_file_size
 from .mesh import MeshError, resolve_mesh_path
 
 MAX_HEIGHTFIELD_BYTES = 64_000_000   # a file larger than this is refused before it is read
@@ -116,17 +117,7 @@ def read_height_file(path: Path) -> np.ndarray:
     if suffix not in HEIGHTFIELD_SUFFIXES:
         raise HeightmapError(f"{path.name}: unknown heightfield format {suffix or '(no extension)'}; "
                              f"use a greyscale .png (8 or 16 bit) or a NumPy .npy array")
-    try:
-        size = path.stat().st_size
-    except FileNotFoundError:
-        raise HeightmapError(f"{path} does not exist") from None
-    except OSError as exc:
-        raise HeightmapError(f"{path} cannot be read: {exc.strerror or exc}") from None
-    if not path.is_file():
-        raise HeightmapError(f"{path} is not a file")
-    if size > MAX_HEIGHTFIELD_BYTES:
-        raise HeightmapError(f"{path.name} is {size / 1e6:.1f} MB, more than the limit of "
-                             f"{MAX_HEIGHTFIELD_BYTES / 1e6:.0f} MB; downsample it first")
+    size = data_file_size(path, HeightmapError, MAX_HEIGHTFIELD_BYTES, "downsample it first")
     values = _read_png(path) if suffix == ".png" else _read_npy(path, size)
     rows, cols = values.shape
     _check_sides(path, rows, cols)

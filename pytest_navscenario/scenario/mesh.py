@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.files import data_file_size
+
 # Limits that hold an item's own work (load, outline, convex parts, model, first ticks) to about one
 # second (benchmarks/bench_shapes.py): the outline's union costs ~15 us per triangle seen from above.
 MAX_MESH_BYTES = 20_000_000      # a mesh file larger than this is refused before it is read
@@ -46,17 +48,7 @@ def read_mesh(path: Path) -> tuple[np.ndarray, np.ndarray]:
     suffix = path.suffix.lower()
     if suffix not in (".stl", ".obj"):
         raise MeshError(f"{path.name}: unknown mesh format {suffix or '(no extension)'}; use .stl or .obj")
-    try:
-        size = path.stat().st_size
-    except FileNotFoundError:
-        raise MeshError(f"{path} does not exist") from None
-    except OSError as exc:
-        raise MeshError(f"{path} cannot be read: {exc.strerror or exc}") from None
-    if not path.is_file():
-        raise MeshError(f"{path} is not a file")
-    if size > MAX_MESH_BYTES:
-        raise MeshError(f"{path.name} is {size / 1e6:.1f} MB, more than the limit of "
-                        f"{MAX_MESH_BYTES / 1e6:.0f} MB; simplify the mesh (decimate it) first")
+    size = data_file_size(path, MeshError, MAX_MESH_BYTES, "simplify the mesh (decimate it) first")
     try:
         data = path.read_bytes()
     except OSError as exc:
