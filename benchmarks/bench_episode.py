@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import glob
+import math
 import os
 import statistics
 import sys
@@ -52,7 +53,12 @@ class Replay:
 
 
 def bare_floor(scenario, ticks: int) -> float:
-    """CPU seconds for ``ticks`` control ticks of pure MuJoCo: one multi-ray, then spt mj_steps."""
+    """CPU seconds for ``ticks`` control ticks of pure MuJoCo: one multi-ray, then spt mj_steps; NaN
+    for a body that rides the ground (its own loop: benchmarks/bench_terrain.py measures it)."""
+    from pytest_navscenario.sim.body_world import rides_the_ground
+
+    if rides_the_ground(scenario):
+        return math.nan
     world = compiled_world(scenario)
     m = world.model
     d = world.take_data()
