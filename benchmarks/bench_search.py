@@ -208,6 +208,7 @@ def one_held_search(args):
             "new_sims": len(search), "failing_sims": sum(c.failed for c in search),
             "frozen": len(r.failures), "rejected": len(r.rejected), "unconfirmed": len(r.unconfirmed),
             "fresh": fresh, "estimates": [f.estimate.to_data() for f in r.failures],
+            "signatures": ["/".join(map(str, f.found.signature)) for f in r.failures],   # aligned with fresh
             "wall": wall, "cpu": cpu}
 
 
