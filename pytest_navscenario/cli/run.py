@@ -52,7 +52,8 @@ def add_arguments_run(p: argparse.ArgumentParser) -> None:
                         "CPU kernels without one: the optional extra pytest-navscenario[gpu]; "
                         "trajectories within a tolerance of the CPU's, not bit for bit; scenarios it "
                         "cannot simulate (terrain, bodies that ride the ground, 3D lidars) run alone "
-                        "on the CPU, said in the last line). See docs/how-to/gpu-batches.md")
+                        "on the CPU, said in the last line); one file with warp is a batch of one on it. "
+                        "See docs/how-to/gpu-batches.md")
 
 
 def _engine(name: str):
@@ -125,13 +126,16 @@ def run_run(args: argparse.Namespace) -> int:
 
     files = list(args.scenario)
     batch = _batch_size(args.batch)
-    if len(files) == 1:
+    # One file runs alone, unless another engine than the CPU's was asked for: then it is a batch of
+    # one on that engine (it was run on the CPU without a word).
+    alone = len(files) == 1 and args.batch_engine == "cpu"
+    if alone:
         scenarios = [load_scenario(files[0])]
     else:   # each file that cannot load is that file's error; the others run
         scenarios = [_load_or_error(load_scenario, path) for path in files]
     look_in_current_folder(args.subject)
     tick_limit = args.tick_limit or None
-    if len(files) == 1:
+    if alone:
         result = run_scenario(scenarios[0], args.subject, seed=args.seed, tick_limit=tick_limit)
         if args.json:
             print(json.dumps(_record(scenarios[0], files[0], result), indent=2, allow_nan=False))
@@ -162,8 +166,8 @@ def run_run(args: argparse.Namespace) -> int:
         else:
             _print_result(scenario, path, result)
             print()
-    if args.json:
-        print(json.dumps(records, indent=2, allow_nan=False))
+    if args.json:   # one file: its record, as when it runs alone
+        print(json.dumps(records[0] if len(files) == 1 else records, indent=2, allow_nan=False))
     else:
         passed = len(files) - failed - errors
         print(f"{len(files)} scenario(s): {passed} passed, {failed} failed" + (f", {errors} error(s)" if errors else "")

@@ -198,6 +198,9 @@ def test_navscenario_run_with_an_unknown_or_missing_engine_says_so(capsys, monke
     monkeypatch.setattr(warp_engine, "missing", lambda: "mujoco-warp not installed: " + warp_engine.INSTALL_HINT)
     assert cli.main(["run", *files, "--batch-engine", "warp"]) == 2
     assert "--batch-engine warp: the warp batch engine cannot run: mujoco-warp not installed" in capsys.readouterr().err
+    # one file too: it ran on the CPU without a word, whatever --batch-engine said
+    assert cli.main(["run", files[0], "--batch-engine", "warp"]) == 2
+    assert "--batch-engine warp: the warp batch engine cannot run: mujoco-warp not installed" in capsys.readouterr().err
 
 
 @pytest.mark.heavy
@@ -211,3 +214,6 @@ def test_navscenario_run_on_the_warp_engine_gives_the_cpu_outcomes(capsys):
     assert out.count("outcome: success") == 2
     assert out.rstrip().endswith("2 scenario(s): 2 passed, 0 failed; batches (--batch auto, --batch-engine warp): "
                                  "2 episode(s) in 1 batch(es)")
+    assert cli.main(["run", files[0], "--seed", "0", "--batch-engine", "warp"]) == 0
+    assert capsys.readouterr().out.rstrip().endswith("1 scenario(s): 1 passed, 0 failed; batches (--batch auto, "
+                                                     "--batch-engine warp): 1 episode(s) in 1 batch(es)")
