@@ -98,15 +98,8 @@ class Lockstep:
                 self.results[i] = exc
                 continue
             self.episodes[i] = ep
-            try:
-                ep.place()
-            except EpisodeOver as over:
-                self._finish(i, over.reason)
-                continue
-            except Exception as exc:
-                self._fail(i, exc)
-                continue
-            started.append(i)
+            if self._goes_on(i, ep.place):
+                started.append(i)
         if not started:
             return []
         self.ids = {i: k for k, i in enumerate(started)}
@@ -178,16 +171,9 @@ class Lockstep:
             if where is not None:
                 physics.setdefault(where[0], []).append((where[1], setpoint))
                 continue
-            try:
-                MUJOCO_WARNINGS.clear()
-                steps[i][2](setpoint)
-            except EpisodeOver as over:
-                self._finish(i, over.reason)
-                continue
-            except Exception as exc:
-                self._fail(i, exc)
-                continue
-            still.append(i)
+            MUJOCO_WARNINGS.clear()
+            if self._goes_on(i, steps[i][2], setpoint):
+                still.append(i)
         for c, items in physics.items():
             still += self.cohorts[c][0].step(items, self._finish, self._fail)
         still.sort()
@@ -269,6 +255,19 @@ class Lockstep:
         return [failed] * len(live)
 
     # ------------------------------------------------------------ an episode ends
+
+    def _goes_on(self, i: int, step: Any, *args: Any) -> bool:
+        """Run ``step(*args)`` for episode ``i``: False when it ended the episode (its EpisodeOver
+        finishes it, any other exception fails it alone), True when the episode goes on."""
+        try:
+            step(*args)
+        except EpisodeOver as over:
+            self._finish(i, over.reason)
+            return False
+        except Exception as exc:
+            self._fail(i, exc)
+            return False
+        return True
 
     def _finish(self, i: int, reason: str) -> None:
         ep = self.episodes[i]

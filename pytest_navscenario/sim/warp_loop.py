@@ -120,15 +120,8 @@ class WarpLockstep(Lockstep):
         for i in moving:
             ep = self.episodes[i]
             ep.t_physics += share
-            try:
-                self._advance(ep, group, group.position[i], out)
-            except EpisodeOver as over:
-                self._finish(i, over.reason)
-                continue
-            except Exception as exc:
-                self._fail(i, exc)
-                continue
-            still.append(i)
+            if self._goes_on(i, self._advance, ep, group, group.position[i], out):
+                still.append(i)
         return still
 
     @staticmethod
