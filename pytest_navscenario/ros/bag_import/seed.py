@@ -160,7 +160,7 @@ def _seed(data: BagData, laser_pose, path_as, reference_file, name, robot_radius
     _check_moves(data, scenario)
     fit = None
     if smap is not None and smap.scans:
-        fit = fit_figure(scenario, data, mount, smap.sample, smap.first)
+        fit = fit_figure(scenario, data, mount, smap.sample, smap.first, carved=_carved_cells(smap))
     od = data.odom
     path_rows = np.stack([od[:, 0] - od[0, 0], od[:, 1], od[:, 2]], axis=1)
     return BagSeed(scenario=scenario, path=path_rows, notes=notes, mount=mount, fit=fit,
@@ -222,6 +222,19 @@ def _fit_scans(data: BagData, smap, settings: FitSettings, notes: list[str]) -> 
     occ = smap.occupancy
     return _fit(data, grid, settings, notes, f"{smap.scans} scans", occupied=occupied,
                 seen_free=lambda cols, rows: occ.at_cells(cols, rows) < 0.0)
+
+
+def _carved_cells(smap):
+    """Whether points lie in cells that returns hit in REPEATED scans or more and yet the occupancy
+    grid holds free (carved by the beams that passed them)."""
+    from .occupancy import REPEATED
+
+    occ = smap.occupancy
+
+    def carved(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        c, r = np.floor(x / occ.res).astype(np.int64), np.floor(y / occ.res).astype(np.int64)
+        return (occ.at_cells(c, r, occ.hits) >= REPEATED) & (occ.at_cells(c, r) <= 0.0)
+    return carved
 
 
 def _check_moves(data: BagData, scenario: Scenario) -> None:
