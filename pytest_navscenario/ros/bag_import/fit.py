@@ -208,4 +208,9 @@ def _disagreements(fig: FitFigure) -> list[str]:
     if math.isfinite(fig.start_scan) and fig.start_seed < fig.start_scan - WARN_START:
         out.append(f"at the start the seed has an obstacle {fig.start_seed:.2f} m from the robot's centre where "
                    f"the first scan's nearest return is {fig.start_scan:.2f} m away")
+    if math.isfinite(fig.start_scan) and fig.start_seed > fig.start_scan + WARN_START:
+        seed = f"{fig.start_seed:.2f} m away" if math.isfinite(fig.start_seed) else "none at all"
+        out.append(f"at the start the seed's nearest obstacle is {seed} where the first scan's nearest return is "
+                   f"{fig.start_scan:.2f} m from the robot's centre: the seed lacks what the robot saw nearest (a "
+                   f"wall carved away or left out as small): check the seed's picture beside the returns")
     return out

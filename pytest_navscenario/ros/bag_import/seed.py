@@ -157,6 +157,9 @@ def _seed(data: BagData, laser_pose, path_as, reference_file, name, robot_radius
     if background:
         scenario = dataclasses.replace(scenario, search={"frozen": background})
     notes.append(summary)
+    lidar = lidar_note(data, scenario.robot.lidar)
+    if lidar:
+        notes.append(lidar)
     _check_moves(data, scenario)
     fit = None
     if smap is not None and smap.scans:
@@ -384,7 +387,33 @@ def _robot(data: BagData, footprint: Footprint) -> Robot:
     # 20 % above the real peak speed, rounded up to 0.05 m/s: headroom for the planner
     limits = Limits(max_speed=_r(max(0.2, math.ceil(speed * 1.2 * 20) / 20), 2),
                     max_yaw_rate=_r(max(30.0, math.ceil(math.degrees(yaw_rate) * 1.2 / 5) * 5), 1))
-    lidar = Lidar(beams=min(len(data.scan_angles), 360) if data.scan_topic else 72,
+    beams, fov = _lidar_beams(data)
+    lidar = Lidar(beams=beams, fov=fov,
                   range_max=_r(data.range_max if data.scan_topic and math.isfinite(data.range_max) else 8.0, 2),
                   range_min=_r(data.range_min if data.scan_topic else 0.05, 3))
     return Robot(footprint=footprint, drive="diff", limits=limits, lidar=lidar)
+
+
+def _lidar_beams(data: BagData) -> tuple[int, float]:
+    """The seed lidar's beams and field of view (degrees): the bag's scans' own, every beam (up to
+    the scenario's limit), else 72 over a full turn."""
+    from ...scenario.keys import SCENARIO_LIMITS
+
+    if not data.scan_topic or not len(data.scan_angles):
+        return 72, 360.0
+    n = len(data.scan_angles)
+    fov = min(360.0, abs(math.degrees(data.scan_layout.angle_increment)) * n) if n > 1 else 360.0
+    return min(n, int(SCENARIO_LIMITS["max_lidar_beams"])), _r(fov, 2)
+
+
+def lidar_note(data: BagData, lidar: Lidar) -> str | None:
+    """What the seed's lidar took from the bag's scans (said, not silent: a seed with fewer beams
+    than the real laser sees less)."""
+    if not data.scan_topic or not len(data.scan_angles):
+        return None
+    n = len(data.scan_angles)
+    text = f"robot.lidar: {lidar.beams} beams over {lidar.fov:g} deg"
+    if lidar.beams < n:
+        return (text + f", fewer than the {n} of {data.scan_topic} (the scenario's limit); the simulated lidar "
+                f"sees less than the real one did")
+    return text + f", as {data.scan_topic}'s scans (set robot.lidar.beams lower for a faster simulation)"
