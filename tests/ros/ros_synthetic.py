@@ -344,3 +344,25 @@ def stop_drive(speed: float = 0.5, stop_x: float = 2.0, duration: float = 8.0, d
     """(n, 4) t, x, y, yaw: along +x at ``speed`` until ``stop_x``, then standing still."""
     t = np.arange(0.0, duration + 1e-9, dt)
     return np.stack([t, np.minimum(speed * t, stop_x), 0 * t, 0 * t], 1)
+
+
+ROOM = World(pillars=[(0.3, 0.2, 0.2, 1.0), (-1.5, -0.5, 0.25, 1.0), (2.5, -1.8, 0.15, 1.0)],
+             boxes=[(0.0, 3.5, 9.0, 0.1, 0.0, 1.0), (0.0, -3.5, 9.0, 0.1, 0.0, 1.0),
+                    (4.5, 0.0, 0.1, 7.0, 0.0, 1.0), (-4.5, 0.0, 0.1, 7.0, 0.0, 1.0),
+                    (-2.5, 2.0, 1.0, 0.6, 30.0, 1.0), (3.0, 1.5, 0.6, 0.6, 0.0, 1.0)])
+
+
+def drift_bag(folder: Path, drift_deg: float = 6.0, drift_m: float = 0.35, seconds: float = 46.0,
+              angles: np.ndarray | None = None) -> tuple[Path, np.ndarray]:
+    """A robot driving a 2 m circle and a bit in a furnished room; its odometry drifts linearly to
+    ``drift_deg`` and ``drift_m`` by the end; no map -> odom in the bag; a 720-beam laser (or
+    ``angles``) with 1 cm of range noise. Returns the bag and the truth (issue 37)."""
+    t = np.arange(0.0, seconds, 0.1)
+    a = t * (2 * math.pi / 40.0)
+    truth = np.stack([t, 2.0 * np.cos(a) - 0.5, 1.6 * np.sin(a), a + math.pi / 2], 1)
+    f = t / t[-1]
+    drift = np.stack([drift_m * f * 0.8, -drift_m * f * 0.6, np.radians(drift_deg) * f], 1)
+    path = robot_bag(folder / "drift", ROOM, truth, drift=drift, tf_map=False,
+                     angles=np.radians(np.arange(-180.0, 180.0, 0.5)) if angles is None else angles,
+                     range_noise=0.01, range_max=12.0)
+    return path, truth

@@ -10,6 +10,7 @@ import numpy as np
 from .clouds import CloudSettings
 from .frames import FRAMES
 from .reading import PATH_AS, BagImportError
+from .scan_match import METHODS
 from .scans import STAMPS
 from .seed import scenario_from_bag
 
@@ -62,6 +63,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--scan-time-offset", type=float, default=0.0, metavar="SECONDS",
                    help="add this to every scan's stamp, for a driver that stamps its scans late or early against "
                         "the odometry (default 0)")
+    p.add_argument("--scan-match", choices=METHODS, default="auto",
+                   help="correct odometry drift by aligning each key scan to the map of those before it, when the "
+                        "bag has no map -> odom and no pose topic: auto (default: KISS-ICP when installed, "
+                        "pip install 'pytest-navscenario[drift]', else the own correlative matcher), own, kiss-icp, "
+                        "or off (the odometry as it is); the output says how far the poses moved")
     p.add_argument("--frame", choices=FRAMES, default="auto",
                    help="the seed's world frame: auto (default: the map frame when the bag has map -> odom on /tf "
                         "or a pose topic in the map frame, else the odometry frame), map (an error without one), odom")
@@ -113,7 +119,8 @@ def import_bag(args: argparse.Namespace):
                              robot_radius=args.robot_radius, frame=args.frame, map_frame=args.map_frame,
                              pose_topic=args.pose_topic, cloud_topic=args.cloud_topic,
                              cloud=_cloud_settings(args), goal_topic=args.goal_topic, at=args.at,
-                             window=args.window, scan_stamp=args.scan_stamp, scan_offset=args.scan_time_offset)
+                             window=args.window, scan_stamp=args.scan_stamp, scan_offset=args.scan_time_offset,
+                             scan_match=args.scan_match)
     extra = {}
     if args.path_as != "waypoints":
         extra[csv_name] = reference_csv(seed.path)

@@ -32,6 +32,7 @@ from .known_map import map_background, not_on_map
 from .mount import choose_mount
 from .obstacles import FitSettings, _r, fit_obstacles, occupied_clusters
 from .projection import map_scans, settle_timing
+from .scan_match import METHODS, correct_drift
 from .reading import PATH_AS, BagData, BagImportError, close_bag, open_bag, read_bag
 from .streaming import stream_notes
 from .simplify import SeedSize, merge_neighbours, split_near_path
@@ -90,7 +91,7 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
                       pose_topic: str | None = None, cloud_topic: str | None = None,
                       cloud: CloudSettings = CloudSettings(), goal_topic: str | None = None,
                       at: float | None = None, window: float = 30.0, size: SeedSize = SeedSize(),
-                      scan_stamp: str = "auto", scan_offset: float = 0.0) -> BagSeed:
+                      scan_stamp: str = "auto", scan_offset: float = 0.0, scan_match: str = "auto") -> BagSeed:
     """Build a seed scenario from a bag (see the package docstring). ``laser_pose`` is x, y (m),
     yaw (degrees) of the laser in the robot's base frame; ``robot_radius`` the seed's circular
     footprint (m; default: from the bag's URDF or Nav2 footprint, else 0.15 m); ``reference_file`` is the CSV name
@@ -99,7 +100,9 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
     ``at``: cut the ``window`` seconds before this moment instead of ``start``..``end``.
     ``frame``: "auto" (the map frame when the bag has ``map -> odom`` or a pose topic in it, else
     the odometry frame), "map" or "odom". ``scan_stamp`` ("auto", "start", "end") and
-    ``scan_offset`` (s): when each scan was taken (scans.choose_timing)."""
+    ``scan_offset`` (s): when each scan was taken (scans.choose_timing). ``scan_match`` ("auto",
+    "own", "kiss-icp", "off"): how odometry drift is corrected when the bag has no ``map -> odom``
+    (scan_match.py)."""
     if robot_radius is not None and not (math.isfinite(robot_radius) and 0 < robot_radius <= 5):
         raise BagImportError(f"--robot-radius must be a length in (0, 5] m, got {robot_radius}")
     if path_as not in PATH_AS:
@@ -114,14 +117,16 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
                         cloud_topic=cloud_topic, at=at, window=window, scan_stamp=scan_stamp,
                         scan_offset=scan_offset, reader=reader)
         return _seed(data, laser_pose, path_as, reference_file, name, robot_radius, settings, frame, map_frame,
-                     pose_topic, cloud, goal_topic, size)
+                     pose_topic, cloud, goal_topic, size, scan_match)
     finally:
         close_bag(reader)
 
 
 def _seed(data: BagData, laser_pose, path_as, reference_file, name, robot_radius, settings, frame, map_frame,
-          pose_topic, cloud, goal_topic, size) -> BagSeed:
+          pose_topic, cloud, goal_topic, size, scan_match="auto") -> BagSeed:
     corr = to_world_frame(data, frame, map_frame, pose_topic, data.full_odom)
+    if scan_match not in METHODS:
+        raise BagImportError(f"--scan-match must be one of {', '.join(METHODS)}, got {scan_match!r}")
     goal, goal_note = choose_goal(data, corr, goal_topic)
     fp, fp_how, fp_warnings = footprint_from_bag(data, robot_radius)
     radius = inner_radius(fp)
@@ -133,6 +138,10 @@ def _seed(data: BagData, laser_pose, path_as, reference_file, name, robot_radius
         notes.append(f"laser {data.scan_frame} at x={mount[0]:.3f} y={mount[1]:.3f} "
                      f"yaw={math.degrees(mount[2]):.1f} deg in {data.base_frame}, {how}")
         settle_timing(data, mount)
+        if corr is None and frame != "odom":    # no map -> odom: the scans correct the odometry's drift
+            matched = correct_drift(data, mount, scan_match)
+            if matched:
+                notes.append(matched)
         smap = map_scans(data, mount, settings.res)
         notes.extend(stream_notes(data))
         if smap.scans:
