@@ -120,6 +120,17 @@ def look_in_current_folder(spec: str) -> None:
         load_subject(spec, project=[os.getcwd()])
 
 
+def _warn_movers_inside(scenarios: list, files: list[str]) -> None:
+    """Moving obstacles that start or end inside a wall (issue 37: written by hand into a DynaBARN
+    seed) run, but not as in Gazebo: said on stderr with the file and field."""
+    from ..verdict.movers import movers_inside
+
+    for scenario, path in zip(scenarios, files):
+        if not isinstance(scenario, Exception):
+            for field, message in movers_inside(scenario.obstacles):
+                print(f"navscenario run: warning: {path}: {field}: {message}", file=sys.stderr)
+
+
 def run_run(args: argparse.Namespace) -> int:
     from ..scenario.loader import load_scenario
     from ..harness.runner import run_scenario
@@ -133,6 +144,7 @@ def run_run(args: argparse.Namespace) -> int:
         scenarios = [load_scenario(files[0])]
     else:   # each file that cannot load is that file's error; the others run
         scenarios = [_load_or_error(load_scenario, path) for path in files]
+    _warn_movers_inside(scenarios, files)
     look_in_current_folder(args.subject)
     tick_limit = args.tick_limit or None
     if alone:

@@ -23,7 +23,12 @@ import dataclasses
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+from ..core.errors import NavScenarioError
 from ..scenario.model import Obstacle
+
+
+class PluginMotionError(NavScenarioError):
+    """The ``--plugin-motion`` file cannot be used (not YAML, an unknown model, an invalid motion)."""
 
 
 def compiled_plugins(model: ET.Element) -> list[str]:
@@ -49,27 +54,25 @@ def read_plugin_motion(path: str | Path) -> dict[str, tuple[dict, int]]:
     """The ``--plugin-motion`` file: model name -> (its motion mapping, its line)."""
     import yaml
 
-    from .world_import import WorldImportError
-
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
-        raise WorldImportError(f"--plugin-motion {path}: cannot read: {exc.strerror or exc}") from None
+        raise PluginMotionError(f"--plugin-motion {path}: cannot read: {exc.strerror or exc}") from None
     try:
         node = yaml.compose(text, Loader=yaml.SafeLoader)
         body = yaml.safe_load(text)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
-        raise WorldImportError(f"{path}:{mark.line + 1 if mark else 1}: not YAML: {exc}") from None
+        raise PluginMotionError(f"{path}:{mark.line + 1 if mark else 1}: not YAML: {exc}") from None
     if not isinstance(body, dict) or not body:
-        raise WorldImportError(f"{path}:1: expected a mapping of model name to its motion, e.g. "
+        raise PluginMotionError(f"{path}:1: expected a mapping of model name to its motion, e.g. "
                                f"'easylibobs_66: {{path: [[-2, 11], [-2, -11]], speed: 1.2, mode: loop}}'")
     lines = {str(k.value): k.start_mark.line + 1 for k, _ in node.value}
     out = {}
     for name, motion in body.items():
         if not isinstance(motion, dict) and motion != "static":
-            raise WorldImportError(f"{path}:{lines.get(str(name), 1)}: {name}: expected a motion mapping (path, "
+            raise PluginMotionError(f"{path}:{lines.get(str(name), 1)}: {name}: expected a motion mapping (path, "
                                    f"speed, mode, start; or velocity) or 'static' (where the world file puts it), "
                                    f"got {motion!r}")
         out[str(name)] = (motion, lines.get(str(name), 1))
@@ -85,14 +88,12 @@ def given_motion(moved: dict[str, tuple[list[str], list[Obstacle]]], path: str |
     import yaml
 
     from ..scenario.model import Mission, Pose, Scenario
-    from .world_import import WorldImportError
-
     given = read_plugin_motion(path)
     out: list[Obstacle] = []
     for name, (motion, line) in given.items():
         if name not in moved:
             known = ", ".join(moved) or "none"
-            raise WorldImportError(f"{path}:{line}: {name}: not a model the world's compiled plugins move (those "
+            raise PluginMotionError(f"{path}:{line}: {name}: not a model the world's compiled plugins move (those "
                                    f"are: {known})")
         if motion == "static":          # the plugin does not move it: where the world file puts it
             out.extend(moved[name][1])
@@ -109,31 +110,13 @@ def given_motion(moved: dict[str, tuple[list[str], list[Obstacle]]], path: str |
                 out.append(loads_scenario(yaml.safe_dump(doc, sort_keys=False)).obstacles[0])
             except ScenarioError as exc:
                 field = (exc.field or "").replace("obstacles[0].", "")
-                raise WorldImportError(f"{path}:{line}: {name}: {field + ': ' if field else ''}{exc.message}"
+                raise PluginMotionError(f"{path}:{line}: {name}: {field + ': ' if field else ''}{exc.message}"
                                        + (f" (fix: {exc.hint})" if exc.hint else "")) from None
     return out
 
 
 def movers_in_walls(obstacles) -> list[str]:
     """Warnings for moving obstacles whose motion starts or ends inside a static obstacle."""
-    from shapely import affinity
+    from ..verdict.movers import movers_inside
 
-    from ..scenario.geometry import obstacle_polygon
-    from ..verdict.movers import AREA
-
-    still = [(o.name, obstacle_polygon(o)) for o in obstacles if getattr(o, "motion", None) is None]
-    out = []
-    for o in obstacles:
-        m = getattr(o, "motion", None)
-        if m is None or not m.path:
-            continue
-        base = obstacle_polygon(o)
-        for which, (x, y) in (("starts", m.path[0]), ("ends", m.path[-1])):
-            at = affinity.translate(base, x - o.x, y - o.y)
-            inside = [n for n, p in still if at.intersection(p).area > AREA]
-            if inside:
-                out.append(f"moving obstacle {o.name!r} {which} inside static obstacle {inside[0]!r} at ({x:g}, {y:g}) "
-                           f"(as DynaBARN's obstacles come out of the arena's walls in Gazebo): the simulation moves "
-                           f"it through the wall as if it were not there, and the pytest plugin reports the scenario "
-                           f"as infeasible (a mover through a static obstacle); start and end its path outside")
-    return out
+    return [message for _, message in movers_inside(obstacles)]

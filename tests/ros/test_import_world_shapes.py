@@ -194,3 +194,17 @@ def test_a_mesh_from_outside_the_worlds_folder_is_refused(tmp_path, uri, capsys)
     allowed = sdf_obstacles(src, model_path=(outside,)) if uri.startswith("file") else \
         sdf_obstacles(src, model_path=(tmp_path,))
     assert [o.kind for o in allowed.obstacles] == ["mesh"]
+
+
+def test_a_hand_written_mover_starting_inside_a_wall_is_warned_when_run(tmp_path, capsys):
+    """Issue 37 point 5: motion written by hand into a DynaBARN seed, starting inside the arena's
+    wall, ran without a word."""
+    seed = tmp_path / "dyn.yaml"
+    seed.write_text("version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 0, y: 3}, timeout: 20}\nobstacles:\n"
+                    "  - {type: box, name: top_wall, x: 0, y: 10, length: 20, width: 0.5}\n"
+                    "  - {type: cylinder, name: mover, radius: 0.5, motion: {path: [[-4, 10], [-4, -5]], speed: 1.0}}\n")
+    main(["run", str(seed)])
+    err = capsys.readouterr().err
+    assert (f"navscenario run: warning: {seed}: obstacles[1].motion.path: moving obstacle 'mover' starts inside "
+            f"static obstacle 'top_wall' at (-4, 10)") in err
+    assert "ends inside" not in err
