@@ -7,8 +7,9 @@
   world. The box, cylinder, polyline (a polygon obstacle) and mesh (STL/OBJ found beside the world,
   copied beside the seed) collision geometry of static models becomes obstacles, with the model,
   link and collision poses composed (a world ``<state>`` pose overrides the model's, as Gazebo does
-  on load). A model with plugins (which may move it) is imported where it stands, with a note that
-  what the plugins do is not carried over. Planes are ignored; everything else (other meshes,
+  on load). A model with plugins (compiled code that may move it: DynaBARN's obstacles) is left
+  out, said once, and given back moving with ``--plugin-motion`` (``plugin_motion.py``). Planes
+  are ignored; everything else (other meshes,
   spheres, includes, tilted shapes, non-static models without plugins) is listed in a warning,
   never dropped silently. A ``<heightmap>`` (a PNG) becomes heightfield terrain, its image copied
   beside the seed (``sdf_terrain.py``); the robot then needs a body that rides the ground. A file

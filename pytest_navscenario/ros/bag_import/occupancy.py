@@ -133,23 +133,26 @@ class LogOdds:
     def _before_grazed_wall(self, c, r, beam, angle) -> np.ndarray:
         """Which samples a beam carves: those before the first cell that returns hit in ``REPEATED``
         scans or more whose surface (a consistent direction) the beam meets at less than ``GRAZE``."""
+        keep = np.ones(len(c), bool)
         if not len(c):
-            return np.ones(0, bool)
+            return keep
         inside = (c >= 0) & (c < self.nx) & (r >= 0) & (r < self.ny)
-        ci, ri = np.where(inside, c, 0), np.where(inside, r, 0)
-        hits = np.where(inside, self.hits[ri, ci], 0.0)
-        wall = hits >= REPEATED
-        if not wall.any():
-            return np.ones(len(c), bool)
-        c2, s2 = self.c2[ri, ci], self.s2[ri, ci]
-        strength = np.hypot(c2, s2)
+        flat = np.where(inside, r * self.nx + c, 0)
+        hits = self.hits.reshape(-1)[flat]
+        wall = np.flatnonzero(inside & (hits >= REPEATED))
+        if not len(wall):
+            return keep
+        at = flat[wall]
+        c2, s2 = self.c2.reshape(-1)[at], self.s2.reshape(-1)[at]
         surface = 0.5 * np.arctan2(s2, c2)
-        graze = wall & (strength >= CONSISTENT * hits) & (np.abs(np.sin(angle[beam] - surface)) < math.sin(GRAZE))
-        # carved up to (not through) the first grazed wall cell of each beam
-        before = np.cumsum(graze) - graze
-        first = np.r_[0, np.nonzero(np.diff(beam))[0] + 1]
-        start_of = np.repeat(before[first], np.diff(np.r_[first, len(beam)]))
-        return (before - start_of == 0) & ~graze
+        graze = (np.hypot(c2, s2) >= CONSISTENT * hits[wall]) & \
+            (np.abs(np.sin(angle[beam[wall]] - surface)) < math.sin(GRAZE))
+        if not graze.any():
+            return keep
+        # carved up to (not through) the first grazed wall cell of each beam: samples are in beam order
+        stop = np.full(int(beam[-1]) + 1, len(c))
+        np.minimum.at(stop, beam[wall[graze]], wall[graze])
+        return np.arange(len(c)) < stop[beam]
 
     def _samples(self, ox, oy, dx, dy, steps) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The cells each beam passes through (sampled once a cell length, each cell once per beam),

@@ -27,8 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 
 METHODS = ("auto", "own", "kiss-icp", "off")
-KEY_MOVE = 0.1          # m the robot moves between key scans
-KEY_TURN = math.radians(3.0)
+KEY_MOVE = 0.2          # m the robot moves between key scans
+KEY_TURN = math.radians(6.0)
 POINTS = 240            # returns of a key scan the own matcher uses (evenly picked)
 KISS_POINTS = 100_000   # KISS-ICP takes them all (fewer made it less exact: 37 mm against 13 mm with 240)
 RES = 0.05              # m, the likelihood grid's cells
@@ -203,25 +203,27 @@ def match_own(data, mount) -> Matched:
 
 
 def match_kiss(data, mount) -> Matched:
-    """Corrections by KISS-ICP's registration against its voxel map of the key scans before each."""
-    from kiss_icp.mapping import VoxelHashMap
-    from kiss_icp.registration import Registration
+    """Corrections by KISS-ICP's registration against its voxel map of the key scans before each
+    (its compiled core only: the package's Python front end imports a configuration stack that
+    costs more than the matching on a small bag)."""
+    from kiss_icp.pybind import kiss_icp_pybind as kiss
 
     from .occupancy import reach_of
 
     reach = reach_of(data.scan_layout.range_max)
-    voxels = VoxelHashMap(voxel_size=0.05, max_distance=reach + 5.0, max_points_per_voxel=20)
-    reg = Registration(max_num_iterations=500, convergence_criterion=1e-4, max_num_threads=1)
+    voxels = kiss._VoxelHashMap(voxel_size=0.05, max_distance=reach + 5.0, max_points_per_voxel=20)
+    reg = kiss._Registration(max_num_iterations=500, convergence_criterion=1e-4, max_num_threads=1)
     corr = np.eye(3)
     rows = []
     for t, pose, local in key_scans(data, mount, KISS_POINTS):
-        pts = np.c_[local, np.zeros(len(local))]
+        pts = kiss._Vector3dVector(np.c_[local, np.zeros(len(local))])
         robot = _se2(*pose)
         guess = _to4(corr @ robot)
         if rows:
-            guess = reg.align_points_to_map(pts, voxels, guess, max_correspondance_distance=0.5, kernel=0.1)
+            guess = reg._align_points_to_map(points=pts, voxel_map=voxels, initial_guess=guess,
+                                             max_correspondance_distance=0.5, kernel=0.1)
             corr = _to3(guess) @ np.linalg.inv(robot)
-        voxels.update(pts, _to4(corr @ robot))
+        voxels._update(pts, _to4(corr @ robot))
         rows.append((t, corr[0, 2], corr[1, 2], _yaw(corr)))
     return Matched(np.array(rows, float).reshape(-1, 4), "KISS-ICP", len(rows))
 
@@ -251,7 +253,7 @@ def correct_drift(data, mount, method: str = "auto") -> str | None:
     fallback = ""
     if method in ("auto", "kiss-icp"):
         try:
-            import kiss_icp  # noqa: F401
+            from kiss_icp.pybind import kiss_icp_pybind  # noqa: F401
         except ImportError:
             if method == "kiss-icp":
                 raise BagImportError("--scan-match kiss-icp needs KISS-ICP: pip install 'pytest-navscenario[drift]' "
