@@ -114,13 +114,21 @@ _ARITHMETIC = {
     "pow": lambda a, b: (lambda s: np.power(a(s), b(s))),
 }
 
+def _difference(left: Step, right: Step, sign: float) -> Step:
+    """``sign * |l - r|`` (iff: -1, xor: +1); NaN where both are the same infinity, as in RTAMT."""
+    def step(s):
+        with np.errstate(invalid="ignore"):
+            return sign * np.abs(np.subtract(left(s), right(s)))
+    return step
+
+
 _LOGIC = {
     "not": lambda a: (lambda s: np.negative(a(s))),
     "and": lambda a, b: (lambda s: np.minimum(a(s), b(s))),
     "or": lambda a, b: (lambda s: np.maximum(a(s), b(s))),
     "implies": lambda a, b: (lambda s: np.maximum(np.negative(a(s)), b(s))),
-    "iff": lambda a, b: (lambda s: -np.abs(np.subtract(a(s), b(s)))),
-    "xor": lambda a, b: (lambda s: np.abs(np.subtract(a(s), b(s)))),
+    "iff": lambda a, b: _difference(a, b, -1.0),
+    "xor": lambda a, b: _difference(a, b, 1.0),
 }
 
 
