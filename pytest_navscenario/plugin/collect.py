@@ -319,18 +319,19 @@ class ScenarioItem(pytest.Item):
                           cwd=os.getcwd(), reset_timeout=state.settings.reset_timeout, check_feasible=True)
 
     def runtest(self) -> None:
-        pending, self.nav_pending = self.nav_pending, None
-        if pending is not None:   # submitted at the start of the run loop (an executor)
-            result = pending.result()
-        else:
-            from ..harness.runner import add_check_time, run_scenario
+        try:
+            result = self._episode()
+        except Exception as exc:
+            # The episode never finished (its worker died 3 times, ...): the item still gets a
+            # record (subject-error, ``error`` says what ended it) and counts in the rates; the
+            # exception stays the item's failure.
+            from ..harness.runner import effective_seed, unfinished_result
 
             state = get_state(self.config)
-            result = add_check_time(run_scenario(self.scenario, state.subject.runner_arg,
-                                                 seed=repeat_seed(state.settings.seed, self.repeat),
-                                                 tick_limit=state.settings.tick_limit,
-                                                 reset_timeout=state.settings.reset_timeout), self.nav_checked)
-            self.nav_checked = 0.0
+            seed = effective_seed(self.scenario.simulation.seed, repeat_seed(state.settings.seed, self.repeat))
+            self.nav_result = unfinished_result(self.scenario, exc, seed=seed,
+                                                subject=state.subject.spec or state.subject.label)
+            raise
         self.nav_result = result
         if result.left_running:
             _warn_left_running(self.rel_path, result.left_running)
@@ -349,6 +350,21 @@ class ScenarioItem(pytest.Item):
         ])
         if not result.passed:
             raise ScenarioFailed(result)
+
+    def _episode(self) -> Any:
+        """This item's EpisodeResult: from its executor, or run here."""
+        pending, self.nav_pending = self.nav_pending, None
+        if pending is not None:   # submitted at the start of the run loop (an executor)
+            return pending.result()
+        from ..harness.runner import add_check_time, run_scenario
+
+        state = get_state(self.config)
+        result = add_check_time(run_scenario(self.scenario, state.subject.runner_arg,
+                                             seed=repeat_seed(state.settings.seed, self.repeat),
+                                             tick_limit=state.settings.tick_limit,
+                                             reset_timeout=state.settings.reset_timeout), self.nav_checked)
+        self.nav_checked = 0.0
+        return result
 
     def reproduce_command(self) -> str:
         """The command line that re-runs exactly this item with the same subject and seed."""

@@ -82,6 +82,7 @@ class EpisodeResult:
     timings: dict[str, float] = field(default_factory=dict)  # s: physics, rays, planner, harness
     terrain_event: TerrainEvent | None = None   # fell, tipped over or stuck on terrain
     left_running: tuple[str, ...] = ()          # processes the planner started and left running ("pid N: cmd")
+    error: str | None = None                    # the episode never finished: the exception's type (WorkerDied, ...)
 
     @property
     def passed(self) -> bool:
