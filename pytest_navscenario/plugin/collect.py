@@ -411,9 +411,12 @@ class ScenarioItem(pytest.Item):
             f = r.subject_failure
             lines.append(f"  planner error: {f.message} (tick {f.tick}, t={_fmt(f.time, ' s', 2)})")
         obstacle = f" to {m.min_clearance_obstacle!r}" if m.min_clearance_obstacle else ""
-        lines.append(f"  min clearance: {_fmt(m.min_clearance, ' m')}{obstacle} at t="
-                     f"{_fmt(m.min_clearance_time, ' s', 2)}, robot at ({_fmt(m.min_clearance_x, '', 2)}, "
-                     f"{_fmt(m.min_clearance_y, '', 2)})")
+        if m.min_clearance == float("inf"):   # one form in the terminal (outcomes-metrics.md)
+            lines.append("  min clearance: none (no obstacles)")
+        else:
+            lines.append(f"  min clearance: {_fmt(m.min_clearance, ' m')}{obstacle} at t="
+                         f"{_fmt(m.min_clearance_time, ' s', 2)}, robot at ({_fmt(m.min_clearance_x, '', 2)}, "
+                         f"{_fmt(m.min_clearance_y, '', 2)})")
         lines.append(f"  duration:      {_fmt(m.duration, ' s', 2)} (timeout "
                      f"{_fmt(r.scenario.mission.timeout, ' s', 1)}), path {_fmt(m.path_length, ' m', 2)}, "
                      f"efficiency {_fmt(m.path_efficiency, '', 2)}, goal error "
