@@ -230,7 +230,8 @@ class ScenarioFailed(Exception):
     """Raised by ScenarioItem.runtest when the outcome is not success (carries the result)."""
 
     def __init__(self, result: Any):
-        super().__init__(f"{result.outcome}: {result.message}")
+        from ..verdict.result import headline
+        super().__init__(headline(result.outcome, result.message))
         self.result = result
 
 
@@ -398,7 +399,8 @@ class ScenarioItem(pytest.Item):
 
     def _describe(self, r: Any) -> str:
         m = r.metrics
-        lines = [f"{r.outcome}: {r.message}" if r.message else str(r.outcome)]
+        from ..verdict.result import headline
+        lines = [headline(r.outcome, r.message)]
         if r.collision is not None:
             c = r.collision
             lines.append(f"  collision:     obstacle {c.obstacle!r} at t={_fmt(c.time, ' s', 2)}, contact "

@@ -89,3 +89,10 @@ class EpisodeResult:
         return self.outcome.passed
 
 
+def headline(outcome: Any, message: str) -> str:
+    """"outcome: message", a failure's first line, without saying the outcome twice: some
+    messages carry it themselves ("timeout: stuck on terrain ...") since they are read alone too."""
+    outcome = str(outcome)
+    if not message:
+        return outcome
+    return message if message.startswith(f"{outcome}:") else f"{outcome}: {message}"

@@ -49,3 +49,19 @@ def test_the_failure_header_and_results_file(pytester: pytest.Pytester, monkeypa
     assert "n/a at t=n/a" not in out
     record = read_results(pytester.path / "r.jsonl")[0]
     assert record["outcome"] == "timeout" and record["metrics"]["min_clearance"] is None
+
+
+def test_the_failure_header_says_timeout_once(pytester: pytest.Pytester, monkeypatch: pytest.MonkeyPatch):
+    """Issue 32 item 3: "timeout: timeout: stuck on terrain ..." doubled the word in the header and
+    in pytest's short summary."""
+    monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
+    pytester.makefile(".yaml", plinth="""version: 1
+robot: {drive: diff, body: {type: wheeled}}
+mission: {start: {x: 0, y: 0}, goal: {x: 8, y: 0}, timeout: 30}
+terrain:
+  - {type: platform, name: plinth, x: 4, y: 0, length: 1, width: 2, height: 0.08}
+""")
+    result = pytester.runpytest("-p", "pytest_navscenario.plugin", "plinth.yaml", "--nav-subject=dwa", "-rf")
+    out = result.stdout.str()
+    assert "timeout: stuck on terrain at t=" in out, out[-3000:]
+    assert "timeout: timeout" not in out
