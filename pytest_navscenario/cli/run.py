@@ -57,9 +57,9 @@ def add_arguments_run(p: argparse.ArgumentParser) -> None:
 
 
 def _engine(name: str):
-    """The batch engine called ``name`` (sim/batch.py); NavScenarioError saying how to install
+    """The batch engine called ``name`` (sim/batching/batch.py); NavScenarioError saying how to install
     the warp engine's extra when it is missing."""
-    from ..sim.batch import batch_engine
+    from ..sim.batching.batch import batch_engine
     try:
         return batch_engine(name)
     except ValueError as exc:

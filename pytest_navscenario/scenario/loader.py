@@ -257,7 +257,7 @@ def _terrain_element(ctx: _Ctx, sec: _Section, element: K.Element, name: str) ->
     values = _read(ctx, sec, decl, {"name": name})
     if element.type not in ("heightfield", "rough"):
         return decl.cls(**values)
-    from .heightmap import HeightmapError, check_rough, load_heightfield
+    from .ground.heightmap import HeightmapError, check_rough, load_heightfield
 
     try:
         if element.type == "rough":
@@ -423,7 +423,7 @@ def check_scenario(scenario: Scenario, *, _ctx: _Ctx | None = None) -> None:
         _check_clear(scenario, ctx)
         _check_speeds(scenario, ctx)
     if scenario.terrain or scenario.robot.body.kind != "planar" or any(o.z is not None for o in scenario.obstacles):
-        from .ground import body_problem, mission_problem, obstacle_problem, terrain_problem
+        from .ground.surface import body_problem, mission_problem, obstacle_problem, terrain_problem
         problem = (body_problem(scenario) or terrain_problem(scenario) or mission_problem(scenario)
                    or obstacle_problem(scenario))
         if problem is not None:
