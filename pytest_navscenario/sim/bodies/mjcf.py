@@ -92,6 +92,7 @@ def read_robot(scenario) -> tuple[mujoco.MjSpec, str]:
     file when it does not load or compile, or has no free base."""
     path = mjcf_path(scenario)
     field = "robot.body.file"
+    _same_files(scenario, path)
     try:
         child = mujoco.MjSpec.from_file(os.fspath(path))
         child.compile()
@@ -114,6 +115,25 @@ def read_robot(scenario) -> tuple[mujoco.MjSpec, str]:
         raise _fail(scenario, f"{path} has no body with a free joint (a free base): the robot must move freely",
                     field, "give the robot's base body a <freejoint/>")
     return child, free[0]
+
+
+def _same_files(scenario, path: Path) -> None:
+    """The robot's files checked again just before MuJoCo opens them (scenario/mjcf_files.py: inside
+    the scenario's folder, regular files) and hashed: ScenarioError when they changed since the
+    scenario was loaded, so an edited MJCF or included file never runs under the old content hash."""
+    from ...scenario.mjcf_files import MjcfFileError, robot_digest
+
+    folder = Path(scenario.source).parent if scenario.source else Path.cwd()
+    field, fix = "robot.body.file", "keep the robot's files in the scenario's folder, named by relative paths"
+    try:
+        now = robot_digest(path, folder)
+    except (MjcfFileError, OSError) as exc:
+        raise _fail(scenario, str(exc), field, fix) from None
+    loaded = scenario.robot.body.digest
+    if loaded and now != loaded:
+        raise _fail(scenario, f"{path} or a file it names changed after the scenario was loaded (content "
+                              f"{loaded}, now {now}): its results would carry the old content hash", field,
+                    "load the scenario again (run it again) once the robot's files are as you want them")
 
 
 def load_controller(scenario) -> Any:
