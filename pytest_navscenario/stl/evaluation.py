@@ -23,7 +23,7 @@ import numpy as np
 from .tree import COMPARISONS, Node
 from .errors import StlEvaluationError
 from .formula import Formula, parse
-from .plan import LENGTH, plan, samples
+from .plan import LENGTH, plan, plan_for, samples
 
 
 @dataclass(frozen=True)
@@ -48,7 +48,7 @@ def robustness(formula: Formula | str, signals: Mapping[str, object], dt: float)
     trace or an interval that is not a whole number of periods.
     """
     formula = parse(formula) if isinstance(formula, str) else formula
-    step = _plan(formula, dt)
+    step = plan_for(formula, dt)
     return np.asarray(step(_arrays(formula, signals)), dtype=np.float64)
 
 
@@ -56,22 +56,12 @@ def evaluate(formula: Formula | str, signals: Mapping[str, object], dt: float) -
     """The verdict of ``formula`` on the signals: ``robustness`` plus where it was first violated."""
     formula = parse(formula) if isinstance(formula, str) else formula
     arrays = _arrays(formula, signals)
-    rho = np.asarray(_plan(formula, dt)(arrays), dtype=np.float64)
+    rho = np.asarray(plan_for(formula, dt)(arrays), dtype=np.float64)
     value = float(rho[0])
     if not value < 0:
         return Evaluation(value, False, None, None, rho)
     index = _Witness(formula, arrays, dt).find(formula.root, 0, False)
     return Evaluation(value, True, round(index * dt, 9), index, rho)
-
-
-def _plan(formula: Formula, dt: float):
-    if not (isinstance(dt, (int, float)) and dt > 0 and np.isfinite(dt)):
-        raise StlEvaluationError(f"the sampling period must be a positive number of seconds, got {dt!r}",
-                                 "pass the control tick, e.g. dt=0.1")
-    step = formula._plans.get(dt)
-    if step is None:
-        step = formula._plans[dt] = plan(formula.root, float(dt), formula.text)
-    return step
 
 
 def _arrays(formula: Formula, signals: Mapping[str, object]) -> dict:

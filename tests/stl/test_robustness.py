@@ -139,3 +139,10 @@ def test_robustness_is_float64_whatever_the_inputs():
     rho = robustness("always (x > 0)", {"x": [1, 2, 3]}, 1)
     assert rho.dtype == np.float64 and rho.tolist() == [1.0, 2.0, 3.0]
     assert robustness("1 < 2", {"x": [0, 0]}, 1).tolist() == [1.0, 1.0]
+
+
+def test_a_formula_checks_its_intervals_against_a_period_before_any_trace():
+    f = parse("always[0:0.25] (x > 0) and eventually[0:1] (x > 1)")
+    f.check_period(0.05)
+    with pytest.raises(StlEvaluationError, match="0.25 s .column 1. is not a whole number"):
+        f.check_period(0.1)
