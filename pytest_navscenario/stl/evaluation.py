@@ -58,6 +58,10 @@ def evaluate(formula: Formula | str, signals: Mapping[str, object], dt: float) -
     arrays = _arrays(formula, signals)
     rho = np.asarray(plan_for(formula, dt)(arrays), dtype=np.float64)
     value = float(rho[0])
+    if np.isnan(value):
+        raise StlEvaluationError(f"{formula.text}: the robustness at time 0 is undefined (NaN)",
+                                 "it comes from 0/0, sqrt of a negative number, or iff/xor of two "
+                                 "windows past the end of the trace: guard the arithmetic or the windows")
     if not value < 0:
         return Evaluation(value, False, None, None, rho)
     index = _Witness(formula, arrays, dt).find(formula.root, 0, False)
@@ -79,6 +83,11 @@ def _arrays(formula: Formula, signals: Mapping[str, object]) -> dict:
         if n is not None and x.shape[0] != n:
             raise StlEvaluationError(f"signal {name!r} has {x.shape[0]} samples, the others {n}",
                                      "sample every signal at the same ticks")
+        if np.isnan(x).any():
+            first = int(np.flatnonzero(np.isnan(x))[0])
+            raise StlEvaluationError(f"signal {name!r} is NaN at sample {first} (of {x.shape[0]})",
+                                     "a signal must have a value at every sample; fix the function "
+                                     "that computes it")
         n = x.shape[0]
         out[name] = x
     if n is None:       # a formula of constants only: any signal gives the length
