@@ -69,9 +69,11 @@ def draw(ax, scenario, returns, spots, path, fig, title, truth=None) -> None:
     if truth is not None:
         for x, y, r, _ in truth.pillars:
             ax.add_patch(Circle((x, y), r, fill=False, ls="--", color="tab:green"))
-        for x, y, ln, w, _, _ in truth.boxes:
-            ax.add_patch(Polygon([(x - ln / 2, y - w / 2), (x + ln / 2, y - w / 2), (x + ln / 2, y + w / 2),
-                                  (x - ln / 2, y + w / 2)], fill=False, ls="--", color="tab:green"))
+        for x, y, ln, w, yaw, _ in truth.boxes:
+            c, s = np.cos(np.radians(yaw)), np.sin(np.radians(yaw))
+            corners = [(-ln / 2, -w / 2), (ln / 2, -w / 2), (ln / 2, w / 2), (-ln / 2, w / 2)]
+            ax.add_patch(Polygon([(x + c * u - s * v, y + s * u + c * v) for u, v in corners], fill=False, ls="--",
+                                 color="tab:green"))
     for o in scenario.obstacles:
         ax.add_patch(Polygon(np.asarray(obstacle_polygon(o).exterior.coords), facecolor="0.85", edgecolor="k", lw=0.8))
     ax.plot(path[:, 0], path[:, 1], "-", color="tab:blue", lw=0.8)

@@ -16,8 +16,8 @@ pose is corrected by the alignment (``map -> odom``, interpolated between key sc
 
 ``auto`` (the default) uses KISS-ICP when it is installed, else the own matcher (and says so): on
 generated bags with known drifts (2, 6 and 15 degrees) both gave the seed the same fit to its scans,
-and KISS-ICP's poses were closer to the truth (largest error 6-12 mm against 28-37 mm, headings
-within 0.32 deg against 0.70) in about twice the own matcher's time (docs/benchmarks.md, #37).
+and KISS-ICP's poses were closer to the truth (largest error 6-8 mm against 20-35 mm, headings
+within 0.30 deg against 0.43) in up to twice the own matcher's time (docs/benchmarks.md, #37).
 """
 from __future__ import annotations
 
