@@ -70,3 +70,11 @@ def test_scan_matching_off_keeps_the_odometry(drifting):
     before = data.odom.copy()
     assert correct_drift(data, choose_mount(data, None)[0], "off") is None
     assert np.array_equal(before, data.odom)
+
+
+def test_by_default_the_odometry_is_kept_and_a_disagreeing_fit_points_to_scan_matching(drifting):
+    """Off by default (a corridor gives the matching nothing along it): the drifting bag's seed
+    disagrees with its scans, and the warning says what would correct it."""
+    seed = scenario_from_bag(drifting[0])
+    assert not any("corrected by scan matching" in n for n in seed.notes)
+    assert seed.fit.blocked > 0.05 and any("--scan-match auto aligns the scans" in w for w in seed.fit.warnings)

@@ -63,11 +63,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--scan-time-offset", type=float, default=0.0, metavar="SECONDS",
                    help="add this to every scan's stamp, for a driver that stamps its scans late or early against "
                         "the odometry (default 0)")
-    p.add_argument("--scan-match", choices=METHODS, default="auto",
+    p.add_argument("--scan-match", choices=METHODS, default="off",
                    help="correct odometry drift by aligning each key scan to the map of those before it, when the "
-                        "bag has no map -> odom and no pose topic: auto (default: KISS-ICP when installed, "
-                        "pip install 'pytest-navscenario[drift]', else the own correlative matcher), own, kiss-icp, "
-                        "or off (the odometry as it is); the output says how far the poses moved")
+                        "bag has no map -> odom and no pose topic: auto (KISS-ICP when installed, pip install "
+                        "'pytest-navscenario[drift]', else the own correlative matcher), own, kiss-icp, or off "
+                        "(default: the odometry as it is; a corridor gives the matching nothing along it); the "
+                        "output says how far the poses moved")
     p.add_argument("--frame", choices=FRAMES, default="auto",
                    help="the seed's world frame: auto (default: the map frame when the bag has map -> odom on /tf "
                         "or a pose topic in the map frame, else the odometry frame), map (an error without one), odom")

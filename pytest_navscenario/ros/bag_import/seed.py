@@ -91,7 +91,7 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
                       pose_topic: str | None = None, cloud_topic: str | None = None,
                       cloud: CloudSettings = CloudSettings(), goal_topic: str | None = None,
                       at: float | None = None, window: float = 30.0, size: SeedSize = SeedSize(),
-                      scan_stamp: str = "auto", scan_offset: float = 0.0, scan_match: str = "auto") -> BagSeed:
+                      scan_stamp: str = "auto", scan_offset: float = 0.0, scan_match: str = "off") -> BagSeed:
     """Build a seed scenario from a bag (see the package docstring). ``laser_pose`` is x, y (m),
     yaw (degrees) of the laser in the robot's base frame; ``robot_radius`` the seed's circular
     footprint (m; default: from the bag's URDF or Nav2 footprint, else 0.15 m); ``reference_file`` is the CSV name
@@ -123,7 +123,7 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
 
 
 def _seed(data: BagData, laser_pose, path_as, reference_file, name, robot_radius, settings, frame, map_frame,
-          pose_topic, cloud, goal_topic, size, scan_match="auto") -> BagSeed:
+          pose_topic, cloud, goal_topic, size, scan_match="off") -> BagSeed:
     corr = to_world_frame(data, frame, map_frame, pose_topic, data.full_odom)
     if scan_match not in METHODS:
         raise BagImportError(f"--scan-match must be one of {', '.join(METHODS)}, got {scan_match!r}")
@@ -173,6 +173,9 @@ def _seed(data: BagData, laser_pose, path_as, reference_file, name, robot_radius
     fit = None
     if smap is not None and smap.scans:
         fit = fit_figure(scenario, data, mount, smap.sample, smap.first, carved=_carved_cells(smap))
+        if fit.warnings and corr is None and frame != "odom" and scan_match == "off":
+            fit.warnings.append("the bag has no map -> odom: if the odometry drifted, --scan-match auto aligns the "
+                                "scans to one another and moves the poses (the output says how far)")
     od = data.odom
     path_rows = np.stack([od[:, 0] - od[0, 0], od[:, 1], od[:, 2]], axis=1)
     return BagSeed(scenario=scenario, path=path_rows, notes=notes, mount=mount, fit=fit,
