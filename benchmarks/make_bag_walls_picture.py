@@ -6,7 +6,7 @@
 path, no echo from beams meeting a surface at less than 10 degrees) imported by OTHER_CHECKOUT (before
 issue 37) and by this checkout. ``from-bag-walls-drift.png``: a generated drive round a furnished room
 whose odometry drifts to 6 degrees and 0.35 m, no map -> odom. Each seed is drawn over the bag's
-returns placed with the poses that seed used (this checkout's: corrected by scan matching), the beams
+returns placed with the poses that seed used (this checkout's drift seed: --scan-match auto), the beams
 along which the seed blocks space the lidar saw free in red, the truth dashed.
 """
 from __future__ import annotations
@@ -21,7 +21,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tests" / "ros"))
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from make_bag_fit_picture import draw, import_with  # noqa: E402
+from make_bag_fit_picture import draw, fit_of, import_with  # noqa: E402
 
 CORRIDOR_BEAMS = np.radians(np.arange(-180.0, 180.0, 0.5))
 
@@ -34,36 +34,6 @@ def corridor_bag(folder: Path):
     drive = np.stack([t, 8.3 * t / 46.0, 0 * t, 0 * t], 1)
     return robot_bag(folder / "corridor", world, drive, tf_map=False, angles=CORRIDOR_BEAMS, range_noise=0.01,
                      range_max=12.0, grazing=10.0), world
-
-
-def seen(scenario, bag: Path, match: str):
-    """The fit figure, the returns and the blocked spots of ``scenario`` against ``bag``, the poses
-    corrected by ``match`` (scan_match.METHODS) as the import did."""
-    from pytest_navscenario.ros.bag_import.fit import _segments, cast, fit_figure
-    from pytest_navscenario.ros.bag_import.mount import choose_mount
-    from pytest_navscenario.ros.bag_import.projection import beam_rays, map_scans, settle_timing
-    from pytest_navscenario.ros.bag_import.reading import read_bag
-    from pytest_navscenario.ros.bag_import.scan_match import correct_drift
-
-    data = read_bag(bag)
-    mount, _ = choose_mount(data, None)
-    settle_timing(data, mount)
-    correct_drift(data, mount, match)
-    smap = map_scans(data, mount)
-    fig = fit_figure(scenario, data, mount, smap.sample, smap.first)
-    r = beam_rays(data, smap.sample, mount)
-    use = r.valid | r.none
-    ox, oy, ang = r.ox[use].astype(float), r.oy[use].astype(float), r.angle[use]
-    seed, cosine = cast(ox, oy, np.cos(ang), np.sin(ang), *_segments(scenario.obstacles))
-    real = np.where(r.valid[use], r.range[use].astype(float), np.inf)
-    far = np.where(np.isfinite(real), real, data.range_max)
-    with np.errstate(invalid="ignore"):
-        blocked = (seed < far) & ((far - seed) * cosine > 0.1)
-    hits = np.isfinite(real)
-    returns = np.stack([ox[hits] + real[hits] * np.cos(ang[hits]), oy[hits] + real[hits] * np.sin(ang[hits])], 1)
-    spots = np.stack([ox[blocked] + seed[blocked] * np.cos(ang[blocked]),
-                      oy[blocked] + seed[blocked] * np.sin(ang[blocked])], 1)
-    return fig, returns, spots, data.odom[:, 1:3]
 
 
 def main() -> None:
@@ -84,11 +54,11 @@ def main() -> None:
     for name, bag, truth in cases:
         panels = []
         for label, checkout, match in (("before (the version before issue 37)", args.before, "off"),
-                                       ("after", ROOT, "auto")):
+                                       ("after", ROOT, "auto" if name == "drift" else "off")):
             out = tmp / f"{name}-{match}.yaml"
-            import_with(checkout, bag, out)
+            import_with(checkout, bag, out, [] if checkout == args.before else ["--scan-match", match])
             scenario = load_scenario(out)
-            panels.append((label, scenario, *seen(scenario, bag, match)))
+            panels.append((label, scenario, *fit_of(scenario, bag, match)))
         fig, axes = plt.subplots(2 if name == "corridor" else 1, 1 if name == "corridor" else 2,
                                  figsize=(11, 6.5) if name == "corridor" else (11, 6.0))
         for ax, (label, scenario, fit, returns, spots, path) in zip(axes, panels):
