@@ -6,7 +6,8 @@ seed) and frozen scenario files with provenance, which are ordinary regression s
 
 Read first: ``space.py`` (what may change, by how much, and which candidates are valid), then
 ``engine.py`` (the strategies and shrinking, driven by Hypothesis), ``freeze.py`` (writing) and
-``suite.py`` (the generated suite as scenario files).
+``suite.py`` (the generated suite as scenario files); ``discards.py`` says why many candidates were
+discarded and what to change in the seed's ``search:`` section.
 
 Names are imported lazily so that importing this package stays cheap.
 """
