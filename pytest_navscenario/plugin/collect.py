@@ -407,8 +407,10 @@ class ScenarioItem(pytest.Item):
                          f"({_fmt(c.x, '', 2)}, {_fmt(c.y, '', 2)}), depth {_fmt(c.depth, ' m', 4)}")
         if r.safety_stop is not None:
             s = r.safety_stop
+            from ..verdict.oracle import stop_motion
             lines.append(f"  safety stop:   predicted hit of obstacle {s.obstacle!r} at t="
-                         f"{_fmt(s.time, ' s', 2)}, speed {_fmt(s.speed, ' m/s', 2)}")
+                         f"{_fmt(s.time, ' s', 2)}, "
+                         + (f"speed {_fmt(s.speed, ' m/s', 2)}" if not s.speed < 0.005 else stop_motion(s)))
         if r.subject_failure is not None:
             f = r.subject_failure
             lines.append(f"  planner error: {f.message} (tick {f.tick}, t={_fmt(f.time, ' s', 2)})")
