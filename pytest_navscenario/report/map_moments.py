@@ -55,6 +55,7 @@ def _draw_min_clearance(ax: "Axes", result: EpisodeResult, labels: LabelPlacer |
                     arrowprops=dict(arrowstyle="-", color="#d50000", lw=0.6), **style)
         return
     labels.avoid((a.x, a.y), 5)
+    labels.avoid_area(np.asarray(footprint.exterior.coords))   # no label over the red footprint
     free = [tuple(r * d) for r in (28.0, 44.0)]     # on the free side first, then anywhere near
     labels.add(text, (a.x, a.y), priority=1, offsets=free + ring((28.0, 44.0, 64.0)),
                leader=dict(color="#d50000", lw=0.6, zorder=10), **style)
@@ -124,6 +125,11 @@ def _draw_end(ax: "Axes", result: EpisodeResult, labels: LabelPlacer | None = No
     outline = footprint_polygon(result.scenario.robot.footprint, x, y, yaw)
     ax.add_patch(MplPolygon(np.asarray(outline.exterior.coords), closed=True, fill=False, ec=colour,
                             lw=1.6, zorder=11))
+    if labels is not None:
+        labels.avoid_area(np.asarray(outline.exterior.coords))
+    event = getattr(result, "terrain_event", None)
+    if event is not None and math.hypot(event.x - x, event.y - y) < 0.5:
+        return   # the fall, tip-over or stuck marker says where and when it ended: no square over it
     ax.plot(x, y, marker="s", ms=8, color=colour, mec="white", zorder=12, ls="none",
             label=f"end: {result.outcome.value} at t={float(traj.t[-1]):.1f} s")
     if labels is not None:

@@ -79,7 +79,7 @@ def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
     placer = labels if labels is not None else LabelPlacer(ax)
     if getattr(s, "terrain", ()):     # the ground's height under everything (terrain_plot.py)
         from .terrain_plot import draw_terrain
-        draw_terrain(ax, s, _extent(result), colorbar=ground_scale)
+        draw_terrain(ax, s, _extent(result), colorbar=ground_scale, labels=placer)
     draw_obstacles(ax, s, involved=_involved_obstacles(result), labels=placer)
     draw_moving_obstacles(ax, result, labels=placer)
     _draw_shortest_path(ax, s)
@@ -114,7 +114,8 @@ def _finish_axes(ax: "Axes", result: EpisodeResult, *, title: str | None, legend
     ax.set_aspect("equal", adjustable="box")
     major = _nice_step(max(x1 - x0, y1 - y0) / 8.0)
     ax.xaxis.set_major_locator(MultipleLocator(major))
-    ax.yaxis.set_major_locator(MultipleLocator(major))
+    # a wide, low map (a long ramp, a dock) keeps at least three y ticks: its own, finer step
+    ax.yaxis.set_major_locator(MultipleLocator(major if (y1 - y0) / major >= 3 else _nice_step((y1 - y0) / 4.0)))
     ax.grid(True, which="major", color="#bdbdbd", lw=0.6, zorder=0)
     ax.set_axisbelow(True)
     ax.set_xlabel("x (m)")
@@ -210,8 +211,14 @@ def _figure_legend(fig: "Figure", axes: Sequence["Axes"]) -> None:
         for handle, label in zip(*ax.get_legend_handles_labels()):
             seen.setdefault(label, handle)
     if seen:
+        import textwrap
+
         fw, fh = fig.get_size_inches()
-        fig.legend(list(seen.values()), list(seen), loc="upper left", fontsize=7, frameon=False,
+        # wrapped to the margin's width (a 7 pt character is ~0.06 in, the marker takes ~0.45 in):
+        # "fell off platform 'dock' t=4.3 s, 1.2 m drop" was cut at the figure's right edge
+        width = max(16, int((_RIGHT - 0.1 - 0.45) / 0.06))
+        texts = [textwrap.fill(label, width, break_on_hyphens=False) for label in seen]
+        fig.legend(list(seen.values()), texts, loc="upper left", fontsize=7, frameon=False,
                    bbox_to_anchor=((fw - _RIGHT + 0.1) / fw, 1 - _TOP / fh))
 
 

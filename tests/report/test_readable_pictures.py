@@ -1,0 +1,119 @@
+"""Issue 32 item 5: pictures a person reads. The side profile's angle axis in plain degrees (no
+matplotlib offset text) with roll beside pitch, so that a tip-over by roll shows; at least three y
+ticks on a wide, low map; legend entries inside the figure; the fall or tip-over marker not under
+an "end" square; terrain names placed clear of the other labels and markers. Real episodes: a
+robot that tips over the loading dock's edge (found by the search: tests/data/dock-tip.yaml) and
+the ramp-levels seed."""
+from __future__ import annotations
+
+import math
+from itertools import combinations
+from pathlib import Path
+
+import pytest
+
+from pytest_navscenario import load_scenario, run_scenario
+from pytest_navscenario.report.labels import text_boxes
+from pytest_navscenario.report.plots import trajectory_figure
+
+HERE = Path(__file__).resolve().parents[1]
+SEEDS = HERE.parent / "scenarios"
+
+
+@pytest.fixture(scope="module")
+def dock():
+    result = run_scenario(load_scenario(HERE / "data" / "dock-tip.yaml"), "dwa")
+    fig = trajectory_figure(result)
+    fig.canvas.draw()
+    return result, fig
+
+
+@pytest.fixture(scope="module")
+def ramp():
+    result = run_scenario(load_scenario(SEEDS / "ramp-levels.yaml"), "dwa")
+    fig = trajectory_figure(result)
+    fig.canvas.draw()
+    return result, fig
+
+
+def _map(fig):
+    (ax,) = [ax for ax in fig.axes if ax.get_xlabel() == "x (m)"]
+    return ax
+
+
+def _angles(fig):
+    (twin,) = [ax for ax in fig.axes if "roll" in ax.get_ylabel()]
+    return twin
+
+
+def test_the_profile_shows_roll_in_plain_degrees(dock):
+    result, fig = dock
+    twin = _angles(fig)
+    assert twin.yaxis.get_offset_text().get_text() == ""
+    (roll,) = [line for line in twin.get_lines() if line.get_label() == "roll"]
+    assert max(abs(v) for v in roll.get_ydata()) == pytest.approx(result.metrics.max_roll, abs=0.5)
+    assert result.metrics.max_roll > 30          # the robot rolls over the edge: the profile shows it
+    lo, hi = twin.get_ylim()
+    assert lo <= -5 and hi >= max(5.0, result.metrics.max_roll)
+
+
+def test_a_wide_map_has_y_ticks(ramp):
+    _, fig = ramp
+    ax = _map(fig)
+    lo, hi = ax.get_ylim()
+    assert len([t for t in ax.get_yticks() if lo <= t <= hi]) >= 3
+
+
+@pytest.mark.parametrize("which", ["dock", "ramp"])
+def test_legend_entries_stay_inside_the_figure(which, request):
+    _, fig = request.getfixturevalue(which)
+    renderer = fig.canvas.get_renderer()
+    width = fig.bbox.width
+    for legend in fig.legends:
+        for text in legend.get_texts():
+            assert text.get_window_extent(renderer).x1 <= width, text.get_text()
+
+
+def test_the_event_marker_is_not_under_an_end_square(dock):
+    result, fig = dock
+    event = result.terrain_event
+    assert event is not None
+    squares = [line for line in _map(fig).get_lines() if line.get_marker() == "s"
+               and any(math.hypot(x - event.x, y - event.y) < 0.5 for x, y in line.get_xydata())]
+    assert squares == []
+
+
+@pytest.mark.parametrize("which", ["dock", "ramp"])
+def test_no_label_covers_another(which, request):
+    _, fig = request.getfixturevalue(which)
+    boxes = text_boxes(_map(fig))
+    for (ta, a), (tb, b) in combinations(boxes, 2):
+        w = min(a[2], b[2]) - max(a[0], b[0])
+        h = min(a[3], b[3]) - max(a[1], b[1])
+        assert not (w > 1 and h > 1), f"{ta!r} over {tb!r}"
+
+
+STAIRS = """version: 1
+name: stairs
+robot:
+  drive: diff
+  body: {type: legged, max_step: 0.2, max_slope: 30, max_gap: 0.3}
+  lidar: {mount_height: 1.0}
+mission: {start: {x: 0, y: 0}, goal: {x: 9, y: 0}, timeout: 30}
+terrain:
+  - {type: steps, name: stairs, x: 5, y: 0, count: 5, rise: 0.17, run: 0.3, width: 2}
+  - {type: platform, name: landing, x: 8.75, y: 0, length: 6, width: 8, height: 0.85}
+"""
+
+
+def test_a_terrain_name_is_not_written_over_the_goal():
+    """The tutorial's stairs: "platform 'landing'" was written at the landing's centre, over the goal."""
+    from pytest_navscenario import loads_scenario
+
+    result = run_scenario(loads_scenario(STAIRS), "dwa")
+    fig = trajectory_figure(result)
+    fig.canvas.draw()
+    ax = _map(fig)
+    gx, gy = ax.transData.transform((9.0, 0.0))
+    (box,) = [b for text, b in text_boxes(ax) if text == "platform 'landing'"]
+    assert not (box[0] - 6 <= gx <= box[2] + 6 and box[1] - 6 <= gy <= box[3] + 6), box
