@@ -354,7 +354,7 @@ def _draw_mission(ax: "Axes", mission: Any, labels: LabelPlacer | None = None) -
             label="goal")
     if labels is not None:
         labels.avoid((mission.start.x, mission.start.y), 6)
-        labels.avoid((mission.goal.x, mission.goal.y), 8)
+        labels.avoid((mission.goal.x, mission.goal.y), 10)   # the star (13 pt) and a little room
 
 
 def _label(ax: "Axes", labels: LabelPlacer | None, text: str, xy: tuple[float, float],
