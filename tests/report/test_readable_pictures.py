@@ -117,3 +117,21 @@ def test_a_terrain_name_is_not_written_over_the_goal():
     gx, gy = ax.transData.transform((9.0, 0.0))
     (box,) = [b for text, b in text_boxes(ax) if text == "platform 'landing'"]
     assert not (box[0] - 8 <= gx <= box[2] + 8 and box[1] - 8 <= gy <= box[3] + 8), box   # the star: 9 px
+
+
+def test_the_time_slider_view_has_names_axes_and_a_scale(dock, tmp_path):
+    """The HTML viewer had no axes, scale or names: the view now carries the obstacles' and the
+    terrain elements' names and the roll, and report.js draws ticks in metres and a scale bar
+    (looked at in headless chromium; here: the data and the drawing code the page carries)."""
+    from pytest_navscenario.report.html import Entry, view_data, write_html
+    from pytest_navscenario.report.results_file import make_record
+
+    result, _ = dock
+    view = view_data(result)
+    assert view["on"] == ["pallet_a", "pallet_b"] and view["tn"] == ["platform 'dock'"]
+    assert len(view["roll"]) == len(view["t"])
+    record = make_record(result, nodeid="dock.yaml::dock", path="dock.yaml")
+    out = tmp_path / "r.html"
+    write_html(out, [Entry(record=record, view=view)], title="t")
+    page = out.read_text()
+    assert "function axes()" in page and "function scale()" in page and "x, y (m)" in page
