@@ -247,6 +247,21 @@ def _fmt(value: Any, unit: str = "", digits: int = 3) -> str:
     return f"{value:.{digits}f}{unit}"
 
 
+def _culprit_line(result: Any) -> list[str]:
+    """The clearance that explains the outcome, when the minimum is to another obstacle: a robot
+    stopped for a person that passed nearer a wall (metrics.culprit_clearance)."""
+    if not len(result.trajectory.t):
+        return []
+    from ..verdict.metrics import culprit_clearance
+    found = culprit_clearance(result)
+    if found is None:
+        return []
+    name, dist, time = found
+    why = "the safety stop was for it" if result.safety_stop is not None else "the collision was with it"
+    return [f"  clearance to {name!r}: {_fmt(dist, ' m')} at t={_fmt(time, ' s', 2)} ({why}; the minimum "
+            f"above is to another obstacle)"]
+
+
 def _field_line(scenario: Any, field: str) -> int | None:
     """The line of ``field`` in the scenario's file (read again only for this error), or None."""
     from ..scenario.yaml_tree import field_line
@@ -421,6 +436,7 @@ class ScenarioItem(pytest.Item):
             lines.append(f"  min clearance: {_fmt(m.min_clearance, ' m')}{obstacle} at t="
                          f"{_fmt(m.min_clearance_time, ' s', 2)}, robot at ({_fmt(m.min_clearance_x, '', 2)}, "
                          f"{_fmt(m.min_clearance_y, '', 2)})")
+        lines += _culprit_line(r)
         lines.append(f"  duration:      {_fmt(m.duration, ' s', 2)} (timeout "
                      f"{_fmt(r.scenario.mission.timeout, ' s', 1)}), path {_fmt(m.path_length, ' m', 2)}, "
                      f"efficiency {_fmt(m.path_efficiency, '', 2)}, goal error "

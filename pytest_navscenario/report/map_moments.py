@@ -61,6 +61,36 @@ def _draw_min_clearance(ax: "Axes", result: EpisodeResult, labels: LabelPlacer |
                leader=dict(color="#d50000", lw=0.6, zorder=10), **style)
 
 
+def _draw_culprit_clearance(ax: "Axes", result: EpisodeResult, labels: LabelPlacer | None = None) -> None:
+    """For a stop or a collision about another obstacle than the minimum clearance's (a person
+    beside a corridor's walls): the robot's closest approach to that obstacle, labelled with its
+    name, in the outcome's colour."""
+    from shapely.ops import nearest_points
+
+    from ..verdict.metrics import culprit_clearance
+
+    found = culprit_clearance(result) if len(result.trajectory.t) else None
+    if found is None:
+        return
+    name, dist, time = found
+    p = _pose_at(result, time)
+    if p is None:
+        return
+    colour = OUTCOME_COLOURS.get(result.outcome.value, "#ef6c00")
+    a, b = nearest_points(footprint_polygon(result.scenario.robot.footprint, *p),
+                          obstacle_polygon_at(result.scenario.obstacle(name), time))
+    ax.plot([a.x, b.x], [a.y, b.y], color=colour, lw=2, zorder=10)
+    ax.plot([a.x], [a.y], marker="o", ms=5, color=colour, zorder=10)
+    text = f"clearance to {name} {dist:.2f} m\n(t={time:.1f} s, the {result.outcome.value}'s)"
+    style = dict(fontsize=7, color=colour, zorder=11, bbox=_HALO)
+    if labels is None:
+        ax.annotate(text, (a.x, a.y), xytext=(20, -20), textcoords="offset points", **style)
+        return
+    labels.avoid((a.x, a.y), 5)
+    labels.add(text, (a.x, a.y), priority=1, offsets=ring((28.0, 44.0, 64.0)),
+               leader=dict(color=colour, lw=0.6, zorder=10), **style)
+
+
 def _draw_narrowest_gap(ax: "Axes", scenario: Any, metrics: Any, labels: LabelPlacer | None = None) -> None:
     """The narrowest gap between two obstacles: a double arrow with its width."""
     from shapely.ops import nearest_points

@@ -29,6 +29,7 @@ from .figures import _figure, as_written, png_bytes, save_figure  # noqa: F401
 from .labels import LabelPlacer
 from .map_moments import (  # noqa: F401
     OUTCOME_COLOURS,
+    _draw_culprit_clearance,
     _draw_end,
     _draw_events,
     _draw_min_clearance,
@@ -87,6 +88,7 @@ def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
     _draw_believed(ax, result, placer)
     _draw_mission(ax, s.mission, placer)
     _draw_min_clearance(ax, result, placer)
+    _draw_culprit_clearance(ax, result, placer)
     _draw_narrowest_gap(ax, s, result.metrics, placer)
     _draw_events(ax, result, placer)
     _draw_end(ax, result, placer)

@@ -135,3 +135,24 @@ def test_the_time_slider_view_has_names_axes_and_a_scale(dock, tmp_path):
     write_html(out, [Entry(record=record, view=view)], title="t")
     page = out.read_text()
     assert "function axes()" in page and "function scale()" in page and "x, y (m)" in page
+
+
+def test_the_clearance_that_explains_a_stop_is_named(pytester: pytest.Pytester, monkeypatch: pytest.MonkeyPatch):
+    """person-crossing (a frozen failure of its search, tests/data/person-stop.yaml): the safety
+    stop is for the walker, the minimum clearance is to a wall; before, only the wall's was given."""
+    import shutil
+
+    from pytest_navscenario.verdict.metrics import culprit_clearance
+
+    result = run_scenario(load_scenario(HERE / "data" / "person-stop.yaml"), "dwa")
+    assert result.safety_stop.obstacle == "walker" and result.metrics.min_clearance_obstacle.startswith("wall")
+    name, dist, _ = culprit_clearance(result)
+    assert name == "walker" and 0 < dist < 1.0
+    fig = trajectory_figure(result)
+    texts = [t for t, _ in text_boxes(_map(fig))]
+    assert any(t.startswith(f"clearance to walker {dist:.2f} m") for t in texts), texts
+    monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
+    shutil.copy(HERE / "data" / "person-stop.yaml", pytester.path / "person-stop.yaml")
+    out = pytester.runpytest("-p", "pytest_navscenario.plugin", "person-stop.yaml", "--nav-subject=dwa",
+                             "--nav-plots=none").stdout.str()
+    assert f"  clearance to 'walker': {dist:.3f} m at t=" in out and "(the safety stop was for it;" in out, out
