@@ -166,8 +166,14 @@ def draw_profile(ax: "Axes", results: Sequence[Any], labels: Sequence[str] = (),
     ax.grid(True, color="#e0e0e0", lw=0.5)
     handles = ax.get_legend_handles_labels()
     extra = twin.get_legend_handles_labels()
-    ax.legend(handles[0] + extra[0], handles[1] + extra[1], loc="upper left", fontsize=6.5, framealpha=0.85,
-              ncol=3)
+    # right of the profile, beside its angle axis, in the figure's right margin: inside the plot
+    # it covered the base's height where the route starts at the top
+    import textwrap
+
+    width_in = ax.get_position().width * ax.figure.get_size_inches()[0]
+    names = [textwrap.fill(n, 24, break_on_hyphens=False) for n in handles[1] + extra[1]]
+    ax.legend(handles[0] + extra[0], names, loc="upper left", fontsize=6.5, frameon=False,
+              bbox_to_anchor=(1.0 + 0.6 / width_in, 1.04), borderaxespad=0.0, handlelength=1.8)
 
 
 def _profile_event(ax: "Axes", result: Any, prof: dict[str, np.ndarray], label: str) -> None:

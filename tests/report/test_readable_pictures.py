@@ -69,7 +69,9 @@ def test_legend_entries_stay_inside_the_figure(which, request):
     _, fig = request.getfixturevalue(which)
     renderer = fig.canvas.get_renderer()
     width = fig.bbox.width
-    for legend in fig.legends:
+    legends = list(fig.legends) + [ax.get_legend() for ax in fig.axes if ax.get_legend() is not None]
+    assert len(legends) == 2                     # the map's, right of it; the profile's, right of it
+    for legend in legends:
         for text in legend.get_texts():
             assert text.get_window_extent(renderer).x1 <= width, text.get_text()
 
