@@ -122,9 +122,8 @@ def _robot(ctx: _Ctx, top: _Section) -> Robot:
 
 def _mjcf_file(ctx: _Ctx, body: Any) -> Any:
     """An MJCF body's file: beside the scenario (the mesh path rules), there and readable; its
-    digest (a hash of the file's bytes) made part of the content. MuJoCo reads it at run time."""
-    import hashlib
-
+    digest (a hash of its bytes and of every file MuJoCo will open for it: scenario/mjcf_files.py)
+    made part of the content. MuJoCo reads it at run time."""
     from .mesh import MeshError, resolve_mesh_path
 
     field = "robot.body.file"
@@ -137,13 +136,16 @@ def _mjcf_file(ctx: _Ctx, body: Any) -> Any:
         raise ctx.fail(str(exc), field, line, fix) from None
     if path.exists() and not path.is_file():   # a folder, or a named pipe that reading would wait on
         raise ctx.fail(f"{path} is not a file", field, line, fix)
-    try:
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise ctx.fail(f"{path} does not exist", field, line, fix) from None
+    if not path.exists():
+        raise ctx.fail(f"{path} does not exist", field, line, fix)
+    from .mjcf_files import MjcfFileError, robot_digest
+    try:   # the file and every file MuJoCo will open for it: inside the folder, regular, hashed
+        return replace(body, digest=robot_digest(path, folder))
+    except MjcfFileError as exc:
+        raise ctx.fail(str(exc), field, line, "keep the robot's included files, meshes and textures in the "
+                                              "scenario's folder, named by relative paths") from None
     except OSError as exc:
         raise ctx.fail(f"{path} cannot be read: {exc.strerror or exc}", field, line, fix) from None
-    return replace(body, digest=hashlib.sha256(data).hexdigest()[:16])
 
 
 def _pose(ctx: _Ctx, node: YNode | None, path: str, line: int | None, what: str) -> Pose:
@@ -257,7 +259,7 @@ def _terrain_element(ctx: _Ctx, sec: _Section, element: K.Element, name: str) ->
     values = _read(ctx, sec, decl, {"name": name})
     if element.type not in ("heightfield", "rough"):
         return decl.cls(**values)
-    from .heightmap import HeightmapError, check_rough, load_heightfield
+    from .ground.heightmap import HeightmapError, check_rough, load_heightfield
 
     try:
         if element.type == "rough":
@@ -423,7 +425,7 @@ def check_scenario(scenario: Scenario, *, _ctx: _Ctx | None = None) -> None:
         _check_clear(scenario, ctx)
         _check_speeds(scenario, ctx)
     if scenario.terrain or scenario.robot.body.kind != "planar" or any(o.z is not None for o in scenario.obstacles):
-        from .ground import body_problem, mission_problem, obstacle_problem, terrain_problem
+        from .ground.surface import body_problem, mission_problem, obstacle_problem, terrain_problem
         problem = (body_problem(scenario) or terrain_problem(scenario) or mission_problem(scenario)
                    or obstacle_problem(scenario))
         if problem is not None:

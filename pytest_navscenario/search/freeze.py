@@ -31,7 +31,7 @@ from typing import Any, Iterable
 from ..core.files import atomic_write_text
 from ..scenario.model import Scenario, content_hash
 from ..verdict.result import headline
-from .engine import Candidate, Failure, SearchReport
+from .report import Candidate, Failure, SearchReport
 from .holding import Estimate
 from .space import SearchSpace
 
