@@ -121,8 +121,10 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     """The whole parser; with ``only``, only that subcommand's arguments are added (and only its
     module is imported); ``only=""`` adds none (enough for the top-level --help)."""
     from .. import __version__
+    from ..core.versions import mujoco_version
     parser = NavArgumentParser(prog="navscenario", description=DESCRIPTION, epilog=EPILOG)
-    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    parser.add_argument("--version", action="version",
+                        version=f"%(prog)s {__version__} (MuJoCo {mujoco_version()})")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", title="commands")
     for name, (module_name, purpose) in SUBCOMMANDS.items():
         p = sub.add_parser(name, help=purpose, description=DESCRIPTIONS[name])

@@ -405,6 +405,7 @@ class ScenarioItem(pytest.Item):
         version = f" {r.subject_version}" if r.subject_version else ""
         lines.append(f"  subject:       {r.subject}{version}, episode seed {r.seed}")
         lines.append(f"  scenario:      {self.rel_path}")
+        lines += _unreproduced(r)
         from .artifacts import item_dir
         folder = item_dir(self.config, self.nodeid)
         if folder is not None:
@@ -418,3 +419,19 @@ class ScenarioItem(pytest.Item):
     def reportinfo(self) -> tuple[Path, int, str]:
         # line 0 (shown as 1): pytest needs a line for skip reports
         return self.path, 0, f"scenario {self.name} ({self.scenario.family or 'no family'})"
+
+
+def _unreproduced(r: Any) -> list[str]:
+    """For a frozen failure whose outcome or message is not the one its provenance recorded: what
+    was recorded, and the MuJoCo release it was recorded under when that is not this run's."""
+    from ..core.versions import other_mujoco
+
+    prov = r.scenario.provenance or {}
+    if "outcome" not in prov or (prov.get("outcome") == r.outcome.value and prov.get("message") == r.message):
+        return []
+    lines = [f"  recorded:      {prov.get('outcome')}: {prov.get('message') or ''} (its provenance; this run "
+             f"did not reproduce it)"]
+    note = other_mujoco(prov.get("mujoco_version"))
+    if note:
+        lines.append(f"  MuJoCo:        {note}; re-run its search to record it under this release")
+    return lines
