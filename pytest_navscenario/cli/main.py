@@ -81,7 +81,8 @@ DESCRIPTIONS: dict[str, str] = {
                        "width. The layout is a guess: edit it to your training environment's, then run "
                        "'navscenario check-planner MODEL.onnx'. Needs the onnx extra (onnxruntime).",
     "import": "Import another tool's world as a scenario: an Aerialist test definition or a Gazebo "
-              "SDF world (static boxes and cylinders; anything not carried over is listed). Poses "
+              "SDF world (static boxes, cylinders, polylines and STL/OBJ meshes as obstacles, PNG heightmaps as "
+              "terrain; anything not carried over is listed). Poses "
               "are x,y,yaw in metres and degrees, e.g. --start -2.25,3,90.",
 }
 

@@ -180,6 +180,7 @@ class ScenarioFile(pytest.File):
             scenario = with_sensor_model(scenario, model)
         repeats = get_state(self.config).settings.repeat
         provenance = scenario.provenance or {}
+        _warn_other_subject(provenance, get_state(self.config).subject)
         if repeats > 1 and "confirmation" in provenance:   # a frozen failure: does it still hold?
             get_state(self.config).frozen[(rel_path(self.config, self.path), name)] = dict(provenance)
         for repeat in range(repeats):
@@ -255,6 +256,26 @@ def _field_line(scenario: Any, field: str) -> int | None:
             return field_line(fh.read(), field)
     except (OSError, TypeError, UnicodeDecodeError):
         return None
+
+
+class OtherSubjectWarning(UserWarning):
+    """A frozen failure runs against another subject than the one its provenance names."""
+
+
+def _warn_other_subject(provenance: dict, subject: Any) -> None:
+    """A pytest warning (shown with the file in the warnings summary; the same text for every file,
+    so pytest lists them under one message) when a frozen failure of the search runs against
+    another subject than the one it was found against: against that one it is only a layout,
+    which it may well pass, and a run that looks like a fixed regression may be no such thing."""
+    import warnings
+
+    found = provenance.get("subject")
+    if not found or "outcome" not in provenance or subject.spec is None or str(found) == subject.spec:
+        return
+    warnings.warn(OtherSubjectWarning(
+        f"frozen failure found against subject {found!r} runs against {subject.spec!r} (from "
+        f"{subject.origin}): against another subject it is only a layout, which it may pass; to re-run "
+        f"the failure as found, add --nav-subject={found}"), stacklevel=2)
 
 
 def _warn_left_running(where: str, left: tuple[str, ...]) -> None:

@@ -1,6 +1,8 @@
-"""The MuJoCo release is named wherever bits are recorded or compared (issue 32): pytest's header,
-``navscenario --version``, every results record, and the failure of a frozen file that did not
-reproduce its provenance's outcome, with the release it was recorded under when that is another."""
+"""Frozen files and what they were recorded with (issue 32). The MuJoCo release is named wherever
+bits are recorded or compared: pytest's header, ``navscenario --version``, every results record, and
+the failure of a frozen file that did not reproduce its provenance's outcome, with the release it
+was recorded under when that is another. A frozen file run against another subject than the one it
+was found against warns."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -70,3 +72,19 @@ def test_navscenario_version_names_the_mujoco_release(capsys):
         main(["--version"])
     assert stop.value.code == 0
     assert capsys.readouterr().out.strip().endswith(f"(MuJoCo {mujoco.__version__})")
+
+
+def test_frozen_failures_run_against_another_subject_than_their_provenance_warn(project):
+    """Tutorial 5's `pytest scenarios/regressions/loading-dock` ran the ini's subject against the
+    failures dwa was found to have, all of them passed for the wrong reason, without a word."""
+    project.makeini("[pytest]\nnav_subject = dwa\n")
+    other = project.runpytest_inprocess("-p", "pytest_navscenario.plugin", "-p", "no:cacheprovider",
+                                        "regressions", "--nav-plots=none")
+    out = other.stdout.str()
+    assert "OtherSubjectWarning: frozen failure found against subject 'straight_planner:Straight' runs " \
+           "against 'dwa' (from ini nav_subject): against another subject it is only a layout, which it " \
+           "may pass; to re-run the failure as found, add --nav-subject=straight_planner:Straight" in out, out
+    assert "regressions/old.yaml" in out and "regressions/same.yaml" in out       # both files, one message
+    same = project.runpytest_inprocess("-p", "pytest_navscenario.plugin", "-p", "no:cacheprovider",
+                                       "regressions", "--nav-plots=none", "--nav-subject=straight_planner:Straight")
+    assert "OtherSubjectWarning" not in same.stdout.str()
