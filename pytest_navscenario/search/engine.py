@@ -153,6 +153,7 @@ class SearchReport:
     episode_seed: int | None = None   # the run's base seed (--nav-seed) every episode used
     first_failure: int = 0            # simulation number of the first failing candidate (0: none)
     batching: str = ""                # how the simulations ran in batches (search/batched.py), or ""
+    worker_deaths: list[str] = field(default_factory=list)   # workers that died, their jobs run again
 
     @property
     def discarded_total(self) -> int:
@@ -995,6 +996,9 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], *, budget: in
         batching = getattr(evaluator, "batching", None)
         if batching is not None and batching.batched:
             report.batching = batching.describe()
+        deaths = getattr(evaluator, "worker_deaths", None)   # parallel.py: a worker killed mid-search
+        if deaths is not None:
+            report.worker_deaths = deaths()
         if report.interrupted:
             for f in report.failures:
                 if f.shrink_sims == 0 and not f.note and any(f.found.offsets):

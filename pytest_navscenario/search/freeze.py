@@ -247,7 +247,8 @@ def end_record(report: SearchReport, search_id: str) -> dict[str, Any]:
             "shrink_budget": report.shrink_total, "failures": len(report.failures),
             "rejected": len(report.rejected), "unconfirmed": len(report.unconfirmed),
             "hold": report.hold, "randomness": list(report.randomness), "interrupted": report.interrupted,
-            "stop_reason": report.stop_reason, "wall_time": round(report.wall_time, 3)}
+            "stop_reason": report.stop_reason, "worker_deaths": list(report.worker_deaths),
+            "wall_time": round(report.wall_time, 3)}
 
 
 def log_records(report: SearchReport, space: SearchSpace, search_id: str = "") -> list[dict[str, Any]]:
