@@ -198,7 +198,9 @@ def _read_npy(path: Path, size: int) -> np.ndarray:
                 raise ValueError(f"unsupported .npy format version {version[0]}.{version[1]}")
             shape, _, dtype = read_header(fp)
             data_bytes = size - fp.tell()
-    except (ValueError, OSError, EOFError) as exc:
+    except Exception as exc:   # ValueError, EOFError, and numpy's header parser's own (tokenize.TokenError...)
+        if isinstance(exc, HeightmapError):
+            raise
         raise HeightmapError(f"{path.name} cannot be read as a NumPy .npy array: {exc}") from None
     if dtype.kind not in "iuf":
         raise HeightmapError(f"{path.name} holds {dtype} values; a heightfield array holds numbers "
@@ -213,7 +215,7 @@ def _read_npy(path: Path, size: int) -> np.ndarray:
                              f"promises {promised} ({shape[1]} x {shape[0]} {dtype} values)")
     try:
         values = np.load(path, allow_pickle=False)
-    except (ValueError, OSError, EOFError) as exc:
+    except Exception as exc:
         raise HeightmapError(f"{path.name} cannot be read as a NumPy .npy array: {exc}") from None
     return values.astype(float)
 
