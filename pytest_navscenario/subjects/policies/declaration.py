@@ -59,6 +59,8 @@ _FIELD_KEYS = {
 ACTION_KEYS = ("components", "clip", "scale")
 _LIMITS = 50_000          # nodes: a declaration is a few dozen
 MAX_LABEL = int(SCENARIO_LIMITS["max_name_length"])   # characters of a name or version
+MAX_OBSERVATION = 100_000   # values in the observation row, all fields together (= one lidar's beam limit)
+MAX_FIELDS = 1_000          # fields in the observation
 
 
 class DeclarationError(SubjectLoadError):
@@ -357,7 +359,15 @@ def _read_observation(r: _Reader, node: YNode) -> tuple[Feature, ...]:
         where = f"{where}.{kind}"
         if isinstance(settings, YScalar) and settings.value is None:
             settings = YMap(line)        # `- velocity:` with nothing after it: the defaults
+        if i >= MAX_FIELDS:
+            raise r.fail(f"the observation has more than {MAX_FIELDS} fields", where, item.line,
+                         "a policy's observation row is a few fields (lidar, target, velocity ...)")
         out.append(_read_feature(r, kind, settings, where, line))
+        total = sum(f.width for f in out)
+        if total > MAX_OBSERVATION:   # refused before any array of that width is made
+            raise r.fail(f"brings the observation to {total} values, more than the limit of {MAX_OBSERVATION} "
+                         f"(each tick's row, its clip and scale arrays are that wide)", where, line,
+                         "declare the fields the policy was trained on; resample the lidar to fewer beams")
     return tuple(out)
 
 
