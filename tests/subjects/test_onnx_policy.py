@@ -304,6 +304,16 @@ def test_a_declaration_of_a_huge_observation_is_refused_before_anything_that_wid
     load_error(path, "more than 1000 fields")
 
 
+def test_a_number_written_with_an_exponent_is_a_number_as_in_scenario_files(tmp_path):
+    from pytest_navscenario.subjects.policies.declaration import read_declaration
+    decl = DECLARATION_24.replace("scale: limits", "scale: 2e-1").replace("std: 4.0", "std: 4e0")
+    path = tmp_path / "e.policy.yaml"
+    path.write_text(decl)
+    read = read_declaration(path.read_text(), str(path))
+    assert read.action.scale == (0.2, 0.2, 0.2)
+    assert read.observation[0].std[0] == 4.0
+
+
 def test_file_and_metadata_declarations_that_differ_are_refused(tmp_path):
     path = write_policy(tmp_path, "two", constant_model([0, 0, 0], 24, metadata={
         "navscenario.policy": UNIT_SCALE}), DECLARATION_24)
