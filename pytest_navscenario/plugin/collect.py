@@ -174,6 +174,10 @@ class ScenarioFile(pytest.File):
         family_from_folder = not scenario.family
         if family_from_folder:  # may become the folder's path: see separate_families
             scenario = dataclasses.replace(scenario, family=self.path.parent.name)
+        shared = get_state(self.config).settings.requirements
+        if shared is not None:  # --nav-requirements: the suite's requirements beside the scenario's own
+            from ..scenario.requirement_reading import with_shared
+            scenario = with_shared(scenario, shared)
         model = get_state(self.config).settings.sensor_model
         if model:   # --nav-sensor-model: a lidar noise model for scenarios that declare none
             from ..scenario.sensor_model import with_sensor_model
@@ -347,6 +351,8 @@ class ScenarioItem(pytest.Item):
             ("nav_seed", str(result.seed)),
             ("nav_repeat", str(self.repeat)),
         ])
+        for req in result.requirements:     # issue 34: each requirement's robustness (< 0: violated)
+            self.user_properties.append((f"nav_requirement_{req.name}", _fmt(req.robustness, digits=4)))
         if not result.passed:
             raise ScenarioFailed(result)
 

@@ -21,7 +21,7 @@ from typing import Any, Iterable, Sequence
 from .results_file import OUTCOMES, ResultsFileError, read_results
 from .stats import mcnemar_exact, rate_with_interval
 
-RATE_OUTCOMES = ("success", "safety-stop", "timeout", "collision", "fall", "subject-error")
+RATE_OUTCOMES = ("success", "safety-stop", "timeout", "collision", "fall", "requirement", "subject-error")
 # compared over the pairs both subjects passed: (record metrics key, label)
 METRICS = (("path_efficiency", "path efficiency"), ("duration", "duration (s)"),
            ("mean_speed", "mean speed (m/s)"), ("min_clearance", "min clearance (m)"))
@@ -287,8 +287,9 @@ def _p(p: float) -> str:
     return "<0.001" if p < 0.001 else f"{p:.3f}"
 
 
+OPTIONAL_OUTCOMES = ("subject-error", "fall", "requirement")   # a column only when some episode had it
 SHORT = {"success": "success", "safety-stop": "safety-stop", "timeout": "timeout",
-         "collision": "collision", "fall": "fall", "subject-error": "error"}
+         "collision": "collision", "fall": "fall", "requirement": "requirement", "subject-error": "error"}
 
 
 def format_comparison(cmp: Comparison, *, max_listed: int = 50, max_unpaired: int | None = None,
@@ -299,7 +300,7 @@ def format_comparison(cmp: Comparison, *, max_listed: int = 50, max_unpaired: in
              f"{len(cmp.pairs)} paired scenario runs (same nodeid and repeat index); rates over these pairs",
              "with 95 % Wilson intervals; change = B - A success; p = exact McNemar test on success"]
     outcomes = [o for o in RATE_OUTCOMES        # errors and falls get a column when there are any
-                if o not in ("subject-error", "fall") or cmp.overall.a[o].count or cmp.overall.b[o].count]
+                if o not in OPTIONAL_OUTCOMES or cmp.overall.a[o].count or cmp.overall.b[o].count]
     fw = max([14] + [len(f.family) for f in cmp.families])
     header = f"{'family':<{fw}} {'n':>4}  {'':2}" + "".join(f" {SHORT[o]:>15}" for o in outcomes) \
         + f" {'change':>8} {'broke':>5} {'fixed':>5} {'p':>6}"

@@ -39,7 +39,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .compare import Comparison
 
 OUTCOME_COLOURS = {"success": "#2e7d32", "collision": "#c62828", "safety-stop": "#ef6c00",
-                   "timeout": "#6a1b9a", "subject-error": "#37474f", "fall": "#8d1b1b"}
+                   "timeout": "#6a1b9a", "subject-error": "#37474f", "fall": "#8d1b1b", "requirement": "#ad1457"}
 A_COLOUR, B_COLOUR = "#7f9fbf", "#1f4e79"
 SPEED_CMAP = "viridis"
 MAX_NAMED_OBSTACLES = 40   # more obstacles than this: only the ones involved are named
@@ -796,7 +796,7 @@ def save_comparison(a: EpisodeResult, b: EpisodeResult, path: str | os.PathLike,
 
 # ------------------------------------------------------------------------------- bar chart
 
-FAILURE_HATCHES = {"safety-stop": "///", "timeout": "..", "collision": "xx", "subject-error": "--"}
+FAILURE_HATCHES = {"safety-stop": "///", "timeout": "..", "collision": "xx", "subject-error": "--", "requirement": "\\\\"}
 
 
 @as_written

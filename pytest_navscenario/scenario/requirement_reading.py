@@ -113,7 +113,7 @@ def read_requirements(ctx: Ctx, top: SectionReader, known: Iterable[str] | None,
                            f"scenario (known: {', '.join(known)})", f"{path}.spec", line,
                            f"{hint + '; ' if hint.startswith('did') else ''}declare it under 'signals:' "
                            f"(e.g. {{name: {unknown[0]}, distance_to: <obstacle>}}) or use a known one")
-        out.append(Requirement(name=name, spec=formula.text, scale=values["scale"], source=source))
+        out.append(Requirement(name=name, spec=spec, scale=values["scale"], source=source))
     return tuple(out)
 
 

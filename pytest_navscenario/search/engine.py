@@ -42,7 +42,7 @@ STRATEGIES = ("evolve", "random", "hillclimb")
 DISTINCT_DISTANCE = 0.1    # kept for is_near_failure (fraction of each parameter's range)
 DEFAULT_SHRINK_BUDGET = "25%"   # of the search budget, for the whole shrink phase
 MIN_SHRINK_SIMS = 10       # a failure given a share of the shrink budget gets at least this many
-SEVERITY = ("collision", "fall", "subject-error", "safety-stop", "timeout")   # shrunk first .. last
+SEVERITY = ("collision", "fall", "subject-error", "safety-stop", "requirement", "timeout")   # shrunk first .. last
 DEFAULT_STUCK_AFTER = 15.0  # s without new ground covered: the episode ends as a stuck timeout (the
                             # longest stall a robot recovered from over the shipped seeds and the
                             # example suites x 3 planners: 14.5 s; benchmarks/check_stuck.py)
