@@ -433,6 +433,11 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
         if n:
             _gate_line(tr, state.settings.mode, f"{n} scenario(s) the baseline passed fail now",
                        f"{n} regression(s) against the baseline")
+        kept = state.comparison.broke_requirements
+        if kept:
+            what = ", ".join(f"{label}: {name}" for label, name in kept[:5]) + (" ..." if len(kept) > 5 else "")
+            _gate_line(tr, state.settings.mode, f"{len(kept)} requirement(s) the baseline kept are violated now ({what})",
+                       f"{len(kept)} requirement(s) the baseline kept are violated now ({what})")
     files = [p for p in state.plots.values() if isinstance(p, Path)]
     if files:
         folders = sorted({str(p.parent) for p in files})
