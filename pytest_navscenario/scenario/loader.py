@@ -551,8 +551,9 @@ def _with_requirements(ctx: _Ctx, top: _Section, scenario: Scenario) -> Scenario
     signals = read_signals(ctx, top)
     check_obstacle_names(ctx, signals, tuple(o.name for o in scenario.obstacles))
     known = known_signals(len(scenario.mission.waypoints), signals)
+    period = 1.0 / scenario.simulation.control_rate
     return replace(scenario, signals=signals,
-                               requirements=read_requirements(ctx, top, known))
+                               requirements=read_requirements(ctx, top, known, period=period))
 
 
 # --------------------------------------------------------------------------- public API

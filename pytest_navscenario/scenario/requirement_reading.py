@@ -38,6 +38,10 @@ def read_signals(ctx: Ctx, top: SectionReader) -> tuple[Signal, ...]:
         if not _IDENT.match(name):
             raise ctx.fail(f"{name!r} cannot be named in a formula", f"{path}.name", line,
                            "use letters, digits and '_', starting with a letter (d_walker)")
+        from ..stl import RESERVED_WORDS
+        if name in RESERVED_WORDS:
+            raise ctx.fail(f"{name!r} is a word of the formula language, not a signal name", f"{path}.name", line,
+                           f"rename it, e.g. {name.lower()}_signal (reserved: always, eventually, G, F, X, ...)")
         if name in BUILTIN_SIGNALS or name.startswith("d_waypoint"):
             raise ctx.fail(f"{name!r} is a built-in signal's name", f"{path}.name", line,
                            f"choose another name; the built-in {name!r} needs no declaration")
@@ -79,9 +83,9 @@ def _region(ctx: Ctx, sec: SectionReader) -> Region:
 
 
 def read_requirements(ctx: Ctx, top: SectionReader, known: Iterable[str] | None,
-                      source: str = "") -> tuple[Requirement, ...]:
+                      source: str = "", period: float | None = None) -> tuple[Requirement, ...]:
     """The requirements, each formula parsed and its signals checked against ``known`` (None: not
-    checked here)."""
+    checked here), its intervals against the control ``period`` (s; None: not checked here)."""
     from ..stl import StlSyntaxError, parse
 
     check = known is not None
@@ -113,8 +117,21 @@ def read_requirements(ctx: Ctx, top: SectionReader, known: Iterable[str] | None,
                            f"scenario (known: {', '.join(known)})", f"{path}.spec", line,
                            f"{hint + '; ' if hint.startswith('did') else ''}declare it under 'signals:' "
                            f"(e.g. {{name: {unknown[0]}, distance_to: <obstacle>}}) or use a known one")
+        if period is not None:
+            _check_period(ctx, formula, period, f"{path}.spec", line)
         out.append(Requirement(name=name, spec=spec, scale=values["scale"], source=source))
     return tuple(out)
+
+
+def _check_period(ctx: Ctx, formula: Any, period: float, field: str, line: int | None) -> None:
+    """Every interval bound is a whole number of control periods (signals are sampled per tick)."""
+    from ..stl import StlError
+    try:
+        formula.check_period(period)
+    except StlError as exc:
+        raise ctx.fail(f"{getattr(exc, 'message', exc)}", field, line,
+                       getattr(exc, "hint", "") or f"write interval bounds as multiples of the control "
+                                                  f"period {period:g} s (1 / simulation.control_rate)") from None
 
 
 def known_signals(waypoints: int, signals: Sequence[Signal]) -> tuple[str, ...]:
@@ -171,15 +188,23 @@ def with_shared(scenario: Any, shared: SharedRequirements | None) -> Any:
     name win); a shared formula naming a signal the scenario lacks is an error naming both."""
     if shared is None or not (shared.signals or shared.requirements):
         return scenario
-    from ..stl import parse
+    from ..stl import StlError, parse
 
     own_signals = {s.name for s in scenario.signals}
     signals = scenario.signals + tuple(s for s in shared.signals if s.name not in own_signals)
     own = {r.name for r in scenario.requirements}
     added = tuple(r for r in shared.requirements if r.name not in own)
     known = set(known_signals(len(scenario.mission.waypoints), signals))
+    period = 1.0 / scenario.simulation.control_rate
     for r in added:
-        unknown = sorted(set(parse(r.spec).signals) - known)
+        formula = parse(r.spec)
+        try:
+            formula.check_period(period)
+        except StlError as exc:
+            raise ScenarioError(f"requirement {r.name!r}, in scenario {scenario.name!r}: {getattr(exc, 'message', exc)}",
+                                path=shared.path, field="requirements",
+                                hint=f"write interval bounds as multiples of {period:g} s (its control period)") from None
+        unknown = sorted(set(formula.signals) - known)
         if unknown:
             raise ScenarioError(f"requirement {r.name!r} names {', '.join(map(repr, unknown))}, which scenario "
                                 f"{scenario.name!r} ({scenario.source or 'no file'}) does not have "

@@ -96,6 +96,9 @@ def test_a_signal_naming_no_obstacle_is_an_error_with_the_obstacles_named():
      "requirements[1].name", "twice"),
     ('requirements:\n  - {name: a, spec: "always (speed <= 1)", scale: 0}\n', "requirements[0].scale", "> 0"),
     ('requirements:\n  - {name: a}\n', "requirements[0].spec", "missing"),
+    ('signals:\n  - {name: X, distance_to: walker}\n', "signals[0].name", "word of the formula language"),
+    ('requirements:\n  - {name: a, spec: "always[0:0.25] (speed <= 1)"}\n', "requirements[0].spec",
+     "sampling periods of 0.1 s"),
 ])
 def test_other_mistakes_are_errors_at_their_field(tail, field, words):
     err = _error(HEAD + tail)
