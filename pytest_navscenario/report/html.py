@@ -44,6 +44,7 @@ class Entry:
     view: dict[str, Any] | None = None   # view_data(result): the interactive time-slider view
     compare_png: bytes | None = None     # a regression: the scenario under the baseline | this run
     xfail_reason: str | None = None      # marked xfail and failed as expected (pytest's wasxfail)
+    requirements_png: bytes | None = None  # each requirement's signals and thresholds over time (issue 34)
 
     @property
     def failed(self) -> bool:

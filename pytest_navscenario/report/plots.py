@@ -29,6 +29,7 @@ import numpy as np
 
 from ..scenario.geometry import footprint_polygon, footprint_polygons, obstacle_polygon
 from .labels import LabelPlacer, ring
+from .requirement_plot import draw_requirements
 from ..scenario.motion import Track, displacement, is_moving
 from ..verdict.result import EpisodeResult
 
@@ -172,7 +173,8 @@ def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
     The picture is made in named steps, back to front: the obstacles, the shortest path, the
     footprint's path (swept area, outlines, centre line coloured by speed, time labels), the
     mission (start, waypoints, goal), the key moments (minimum clearance, narrowest gap,
-    collision, safety stop, or where the robot ended when it did neither and missed the goal),
+    collision, safety stop, a requirement's first violation and the regions it names
+    (requirement_plot.py), or where the robot ended when it did neither and missed the goal),
     then the axes (limits, grid, labels, legend, title). Artists are added as collections with
     ``autolim=False``: the limits are set once, at the end. The steps ask for their text labels
     and say where their markers are; the labels are placed last, clear of each other and of the
@@ -193,6 +195,7 @@ def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
     _draw_min_clearance(ax, result, placer)
     _draw_narrowest_gap(ax, s, result.metrics, placer)
     _draw_events(ax, result, placer)
+    draw_requirements(ax, result, placer)
     _draw_end(ax, result, placer)
     _finish_axes(ax, result, title=title, legend=legend)
     if labels is None:
