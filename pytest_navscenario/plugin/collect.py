@@ -400,6 +400,11 @@ class ScenarioItem(pytest.Item):
         if r.subject_failure is not None:
             f = r.subject_failure
             lines.append(f"  planner error: {f.message} (tick {f.tick}, t={_fmt(f.time, ' s', 2)})")
+        for q in r.requirements:     # issue 34: every requirement, kept or not, with its robustness
+            unit = f" {q.unit}" if q.unit else ""
+            state = (f"violated first at t={_fmt(q.first_violation, ' s', 2)}" if q.violated and
+                     q.first_violation is not None else ("violated" if q.violated else "kept"))
+            lines.append(f"  requirement:   {q.name}: {q.spec}: robustness {q.robustness:+.3g}{unit}, {state}")
         obstacle = f" to {m.min_clearance_obstacle!r}" if m.min_clearance_obstacle else ""
         lines.append(f"  min clearance: {_fmt(m.min_clearance, ' m')}{obstacle} at t="
                      f"{_fmt(m.min_clearance_time, ' s', 2)}, robot at ({_fmt(m.min_clearance_x, '', 2)}, "

@@ -4,6 +4,8 @@ In: episode results and results-file records. Out: the results file (JSON Lines,
 episode), the terminal summary with confidence intervals, comparisons of two runs (rates, McNemar,
 fixed and broken lists, JUnit), plots, and the self-contained HTML reports.
 
-Read first: ``results_file.py`` (the record format), then ``summary.py``, ``compare.py``,
-``plots.py``, ``html.py`` (rendered from ``templates/``), ``stats.py``, ``flaky.py``, ``rerun.py``.
+Read first: ``results_file.py`` (the record format), then ``summary.py``, ``compare.py``
+(``requirement_compare.py``: per requirement), ``plots.py`` (``requirement_plot.py``: requirements
+on the map and over time), ``html.py`` (rendered from ``templates/``), ``stats.py``, ``flaky.py``,
+``rerun.py``.
 """
