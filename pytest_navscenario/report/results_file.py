@@ -26,6 +26,11 @@ Record fields (format_version 1)::
     requirements      the scenario's requirements checked (issue 34), each {"name", "spec",
                       "robustness" (in "unit"; < 0 violated), "violated", "first_violation" (s or
                       null), "unit", "scale", "span"}; [] without requirements
+    error             only in the record of an episode that never finished: what ended it
+                      ("WorkerDied": its process died 3 times; "RayTaskLost"; or the exception's
+                      type); its outcome is "subject-error" and its metrics are null
+
+Every scenario item that ran has a record, crashed or not, so the rates count it.
 
 Files are written whole and atomically (``atomic_write_text``), so an interrupted run leaves
 either the previous file or a complete new one.
@@ -82,6 +87,7 @@ def make_record(result: EpisodeResult, *, nodeid: str, path: str, repeat: int = 
         "collision": _collision_record(result),
         "wall_time": result.wall_time,
         "requirements": [json_safe(r.as_dict()) for r in result.requirements],
+        **({"error": result.error} if result.error is not None else {}),
     }
 
 

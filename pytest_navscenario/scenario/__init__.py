@@ -7,9 +7,11 @@ errors, and YAML that loads back to the same value.
 Read first: ``model.py`` (the dataclasses and their units), then ``loader.py`` (validation),
 ``dump.py`` (writing), ``yaml_tree.py`` (the line-tracking YAML reader), ``geometry.py``
 (footprints and obstacle outlines as shapely polygons), ``motion.py`` (where a moving obstacle is at
-a time: the one function the simulation, the verdict and the pictures share), ``requirements.py``
-and ``requirement_reading.py`` (the ``signals:`` and ``requirements:`` sections, STL formulas
-parsed at load; the shared requirements file).
+a time: the one function the simulation, the verdict and the pictures share), ``terrain.py`` (terrain
+elements and bodies as data), the subpackage ``ground/`` (the ground as MuJoCo-free geometry:
+heights, pieces, height grids, what a body can cross, a wheeled chassis' stability), and
+``requirements.py`` and ``requirement_reading.py`` (the ``signals:`` and ``requirements:`` sections,
+STL formulas parsed at load; the shared requirements file).
 """
 from .model import (  # noqa: F401  (the model is the public face of this package)
     SCHEMA_VERSION,
