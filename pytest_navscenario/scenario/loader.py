@@ -604,7 +604,9 @@ def _build(root: YNode | None, ctx: _Ctx, name: str | None, family: str | None) 
     }
     ctx.finish()
     scenario = Scenario(version=int(version), source=ctx.source, **parts)
-    scenario = _with_requirements(ctx, top, scenario)
+    with_requirements = ctx.attempt(_with_requirements, ctx, top, scenario)
+    ctx.finish()
+    scenario = with_requirements
     if scenario.search is not None:     # the search's space, checked on plain runs too
         read_search(ctx, top.get("search"), "search", top.line_of("search"),
                     obstacles=tuple(o.name for o in scenario.obstacles), waypoints=len(scenario.mission.waypoints),
