@@ -53,6 +53,8 @@ def test_a_search_finds_shrinks_and_freezes_a_violation_that_keeps_its_requireme
     again = run_scenario(scenario, "dwa")
     assert again.outcome.value == "requirement" and "keep-away-from-people" in again.message
     assert "requirement:keep-away-from-people" in json.dumps(scenario.provenance)
+    result.stdout.fnmatch_lines([f"*new  frozen/people/{violations[0].name}  requirement keep-away-from-people, "
+                                 "clearance *"])
 
 
 def test_a_shared_requirement_is_searched_and_frozen_into_the_file(project):
