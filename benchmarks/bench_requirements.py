@@ -4,6 +4,7 @@ seeds with requirements, counted in violations that hold under noise.
 Run from the repository root (not a timed test; the machine may be shared, so use nice):
 
     nice python benchmarks/bench_requirements.py --jobs 2
+    nice python benchmarks/bench_requirements.py --part cost      # the check's share of an episode
 
 For each seed (default: people-distance, people-speed, dock-tour) x search seed (0-4) x strategy
 (evolve, random): one search at budget 100 without shrinking, the realistic lidar model in the seed
@@ -83,8 +84,40 @@ def table(rows: list[dict], fresh_hold: int, fresh_runs: int) -> str:
     return "\n".join(lines)
 
 
+def part_cost(calls: int = 50, episodes: int = 5) -> str:
+    """CPU time of checking a seed's requirements after its episode (its signals computed from the
+    trajectory, then each formula evaluated: ``verdict.requirements.check_requirements``) against
+    the CPU time of the whole episode (``run_scenario`` with dwa, the check included); medians."""
+    import statistics
+
+    from pytest_navscenario import load_scenario
+    from pytest_navscenario.harness.runner import run_scenario
+    from pytest_navscenario.verdict.requirements import check_requirements
+
+    lines = ["seed             requirements  ticks  check (ms)  episode (ms)  share"]
+    for name in SEEDS:
+        seed = load_scenario(ROOT / "scenarios" / f"{name}.yaml")
+        result = run_scenario(seed, "dwa")
+        check_requirements(seed, result.trajectory)      # warm: formulas parsed, plans compiled
+        check = []
+        for _ in range(calls):
+            c0 = time.process_time()
+            check_requirements(seed, result.trajectory)
+            check.append(time.process_time() - c0)
+        episode = []
+        for _ in range(episodes):
+            c0 = time.process_time()
+            run_scenario(seed, "dwa")
+            episode.append(time.process_time() - c0)
+        c, e = statistics.median(check) * 1e3, statistics.median(episode) * 1e3
+        ticks = len(result.trajectory.tick_t)
+        lines.append(f"{name:<16} {len(seed.requirements):>12}  {ticks:>5}  {c:>10.2f}  {e:>12.1f}  {100 * c / e:>4.1f} %")
+    return "\n".join(lines)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--part", choices=("power", "cost"), default="power")
     ap.add_argument("--budget", type=int, default=100)
     ap.add_argument("--search-seeds", type=int, default=5)
     ap.add_argument("--strategies", default="evolve,random")
@@ -96,6 +129,10 @@ def main() -> None:
     ap.add_argument("--out", default=str(Path(__file__).parent / "out" / "bench_requirements.json"))
     a = ap.parse_args()
     print(f"load average before: {os.getloadavg()}", flush=True)
+    if a.part == "cost":
+        print(part_cost())
+        print(f"load average after: {os.getloadavg()}")
+        return
     tasks = [(s, strat, k, a.budget, a.fresh_seed, a.fresh_runs) for s in a.seeds.split(",")
              for strat in a.strategies.split(",") for k in range(a.search_seeds)]
     with ProcessPoolExecutor(a.jobs) as pool:
