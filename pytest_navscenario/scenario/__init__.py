@@ -20,6 +20,9 @@ MuJoCo-free, here because the simulation, the verdict, the pictures, the search 
 read it and this is the lowest layer they share (``surface.py`` the height under any point and each
 element's pieces, ``heightmap.py`` height grids, ``crossing.py`` what a body can cross, ``chassis.py``
 a wheeled body's layout).
+
+Requirements: ``requirements.py`` and ``requirement_reading.py`` (the ``signals:`` and
+``requirements:`` sections, STL formulas parsed at load; the shared requirements file).
 """
 from .model import (  # noqa: F401  (the model is the public face of this package)
     SCHEMA_VERSION,
