@@ -81,7 +81,8 @@ DESCRIPTIONS: dict[str, str] = {
                        "width. The layout is a guess: edit it to your training environment's, then run "
                        "'navscenario check-planner MODEL.onnx'. Needs the onnx extra (onnxruntime).",
     "import": "Import another tool's world as a scenario: an Aerialist test definition or a Gazebo "
-              "SDF world (static boxes and cylinders; anything not carried over is listed). Poses "
+              "SDF world (static boxes, cylinders, polylines and STL/OBJ meshes as obstacles, PNG heightmaps as "
+              "terrain; anything not carried over is listed). Poses "
               "are x,y,yaw in metres and degrees, e.g. --start -2.25,3,90.",
 }
 
@@ -121,8 +122,10 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     """The whole parser; with ``only``, only that subcommand's arguments are added (and only its
     module is imported); ``only=""`` adds none (enough for the top-level --help)."""
     from .. import __version__
+    from ..core.versions import mujoco_version
     parser = NavArgumentParser(prog="navscenario", description=DESCRIPTION, epilog=EPILOG)
-    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    parser.add_argument("--version", action="version",
+                        version=f"%(prog)s {__version__} (MuJoCo {mujoco_version()})")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", title="commands")
     for name, (module_name, purpose) in SUBCOMMANDS.items():
         p = sub.add_parser(name, help=purpose, description=DESCRIPTIONS[name])

@@ -184,6 +184,7 @@ class ScenarioFile(pytest.File):
             scenario = with_sensor_model(scenario, model)
         repeats = get_state(self.config).settings.repeat
         provenance = scenario.provenance or {}
+        _warn_other_subject(provenance, get_state(self.config).subject)
         if repeats > 1 and "confirmation" in provenance:   # a frozen failure: does it still hold?
             get_state(self.config).frozen[(rel_path(self.config, self.path), name)] = dict(provenance)
         for repeat in range(repeats):
@@ -251,6 +252,21 @@ def _fmt(value: Any, unit: str = "", digits: int = 3) -> str:
     return f"{value:.{digits}f}{unit}"
 
 
+def _culprit_line(result: Any) -> list[str]:
+    """The clearance that explains the outcome, when the minimum is to another obstacle: a robot
+    stopped for a person that passed nearer a wall (metrics.culprit_clearance)."""
+    if not len(result.trajectory.t):
+        return []
+    from ..verdict.metrics import culprit_clearance
+    found = culprit_clearance(result)
+    if found is None:
+        return []
+    name, dist, time = found
+    why = "the safety stop was for it" if result.safety_stop is not None else "the collision was with it"
+    return [f"  clearance to {name!r}: {_fmt(dist, ' m')} at t={_fmt(time, ' s', 2)} ({why}; the minimum "
+            f"above is to another obstacle)"]
+
+
 def _field_line(scenario: Any, field: str) -> int | None:
     """The line of ``field`` in the scenario's file (read again only for this error), or None."""
     from ..scenario.yaml_tree import field_line
@@ -260,6 +276,26 @@ def _field_line(scenario: Any, field: str) -> int | None:
             return field_line(fh.read(), field)
     except (OSError, TypeError, UnicodeDecodeError):
         return None
+
+
+class OtherSubjectWarning(UserWarning):
+    """A frozen failure runs against another subject than the one its provenance names."""
+
+
+def _warn_other_subject(provenance: dict, subject: Any) -> None:
+    """A pytest warning (shown with the file in the warnings summary; the same text for every file,
+    so pytest lists them under one message) when a frozen failure of the search runs against
+    another subject than the one it was found against: against that one it is only a layout,
+    which it may well pass, and a run that looks like a fixed regression may be no such thing."""
+    import warnings
+
+    found = provenance.get("subject")
+    if not found or "outcome" not in provenance or subject.spec is None or str(found) == subject.spec:
+        return
+    warnings.warn(OtherSubjectWarning(
+        f"frozen failure found against subject {found!r} runs against {subject.spec!r} (from "
+        f"{subject.origin}): against another subject it is only a layout, which it may pass; to re-run "
+        f"the failure as found, add --nav-subject={found}"), stacklevel=2)
 
 
 def _warn_left_running(where: str, left: tuple[str, ...]) -> None:
@@ -413,8 +449,10 @@ class ScenarioItem(pytest.Item):
                          f"({_fmt(c.x, '', 2)}, {_fmt(c.y, '', 2)}), depth {_fmt(c.depth, ' m', 4)}")
         if r.safety_stop is not None:
             s = r.safety_stop
+            from ..verdict.oracle import stop_motion
             lines.append(f"  safety stop:   predicted hit of obstacle {s.obstacle!r} at t="
-                         f"{_fmt(s.time, ' s', 2)}, speed {_fmt(s.speed, ' m/s', 2)}")
+                         f"{_fmt(s.time, ' s', 2)}, "
+                         + (f"speed {_fmt(s.speed, ' m/s', 2)}" if not s.speed < 0.005 else stop_motion(s)))
         if r.subject_failure is not None:
             f = r.subject_failure
             lines.append(f"  planner error: {f.message} (tick {f.tick}, t={_fmt(f.time, ' s', 2)})")
@@ -430,6 +468,7 @@ class ScenarioItem(pytest.Item):
             lines.append(f"  min clearance: {_fmt(m.min_clearance, ' m')}{obstacle} at t="
                          f"{_fmt(m.min_clearance_time, ' s', 2)}, robot at ({_fmt(m.min_clearance_x, '', 2)}, "
                          f"{_fmt(m.min_clearance_y, '', 2)})")
+        lines += _culprit_line(r)
         lines.append(f"  duration:      {_fmt(m.duration, ' s', 2)} (timeout "
                      f"{_fmt(r.scenario.mission.timeout, ' s', 1)}), path {_fmt(m.path_length, ' m', 2)}, "
                      f"efficiency {_fmt(m.path_efficiency, '', 2)}, goal error "
@@ -437,6 +476,7 @@ class ScenarioItem(pytest.Item):
         version = f" {r.subject_version}" if r.subject_version else ""
         lines.append(f"  subject:       {r.subject}{version}, episode seed {r.seed}")
         lines.append(f"  scenario:      {self.rel_path}")
+        lines += _unreproduced(r)
         from .artifacts import item_dir
         folder = item_dir(self.config, self.nodeid)
         if folder is not None:
@@ -450,3 +490,19 @@ class ScenarioItem(pytest.Item):
     def reportinfo(self) -> tuple[Path, int, str]:
         # line 0 (shown as 1): pytest needs a line for skip reports
         return self.path, 0, f"scenario {self.name} ({self.scenario.family or 'no family'})"
+
+
+def _unreproduced(r: Any) -> list[str]:
+    """For a frozen failure whose outcome or message is not the one its provenance recorded: what
+    was recorded, and the MuJoCo release it was recorded under when that is not this run's."""
+    from ..core.versions import other_mujoco
+
+    prov = r.scenario.provenance or {}
+    if "outcome" not in prov or (prov.get("outcome") == r.outcome.value and prov.get("message") == r.message):
+        return []
+    lines = [f"  recorded:      {prov.get('outcome')}: {prov.get('message') or ''} (its provenance; this run "
+             f"did not reproduce it)"]
+    note = other_mujoco(prov.get("mujoco_version"))
+    if note:
+        lines.append(f"  MuJoCo:        {note}; re-run its search to record it under this release")
+    return lines

@@ -398,7 +398,7 @@ class Episode:
     def _halt(self, state: tuple[float, ...], hit: str) -> None:
         """The safety layer halts the robot before ``hit``: zero control, the episode ends."""
         t, vx, vy = state[0], state[4], state[5]
-        self.safety_stop = SafetyStop(t, hit, math.hypot(vx, vy))
+        self.safety_stop = SafetyStop(t, hit, math.hypot(vx, vy), yaw_rate=state[6])
         self.ctrl[:] = 0.0
         self.record(t, HALT)
         raise EpisodeOver("safety-stop")
@@ -699,7 +699,7 @@ class RidingEpisode(Episode):
             if hit is not None:
                 self._halt(state, hit)
             if ground is not None:
-                self.safety_stop = SafetyStop(t, "", math.hypot(vx, vy), ground=ground)
+                self.safety_stop = SafetyStop(t, "", math.hypot(vx, vy), ground=ground, yaw_rate=wz)
                 self.ctrl[:] = 0.0
                 self.record(t, HALT)
                 raise EpisodeOver("safety-stop")
@@ -719,6 +719,7 @@ class RidingEpisode(Episode):
         step = mujoco.mj_step
         t0 = perf_counter()
         collision = None
+        level = self.watch.level          # a face under the ground it stood on is an edge it goes over
         mujoco.mj_step2(m, d)
         i = self.i + 1
         pose_buf[i] = qpos7
@@ -728,7 +729,7 @@ class RidingEpisode(Episode):
                 mocap[:] = rows[k + 1]
             step(m, d)
             if sensordata[k_chassis] > 0.0:
-                collision = self.world.first_collision(d, self.obstacles, i * self.dt)
+                collision = self.world.first_collision(d, self.obstacles, i * self.dt, level)
                 if collision is not None:
                     break
             i += 1
@@ -739,7 +740,7 @@ class RidingEpisode(Episode):
                 mocap[:] = rows[self.spt]
             mujoco.mj_step1(m, d)
             if sensordata[k_chassis] > 0.0:
-                collision = self.world.first_collision(d, self.obstacles, i * self.dt)
+                collision = self.world.first_collision(d, self.obstacles, i * self.dt, level)
         self.i = i
         self.t_physics += perf_counter() - t0
         if collision is not None:
