@@ -23,7 +23,7 @@ def test_the_map_marks_the_first_violation_and_outlines_the_regions():
     result = run_scenario(loads_scenario(INTO), "dwa")
     assert result.outcome.value == "requirement"
     fig = trajectory_figure(result)
-    labels = [" ".join(t.get_text().split()) for t in fig.legends[0].get_texts()]   # legends wrap long labels
+    labels = [" ".join(t.get_text().split()) for t in fig.legends[0].get_texts()]   # wrapped entries read as one line
     (when,) = [r.first_violation for r in result.requirements if r.name == "never-in-keep-out"]
     assert f"violated never-in-keep-o… t={when:.1f} s" in labels
     texts = {t.get_text() for t in fig.axes[0].texts}
