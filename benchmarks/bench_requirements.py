@@ -5,6 +5,7 @@ Run from the repository root (not a timed test; the machine may be shared, so us
 
     nice python benchmarks/bench_requirements.py --jobs 2
     nice python benchmarks/bench_requirements.py --part cost      # the check's share of an episode
+    nice python benchmarks/bench_requirements.py --part rate      # how often layouts violate (seed 0)
 
 For each seed (default: people-distance, people-speed, dock-tour) x search seed (0-4) x strategy
 (evolve, random): one search at budget 100 without shrinking, the realistic lidar model in the seed
@@ -115,9 +116,30 @@ def part_cost(calls: int = 50, episodes: int = 5) -> str:
     return "\n".join(lines)
 
 
+def part_rate(budget: int = 100) -> str:
+    """How often a search's layouts violate a requirement (search seed 0, realistic lidar, no
+    confirmation, no shrinking): the share of violating simulations and the first one."""
+    from pytest_navscenario import load_scenario
+    from pytest_navscenario.scenario.sensor_model import MODELS, with_sensor_model
+    from pytest_navscenario.search.engine import run_search
+    from pytest_navscenario.subjects.loading import load_subject
+
+    lines = []
+    for name in SEEDS:
+        seed = with_sensor_model(load_scenario(ROOT / "scenarios" / f"{name}.yaml"), MODELS["realistic"])
+        for strategy in ("random", "evolve"):
+            r = run_search(seed, load_subject("dwa"), budget=budget, seed_value=0, strategy=strategy,
+                           shrink_budget=0, hold=0)
+            sims = [c for c in r.candidates if c.phase == "search" and not c.run]
+            hits = [i for i, c in enumerate(sims) if c.signature and c.signature[0] == "requirement"]
+            lines.append(f"{name:<16} {strategy:<7} sims {len(sims)} violating {len(hits)} "
+                         f"({100 * len(hits) / max(len(sims), 1):.0f} %), first at sim {hits[0] + 1 if hits else None}")
+    return "\n".join(lines)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--part", choices=("power", "cost"), default="power")
+    ap.add_argument("--part", choices=("power", "cost", "rate"), default="power")
     ap.add_argument("--budget", type=int, default=100)
     ap.add_argument("--search-seeds", type=int, default=5)
     ap.add_argument("--strategies", default="evolve,random")
@@ -129,8 +151,8 @@ def main() -> None:
     ap.add_argument("--out", default=str(Path(__file__).parent / "out" / "bench_requirements.json"))
     a = ap.parse_args()
     print(f"load average before: {os.getloadavg()}", flush=True)
-    if a.part == "cost":
-        print(part_cost())
+    if a.part in ("cost", "rate"):
+        print(part_cost() if a.part == "cost" else part_rate(a.budget))
         print(f"load average after: {os.getloadavg()}")
         return
     tasks = [(s, strat, k, a.budget, a.fresh_seed, a.fresh_runs) for s in a.seeds.split(",")
