@@ -35,3 +35,16 @@ def test_rough_patches_count_too(tmp_path):
     (tmp_path / "s.yaml").write_text(HEAD + "\n".join(lines) + "\n")
     with pytest.raises(ScenarioError, match=f"terrain\\[{n - 1}\\]: brings the rough ground's"):
         load_scenario(tmp_path / "s.yaml")
+
+
+def test_a_rough_patchs_lowest_surface_is_its_z_without_making_its_grid():
+    """Rough ground's heights run from 0 (the tapered border) up, so the loader's check of grids
+    dipping below the floor need not generate 50 grids of 1023^2 (22 s of the load at the limit)."""
+    from pytest_navscenario.scenario.ground import heightmap
+    from pytest_navscenario.scenario.ground.surface import grid_low
+    from pytest_navscenario.scenario.terrain import Rough
+
+    for args in [(6, 4, 0.05, 0.6, 1), (19, 19, 0.3, 0.2, 3), (2, 1, 1.0, 0.5, 7), (0.5, 0.5, 0.2, 2.0, 2)]:
+        el = Rough("r", 0, 0, length=args[0], width=args[1], amplitude=args[2], wavelength=args[3], seed=args[4],
+                   z=-0.25)
+        assert grid_low(el, None) == -0.25 == el.z + float(np.asarray(heightmap.height_grid(el).heights).min())

@@ -157,6 +157,8 @@ def ground_height(scenario, px, py) -> np.ndarray:
 def grid_low(element: TerrainElement, scenario) -> float:
     """The lowest surface of a grid element (rough ground, heightfield); cached (asked for with
     every height on it)."""
+    if isinstance(element, Rough):   # its heights run from 0 (its tapered border) up: z, without making the grid
+        return float(element.z)
     key = (element, getattr(scenario, "source", None))
     low = _GRID_LOW.get(key)
     if low is None:
