@@ -28,7 +28,7 @@ from ..scenario.model import Mission, Scenario
 from ..subjects.protocol import Observation
 from .command import Drive, call_planner, planner_traceback, validate_command
 from .deadline import PlannerTimeout, TickDeadline
-from .ground_safety import ground_safety
+from .ground.ground_safety import ground_safety
 from .lidar import Lidar, base_rotation
 from .lidar3d import CloudLidar, LEVEL
 from .faults import Faults
@@ -37,10 +37,10 @@ from .profiler import profiler_off
 from .trajectory import Collision, SafetyStop, SubjectFailure, TerrainEvent, Trajectory
 from .world import (MUJOCO_WARNINGS, TWO_PI, compiled_world, divergence_message, fatal_message,
                     on_mujoco_warning, steps_per_tick)
-from ..scenario import ground
+from ..scenario.ground import surface as ground
 from .bodies.base import base_state, quat_to_rpy, world_yaw_rate
 from .body_world import compiled_body_world, rides_the_ground
-from .riding import GroundProbe, TerrainStop, TerrainWatch, resting_pose
+from .ground.riding import GroundProbe, TerrainStop, TerrainWatch, resting_pose
 
 __all__ = ["Episode", "RidingEpisode", "SimResult", "simulate", "validate_command"]
 
@@ -60,10 +60,10 @@ class SimResult:
     subject_failure: SubjectFailure | None = None
     goal_reached: bool = False
     end: str = ""              # "goal", "collision", "safety-stop", "subject-error", "timeout", "max-ticks", "stuck",
-                               # and on terrain (sim/riding.py) "fell", "tipped", "stuck-terrain"
+                               # and on terrain (sim/ground/riding.py) "fell", "tipped", "stuck-terrain"
     ticks: int = 0             # planner ticks run
     timings: dict[str, float] = field(default_factory=dict)  # s: physics, rays, planner, safety, harness, total
-    terrain_event: TerrainEvent | None = None   # fell, tipped over, stuck on terrain (sim/riding.py)
+    terrain_event: TerrainEvent | None = None   # fell, tipped over, stuck on terrain (sim/ground/riding.py)
 
 
 class EpisodeOver(Exception):
@@ -600,7 +600,7 @@ class RidingEpisode(Episode):
         self.setpoint = (0.0, 0.0, 0.0)
         self.stepping = (self.model, self.data, self.ctrl, self.base_qpos, self.base_qvel, self.pose_buf,
                          self.qvel_buf, range(self.spt - 1))
-        # the safety layer's view of the ground, from the 3D lidar's scans (sim/ground_safety.py)
+        # the safety layer's view of the ground, from the 3D lidar's scans (sim/ground/ground_safety.py)
         self.ground = ground_safety(scenario, self.body.drop_limit) if self.cloud is not None else None
 
     def _allocate_records(self, n_steps: int) -> None:

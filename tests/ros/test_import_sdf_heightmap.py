@@ -11,7 +11,7 @@ import pytest
 from PIL import Image
 
 from pytest_navscenario.ros.world_import import sdf_obstacles
-from pytest_navscenario.scenario.heightmap import HeightGrid, load_heightfield, read_height_file
+from pytest_navscenario.scenario.ground.heightmap import HeightGrid, load_heightfield, read_height_file
 
 
 def _world(folder: Path, models: str) -> Path:
@@ -70,7 +70,7 @@ def test_the_imported_grid_is_the_one_gazebo_builds(tmp_path):
     """Samples of the scenario's grid equal Gazebo's heights at the image's pixels."""
     from types import SimpleNamespace
 
-    from pytest_navscenario.scenario.heightmap import height_grid
+    from pytest_navscenario.scenario.ground.heightmap import height_grid
 
     img = (np.arange(9 * 9).reshape(9, 9) * 3).astype(np.uint8)
     img[4, 4] = 0

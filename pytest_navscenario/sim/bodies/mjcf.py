@@ -241,7 +241,7 @@ def _call(spec: str, fn: Any, *args: Any, when: str = "") -> Any:
 
 
 def _world_bit(robot_geoms: list) -> int:
-    """A collision bit that none of the robot's geoms uses and the world's scheme (sim/terrain.py:
+    """A collision bit that none of the robot's geoms uses and the world's scheme (sim/ground/terrain.py:
     1, 2, 4, 8) does not either: the world's geoms get it in ``contype``, each robot geom that
     would meet a default MuJoCo floor (contype 1, conaffinity 1) in ``conaffinity``. So the robot
     meets the ground and the obstacles whatever its own bits (MuJoCo Menagerie's robots have
