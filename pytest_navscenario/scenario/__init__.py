@@ -4,7 +4,8 @@ In: YAML text or files (or plain dicts). Out: a frozen ``Scenario`` (robot, miss
 simulation settings, marks, search bounds), validated with ``file:line: field: message (fix: ...)``
 errors, and YAML that loads back to the same value.
 
-Read first: ``model.py`` (the dataclasses and their units), then ``loader.py`` (validation),
+Read first: ``model.py`` (the dataclasses and their units), then ``loader.py`` (validation; every
+mistake of a file in one pass, kept by ``context.py``),
 ``dump.py`` (writing), ``yaml_tree.py`` (the line-tracking YAML reader), ``geometry.py``
 (footprints and obstacle outlines as shapely polygons), ``motion.py`` (where a moving obstacle is at
 a time: the one function the simulation, the verdict and the pictures share).
@@ -19,6 +20,9 @@ MuJoCo-free, here because the simulation, the verdict, the pictures, the search 
 read it and this is the lowest layer they share (``surface.py`` the height under any point and each
 element's pieces, ``heightmap.py`` height grids, ``crossing.py`` what a body can cross, ``chassis.py``
 a wheeled body's layout).
+
+Requirements: ``requirements.py`` and ``requirement_reading.py`` (the ``signals:`` and
+``requirements:`` sections, STL formulas parsed at load; the shared requirements file).
 """
 from .model import (  # noqa: F401  (the model is the public face of this package)
     SCHEMA_VERSION,

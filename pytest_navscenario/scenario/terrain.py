@@ -298,7 +298,7 @@ ROUGH = section(Rough, "terrain[] (rough)", "a patch of smooth random bumps", [
 HEIGHTFIELD = section(Heightfield, "terrain[] (heightfield)", "a height grid read from a greyscale PNG or a "
                       ".npy file beside the scenario", [
     _NAME, _X, _Y,
-    Text("file", "", "a .png or .npy file, relative to the scenario's folder and inside it", path=True,
+    Text("file", "", "a .png or .npy file, relative to the scenario's folder and inside it", path=True, inside=True,
          example="file: ground/yard.png"),
     _LENGTH, _WIDTH,
     Number("min_height", "m", "the height of the grid's lowest value above z"),
@@ -356,7 +356,7 @@ LEGGED_BODY = section(LeggedBody, "robot.body (legged)", "a walking robot declar
     Number("clearance", "m", "its body's underside above the ground", ge=0),
     _TIP])
 MJCF_BODY = section(MjcfBody, "robot.body (mjcf)", "the user's own MJCF robot and controller", [
-    Text("file", "", "the MJCF file, relative to the scenario's folder and inside it", path=True,
+    Text("file", "", "the MJCF file, relative to the scenario's folder and inside it", path=True, inside=True,
          example="file: robot/robot.xml"),
     Text("controller", "", "pkg.mod:Attr of the controller turning velocity commands into actuator controls",
          example="controller: mypkg.control:Controller"),
