@@ -22,9 +22,10 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests", "searc
 
 from straight_planner import Straight  # noqa: E402
 
-from pytest_navscenario.scenario.ground.crossing import body_capability  # noqa: E402
+from pytest_navscenario.scenario.bodies import body_capability  # noqa: E402
 from pytest_navscenario.scenario.model import Footprint, Mission, Pose, Robot, Safety, Scenario  # noqa: E402
-from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, WheeledBody  # noqa: E402
+from pytest_navscenario.scenario.bodies import WheeledBody
+from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp  # noqa: E402
 from pytest_navscenario.sim.episode import simulate  # noqa: E402
 
 

@@ -101,14 +101,14 @@ def _pose_at(result: EpisodeResult, time: float) -> np.ndarray | None:
 
 
 def _gap(scenario: Any, metrics: Any) -> tuple[float, str, str]:
-    """The narrowest obstacle gap to mark: the metric's (paths.min_obstacle_gap), unless obstacles
+    """The narrowest obstacle gap to mark: the metric's (gaps.min_obstacle_gap), unless obstacles
     touch (gap 0, e.g. walls meeting at a corner), then the narrowest real passage between two
     obstacles that do not touch."""
     names = (metrics.min_gap_obstacles or "").split("|")
     if len(names) == 2 and math.isfinite(metrics.min_obstacle_gap):
         gap = (float(metrics.min_obstacle_gap), names[0], names[1])
     else:
-        from ..verdict.paths import min_obstacle_gap
+        from ..verdict.gaps import min_obstacle_gap
         gap = min_obstacle_gap(scenario)
     still = [o for o in scenario.obstacles if not is_moving(o)]
     if gap[0] > 1e-6 or not 3 <= len(still) <= MAX_GAP_SEARCH:

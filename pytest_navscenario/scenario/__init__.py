@@ -7,9 +7,10 @@ errors, and YAML that loads back to the same value.
 Read first: ``model.py`` (the dataclasses and their units), then ``loader.py`` (validation),
 ``dump.py`` (writing), ``yaml_tree.py`` (the line-tracking YAML reader), ``geometry.py``
 (footprints and obstacle outlines as shapely polygons), ``motion.py`` (where a moving obstacle is at
-a time: the one function the simulation, the verdict and the pictures share), ``terrain.py`` (terrain
-elements and bodies as data), and the subpackage ``ground/`` (the ground as MuJoCo-free geometry:
-heights, pieces, height grids, what a body can cross, a wheeled chassis' stability).
+a time: the one function the simulation, the verdict and the pictures share), and the subpackages
+``terrain/`` (the terrain elements, one module each, and the 3D lidar), ``bodies/`` (the kinds of
+body, one record each) and ``ground/`` (the ground as MuJoCo-free geometry: heights, pieces,
+height grids, what a body can cross).
 """
 from .model import (  # noqa: F401  (the model is the public face of this package)
     SCHEMA_VERSION,

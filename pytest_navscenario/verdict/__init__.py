@@ -6,5 +6,6 @@ line message, the ``Metrics`` (clearance, gap, path length and efficiency, durat
 reference deviation), bundled in an ``EpisodeResult``. Pure functions of their inputs.
 
 Read first: ``result.py`` (the types), then ``oracle.py`` (the outcome), ``metrics.py`` and
-``paths.py`` (shortest footprint paths and obstacle gaps, cached).
+``paths.py`` (shortest footprint paths, cached) and ``gaps.py`` (exact distances between rounded boxes,
+the narrowest obstacle gap, the obstacles paths keep clear of).
 """

@@ -7,7 +7,8 @@ from pytest_navscenario.core.errors import ScenarioError
 from pytest_navscenario.scenario.ground import surface as ground
 from pytest_navscenario.scenario.loader import check_scenario
 from pytest_navscenario.scenario.model import Mission, Pose, Robot, Scenario
-from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, Steps, WheeledBody
+from pytest_navscenario.scenario.bodies import WheeledBody
+from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, Steps
 
 WHEELED = Robot(drive="diff", body=WheeledBody())
 

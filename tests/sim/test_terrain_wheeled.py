@@ -11,7 +11,8 @@ import pytest
 from pytest_navscenario.core.errors import ScenarioError
 from pytest_navscenario.scenario.ground import surface as ground
 from pytest_navscenario.scenario.model import BoxObstacle, Footprint, Mission, Pose, Robot, Scenario
-from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, Steps, WheeledBody
+from pytest_navscenario.scenario.bodies import WheeledBody
+from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, Steps
 from pytest_navscenario.sim.episode import simulate
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "search"))

@@ -181,7 +181,8 @@ def _ground(data: BagData, clouds: Any, notes: list[str]) -> Any:
 
 def _on_terrain(scenario: Scenario, terrain: Any, clouds: Any, notes: list[str]) -> Scenario:
     """The seed with the terrain, a body that rides it and the 3D lidar the bag had (guessed)."""
-    from ...scenario.terrain import Lidar3D, WheeledBody
+    from ...scenario.bodies import WheeledBody
+    from ...scenario.terrain import Lidar3D
 
     m = clouds.mount if clouds.mount is not None else np.eye(4)
     pitch = math.degrees(math.atan2(-m[2, 0], m[0, 0]))

@@ -1,6 +1,7 @@
 """The ground as a pure function: the height under any (x, y) of a scenario's terrain, vectorised,
-and each element's outline and pieces. No MuJoCo: the world (sim/ground/terrain.py) builds the same
-pieces as geoms, and the verdict, the loader's checks and the pictures read heights from here.
+and each element's outline and pieces (each element's dataclass builds its own: scenario/terrain/).
+No MuJoCo: the world (sim/ground/terrain.py) builds the same pieces as geoms, and the verdict,
+the loader's checks and the pictures read heights from here.
 
 What each element is (its own frame: +x along ``length``, the direction it rises or runs along):
 
@@ -17,27 +18,12 @@ lowest cut covering it. Solids reach down into cuts (a ramp over a pit bridges i
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
 
-from ..terrain import Heightfield, Pit, Platform, Ramp, Rough, Steps, TerrainElement
-
-FLOOR = 0.0
-
-
-@dataclass(frozen=True)
-class Piece:
-    """One convex block of an element, in the element's frame: ``u0..u1`` along its length, the
-    full width, its top a plane from ``top0`` (at u0) to ``top1`` (at u1). ``cut``: the floor is
-    removed over it (its top lies below the floor)."""
-    element: int          # index in scenario.terrain
-    u0: float
-    u1: float
-    top0: float
-    top1: float
-    cut: bool = False
+from ..terrain import Piece, Pit, TerrainElement
+from ..terrain.base import FLOOR
 
 
 def frame(element: TerrainElement) -> tuple[float, float, float, float]:
@@ -87,26 +73,12 @@ _PIECES: dict = {}
 
 
 def _pieces(terrain: tuple) -> tuple[Piece, ...]:
-    out: list[Piece] = []
-    for i, el in enumerate(terrain):
-        if isinstance(el, Ramp):
-            out.append(Piece(i, -el.length / 2, el.length / 2, el.z, el.z + el.rise))
-        elif isinstance(el, Platform):
-            out.append(Piece(i, -el.length / 2, el.length / 2, el.z + el.height, el.z + el.height))
-        elif isinstance(el, Pit):
-            out.append(Piece(i, -el.length / 2, el.length / 2, -el.depth, -el.depth, cut=True))
-        elif isinstance(el, Steps):
-            sign = 1.0 if el.direction == "up" else -1.0
-            for k in range(el.count):
-                top = el.z + sign * (k + 1) * el.rise
-                u0 = -el.length / 2 + k * el.run
-                out.append(Piece(i, u0, u0 + el.run, top, top, cut=top < FLOOR - 1e-12))
-    return tuple(out)
+    return tuple(piece for i, el in enumerate(terrain) for piece in el.pieces(i))
 
 
 def grid_elements(terrain: Sequence[TerrainElement]) -> list[int]:
     """Indices of the elements given as height grids (rough ground, heightfields)."""
-    return [i for i, el in enumerate(terrain) if isinstance(el, (Rough, Heightfield))]
+    return [i for i, el in enumerate(terrain) if el.grid]
 
 
 def _piece_height(piece: Piece, u: np.ndarray) -> np.ndarray:
@@ -230,8 +202,6 @@ def highest(scenario) -> float:
     return max([FLOOR] + tops)
 
 
-BODY_DRIVES = {"planar": ("omni", "diff"), "wheeled": ("diff",), "legged": ("omni", "diff"),
-               "mjcf": ("omni", "diff")}
 FACE_STEP = 0.3     # m: ground under a footprint differing by more than this stands it in a face
 MAX_BLOCKS = 5000   # terrain blocks, each step of a flight one: 5000 build in ~0.2 s, 100 000 took 17 s and 0.5 GB
 MAX_HOLES = 100     # elements cutting the floor: the floor around 100 holes at random places ~0.15 s
@@ -243,7 +213,7 @@ def terrain_problem(scenario) -> tuple[str, str, str] | None:
     """(field, message, fix) when the terrain is too large to build in about a second: more than
     MAX_BLOCKS blocks, or more than MAX_HOLES elements cutting the floor; None otherwise."""
     terrain = scenario.terrain
-    blocks = sum(el.count if isinstance(el, Steps) else 1 for el in terrain)
+    blocks = sum(max(1, len(el.pieces(i))) for i, el in enumerate(terrain))
     if blocks > MAX_BLOCKS:
         return ("terrain", f"the terrain has {blocks} blocks (each step of a flight counts), more than the limit "
                            f"of {MAX_BLOCKS}: building its world would take tens of seconds",
@@ -292,21 +262,6 @@ def obstacle_problem(scenario) -> tuple[str, str, str] | None:
                     f"the ground under it {low:.3g} m at least): nothing of it stands above the ground",
                     "leave z out to stand it on the ground")
     return None
-
-
-def body_problem(scenario) -> tuple[str, str, str] | None:
-    """(field, message, fix) when the robot's body and drive, or its body and the terrain, do not
-    go together; None when they do (which combinations exist: sim/bodies/__init__.py)."""
-    kind, drive = scenario.robot.body.kind, scenario.robot.drive
-    if drive not in BODY_DRIVES[kind]:
-        return ("robot.drive", f"a {kind} body cannot drive '{drive}': it cannot move sideways",
-                f"set robot.drive: {BODY_DRIVES[kind][0]}")
-    if kind == "planar" and scenario.terrain:
-        return ("robot.body", "the planar body (the default) slides on a flat floor and cannot ride terrain",
-                "give the robot a body that meets the ground: robot.body: {type: wheeled} "
-                "(or legged, or mjcf with your own robot)")
-    from .chassis import wheeled_problem
-    return wheeled_problem(scenario)
 
 
 def mission_problem(scenario) -> tuple[str, str, str] | None:

@@ -1,6 +1,6 @@
 """What a robot riding the ground meets: the ground height under a point (fast, per tick), the
 pose a body rests in on it, and the watch that tells a fall, a tip-over or being stuck on terrain
-from the base's state each tick (``episode.RidingEpisode`` runs it). A classification of what the
+from the base's state each tick (``riding_episode.RidingEpisode`` runs it). A classification of what the
 physics did: nothing here moves the robot.
 """
 from __future__ import annotations
