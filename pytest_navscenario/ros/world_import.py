@@ -453,6 +453,7 @@ def run(args: argparse.Namespace) -> int:
                                                                            drive="diff"))
         notes.append("robot.body: wheeled, drive: diff (a guess: the world does not say which robot drives it; "
                      "set robot.body)")
+        robot_note = robot_note.replace(f", {robot.drive} drive,", ", diff drive,")   # what the seed has
     if terrain:          # the route's length reads the heightfields: from their files, staged as beside the seed
         with tempfile.TemporaryDirectory() as tmp:
             for name, data in extra.items():
