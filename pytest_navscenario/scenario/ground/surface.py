@@ -202,7 +202,8 @@ def highest(scenario) -> float:
     return max([FLOOR] + tops)
 
 
-FACE_STEP = 0.3     # m: ground under a footprint differing by more than this stands it in a face
+FACE_STEP = 0.3     # m: ground under a footprint jumping by more than this between neighbouring points
+FACE_SPACING = 0.02 # m between those points: a jump of FACE_STEP over it is a face (86 deg), not a slope
 MAX_BLOCKS = 5000   # terrain blocks, each step of a flight one: 5000 build in ~0.2 s, 100 000 took 17 s and 0.5 GB
 MAX_HOLES = 100     # elements cutting the floor: the floor around 100 holes at random places ~0.15 s
                     # (sim/terrain._floor_parts), around 1000 about 9 s
@@ -266,12 +267,10 @@ def obstacle_problem(scenario) -> tuple[str, str, str] | None:
 
 def mission_problem(scenario) -> tuple[str, str, str] | None:
     """(field, message, fix) when the start or the goal stands over a hole (a pit, a stairwell) or
-    inside a terrain face (the ground under its footprint differs by more than FACE_STEP: half on a
-    platform, half off), or a waypoint lies over a hole; None when the mission stands on the ground."""
+    inside a terrain face (``_face_under``: half on a platform, half off), or a waypoint lies over a
+    hole; None when the mission stands on the ground."""
     if not scenario.terrain:
         return None
-    from ..geometry import footprint_polygon
-
     m = scenario.mission
     checks = [("mission.start", m.start, True), ("mission.goal", m.goal, True)]
     checks += [(f"mission.waypoints[{i}]", w, False) for i, w in enumerate(m.waypoints)]
@@ -284,10 +283,8 @@ def mission_problem(scenario) -> tuple[str, str, str] | None:
                                f"{-piece.top0:g} m below the floor",
                         f"move it onto the ground, or move {describe_element(el)}")
         if footprint:
-            outline = np.asarray(footprint_polygon(scenario.robot.footprint, pose.x, pose.y,
-                                                   pose.yaw_rad).exterior.coords)
-            heights = ground_height(scenario, outline[:, 0], outline[:, 1])
-            if float(heights.max() - heights.min()) > FACE_STEP:
+            heights = _face_under(scenario, pose)
+            if heights is not None:
                 el = element_at(scenario, pose.x, pose.y, margin=1.0)
                 what = describe_element(scenario.terrain[el]) if el is not None else "the terrain"
                 return (field, f"the robot's footprint at ({pose.x:g}, {pose.y:g}) stands in a face of "
@@ -295,3 +292,23 @@ def mission_problem(scenario) -> tuple[str, str, str] | None:
                                f"{float(heights.max()):.2f} m",
                         f"move it fully onto {what} or off it")
     return None
+
+
+def _face_under(scenario, pose) -> np.ndarray | None:
+    """The ground's heights under the footprint at ``pose`` when it stands in a face (between two
+    neighbouring points FACE_SPACING apart the ground jumps by more than FACE_STEP: half on a
+    platform, half off); None when it stands on ground, however steep a slope (a side slope of a
+    ramp spans more than FACE_STEP under a wide robot and has no face)."""
+    fp = scenario.robot.footprint
+    hl, hw = (fp.length / 2, fp.width / 2) if fp.shape == "box" else (fp.radius, fp.radius)
+    u = np.linspace(-hl, hl, max(2, int(math.ceil(2 * hl / FACE_SPACING)) + 1))
+    v = np.linspace(-hw, hw, max(2, int(math.ceil(2 * hw / FACE_SPACING)) + 1))
+    gu, gv = np.meshgrid(u, v)
+    c, s = math.cos(pose.yaw_rad), math.sin(pose.yaw_rad)
+    h = ground_height(scenario, (pose.x + c * gu - s * gv).ravel(), (pose.y + s * gu + c * gv).ravel())
+    h = h.reshape(gu.shape)
+    inside = np.ones(gu.shape, bool) if fp.shape == "box" else np.hypot(gu, gv) <= fp.radius + 1e-9
+    h = np.where(inside, h, np.nan)
+    jumps = [np.abs(np.diff(h, axis=axis)) for axis in (0, 1)]
+    jump = max(float(np.nanmax(j, initial=0.0)) for j in jumps)
+    return h[inside] if jump > FACE_STEP else None
