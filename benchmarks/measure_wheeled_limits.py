@@ -5,13 +5,20 @@ at or above them at every speed).
 
     python benchmarks/measure_wheeled_limits.py [--speeds 1.0,0.5,0.25,0.1] [--bodies default]
 
-Measured (MuJoCo 4.0), with the mass at the axle and preloaded caster springs (terrain4), at 1 m/s:
-default diff body (50 kg, 10 N m, wheels 0.1 m) step 0.036 m, slope 17.2 deg, gap 0.180 m; 30 kg:
-0.038, 17.5, 0.168; 20 N m: 0.036, 17.5, 0.172; wheels 0.15 m: 0.047, 16.2, 0.453; skid: 0.064,
-34.4, 0.172. A diff body's slope is not torque-limited: its casters carry load and the driven wheels
-lose grip, so more torque does not help. (A gap's bisection assumes the outcome is monotonic in the
-width; it is not quite, so the gap figures are rough.) Figures at several speeds: docs/benchmarks.md
-(#36).
+Measured under MuJoCo 4.0.1 (PyPI's today): default diff body step 0.041 m, slope 17.2 deg, gap 0.230 m;
+30 kg: 0.045, 17.5, 0.227; 20 N m: 0.047, 17.5, 0.227; wheels 0.15 m: 0.055, 16.2, 0.477; skid: 0.081,
+34.4, 0.191. A patch release moves these by up to a quarter (the steps and gaps below, under 4.0.0):
+the estimates are bounds with room (scenario/bodies/wheeled.py), checked against both releases' figures by
+tests/verdict/test_traversable.py.
+
+Measured (MuJoCo 4.0.0), with the mass at the axle and preloaded caster springs (terrain4): default
+diff body (50 kg, 10 N m, wheels 0.1 m) step 0.036 m, slope 17.2 deg, gap 0.180 m; 30 kg: 0.038,
+17.5, 0.168; 20 N m: 0.036, 17.5, 0.172; wheels 0.15 m: 0.047, 16.2, 0.453; skid: 0.064, 34.4, 0.172.
+(Before, with the mass in the chassis box's middle and softer casters: step 0.044, slope 17.5, gap
+0.129; skid 0.081, 32.5, 0.113.) A diff body's slope is not torque-limited: its casters carry load
+and the driven wheels lose grip, so more torque does not help. (A gap's bisection assumes the
+outcome is monotonic in the width; it is not quite, so the gap figures are rough.) All at 1 m/s;
+figures at several speeds: docs/benchmarks.md (#36).
 """
 from __future__ import annotations
 

@@ -127,6 +127,25 @@ def look_in_current_folder(spec: str) -> None:
 
 
 def run_run(args: argparse.Namespace) -> int:
+    """The files' episodes (``_run_files``); then the processes the planner or the body
+    controller started and left running are ended and named on stderr, as pytest does
+    (core/processes.py), whether the run ended, failed or was interrupted."""
+    try:
+        return _run_files(args)
+    finally:
+        _end_left_running()
+
+
+def _end_left_running() -> None:
+    processes = sys.modules.get("pytest_navscenario.core.processes")   # loaded once an episode ran
+    ended = processes.end_left_behind() if processes is not None else []
+    if ended:
+        shown = [f"pid {p.pid}: {p.command} after {p.episode}" for p in ended[:5]] + (["..."] if len(ended) > 5 else [])
+        print(f"navscenario run: ended {len(ended)} process(es) the planner or controller had left running "
+              f"({'; '.join(shown)})", file=sys.stderr)
+
+
+def _run_files(args: argparse.Namespace) -> int:
     from ..scenario.loader import load_scenario
     from ..harness.runner import run_scenario
 

@@ -4,8 +4,9 @@
     >>> result = run_scenario(load_scenario("scenarios/boxes1.yaml"), "dwa")
     >>> result.outcome, result.metrics.min_clearance
 
-The simulation (sim.py) yields the raw facts; the oracle gives the outcome and one-line message;
-metrics.py the per-episode figures.
+The simulation (``sim.simulate``, sim/episode.py) yields the raw facts; the oracle
+(verdict/oracle.py) gives the outcome and one-line message; verdict/metrics.py the per-episode
+figures.
 """
 from __future__ import annotations
 

@@ -159,8 +159,9 @@ def pytest_report_header(config: pytest.Config) -> list[str]:
         return []
     s = state.settings
     limit = f"{s.tick_limit:g} s" if s.tick_limit else "none"
+    from ..core.versions import mujoco_version
     lines = [f"navscenario: subject {state.subject.label}, seed {s.seed} (--nav-seed), "
-             f"tick limit {limit}"]
+             f"tick limit {limit}, MuJoCo {mujoco_version()}"]
     lines += [f"navscenario: subject note: {note}" for note in state.subject.notes]
     if s.repeat > 1:
         lines.append(f"navscenario: {s.repeat} runs per scenario with different noise seeds "

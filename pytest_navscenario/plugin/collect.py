@@ -180,6 +180,7 @@ class ScenarioFile(pytest.File):
             scenario = with_sensor_model(scenario, model)
         repeats = get_state(self.config).settings.repeat
         provenance = scenario.provenance or {}
+        _warn_other_subject(provenance, get_state(self.config).subject)
         if repeats > 1 and "confirmation" in provenance:   # a frozen failure: does it still hold?
             get_state(self.config).frozen[(rel_path(self.config, self.path), name)] = dict(provenance)
         for repeat in range(repeats):
@@ -256,6 +257,26 @@ def _field_line(scenario: Any, field: str) -> int | None:
             return field_line(fh.read(), field)
     except (OSError, TypeError, UnicodeDecodeError):
         return None
+
+
+class OtherSubjectWarning(UserWarning):
+    """A frozen failure runs against another subject than the one its provenance names."""
+
+
+def _warn_other_subject(provenance: dict, subject: Any) -> None:
+    """A pytest warning (shown with the file in the warnings summary; the same text for every file,
+    so pytest lists them under one message) when a frozen failure of the search runs against
+    another subject than the one it was found against: against that one it is only a layout,
+    which it may well pass, and a run that looks like a fixed regression may be no such thing."""
+    import warnings
+
+    found = provenance.get("subject")
+    if not found or "outcome" not in provenance or subject.spec is None or str(found) == subject.spec:
+        return
+    warnings.warn(OtherSubjectWarning(
+        f"frozen failure found against subject {found!r} runs against {subject.spec!r} (from "
+        f"{subject.origin}): against another subject it is only a layout, which it may pass; to re-run "
+        f"the failure as found, add --nav-subject={found}"), stacklevel=2)
 
 
 def _warn_left_running(where: str, left: tuple[str, ...]) -> None:
@@ -426,6 +447,7 @@ class ScenarioItem(pytest.Item):
         version = f" {r.subject_version}" if r.subject_version else ""
         lines.append(f"  subject:       {r.subject}{version}, episode seed {r.seed}")
         lines.append(f"  scenario:      {self.rel_path}")
+        lines += _unreproduced(r)
         from .artifacts import item_dir
         folder = item_dir(self.config, self.nodeid)
         if folder is not None:
@@ -439,3 +461,19 @@ class ScenarioItem(pytest.Item):
     def reportinfo(self) -> tuple[Path, int, str]:
         # line 0 (shown as 1): pytest needs a line for skip reports
         return self.path, 0, f"scenario {self.name} ({self.scenario.family or 'no family'})"
+
+
+def _unreproduced(r: Any) -> list[str]:
+    """For a frozen failure whose outcome or message is not the one its provenance recorded: what
+    was recorded, and the MuJoCo release it was recorded under when that is not this run's."""
+    from ..core.versions import other_mujoco
+
+    prov = r.scenario.provenance or {}
+    if "outcome" not in prov or (prov.get("outcome") == r.outcome.value and prov.get("message") == r.message):
+        return []
+    lines = [f"  recorded:      {prov.get('outcome')}: {prov.get('message') or ''} (its provenance; this run "
+             f"did not reproduce it)"]
+    note = other_mujoco(prov.get("mujoco_version"))
+    if note:
+        lines.append(f"  MuJoCo:        {note}; re-run its search to record it under this release")
+    return lines

@@ -5,6 +5,7 @@ Record fields (format_version 1)::
     format            "navscenario-results"
     format_version    1
     tool_version      package version that wrote it
+    mujoco_version    the MuJoCo release that simulated the episode (its bits are that release's)
     nodeid            pytest node id, e.g. "scenarios/boxes1.yaml::boxes1"
     path              scenario file, relative to the rootdir (posix separators)
     scenario          scenario name
@@ -40,6 +41,7 @@ from typing import Any, Iterable
 
 from ..core.errors import NavScenarioError
 from ..core.files import atomic_write_text, json_safe
+from ..core.versions import mujoco_version
 from ..verdict.result import EpisodeResult
 from ..scenario.model import content_hash
 
@@ -66,6 +68,7 @@ def make_record(result: EpisodeResult, *, nodeid: str, path: str, repeat: int = 
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
         "tool_version": _tool_version(),
+        "mujoco_version": mujoco_version(),
         "nodeid": nodeid,
         "path": path,
         "scenario": s.name,

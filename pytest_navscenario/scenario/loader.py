@@ -122,9 +122,8 @@ def _robot(ctx: _Ctx, top: _Section) -> Robot:
 
 def _mjcf_file(ctx: _Ctx, body: Any) -> Any:
     """An MJCF body's file: beside the scenario (the mesh path rules), there and readable; its
-    digest (a hash of the file's bytes) made part of the content. MuJoCo reads it at run time."""
-    import hashlib
-
+    digest (a hash of its bytes and of every file MuJoCo will open for it: scenario/mjcf_files.py)
+    made part of the content. MuJoCo reads it at run time."""
     from .mesh import MeshError, resolve_mesh_path
 
     field = "robot.body.file"
@@ -137,13 +136,16 @@ def _mjcf_file(ctx: _Ctx, body: Any) -> Any:
         raise ctx.fail(str(exc), field, line, fix) from None
     if path.exists() and not path.is_file():   # a folder, or a named pipe that reading would wait on
         raise ctx.fail(f"{path} is not a file", field, line, fix)
-    try:
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise ctx.fail(f"{path} does not exist", field, line, fix) from None
+    if not path.exists():
+        raise ctx.fail(f"{path} does not exist", field, line, fix)
+    from .mjcf_files import MjcfFileError, robot_digest
+    try:   # the file and every file MuJoCo will open for it: inside the folder, regular, hashed
+        return replace(body, digest=robot_digest(path, folder))
+    except MjcfFileError as exc:
+        raise ctx.fail(str(exc), field, line, "keep the robot's included files, meshes and textures in the "
+                                              "scenario's folder, named by relative paths") from None
     except OSError as exc:
         raise ctx.fail(f"{path} cannot be read: {exc.strerror or exc}", field, line, fix) from None
-    return replace(body, digest=hashlib.sha256(data).hexdigest()[:16])
 
 
 def _pose(ctx: _Ctx, node: YNode | None, path: str, line: int | None, what: str) -> Pose:

@@ -11,6 +11,7 @@ import difflib
 import math
 import numbers
 import re
+import unicodedata
 from typing import Any, Mapping
 
 from ..core.errors import ScenarioError, ScenarioErrors
@@ -563,6 +564,11 @@ def _check_name(ctx: _Ctx, name: str, field: str, line: int | None, *, file_name
         raise ctx.fail(f"is {len(name)} characters long, more than {limit}", field, line, "shorten it")
     if any(ch in name for ch in "\n\r\t\x00"):
         raise ctx.fail("must be one line without tabs", field, line, "remove the line breaks")
+    control = next((ch for ch in name if unicodedata.category(ch) == "Cc"), None)
+    if control is not None:   # an escape sequence would drive the terminal that prints the name
+        raise ctx.fail(f"{name!r} holds the control character U+{ord(control):04X}: names are printed in "
+                       f"terminals and reports, where it would act (clear the screen, recolour, retitle)",
+                       field, line, "remove the control characters (\\e, \\a, \\x1b ... in YAML escapes)")
     if file_name and (any(ch in name for ch in "/\\") or name.strip() in (".", "..")):
         raise ctx.fail(f"{name!r} cannot be used: scenario names and families become file and folder names",
                        field, line, "use letters, digits, '-', '_' and '.', without '/' or '\\'")

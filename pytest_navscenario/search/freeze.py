@@ -29,9 +29,10 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from ..core.files import atomic_write_text
+from ..core.versions import mujoco_version
 from ..scenario.model import Scenario, content_hash
 from ..verdict.result import headline
-from .engine import Candidate, Failure, SearchReport
+from .report import Candidate, Failure, SearchReport
 from .holding import Estimate
 from .space import SearchSpace
 
@@ -85,6 +86,7 @@ def candidate_provenance(report: SearchReport, cand: Candidate, space: SearchSpa
         "strategy": report.strategy,
         "budget": report.budget,
         "nav_seed": report.episode_seed or 0,
+        "mujoco_version": mujoco_version(),    # the release whose bits it records (core/versions.py)
     }
 
 

@@ -13,13 +13,15 @@ import numpy as np
 
 from ..core.errors import SimulationDivergedError
 from ..subjects.protocol import Observation
+from .command import planner_traceback
 from .ground.ground_safety import ground_safety
 from .lidar import base_rotation
 from .moving import describe_collision
-from .trajectory import SafetyStop, Trajectory
+from .trajectory import SafetyStop, SubjectFailure, Trajectory
 from .world import MUJOCO_WARNINGS, TWO_PI, divergence_message
 from ..scenario.ground import surface as ground
 from .bodies.base import base_state, quat_to_rpy, world_yaw_rate
+from .bodies.mjcf import BodyControllerError
 from .body_world import compiled_body_world
 from .loop import HALT, STILL, Episode, EpisodeOver
 from .ground.riding import GroundProbe, TerrainStop, TerrainWatch, resting_pose
@@ -73,7 +75,12 @@ class RidingEpisode(Episode):
         m, d, start = self.model, self.data, self.scenario.mission.start
         z, roll, pitch = resting_pose(self.scenario, start.x, start.y, start.yaw_rad)
         self.body.place(d, start.x, start.y, start.yaw_rad, self.body.start_height(z), roll, pitch)
-        self.control = self.body.begin(d)
+        try:
+            self.control = self.body.begin(d)
+        except BodyControllerError as exc:   # the user's controller: a subject error, as a planner's
+            self._controller_failed(exc)
+        if hasattr(self.control, "deadline"):
+            self.control.deadline = self.deadline
         if self.moving is not None:
             self.moving.write(0)
         mujoco.mj_step1(m, d)
@@ -162,13 +169,17 @@ class RidingEpisode(Episode):
         state's base recorded; the contacts are looked at only when the chassis touches something."""
         m, d, ctrl, qpos7, qvel6, pose_buf, qvel_buf, inner = self.stepping
         self.setpoint = setpoint
-        self.control.command(ctrl, setpoint, self.state3d)
+        try:
+            self.control.command(ctrl, setpoint, self.state3d)
+        except BodyControllerError as exc:
+            self._controller_failed(exc)
         rows = self.moving.rows_for_tick(self.i) if self.moving is not None else None
         mocap = self.moving.mocap_pos if rows is not None else None
         sensordata, k_chassis = self.sensordata, self.chassis_sensor
         step = mujoco.mj_step
         t0 = perf_counter()
         collision = None
+        level = self.watch.level          # a face under the ground it stood on is an edge it goes over
         mujoco.mj_step2(m, d)
         i = self.i + 1
         pose_buf[i] = qpos7
@@ -178,7 +189,7 @@ class RidingEpisode(Episode):
                 mocap[:] = rows[k + 1]
             step(m, d)
             if sensordata[k_chassis] > 0.0:
-                collision = self.world.first_collision(d, self.obstacles, i * self.dt)
+                collision = self.world.first_collision(d, self.obstacles, i * self.dt, level)
                 if collision is not None:
                     break
             i += 1
@@ -189,7 +200,7 @@ class RidingEpisode(Episode):
                 mocap[:] = rows[self.spt]
             mujoco.mj_step1(m, d)
             if sensordata[k_chassis] > 0.0:
-                collision = self.world.first_collision(d, self.obstacles, i * self.dt)
+                collision = self.world.first_collision(d, self.obstacles, i * self.dt, level)
         self.i = i
         self.t_physics += perf_counter() - t0
         if collision is not None:
@@ -199,6 +210,13 @@ class RidingEpisode(Episode):
             raise SimulationDivergedError(divergence_message(self.scenario, self.data, self.i * self.dt))
 
     step_physics_moving = step_physics
+
+    def _controller_failed(self, exc: Exception) -> None:
+        """The MJCF body's controller raised, overran its tick or answered nonsense: the episode
+        ends as a subject error with its message and traceback (a record in the results file)."""
+        cause = exc.__cause__ if exc.__cause__ is not None else exc
+        self.failure = SubjectFailure(str(exc), max(0, self.tick - 1), self.i * self.dt, planner_traceback(cause))
+        raise EpisodeOver("subject-error") from None
 
     def trajectory(self) -> Trajectory:
         """The base's recorded rows as x, y, yaw and velocities in the heading frame, plus the

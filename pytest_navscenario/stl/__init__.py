@@ -2,7 +2,7 @@
 
 In: a formula's text in RTAMT's discrete-time syntax and, to evaluate it, its signals as arrays
 sampled every ``dt`` seconds. Out: a ``Formula`` (``parse``; ``StlSyntaxError`` with the column
-and a fix on a mistake), the robustness at every sample (``robustness``: RTAMT's offline
+and a fix on a mistake; ``Formula.check_period(dt)`` checks its intervals against a period), the robustness at every sample (``robustness``: RTAMT's offline
 discrete-time semantics, vectorised with numpy) and the verdict (``evaluate`` -> ``Evaluation``:
 the robustness at time 0, violated or not, the first violation's time and sample).
 
@@ -23,15 +23,8 @@ docs/reference/requirements-language.md.
 from __future__ import annotations
 
 from .errors import StlError, StlEvaluationError, StlSyntaxError
+from .evaluation import Evaluation, evaluate, robustness
 from .formula import Formula, parse
 
 __all__ = ["parse", "Formula", "StlError", "StlSyntaxError", "StlEvaluationError",
            "robustness", "evaluate", "Evaluation"]
-
-
-def __getattr__(name: str):
-    # robustness/evaluate live beside numpy; imported on first use so that parsing stays cheap
-    if name in ("robustness", "evaluate", "Evaluation"):
-        from . import evaluation
-        return getattr(evaluation, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -23,7 +23,7 @@ import numpy as np
 from .tree import COMPARISONS, Node
 from .errors import StlEvaluationError
 from .formula import Formula, parse
-from .plan import LENGTH, plan, samples
+from .plan import LENGTH, plan, plan_for, samples
 
 
 @dataclass(frozen=True)
@@ -48,7 +48,7 @@ def robustness(formula: Formula | str, signals: Mapping[str, object], dt: float)
     trace or an interval that is not a whole number of periods.
     """
     formula = parse(formula) if isinstance(formula, str) else formula
-    step = _plan(formula, dt)
+    step = plan_for(formula, dt)
     return np.asarray(step(_arrays(formula, signals)), dtype=np.float64)
 
 
@@ -56,22 +56,16 @@ def evaluate(formula: Formula | str, signals: Mapping[str, object], dt: float) -
     """The verdict of ``formula`` on the signals: ``robustness`` plus where it was first violated."""
     formula = parse(formula) if isinstance(formula, str) else formula
     arrays = _arrays(formula, signals)
-    rho = np.asarray(_plan(formula, dt)(arrays), dtype=np.float64)
+    rho = np.asarray(plan_for(formula, dt)(arrays), dtype=np.float64)
     value = float(rho[0])
+    if np.isnan(value):
+        raise StlEvaluationError(f"{formula.text}: the robustness at time 0 is undefined (NaN)",
+                                 "it comes from 0/0, sqrt of a negative number, or iff/xor of two "
+                                 "windows past the end of the trace: guard the arithmetic or the windows")
     if not value < 0:
         return Evaluation(value, False, None, None, rho)
     index = _Witness(formula, arrays, dt).find(formula.root, 0, False)
     return Evaluation(value, True, round(index * dt, 9), index, rho)
-
-
-def _plan(formula: Formula, dt: float):
-    if not (isinstance(dt, (int, float)) and dt > 0 and np.isfinite(dt)):
-        raise StlEvaluationError(f"the sampling period must be a positive number of seconds, got {dt!r}",
-                                 "pass the control tick, e.g. dt=0.1")
-    step = formula._plans.get(dt)
-    if step is None:
-        step = formula._plans[dt] = plan(formula.root, float(dt), formula.text)
-    return step
 
 
 def _arrays(formula: Formula, signals: Mapping[str, object]) -> dict:
@@ -89,6 +83,11 @@ def _arrays(formula: Formula, signals: Mapping[str, object]) -> dict:
         if n is not None and x.shape[0] != n:
             raise StlEvaluationError(f"signal {name!r} has {x.shape[0]} samples, the others {n}",
                                      "sample every signal at the same ticks")
+        if np.isnan(x).any():
+            first = int(np.flatnonzero(np.isnan(x))[0])
+            raise StlEvaluationError(f"signal {name!r} is NaN at sample {first} (of {x.shape[0]})",
+                                     "a signal must have a value at every sample; fix the function "
+                                     "that computes it")
         n = x.shape[0]
         out[name] = x
     if n is None:       # a formula of constants only: any signal gives the length

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from .tree import Node, render
 from .parser import Parser
+from .plan import plan_for
 
 
 class Formula:
@@ -37,6 +38,11 @@ class Formula:
 
     def __reduce__(self):
         return (parse, (self.source,))
+
+    def check_period(self, dt: float) -> None:
+        """Raise ``StlEvaluationError`` unless every interval bound is a whole number of sampling
+        periods ``dt`` (seconds): the check ``robustness`` makes, for a scenario to make at load."""
+        plan_for(self, dt)
 
 
 def parse(text: str) -> Formula:

@@ -15,6 +15,7 @@ the end, -inf for the strong ``s_next``/``s_prev``); ``rise``: ``min(-prev, now)
 """
 from __future__ import annotations
 
+import numbers
 from typing import Callable
 
 import numpy as np
@@ -45,6 +46,17 @@ def samples(seconds: float, dt: float, node: Node, text: str) -> int:
 def plan(root: Node, dt: float, text: str = "") -> Step:
     """The closure that evaluates ``root`` on signals sampled every ``dt`` seconds."""
     return _build(root, dt, text)
+
+
+def plan_for(formula, dt: float) -> Step:
+    """The formula's evaluation plan at period ``dt``, built once and cached on the formula."""
+    if isinstance(dt, bool) or not (isinstance(dt, numbers.Real) and dt > 0 and np.isfinite(dt)):
+        raise StlEvaluationError(f"the sampling period must be a positive number of seconds, got {dt!r}",
+                                 "pass the control tick, e.g. dt=0.1")
+    step = formula._plans.get(dt)
+    if step is None:
+        step = formula._plans[dt] = plan(formula.root, float(dt), formula.text)
+    return step
 
 
 def _build(node: Node, dt: float, text: str) -> Step:

@@ -124,3 +124,27 @@ def test_a_model_heightmap_not_found_hints_at_model_path(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "model://hills/materials/textures/hills.png" in err
     assert "--model-path" in err and "'hills'" in err
+
+
+@pytest.mark.parametrize("how", ["absolute", "file", "model", "dotdot", "symlink"])
+def test_a_heightmap_from_outside_the_worlds_folder_is_refused_as_a_mesh_is(tmp_path, how):
+    from pytest_navscenario.ros.world_import import WorldImportError
+
+    outside = tmp_path / "secret"
+    outside.mkdir()
+    Image.fromarray(np.full((9, 9), 7, dtype=np.uint8)).save(outside / "h.png")
+    world = tmp_path / "a" / "b"
+    world.mkdir(parents=True)
+    if how == "symlink":
+        (world / "h.png").symlink_to(outside / "h.png")
+    uri = {"absolute": str(outside / "h.png"), "file": f"file://{outside / 'h.png'}",
+           "model": "model://../../secret/h.png", "dotdot": "../../secret/h.png", "symlink": "h.png"}[how]
+    for what, models in [("heightmap", _heightmap(uri)),
+                         ("mesh", _heightmap(uri).replace("<heightmap>", "<mesh>").replace("</heightmap>", "</mesh>")
+                          .replace("h.png", "h.stl"))]:
+        if what == "mesh":
+            (outside / "h.stl").write_text("solid s\nendsolid s\n")
+            if how == "symlink":
+                (world / "h.stl").symlink_to(outside / "h.stl")
+        with pytest.raises(WorldImportError, match=f"{what} .* outside the world's folder"):
+            sdf_obstacles(_world(world, models))

@@ -126,6 +126,7 @@ def test_a_formula_that_holds_has_no_first_violation():
     ("always[0:0.25] (x > 0)", {"x": [1.0]}, DT, "0.25 s (column 1) is not a whole number of sampling "
                                                  "periods of 0.1 s", "write 0.2 or 0.3"),
     ("always (x > 0)", {"x": [1.0]}, 0.0, "positive number of seconds", "dt="),
+    ("always (x > 0)", {"x": [1.0, float("nan")]}, DT, "signal 'x' is NaN at sample 1 (of 2)", "value at every sample"),
 ])
 def test_evaluation_errors_say_what_and_how_to_fix_it(text, signals, dt, message, fix):
     with pytest.raises(StlEvaluationError) as info:
@@ -139,3 +140,18 @@ def test_robustness_is_float64_whatever_the_inputs():
     rho = robustness("always (x > 0)", {"x": [1, 2, 3]}, 1)
     assert rho.dtype == np.float64 and rho.tolist() == [1.0, 2.0, 3.0]
     assert robustness("1 < 2", {"x": [0, 0]}, 1).tolist() == [1.0, 1.0]
+
+
+def test_a_formula_checks_its_intervals_against_a_period_before_any_trace():
+    f = parse("always[0:0.25] (x > 0) and eventually[0:1] (x > 1)")
+    f.check_period(0.05)
+    with pytest.raises(StlEvaluationError, match="0.25 s .column 1. is not a whole number"):
+        f.check_period(0.1)
+
+
+def test_an_undefined_verdict_is_an_error_not_a_pass():
+    # 0/0 is NaN; NaN < 0 is false, so it would read as kept
+    with pytest.raises(StlEvaluationError, match="undefined .NaN.") as info:
+        evaluate("x / x > 0", {"x": [0.0, 1.0]}, DT)
+    assert "0/0" in info.value.hint
+    assert np.isnan(robustness("x / x > 0", {"x": [0.0, 1.0]}, DT)[0])

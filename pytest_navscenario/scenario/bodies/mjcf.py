@@ -14,8 +14,8 @@ class MjcfBody:
     ``base`` body (None: the first body with a free joint) is the robot, driven by ``controller``
     (``pkg.mod:Attr``, loaded like a subject), which turns each velocity command into the model's
     actuator controls. ``digest`` is what the loader read from the file (a hash of its bytes): it
-    makes the model part of the content, wherever the file lives (files it includes are not
-    hashed). What it can cross is the user's to declare (the harness cannot estimate it from an
+    makes the model part of the content, wherever the file lives (with every file MuJoCo opens
+    for it: scenario/mjcf_files.robot_digest). What it can cross is the user's to declare (the harness cannot estimate it from an
     arbitrary model): ``max_step`` and ``max_slope`` together, and ``max_gap`` (None: no gap), and the
     path search and the feasibility check then treat it as a legged body's limits
     (scenario/ground/crossing.py); undeclared, they ignore the terrain for it."""
