@@ -78,9 +78,10 @@ def _batch_size(raw: str) -> int:
         n = int(value)
     except ValueError:
         n = 0
-    if n < 1:
+    if not 1 <= n <= 100_000:    # = plugin.options.MAX_BATCH (not imported: `run --help` stays light)
         from ..core.errors import NavScenarioError
-        raise NavScenarioError(f"--batch {raw!r}: expected auto, a whole number of episodes >= 1, or off")
+        raise NavScenarioError(f"--batch {raw!r}: expected auto, a whole number of episodes from 1 to 100000, "
+                               f"or off")
     return n
 
 

@@ -248,6 +248,21 @@ def _fmt(value: Any, unit: str = "", digits: int = 3) -> str:
     return f"{value:.{digits}f}{unit}"
 
 
+def _culprit_line(result: Any) -> list[str]:
+    """The clearance that explains the outcome, when the minimum is to another obstacle: a robot
+    stopped for a person that passed nearer a wall (metrics.culprit_clearance)."""
+    if not len(result.trajectory.t):
+        return []
+    from ..verdict.metrics import culprit_clearance
+    found = culprit_clearance(result)
+    if found is None:
+        return []
+    name, dist, time = found
+    why = "the safety stop was for it" if result.safety_stop is not None else "the collision was with it"
+    return [f"  clearance to {name!r}: {_fmt(dist, ' m')} at t={_fmt(time, ' s', 2)} ({why}; the minimum "
+            f"above is to another obstacle)"]
+
+
 def _field_line(scenario: Any, field: str) -> int | None:
     """The line of ``field`` in the scenario's file (read again only for this error), or None."""
     from ..scenario.yaml_tree import field_line
@@ -428,8 +443,10 @@ class ScenarioItem(pytest.Item):
                          f"({_fmt(c.x, '', 2)}, {_fmt(c.y, '', 2)}), depth {_fmt(c.depth, ' m', 4)}")
         if r.safety_stop is not None:
             s = r.safety_stop
+            from ..verdict.oracle import stop_motion
             lines.append(f"  safety stop:   predicted hit of obstacle {s.obstacle!r} at t="
-                         f"{_fmt(s.time, ' s', 2)}, speed {_fmt(s.speed, ' m/s', 2)}")
+                         f"{_fmt(s.time, ' s', 2)}, "
+                         + (f"speed {_fmt(s.speed, ' m/s', 2)}" if not s.speed < 0.005 else stop_motion(s)))
         if r.subject_failure is not None:
             f = r.subject_failure
             lines.append(f"  planner error: {f.message} (tick {f.tick}, t={_fmt(f.time, ' s', 2)})")
@@ -440,6 +457,7 @@ class ScenarioItem(pytest.Item):
             lines.append(f"  min clearance: {_fmt(m.min_clearance, ' m')}{obstacle} at t="
                          f"{_fmt(m.min_clearance_time, ' s', 2)}, robot at ({_fmt(m.min_clearance_x, '', 2)}, "
                          f"{_fmt(m.min_clearance_y, '', 2)})")
+        lines += _culprit_line(r)
         lines.append(f"  duration:      {_fmt(m.duration, ' s', 2)} (timeout "
                      f"{_fmt(r.scenario.mission.timeout, ' s', 1)}), path {_fmt(m.path_length, ' m', 2)}, "
                      f"efficiency {_fmt(m.path_efficiency, '', 2)}, goal error "

@@ -182,7 +182,7 @@ _EXPECTED = {"nav_seed": "a whole number >= 0", "nav_summary": "yes or no (true 
              "nav_tick_limit": "seconds >= 0 (0: no limit)",
              "nav_repeat": "a whole number of runs per scenario from 1 to 10000",
              "nav_reset_timeout": "seconds > 0",
-             "nav_batch": "auto, a whole number of episodes >= 1, or off",
+             "nav_batch": "auto, a whole number of episodes from 1 to 100000, or off",
              "nav_batch_engine": "cpu or warp"}
 
 
@@ -294,6 +294,7 @@ def read_sensor_model(config: pytest.Config) -> "dict[str, float] | None":
 
 
 DEFAULT_BATCH = 16   # = harness.batch.DEFAULT_BATCH (not imported: plugin load stays light)
+MAX_BATCH = 100_000  # episodes a batch at most (each holds a MuJoCo data and its records)
 
 
 def read_batch(config: pytest.Config) -> int:
@@ -309,9 +310,10 @@ def read_batch(config: pytest.Config) -> int:
         n = int(value)
     except ValueError:
         n = 0
-    if not 1 <= n <= 100_000:
-        raise pytest.UsageError(f"{where}: expected auto, a whole number of episodes per batch >= 1, or off "
-                                f"(1 and off: every episode alone), got {raw!r} (e.g. --nav-batch=32)")
+    if not 1 <= n <= MAX_BATCH:
+        raise pytest.UsageError(f"{where}: expected auto, a whole number of episodes per batch from 1 to "
+                                f"{MAX_BATCH}, or off (1 and off: every episode alone), got {raw!r} (e.g. "
+                                f"--nav-batch=32)")
     return n
 
 

@@ -78,6 +78,7 @@ class SearchSection:
     discarded: dict[str, int] = field(default_factory=dict)        # reason -> count
     skipped: int = 0
     notes: list[str] = field(default_factory=list)                 # cut short, unshrunk, errors
+    discard_advice: list[str] = field(default_factory=list)        # why many were discarded, what to change
     chart_png: bytes | None = None
 
     @property

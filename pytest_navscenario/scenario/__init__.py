@@ -4,7 +4,8 @@ In: YAML text or files (or plain dicts). Out: a frozen ``Scenario`` (robot, miss
 simulation settings, marks, search bounds), validated with ``file:line: field: message (fix: ...)``
 errors, and YAML that loads back to the same value.
 
-Read first: ``model.py`` (the dataclasses and their units), then ``loader.py`` (validation),
+Read first: ``model.py`` (the dataclasses and their units), then ``loader.py`` (validation; every
+mistake of a file in one pass, kept by ``context.py``),
 ``dump.py`` (writing), ``yaml_tree.py`` (the line-tracking YAML reader), ``geometry.py``
 (footprints and obstacle outlines as shapely polygons), ``motion.py`` (where a moving obstacle is at
 a time: the one function the simulation, the verdict and the pictures share).

@@ -259,7 +259,7 @@ def _terrain_element(ctx: _Ctx, sec: _Section, element: K.Element, name: str) ->
     values = _read(ctx, sec, decl, {"name": name})
     if element.type not in ("heightfield", "rough"):
         return decl.cls(**values)
-    from .ground.heightmap import HeightmapError, check_rough, load_heightfield
+    from .ground.heightmap import HeightmapError, check_grid_total, check_rough, load_heightfield
 
     try:
         if element.type == "rough":
@@ -267,10 +267,12 @@ def _terrain_element(ctx: _Ctx, sec: _Section, element: K.Element, name: str) ->
         else:
             folder = Path(ctx.source).parent if ctx.source else Path.cwd()
             _, values["digest"] = load_heightfield(folder, values["file"], values["length"], values["width"])
+        ctx.grid_samples = check_grid_total(getattr(ctx, "grid_samples", 0), decl.cls(**values), ctx.source)
     except HeightmapError as exc:
         hint = ("fix the file or the path (relative to the scenario's folder)" if exc.field == "file"
-                else f"change {exc.field}")
-        raise ctx.fail(str(exc), _join(sec.path, exc.field), sec.line_of(exc.field) or sec.line, hint) from None
+                else f"change {exc.field}" if exc.field else "use fewer or coarser grids (rough ground, heightfields)")
+        field = _join(sec.path, exc.field) if exc.field else sec.path
+        raise ctx.fail(str(exc), field, (sec.line_of(exc.field) if exc.field else None) or sec.line, hint) from None
     return decl.cls(**values)
 
 

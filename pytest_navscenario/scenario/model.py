@@ -239,7 +239,7 @@ MESH = section(MeshObstacle, "obstacles[] (mesh)", "a triangle mesh (.stl or .ob
     Number("x", "m", "where the mesh's origin is placed, along x", default=0.0),
     Number("y", "m", "where the mesh's origin is placed, along y", default=0.0),
     Text("file", "", "an .stl (binary or ASCII) or .obj file, relative to the scenario's folder and "
-         "inside it", path=True, example="file: parts/press.stl"),
+         "inside it", path=True, inside=True, example="file: parts/press.stl"),
     Scale("scale", "", "one number for all axes or [sx, sy, sz], e.g. 0.001 for millimetres", le=1000.0,
           default_doc="1"),
     _YAW, _MOTION, _VISIBLE, _Z,

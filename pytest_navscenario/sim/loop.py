@@ -394,7 +394,7 @@ class Episode:
     def _halt(self, state: tuple[float, ...], hit: str) -> None:
         """The safety layer halts the robot before ``hit``: zero control, the episode ends."""
         t, vx, vy = state[0], state[4], state[5]
-        self.safety_stop = SafetyStop(t, hit, math.hypot(vx, vy))
+        self.safety_stop = SafetyStop(t, hit, math.hypot(vx, vy), yaw_rate=state[6])
         self.ctrl[:] = 0.0
         self.record(t, HALT)
         raise EpisodeOver("safety-stop")

@@ -159,7 +159,7 @@ class RidingEpisode(Episode):
             if hit is not None:
                 self._halt(state, hit)
             if ground is not None:
-                self.safety_stop = SafetyStop(t, "", math.hypot(vx, vy), ground=ground)
+                self.safety_stop = SafetyStop(t, "", math.hypot(vx, vy), ground=ground, yaw_rate=wz)
                 self.ctrl[:] = 0.0
                 self.record(t, HALT)
                 raise EpisodeOver("safety-stop")

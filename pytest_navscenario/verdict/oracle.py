@@ -38,10 +38,10 @@ def classify(scenario: Scenario, trajectory: Trajectory, *, collision: Collision
         if getattr(safety_stop, "ground", ""):
             return Outcome.SAFETY_STOP, (
                 f"safety stop at t={safety_stop.time:.2f} s: predicted to drive into {safety_stop.ground} "
-                f"at {safety_stop.speed:.2f} m/s (seen by the 3D lidar)")
+                f"{stop_motion(safety_stop)} (seen by the 3D lidar)")
         return Outcome.SAFETY_STOP, (
             f"safety stop at t={safety_stop.time:.2f} s: predicted to hit "
-            f"'{safety_stop.obstacle}' at {safety_stop.speed:.2f} m/s")
+            f"'{safety_stop.obstacle}' {stop_motion(safety_stop)}")
     duration = trajectory.duration
     timeout = scenario.mission.timeout
     if goal_reached and duration <= timeout:
@@ -56,6 +56,15 @@ def classify(scenario: Scenario, trajectory: Trajectory, *, collision: Collision
                                  f"{stuck_after:g} s; episode ended early at {duration:.1f} s of "
                                  f"{timeout:.1f} s")
     return Outcome.TIMEOUT, _timeout_message(scenario, trajectory, goal_reached)
+
+
+def stop_motion(stop: SafetyStop) -> str:
+    """How the robot moved when the safety layer halted it: "at 0.82 m/s", or, for a robot that
+    turned in place (its speed rounds to 0.00 but its footprint still sweeps), "turning in place at
+    35 deg/s" ("at 0.00 m/s" read as a robot standing still that was stopped for nothing)."""
+    if stop.speed >= 0.005:
+        return f"at {stop.speed:.2f} m/s"
+    return f"turning in place at {abs(math.degrees(getattr(stop, 'yaw_rate', 0.0))):.0f} deg/s"
 
 
 def terrain_message(event: TerrainEvent) -> str:

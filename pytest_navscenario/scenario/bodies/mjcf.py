@@ -50,7 +50,7 @@ def _mjcf_limits_schema(sec: Any, required: list[str]) -> dict[str, Any]:
 
 
 MJCF_BODY = section(MjcfBody, "robot.body (mjcf)", "the user's own MJCF robot and controller", [
-    Text("file", "", "the MJCF file, relative to the scenario's folder and inside it", path=True,
+    Text("file", "", "the MJCF file, relative to the scenario's folder and inside it", path=True, inside=True,
          example="file: robot/robot.xml"),
     Text("controller", "", "pkg.mod:Attr of the controller turning velocity commands into actuator controls",
          example="controller: mypkg.control:Controller"),

@@ -44,7 +44,7 @@ def _heights(values: Any, given: Any) -> tuple[str, str, str] | None:
 HEIGHTFIELD = section(Heightfield, "terrain[] (heightfield)", "a height grid read from a greyscale PNG or a "
                       ".npy file beside the scenario", [
     NAME, X, Y,
-    Text("file", "", "a .png or .npy file, relative to the scenario's folder and inside it", path=True,
+    Text("file", "", "a .png or .npy file, relative to the scenario's folder and inside it", path=True, inside=True,
          example="file: ground/yard.png"),
     LENGTH, WIDTH,
     Number("min_height", "m", "the height of the grid's lowest value above z"),
