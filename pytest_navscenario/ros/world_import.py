@@ -486,11 +486,12 @@ def run(args: argparse.Namespace) -> int:
                         obstacles=tuple(obstacles), robot=robot, name=args.name, terrain=terrain,
                         description=f"Imported from {args.format} file {src.name}.")
     if terrain and scenario.robot.body.kind == "planar":   # the planar body cannot ride terrain: guess
-        from ..scenario.terrain import WheeledBody
+        from ..scenario.bodies import WheeledBody
         scenario = dataclasses.replace(scenario, robot=dataclasses.replace(scenario.robot, body=WheeledBody(),
                                                                            drive="diff"))
         notes.append("robot.body: wheeled, drive: diff (a guess: the world does not say which robot drives it; "
                      "set robot.body)")
+        robot_note = robot_note.replace(f", {robot.drive} drive,", ", diff drive,")   # what the seed has
     if terrain:          # the route's length reads the heightfields: from their files, staged as beside the seed
         with tempfile.TemporaryDirectory() as tmp:
             for name, data in extra.items():

@@ -13,7 +13,8 @@ from . import keys as K
 from .loader import LATENCY_KEYS, LIDAR_KEYS, LIMITS_KEYS, LOCALISATION_KEYS
 from .model import LIDAR, PERTURB, BoxObstacle, Mark, MeshObstacle, Motion, Obstacle, PolygonObstacle, Pose, Scenario
 from .requirements import Signal
-from .terrain import BODY, LIDAR3D, PlanarBody
+from .bodies import BODY, PlanarBody
+from .terrain import LIDAR3D
 
 
 def _f(value: Any) -> float:

@@ -427,7 +427,8 @@ def check_scenario(scenario: Scenario, *, _ctx: _Ctx | None = None) -> None:
         _check_clear(scenario, ctx)
         _check_speeds(scenario, ctx)
     if scenario.terrain or scenario.robot.body.kind != "planar" or any(o.z is not None for o in scenario.obstacles):
-        from .ground.surface import body_problem, mission_problem, obstacle_problem, terrain_problem
+        from .bodies import body_problem
+        from .ground.surface import mission_problem, obstacle_problem, terrain_problem
         problem = (body_problem(scenario) or terrain_problem(scenario) or mission_problem(scenario)
                    or obstacle_problem(scenario))
         if problem is not None:

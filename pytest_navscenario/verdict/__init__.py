@@ -7,6 +7,7 @@ duration, smoothness, reference deviation) and each requirement's verdict, bundl
 ``EpisodeResult``. Pure functions of their inputs.
 
 Read first: ``result.py`` (the types), then ``oracle.py`` (the outcome), ``metrics.py`` and
-``paths.py`` (shortest footprint paths and obstacle gaps, cached), ``requirements.py`` (the
-scenario's STL requirements checked) and ``signals.py`` (the signals they name, per control tick).
+``paths.py`` (shortest footprint paths, cached), ``gaps.py`` (exact distances between rounded boxes,
+the narrowest obstacle gap, the obstacles paths keep clear of), ``requirements.py`` (the scenario's
+STL requirements checked) and ``signals.py`` (the signals they name, per control tick).
 """

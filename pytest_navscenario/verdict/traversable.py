@@ -1,7 +1,7 @@
 """What the robot's body cannot cross on the scenario's terrain, as obstacles for the path search.
 
 The rule is the legged body's (``scenario/ground/crossing.py``), with the body's ``Capability``
-(``crossing.body_capability``: a legged body's declared limits, a wheeled body's estimated ones):
+(``scenario.bodies.body_capability``: a legged body's declared limits, a wheeled body's estimated ones):
 
 * a *face* (where the ground jumps: a step's riser, a platform's edge, a pit's wall, a ramp's
   side) higher than ``max_step`` is a wall, both ways (up it cannot climb, down it would fall),
@@ -32,7 +32,8 @@ from dataclasses import replace
 import numpy as np
 
 from ..scenario.ground import surface as ground
-from ..scenario.ground.crossing import Capability, body_capability, steep_cells, steep_piece
+from ..scenario.bodies import body_capability
+from ..scenario.ground.crossing import Capability, steep_cells, steep_piece
 from ..scenario.model import BoxObstacle, Scenario
 
 EDGE_SPACING = 0.05     # m between the points along an element's edge where faces are measured

@@ -212,7 +212,8 @@ def _on_terrain(scenario: Scenario, terrain: Any, clouds: Any, notes: list[str],
     """The seed with the terrain, a body that rides it and the 3D lidar the bag had (guessed;
     ``keep``: the robot is known, --robot's or the recorded scenario's, and a body and a 3D lidar
     it has are kept)."""
-    from ...scenario.terrain import Lidar3D, WheeledBody
+    from ...scenario.bodies import WheeledBody
+    from ...scenario.terrain import Lidar3D
 
     robot = scenario.robot
     if keep and robot.body.kind != "planar" and robot.lidar3d is not None:

@@ -33,18 +33,11 @@ from typing import Sequence
 
 import numpy as np
 
+from ..bodies.record import Capability
+
 SPACING = 0.02    # m between the samples of a profile (a threshold of 5 cm is seen)
 FOOT = 0.1        # m: a steep stretch narrower than this is a step's face, wider a slope (words only)
 EPS = 1e-9
-
-
-@dataclass(frozen=True)
-class Capability:
-    """What a body can cross: steps up and down of ``max_step`` metres, slopes of ``max_slope``
-    degrees, gaps of ``max_gap`` metres (0: none)."""
-    max_step: float
-    max_slope: float
-    max_gap: float
 
 
 @dataclass(frozen=True)
@@ -116,58 +109,6 @@ def look_ahead(cap: Capability, move: float, spacing: float = SPACING) -> int:
     """Samples a profile needs to decide a move of ``move`` metres: the move, the widest gap and
     two samples more (so a far side within max_gap is seen)."""
     return int(math.ceil((move + cap.max_gap) / spacing)) + 3
-
-
-# ---------------------------------------------------------------- what each body can cross
-
-# The wheeled body's limits are estimates from its wheels, measured in MuJoCo with a straight
-# drive (benchmarks/measure_wheeled_limits.py; default body: 50 kg, 10 N m, wheels of 0.1 m). The
-# figures move between MuJoCo patch releases (the highest step the default diff body climbs: 0.036 m
-# under 4.0.0, 0.042 m under 4.0.1; skid 0.064 -> 0.081 m; the widest gap 0.18 -> 0.23 m), so the
-# estimates are bounds with room rather than fits: a step is at most the radius of what meets it
-# first (diff: its ball casters, 0.05 m; skid: its wheels), since a ball or a wheel cannot roll up
-# a step of its own radius (the edge pushes straight back), and at most the chassis' clearance;
-# slopes of 18 deg (diff: the casters carry load and the driven wheels lose grip; measured 17.2
-# under both releases, 16.2 with 0.15 m wheels, where the torque binds) and 35 deg (skid: 34.4);
-# gaps of 2.4 wheel radii. The estimates stay at or above what the body does under every supported
-# release (pyproject.toml pins the series): the shortest path (the metrics' yardstick) and the
-# feasibility check must never rule out what the body really crosses (a path round a sill the robot
-# drives over would make its path efficiency exceed 1), so a step, slope or gap a little above what
-# it does may pass for crossable (tests/verdict/test_traversable.py checks both sides).
-WHEELED_CASTER_STEP = 1.0     # of the caster's radius (diff)
-WHEELED_WHEEL_STEP = 1.0      # of the wheel's radius (skid)
-WHEELED_SLOPE = {"diff": 18.0, "skid": 35.0}   # degrees, at most the torque's limit
-WHEELED_TORQUE_SLOPE = 1.1    # the torque's limit (the slope whose weight it balances), over-estimated by this
-WHEELED_GAP = 2.4             # of the wheel's radius (0.24 m: the default body crossed 0.18 m under MuJoCo
-                              # 4.0.0, 0.23 m under 4.0.1; 0.15 m wheels crossed a rough 0.45 m, not covered)
-
-
-def body_capability(scenario) -> Capability | None:
-    """What the scenario's body can cross: a legged body's declared limits, a wheeled body's
-    estimated ones (see WHEELED_*), None for a body that declares none (planar: no terrain;
-    mjcf: its declared ones, None when undeclared: the harness cannot estimate them from a model)."""
-    body = scenario.robot.body
-    if body.kind == "legged":
-        return Capability(float(body.max_step), float(body.max_slope), float(body.max_gap))
-    if body.kind == "mjcf":
-        if body.max_step is None or body.max_slope is None:
-            return None
-        return Capability(float(body.max_step), float(body.max_slope),
-                          float(body.max_gap) if body.max_gap is not None else 0.0)
-    if body.kind != "wheeled":
-        return None
-    r = float(body.wheel_radius)
-    g = 9.81
-    driven = 4 if body.drive_wheels == "skid" else 2
-    torque = WHEELED_TORQUE_SLOPE * math.degrees(math.asin(min(driven * body.max_wheel_torque / (r * body.mass * g),
-                                                               1.0)))
-    if body.drive_wheels == "skid":
-        step = WHEELED_WHEEL_STEP * r
-    else:
-        from .chassis import wheeled_layout
-        step = WHEELED_CASTER_STEP * wheeled_layout(body, scenario.robot.footprint).caster_radius
-    return Capability(min(step, float(body.clearance)), min(torque, WHEELED_SLOPE[body.drive_wheels]),
-                      WHEELED_GAP * r)
 
 
 # ---------------------------------------------------------------- steep ground, in every direction
