@@ -22,7 +22,7 @@ from ..scenario.model import Scenario
 from ..scenario.motion import displacement, tracks
 from ..scenario.requirements import BUILTIN_SIGNALS, WAYPOINT_SIGNAL, Signal
 from ..sim.trajectory import Trajectory
-from .paths import box_box_distance, footprint_core, is_outlined, obstacle_shapes
+from .gaps import box_box_distance, footprint_core, is_outlined, obstacle_shapes
 
 
 @dataclass(frozen=True, eq=False)

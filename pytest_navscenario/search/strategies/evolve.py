@@ -174,7 +174,7 @@ class Evolve(AimedOperators, BaseStrategy):
 
         from ...scenario.geometry import obstacle_polygon
         from ...scenario.motion import Track
-        from ...verdict.paths import footprint_core
+        from ...verdict.gaps import footprint_core
 
         pts, times = self._expected_way()
         _, hw, rho = footprint_core(scenario.robot.footprint)
