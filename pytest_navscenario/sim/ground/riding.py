@@ -259,7 +259,8 @@ class TerrainWatch:
             detail = f"cannot climb the {slope:.0f} deg slope"
         else:
             el = self.probe.element(x, y)
-            detail = "high-centred: its chassis rests on the ground" if touching else "its wheels slip"
+            slips = "its wheels slip" if self.body.kind_name == "wheeled" else "it makes no headway"
+            detail = "high-centred: its chassis rests on the ground" if touching else slips
         self._end(TerrainEvent("stuck", t, self._name(el), x, y, z, roll=math.degrees(roll),
                                pitch=math.degrees(pitch), detail=detail))
 
