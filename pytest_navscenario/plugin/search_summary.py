@@ -90,7 +90,7 @@ def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
         state = "new " if f.new else "kept"
         c = f.clearance
         held = f", {f.estimate.describe()}" if f.estimate is not None and f.estimate.runs else ""
-        lines.append(f"  {state} {_rel(config, f.path)}  {f.outcome}, clearance "
+        lines.append(f"  {state} {_rel(config, f.path)}  {f.what}, clearance "
                      + (f"{c:.3f} m" if math.isfinite(c) else "n/a") + held + ("" if f.new else " (already frozen)"))
     pictures = [row.picture for row in entry.get("rows") or [] if row.picture]
     if pictures:

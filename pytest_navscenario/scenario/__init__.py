@@ -21,6 +21,9 @@ wheeled body's layout), ``mjcf_files.py`` (an MJCF robot's files), and the subpa
 the ground's geometry, MuJoCo-free, here because the simulation, the verdict, the pictures, the search and the importers all
 read it and this is the lowest layer they share (``surface.py`` the height under any point and each
 element's pieces, ``heightmap.py`` height grids, ``crossing.py`` what a body can cross).
+
+Requirements: ``requirements.py`` and ``requirement_reading.py`` (the ``signals:`` and
+``requirements:`` sections, STL formulas parsed at load; the shared requirements file).
 """
 from .model import (  # noqa: F401  (the model is the public face of this package)
     SCHEMA_VERSION,

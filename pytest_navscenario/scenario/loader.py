@@ -550,6 +550,20 @@ def _check_clear(scenario: Scenario, ctx: _Ctx) -> None:
                                f"move the {what_moves} or obstacle {obs.name!r} so they are clear")
 
 
+def _with_requirements(ctx: _Ctx, top: _Section, scenario: Scenario) -> Scenario:
+    """The scenario with its ``signals:`` and ``requirements:`` (requirement_reading.py)."""
+    if not (top.has("signals") or top.has("requirements")):
+        return scenario
+    from .requirement_reading import check_obstacle_names, known_signals, read_requirements, read_signals
+
+    signals = read_signals(ctx, top)
+    check_obstacle_names(ctx, signals, tuple(o.name for o in scenario.obstacles))
+    known = known_signals(len(scenario.mission.waypoints), signals)
+    period = 1.0 / scenario.simulation.control_rate
+    return replace(scenario, signals=signals,
+                               requirements=read_requirements(ctx, top, known, period=period))
+
+
 # --------------------------------------------------------------------------- public API
 
 def _build(root: YNode | None, ctx: _Ctx, name: str | None, family: str | None) -> Scenario:
@@ -593,6 +607,9 @@ def _build(root: YNode | None, ctx: _Ctx, name: str | None, family: str | None) 
     }
     ctx.finish()
     scenario = Scenario(version=int(version), source=ctx.source, **parts)
+    with_requirements = ctx.attempt(_with_requirements, ctx, top, scenario)
+    ctx.finish()
+    scenario = with_requirements
     if scenario.search is not None:     # the search's space, checked on plain runs too
         read_search(ctx, top.get("search"), "search", top.line_of("search"),
                     obstacles=tuple(o.name for o in scenario.obstacles), waypoints=len(scenario.mission.waypoints),

@@ -22,6 +22,7 @@ from .keys import (REQUIRED, SCENARIO_LIMITS, Choice, Element, Elements, Flag, I
                    Rows, Rule, Scale, Sub, Text, section)
 from .bodies import BODY, Body, PlanarBody
 from .terrain import LIDAR3D, Lidar3D, TerrainElement
+from .requirements import Requirement, Signal
 
 SCHEMA_VERSION = 1
 DRIVES = ("omni", "diff")
@@ -593,6 +594,8 @@ class Scenario:
     search: Mapping[str, Any] | None = None      # search-space overrides (search.py validates)
     provenance: Mapping[str, Any] | None = None  # written by freeze.py: where a frozen failure came from
     terrain: tuple[TerrainElement, ...] = ()     # ground that is not the flat floor (scenario/terrain/)
+    signals: tuple[Signal, ...] = ()             # declared signals (scenario/requirements.py)
+    requirements: tuple[Requirement, ...] = ()   # STL rules every episode is checked against
     # Where it was loaded from (not part of the content, not dumped): for errors and relative paths.
     source: str | None = field(default=None, compare=False, repr=False)
 
@@ -603,7 +606,9 @@ class Scenario:
         raise KeyError(name)
 
 
-_NOT_CONTENT = {"name", "family", "description", "marks", "provenance", "source", "search"}
+# requirements and their signals judge an episode, they are not what the robot experiences
+_NOT_CONTENT = {"name", "family", "description", "marks", "provenance", "source", "search", "signals",
+                "requirements"}
 # Fields added after scenarios were first hashed: at their default they are left out of the hash,
 # so a file written before them keeps its hash (results files pair scenarios by it).
 _ADDED_DEFAULTS: dict[str, Any] = {"noise_per_metre": 0.0, "dropout_at_max": None, "spurious": 0.0,

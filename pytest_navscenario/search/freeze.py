@@ -42,6 +42,11 @@ PROVENANCE_METRICS = ("min_clearance", "min_clearance_obstacle", "path_length", 
                       "path_efficiency", "min_obstacle_gap")
 
 
+def _cause(failure: Any) -> str:
+    signature = getattr(failure.shrunk, "signature", ()) or ()
+    return str(signature[1]) if len(signature) > 1 else ""
+
+
 @dataclass
 class FrozenFile:
     path: Path
@@ -49,6 +54,14 @@ class FrozenFile:
     outcome: str
     clearance: float
     estimate: Estimate | None = None   # how often it fails under the seed's randomness (holding.py)
+    cause: str = ""          # the signature's culprit: "requirement:<name>" for a violated requirement
+
+    @property
+    def what(self) -> str:
+        """The outcome, with the requirement it violated ("requirement keep-away-from-people")."""
+        if self.outcome == "requirement" and self.cause.startswith("requirement:"):
+            return f"requirement {self.cause.split(':', 1)[1]}"
+        return self.outcome
 
 
 def _clean(value: Any) -> Any:
@@ -172,7 +185,8 @@ def freeze_failures(report: SearchReport, space: SearchSpace, out_dir: str | Pat
         new = not path.exists()
         if new:
             save_standalone(scenario, space.seed, path)
-        written.append(FrozenFile(path, new, failure.shrunk.outcome, failure.shrunk.clearance, failure.estimate))
+        written.append(FrozenFile(path, new, failure.shrunk.outcome, failure.shrunk.clearance, failure.estimate,
+                                  _cause(failure)))
     return written
 
 
@@ -430,7 +444,7 @@ class SearchRecorder:
                 continue
             seen.add(path)
             out.append(FrozenFile(path, failure.key in self._mine, failure.shrunk.outcome, failure.shrunk.clearance,
-                                  failure.estimate))
+                                  failure.estimate, _cause(failure)))
         return out
 
 
