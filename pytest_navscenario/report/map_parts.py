@@ -38,7 +38,7 @@ def _pose_at(result: EpisodeResult, time: float) -> np.ndarray | None:
 
 
 def _gap(scenario: Any, metrics: Any) -> tuple[float, str, str]:
-    """The narrowest obstacle gap to mark: the metric's (paths.min_obstacle_gap), unless obstacles
+    """The narrowest obstacle gap to mark: the metric's (gaps.min_obstacle_gap), unless obstacles
     touch (gap 0, e.g. walls meeting at a corner), then the narrowest real passage between two
     obstacles that do not touch."""
     names = (metrics.min_gap_obstacles or "").split("|")

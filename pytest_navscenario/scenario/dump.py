@@ -12,8 +12,8 @@ from ..core.files import atomic_write_text
 from . import keys as K
 from .loader import LATENCY_KEYS, LIDAR_KEYS, LIMITS_KEYS, LOCALISATION_KEYS
 from .model import LIDAR, PERTURB, BoxObstacle, Mark, MeshObstacle, Motion, Obstacle, PolygonObstacle, Pose, Scenario
-from .requirements import Signal
 from .bodies import BODY, PlanarBody
+from .requirements import Signal
 from .terrain import LIDAR3D
 
 

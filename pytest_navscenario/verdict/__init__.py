@@ -8,6 +8,6 @@ duration, smoothness, reference deviation) and each requirement's verdict, bundl
 
 Read first: ``result.py`` (the types), then ``oracle.py`` (the outcome), ``metrics.py`` and
 ``paths.py`` (shortest footprint paths, cached), ``gaps.py`` (exact distances between rounded boxes,
-the narrowest obstacle gap, the obstacles paths keep clear of), ``requirements.py`` (the scenario's
-STL requirements checked) and ``signals.py`` (the signals they name, per control tick).
+the narrowest obstacle gap, the obstacles paths keep clear of), ``requirements.py`` (the
+scenario's STL requirements checked) and ``signals.py`` (the signals they name, per control tick).
 """

@@ -7,7 +7,7 @@ samples unless said otherwise; NaN means "not defined for this episode"):
   steps (exact for boxes and true circles, 0 on contact), with the obstacle, time and robot
   position. Coarse bounds from the robot centre prune pairs, the exact box-box distance is
   computed for the rest (see paths.py). A reported collision overrides it with 0 at the hit.
-* min_obstacle_gap: narrowest obstacle-obstacle gap of the scenario (paths.min_obstacle_gap).
+* min_obstacle_gap: narrowest obstacle-obstacle gap of the scenario (gaps.min_obstacle_gap).
 * path_length: sum of the steps of the centre (over the ground: with its height, for a body that
   rides it); shortest_path_length: paths.reference_path, the
   shortest collision-free path from the start through each waypoint's tolerance disc (a

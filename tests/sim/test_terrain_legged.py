@@ -185,3 +185,20 @@ def test_a_slope_steeper_than_max_slope_stops_it_across_its_way_as_the_path_sear
     assert -3.6 < event.y < -3.0 and event.z == pytest.approx(0.0, abs=1e-6)   # at the low edge, not on it
     gentle = simulate(bank(25.0), Straight(), 0)
     assert gentle.end == "goal" and shortest_path(bank(25.0)).length == pytest.approx(math.hypot(5.0, 5.0))
+
+
+def test_a_legged_body_held_on_the_plain_ground_is_not_said_to_slip_its_wheels():
+    """#36: a legged body driven and making no headway with no step, slope or gap ahead (what dwa
+    moving it back and forth on a flat floor looked like to the watch) is not 'its wheels slip': it
+    has none."""
+    from pytest_navscenario.sim.bodies import body_model
+    from pytest_navscenario.sim.ground.riding import GroundProbe, TerrainStop, TerrainWatch
+
+    sc = scene([Platform("far", 20.0, 10.0, length=2.0, width=2.0, height=0.3)])
+    watch = TerrainWatch(sc, body_model(sc), 0.1, GroundProbe(sc))
+    still = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    with pytest.raises(TerrainStop):
+        for tick in range(100):
+            watch.check(tick * 0.1, still, (0.5, 0.0, 0.0), False)
+    assert "wheel" not in watch.event.detail
+    assert watch.event.detail == "it makes no headway"

@@ -223,3 +223,19 @@ def test_caught_in_a_trench_it_names_the_gap_and_the_pit():
     event = res.terrain_event
     assert event.element == "pit 'trench'"
     assert event.detail == "its wheels are caught in the 0.15 m gap"
+
+
+def test_tilted_off_a_ramps_side_it_names_the_ramps_slope_and_the_tilt():
+    """#36: driven 8 cm inside the side edge of a 6.2 deg ramp, a wheel drops off the side and the
+    robot stalls tilted; the verdict names the ramp's own slope and says it tilted off the side
+    (not 'cannot climb the 11 deg slope', the body's own tilt)."""
+    import re
+
+    rise = 4.0 * math.tan(math.radians(6.2))
+    terrain = (Ramp("ramp", 5.0, 0.0, length=4.0, width=2.0, rise=rise),
+               Platform("top", 10.0, 0.0, length=6.0, width=2.0, height=rise))
+    res = simulate(scene(terrain, start=(0.0, 0.92, 0.0), goal=(10.0, 0.92)), Straight(), 0)
+    assert res.end == "stuck-terrain", res.end
+    event = res.terrain_event
+    assert event.element == "ramp 'ramp'"
+    assert re.fullmatch(r"tilted \d+ deg off the side of the 6\.2 deg slope", event.detail), event.detail

@@ -20,6 +20,7 @@ STUCK_COMMAND = 0.1       # m/s: a setpoint at least this fast counts as driving
 STUCK_MOVING = 0.25       # of the setpoint's speed: slower than this counts as not moving
 LOOK_AHEAD = 0.3          # m beyond the footprint's front where a stuck robot's step is measured
 GAP_SPACING = 0.005       # m between the samples that measure a gap the robot is caught in
+SIDE_TILT = 6.0           # degrees of roll beyond the ground's own cross-slope: a wheel is off a side edge
 FEATURE = Capability(max_step=0.01, max_slope=5.0, max_gap=0.0)   # what counts as a step or a slope there
 
 
@@ -238,6 +239,10 @@ class TerrainWatch:
             who = "its wheels are" if self.body.kind_name == "wheeled" else "it is"
             self._end(TerrainEvent("stuck", t, self._name(gap[1]), x, y, z, roll=math.degrees(roll),
                                    pitch=math.degrees(pitch), detail=f"{who} caught in the {gap[0]:.2f} m gap"))
+        side = self._off_the_side(x, y, c, s, roll)
+        if side is not None:
+            self._end(TerrainEvent("stuck", t, self._name(side[1]), x, y, z, roll=math.degrees(roll),
+                                   pitch=math.degrees(pitch), detail=side[0]))
         h = ground.ground_height(self.scenario, px, py).tolist()
         _, barrier = walk(h, SPACING, h[0], FEATURE)
         slope = math.degrees(max(abs(pitch), abs(roll)))
@@ -254,9 +259,27 @@ class TerrainWatch:
             detail = f"cannot climb the {slope:.0f} deg slope"
         else:
             el = self.probe.element(x, y)
-            detail = "high-centred: its chassis rests on the ground" if touching else "its wheels slip"
+            slips = "its wheels slip" if self.body.kind_name == "wheeled" else "it makes no headway"
+            detail = "high-centred: its chassis rests on the ground" if touching else slips
         self._end(TerrainEvent("stuck", t, self._name(el), x, y, z, roll=math.degrees(roll),
                                pitch=math.degrees(pitch), detail=detail))
+
+    def _off_the_side(self, x, y, c, s, roll) -> tuple[str, int | None] | None:
+        """(detail, element) when the robot rolls SIDE_TILT degrees more than the ground under its
+        centre slopes across its way (a wheel off a ramp's side edge): the element's own slope
+        along its way (a ramp's, else the ground's) and the tilt; None otherwise."""
+        e = 0.05
+        h = ground.ground_height(self.scenario, np.array([x - s * e, x + s * e, x + c * e, x - c * e]),
+                                 np.array([y + c * e, y - c * e, y + s * e, y - s * e]))
+        across = math.degrees(math.atan(abs(h[0] - h[1]) / (2 * e)))
+        tilt = abs(math.degrees(roll))
+        if tilt - across <= SIDE_TILT:
+            return None
+        el = self.probe.element(x, y)
+        slope = getattr(self.scenario.terrain[el], "slope", None) if el is not None else None
+        if slope is None:
+            slope = math.degrees(math.atan(abs(h[2] - h[3]) / (2 * e)))
+        return f"tilted {tilt:.0f} deg off the side of the {slope:.1f} deg slope", el
 
     def _gap_under(self, x, y, c, s) -> tuple[float, int | None] | None:
         """(width along the heading, element) of a gap the robot's centre is over: ground lower by
