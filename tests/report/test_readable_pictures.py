@@ -2,7 +2,7 @@
 matplotlib offset text) with roll beside pitch, so that a tip-over by roll shows; at least three y
 ticks on a wide, low map; legend entries inside the figure; the fall or tip-over marker not under
 an "end" square; terrain names placed clear of the other labels and markers. Real episodes: a
-robot that tips over the loading dock's edge (found by the search: tests/data/dock-tip.yaml) and
+robot that tips over the loading dock's edge (found by the search: tests/data/dock-tip.txt) and
 the ramp-levels seed."""
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ SEEDS = HERE.parent / "scenarios"
 
 @pytest.fixture(scope="module")
 def dock():
-    result = run_scenario(load_scenario(HERE / "data" / "dock-tip.yaml"), "dwa")
+    result = run_scenario(load_scenario(HERE / "data" / "dock-tip.txt"), "dwa")
     fig = trajectory_figure(result)
     fig.canvas.draw()
     return result, fig
@@ -140,13 +140,13 @@ def test_the_time_slider_view_has_names_axes_and_a_scale(dock, tmp_path):
 
 
 def test_the_clearance_that_explains_a_stop_is_named(pytester: pytest.Pytester, monkeypatch: pytest.MonkeyPatch):
-    """person-crossing (a frozen failure of its search, tests/data/person-stop.yaml): the safety
+    """person-crossing (a frozen failure of its search, tests/data/person-stop.txt): the safety
     stop is for the walker, the minimum clearance is to a wall; before, only the wall's was given."""
     import shutil
 
     from pytest_navscenario.verdict.metrics import culprit_clearance
 
-    result = run_scenario(load_scenario(HERE / "data" / "person-stop.yaml"), "dwa")
+    result = run_scenario(load_scenario(HERE / "data" / "person-stop.txt"), "dwa")
     assert result.safety_stop.obstacle == "walker" and result.metrics.min_clearance_obstacle.startswith("wall")
     name, dist, _ = culprit_clearance(result)
     assert name == "walker" and 0 < dist < 1.0
@@ -154,7 +154,7 @@ def test_the_clearance_that_explains_a_stop_is_named(pytester: pytest.Pytester, 
     texts = [t for t, _ in text_boxes(_map(fig))]
     assert any(t.startswith(f"clearance to walker {dist:.2f} m") for t in texts), texts
     monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
-    shutil.copy(HERE / "data" / "person-stop.yaml", pytester.path / "person-stop.yaml")
+    shutil.copy(HERE / "data" / "person-stop.txt", pytester.path / "person-stop.yaml")
     out = pytester.runpytest("-p", "pytest_navscenario.plugin", "person-stop.yaml", "--nav-subject=dwa",
                              "--nav-plots=none").stdout.str()
     assert f"  clearance to 'walker': {dist:.3f} m at t=" in out and "(the safety stop was for it;" in out, out
