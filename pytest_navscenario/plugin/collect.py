@@ -174,6 +174,10 @@ class ScenarioFile(pytest.File):
         family_from_folder = not scenario.family
         if family_from_folder:  # may become the folder's path: see separate_families
             scenario = dataclasses.replace(scenario, family=self.path.parent.name)
+        shared = get_state(self.config).settings.requirements
+        if shared is not None:  # --nav-requirements: the suite's requirements beside the scenario's own
+            from ..scenario.requirement_reading import with_shared
+            scenario = with_shared(scenario, shared)
         model = get_state(self.config).settings.sensor_model
         if model:   # --nav-sensor-model: a lidar noise model for scenarios that declare none
             from ..scenario.sensor_model import with_sensor_model
@@ -385,6 +389,8 @@ class ScenarioItem(pytest.Item):
             ("nav_seed", str(result.seed)),
             ("nav_repeat", str(self.repeat)),
         ])
+        for req in result.requirements:     # issue 34: each requirement's robustness (< 0: violated)
+            self.user_properties.append((f"nav_requirement_{req.name}", _fmt(req.robustness, digits=4)))
         if not result.passed:
             raise ScenarioFailed(result)
 
@@ -450,6 +456,11 @@ class ScenarioItem(pytest.Item):
         if r.subject_failure is not None:
             f = r.subject_failure
             lines.append(f"  planner error: {f.message} (tick {f.tick}, t={_fmt(f.time, ' s', 2)})")
+        for q in r.requirements:     # issue 34: every requirement, kept or not, with its robustness
+            unit = f" {q.unit}" if q.unit else ""
+            state = (f"violated first at t={_fmt(q.first_violation, ' s', 2)}" if q.violated and
+                     q.first_violation is not None else ("violated" if q.violated else "kept"))
+            lines.append(f"  requirement:   {q.name}: {q.spec}: robustness {q.robustness:+.3g}{unit}, {state}")
         obstacle = f" to {m.min_clearance_obstacle!r}" if m.min_clearance_obstacle else ""
         if m.min_clearance == float("inf"):   # one form in the terminal (outcomes-metrics.md)
             lines.append("  min clearance: none (no obstacles)")

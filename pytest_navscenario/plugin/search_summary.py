@@ -88,9 +88,8 @@ def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
         lines.append(f"  stopped early: {r.stop_reason}")
     for f in entry["files"]:
         state = "new " if f.new else "kept"
-        c = f.clearance
         held = f", {f.estimate.describe()}" if f.estimate is not None and f.estimate.runs else ""
-        lines.append(f"  {state} {_rel(config, f.path)}  {f.outcome}, " + _clearance_text(f) + held
+        lines.append(f"  {state} {_rel(config, f.path)}  {f.what}, " + _clearance_text(f) + held
                      + ("" if f.new else " (already frozen)"))
     pictures = [row.picture for row in entry.get("rows") or [] if row.picture]
     if pictures:

@@ -18,7 +18,7 @@ if TYPE_CHECKING:  # pragma: no cover
 A_COLOUR, B_COLOUR = "#7f9fbf", "#1f4e79"
 
 
-FAILURE_HATCHES = {"safety-stop": "///", "timeout": "..", "collision": "xx", "subject-error": "--"}
+FAILURE_HATCHES = {"safety-stop": "///", "timeout": "..", "collision": "xx", "subject-error": "--", "requirement": "\\\\"}
 
 
 @as_written

@@ -28,7 +28,8 @@ from ..core.files import atomic_write_text
 if TYPE_CHECKING:  # pragma: no cover
     from .compare import Comparison
 
-OUTCOMES = ("success", "safety-stop", "timeout", "collision", "fall", "subject-error")
+OUTCOMES = ("success", "safety-stop", "timeout", "collision", "fall", "requirement", "subject-error")
+_OPTIONAL = ("subject-error", "fall", "requirement")     # a column only when some episode had it
 METRICS = (("min_clearance", "min clearance (m)", 2), ("min_obstacle_gap", "narrowest gap (m)", 2),
            ("path_efficiency", "path efficiency", 2), ("duration", "duration (s)", 1),
            ("mean_speed", "mean speed (m/s)", 2))
@@ -43,6 +44,7 @@ class Entry:
     view: dict[str, Any] | None = None   # view_data(result): the interactive time-slider view
     compare_png: bytes | None = None     # a regression: the scenario under the baseline | this run
     xfail_reason: str | None = None      # marked xfail and failed as expected (pytest's wasxfail)
+    requirements_png: bytes | None = None  # each requirement's signals and thresholds over time (issue 34)
 
     @property
     def failed(self) -> bool:
@@ -201,7 +203,7 @@ def _summary(records: Sequence[dict[str, Any]]) -> dict[str, Any]:
     groups = sorted(families.items())
     if len(groups) > 1:
         groups.append(("all", list(records)))
-    outcomes = [o for o in OUTCOMES if o not in ("subject-error", "fall") or any(r["outcome"] == o for r in records)]
+    outcomes = [o for o in OUTCOMES if o not in _OPTIONAL or any(r["outcome"] == o for r in records)]
     rows = [{"family": fam, "n": len(recs), "counts": Counter(r["outcome"] for r in recs)} for fam, recs in groups]
     return {"outcomes": outcomes, "rows": rows}
 
@@ -215,7 +217,7 @@ def _comparison(cmp: "Comparison | None") -> dict[str, Any] | None:
 
     fams = cmp.families + ([cmp.overall] if len(cmp.families) > 1 else [])
     return {
-        "outcomes": [o for o in RATE_OUTCOMES if o not in ("subject-error", "fall")
+        "outcomes": [o for o in RATE_OUTCOMES if o not in _OPTIONAL
                      or cmp.overall.a[o].count or cmp.overall.b[o].count],
         "families": fams,
         "metrics": CMP_METRICS,

@@ -19,7 +19,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
 
 OUTCOME_COLOURS = {"success": "#2e7d32", "collision": "#c62828", "safety-stop": "#ef6c00",
-                   "timeout": "#6a1b9a", "subject-error": "#37474f", "fall": "#8d1b1b"}
+                   "timeout": "#6a1b9a", "subject-error": "#37474f", "fall": "#8d1b1b", "requirement": "#ad1457"}
 
 
 def _draw_min_clearance(ax: "Axes", result: EpisodeResult, labels: LabelPlacer | None = None) -> None:

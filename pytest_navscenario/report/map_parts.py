@@ -45,7 +45,7 @@ def _gap(scenario: Any, metrics: Any) -> tuple[float, str, str]:
     if len(names) == 2 and math.isfinite(metrics.min_obstacle_gap):
         gap = (float(metrics.min_obstacle_gap), names[0], names[1])
     else:
-        from ..verdict.paths import min_obstacle_gap
+        from ..verdict.gaps import min_obstacle_gap
         gap = min_obstacle_gap(scenario)
     still = [o for o in scenario.obstacles if not is_moving(o)]
     if gap[0] > 1e-6 or not 3 <= len(still) <= MAX_GAP_SEARCH:

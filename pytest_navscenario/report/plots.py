@@ -27,6 +27,7 @@ import numpy as np
 from .bars import FAILURE_HATCHES, bars_figure, save_bars  # noqa: F401  (the public names of this module)
 from .figures import _figure, as_written, png_bytes, save_figure  # noqa: F401
 from .labels import LabelPlacer
+from .requirement_plot import draw_requirements
 from .map_moments import (  # noqa: F401
     OUTCOME_COLOURS,
     _draw_culprit_clearance,
@@ -69,7 +70,8 @@ def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
     The picture is made in named steps, back to front: the obstacles, the shortest path, the
     footprint's path (swept area, outlines, centre line coloured by speed, time labels), the
     mission (start, waypoints, goal), the key moments (minimum clearance, narrowest gap,
-    collision, safety stop, or where the robot ended when it did neither and missed the goal),
+    collision, safety stop, a requirement's first violation and the regions it names
+    (requirement_plot.py), or where the robot ended when it did neither and missed the goal),
     then the axes (limits, grid, labels, legend, title). Artists are added as collections with
     ``autolim=False``: the limits are set once, at the end. The steps ask for their text labels
     and say where their markers are; the labels are placed last, clear of each other and of the
@@ -91,6 +93,7 @@ def draw_episode(ax: "Axes", result: EpisodeResult, *, norm: Any = None,
     _draw_culprit_clearance(ax, result, placer)
     _draw_narrowest_gap(ax, s, result.metrics, placer)
     _draw_events(ax, result, placer)
+    draw_requirements(ax, result, placer)
     _draw_end(ax, result, placer)
     _finish_axes(ax, result, title=title, legend=legend)
     if labels is None:

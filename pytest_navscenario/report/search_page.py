@@ -26,7 +26,7 @@ from ..core.files import atomic_write_text
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-OUTCOME_ORDER = ("success", "safety-stop", "timeout", "collision", "subject-error", "harness-error")
+OUTCOME_ORDER = ("success", "safety-stop", "requirement", "timeout", "collision", "subject-error", "harness-error")
 
 
 @dataclass

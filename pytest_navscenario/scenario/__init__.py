@@ -14,12 +14,16 @@ The format as data: ``keys.py`` (each key's type, range, default, unit, declared
 dataclass), ``format.py`` (the top level), ``reading.py`` (reading by declaration), ``json_schema.py``
 and ``modeline.py`` (the JSON Schema for editors and the first line of written files).
 
-Terrain and bodies: ``terrain.py`` (terrain elements, bodies, the 3D lidar as dataclasses),
-``mjcf_files.py`` (an MJCF robot's files), and the subpackage ``ground/``: the ground's geometry,
-MuJoCo-free, here because the simulation, the verdict, the pictures, the search and the importers all
+Terrain and bodies: the subpackages ``terrain/`` (the terrain elements, one module each building
+its own pieces, and the 3D lidar; the registry ``ELEMENT_MODULES``) and ``bodies/`` (the kinds of
+body, one module each giving a ``BodyKind`` record; the registry ``BODY_MODULES``; ``chassis.py`` a
+wheeled body's layout), ``mjcf_files.py`` (an MJCF robot's files), and the subpackage ``ground/``:
+the ground's geometry, MuJoCo-free, here because the simulation, the verdict, the pictures, the search and the importers all
 read it and this is the lowest layer they share (``surface.py`` the height under any point and each
-element's pieces, ``heightmap.py`` height grids, ``crossing.py`` what a body can cross, ``chassis.py``
-a wheeled body's layout).
+element's pieces, ``heightmap.py`` height grids, ``crossing.py`` what a body can cross).
+
+Requirements: ``requirements.py`` and ``requirement_reading.py`` (the ``signals:`` and
+``requirements:`` sections, STL formulas parsed at load; the shared requirements file).
 """
 from .model import (  # noqa: F401  (the model is the public face of this package)
     SCHEMA_VERSION,

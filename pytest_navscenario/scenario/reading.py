@@ -569,6 +569,7 @@ Ctx = _Ctx
 SectionReader = _Section
 REQUIRED = _REQUIRED
 read_section = _read
+did_you_mean = _did_you_mean
 build_section = _build_section
 read_elements = _read_elements
 READERS = _READ

@@ -48,17 +48,8 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..core.errors import ScenarioError
-from .paths import (
-    box_box_distance,
-    footprint_core,
-    min_obstacle_gap,
-    obstacle_shapes,
-    path_through,
-    reference_path,
-    is_outlined,
-    shortest_path,
-    static_obstacles,
-)
+from .gaps import box_box_distance, footprint_core, is_outlined, min_obstacle_gap, obstacle_shapes, static_obstacles
+from .paths import path_through, reference_path, shortest_path
 from ..scenario.motion import displacement, tracks
 from ..sim.trajectory import Collision, Trajectory
 from .result import Metrics
