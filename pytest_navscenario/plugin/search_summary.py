@@ -88,10 +88,9 @@ def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
         lines.append(f"  stopped early: {r.stop_reason}")
     for f in entry["files"]:
         state = "new " if f.new else "kept"
-        c = f.clearance
         held = f", {f.estimate.describe()}" if f.estimate is not None and f.estimate.runs else ""
-        lines.append(f"  {state} {_rel(config, f.path)}  {f.what}, clearance "
-                     + (f"{c:.3f} m" if math.isfinite(c) else "n/a") + held + ("" if f.new else " (already frozen)"))
+        lines.append(f"  {state} {_rel(config, f.path)}  {f.what}, " + _clearance_text(f) + held
+                     + ("" if f.new else " (already frozen)"))
     pictures = [row.picture for row in entry.get("rows") or [] if row.picture]
     if pictures:
         folders = sorted({str(Path(p).parent) for p in pictures})
@@ -108,3 +107,15 @@ def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
     if entry["error"]:
         lines.append(f"  ERROR {entry['error']}")
     return lines
+
+
+def _clearance_text(f: Any) -> str:
+    """A frozen failure's clearance, the one that explains its outcome first: to the obstacle a stop
+    or a collision was about when that is not the nearest one (person-crossing: the walker, not the
+    wall), then the minimum; "none (no obstacles)" on terrain alone, as in a failure's header."""
+    c = f.clearance
+    least = (f"{c:.3f} m" if math.isfinite(c) else "none (no obstacles)" if c == math.inf else "n/a")
+    culprit = getattr(f, "culprit", "")
+    if culprit and math.isfinite(getattr(f, "culprit_clearance", math.nan)):
+        return f"clearance to '{culprit}' {f.culprit_clearance:.3f} m (min {least})"
+    return f"clearance {least}"

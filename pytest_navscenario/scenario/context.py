@@ -42,9 +42,20 @@ class _Ctx:
         mistakes, stop with all of them."""
         if not self.collect:
             raise exc
+        if self._said_already(exc):
+            return
         self.errors.append(exc)
         if len(self.errors) >= MAX_REPORTED:
             raise ScenarioErrors(self.errors, stopped=MAX_REPORTED)
+
+    def _said_already(self, exc: ScenarioError) -> bool:
+        """A required key reported missing where a misspelt one was found and its spelling hinted
+        ('raduis' -> did you mean 'radius'?): one mistake, said once."""
+        if not exc.message.startswith("missing required field ") or not exc.field:
+            return False
+        parent, _, key = exc.field.rpartition(".")
+        return any(e.hint == f"did you mean '{key}'?" and (e.field or "").rpartition(".")[0] == parent
+                   for e in self.errors)
 
     def attempt(self, read: Any, *args: Any) -> Any:
         """``read(*args)``, or BROKEN when it found a mistake (recorded: see ``note``)."""

@@ -142,6 +142,11 @@ def _candidate(ctx: EvalContext, offsets: Sequence[float], origin: str, scenario
                      time.perf_counter() - t0, scenario, reading.robustness, reading.signature,
                      reading.progress, reading.path, reading.closest, run)
     cand.metrics["subject"], cand.metrics["subject_version"] = res.subject, res.subject_version
+    if cand.failed and len(res.trajectory.t):   # stopped for or hit another obstacle than the nearest
+        from ..verdict.metrics import culprit_clearance
+        found = culprit_clearance(res)
+        if found is not None:
+            cand.metrics["culprit_obstacle"], cand.metrics["culprit_clearance"] = found[0], found[1]
     return cand
 
 

@@ -55,6 +55,8 @@ class FrozenFile:
     clearance: float
     estimate: Estimate | None = None   # how often it fails under the seed's randomness (holding.py)
     cause: str = ""          # the signature's culprit: "requirement:<name>" for a violated requirement
+    culprit: str = ""                  # the obstacle a stop/collision was about, when not the nearest one
+    culprit_clearance: float = math.nan   # the robot's closest approach to it (m)
 
     @property
     def what(self) -> str:
@@ -62,6 +64,15 @@ class FrozenFile:
         if self.outcome == "requirement" and self.cause.startswith("requirement:"):
             return f"requirement {self.cause.split(':', 1)[1]}"
         return self.outcome
+
+
+def _frozen(path: Path, new: bool, failure: Any) -> FrozenFile:
+    """A frozen file's summary row from its failure (the shrunk candidate's outcome, its cause and
+    clearances)."""
+    c = failure.shrunk
+    return FrozenFile(path, new, c.outcome, c.clearance, failure.estimate, _cause(failure),
+                      str(c.metrics.get("culprit_obstacle") or ""),
+                      float(c.metrics.get("culprit_clearance", math.nan)))
 
 
 def _clean(value: Any) -> Any:
@@ -185,8 +196,7 @@ def freeze_failures(report: SearchReport, space: SearchSpace, out_dir: str | Pat
         new = not path.exists()
         if new:
             save_standalone(scenario, space.seed, path)
-        written.append(FrozenFile(path, new, failure.shrunk.outcome, failure.shrunk.clearance, failure.estimate,
-                                  _cause(failure)))
+        written.append(_frozen(path, new, failure))
     return written
 
 
@@ -443,8 +453,7 @@ class SearchRecorder:
             if path is None or path in seen:
                 continue
             seen.add(path)
-            out.append(FrozenFile(path, failure.key in self._mine, failure.shrunk.outcome, failure.shrunk.clearance,
-                                  failure.estimate, _cause(failure)))
+            out.append(_frozen(path, failure.key in self._mine, failure))
         return out
 
 

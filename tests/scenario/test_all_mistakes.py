@@ -82,3 +82,16 @@ def test_the_report_is_capped(tmp_path):
     assert len(info.value.errors) == reading.MAX_REPORTED == 20
     assert str(info.value).splitlines()[0] == (f"{path}: 20 mistakes (it stops looking at 20: fix these "
                                                f"and load it again):")
+
+
+def test_a_misspelt_required_key_is_one_mistake(tmp_path):
+    """The tutorial's typo.yaml: 'raduis' is unknown and 'radius' is missing; one mistake, said once
+    (as before this change: the page's output is unchanged)."""
+    path = tmp_path / "typo.yaml"
+    path.write_text("version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 7, y: 0}}\nobstacles:\n"
+                    "  - {type: cylinder, name: pillar, x: 3.5, y: 0.3, raduis: 0.3}\n")
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    assert not isinstance(info.value, ScenarioErrors)
+    assert str(info.value) == (f"{path}:4: obstacles[0].raduis: unknown key 'raduis' "
+                               f"(fix: did you mean 'radius'?)")

@@ -47,3 +47,17 @@ def test_the_terrain_search_names_the_keys_that_break_its_joints(pytester: pytes
     assert "keep the joints: search: {terrain_dx: 0, terrain_rise: 0, terrain_slope: 0}" in out
     html = (pytester.path / "report.html").read_text()
     assert '<p class="advice">' in html and expected in html
+
+
+def test_a_frozen_stop_names_the_clearance_to_what_it_stopped_for(pytester: pytest.Pytester,
+                                                                  monkeypatch: pytest.MonkeyPatch):
+    """Issue 32 item 5: person-crossing's summary said "safety-stop, clearance 0.750 m", the
+    clearance to a wall; the stop was for the walker. The summary names the walker's."""
+    monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
+    shutil.copytree(SEEDS, pytester.path / "scenarios", ignore=shutil.ignore_patterns("regressions"))
+    result = pytester.runpytest_subprocess(
+        "-p", "pytest_navscenario.plugin", "--navsearch", "person-crossing", "--budget", "50",
+        "--navsearch-shrink-budget", "0", "--nav-subject=dwa", "--nav-plots=none", timeout=300)
+    out = result.stdout.str()
+    assert "person-crossing-d0efdee0ac8e246c.yaml  safety-stop, clearance to 'walker' 0.750 m (min 0.750 m)" in out, \
+        out[-3000:]
