@@ -231,6 +231,7 @@ def _record(scenario: Any, path: str, result: Any) -> dict[str, Any]:
         "outcome": result.outcome.value, "passed": result.passed, "message": result.message,
         "metrics": _json_safe(result.metrics.as_dict()),
         "wall_time": result.wall_time, "timings": result.timings,
+        "requirements": [_json_safe(r.as_dict()) for r in result.requirements],   # issue 34
     }
     if result.subject_failure is not None and result.subject_failure.traceback:
         record["traceback"] = result.subject_failure.traceback
@@ -244,6 +245,11 @@ def _print_result(scenario: Any, path: str, result: Any) -> None:
     print(f"message: {result.message}")
     if result.subject_failure is not None and result.subject_failure.traceback:
         print("planner traceback:\n" + result.subject_failure.traceback.rstrip())
+    for q in result.requirements:      # issue 34: every requirement with its robustness
+        unit = f" {q.unit}" if q.unit else ""
+        when = f", first violated at t={q.first_violation:.2f} s" if q.first_violation is not None else ""
+        print(f"requirement {q.name}: {q.spec}: robustness {q.robustness:+.3g}{unit} "
+              f"({'violated' if q.violated else 'kept'}{when})")
     print("metrics:")
     print("\n".join(_metrics_lines(result.metrics)))
     print(f"wall time: {result.wall_time * 1e3:.1f} ms")

@@ -550,18 +550,22 @@ def _check_clear(scenario: Scenario, ctx: _Ctx) -> None:
                                f"move the {what_moves} or obstacle {obs.name!r} so they are clear")
 
 
-def _with_requirements(ctx: _Ctx, top: _Section, scenario: Scenario) -> Scenario:
-    """The scenario with its ``signals:`` and ``requirements:`` (requirement_reading.py)."""
+def _requirements_part(ctx: _Ctx, top: _Section, parts: Mapping[str, Any]) -> Any:
+    """``(signals, requirements)`` of the file (requirement_reading.py), read beside its other parts
+    so that their mistakes are reported together; what they check against a part that could not be
+    read (its obstacles, waypoints, control rate) is left to the next load. None without them."""
     if not (top.has("signals") or top.has("requirements")):
-        return scenario
+        return None
     from .requirement_reading import check_obstacle_names, known_signals, read_requirements, read_signals
 
-    signals = read_signals(ctx, top)
-    check_obstacle_names(ctx, signals, tuple(o.name for o in scenario.obstacles))
-    known = known_signals(len(scenario.mission.waypoints), signals)
-    period = 1.0 / scenario.simulation.control_rate
-    return replace(scenario, signals=signals,
-                               requirements=read_requirements(ctx, top, known, period=period))
+    mission, obstacles, simulation = parts["mission"], parts["obstacles"], parts["simulation"]
+    signals = read_signals(ctx, top)          # None: an entry has a mistake (recorded)
+    if obstacles is not BROKEN and signals is not None:
+        check_obstacle_names(ctx, signals, tuple(o.name for o in obstacles))
+    waypoints = len(mission.waypoints) if mission is not BROKEN else int(SCENARIO_LIMITS["max_waypoints"])
+    period = 1.0 / simulation.control_rate if simulation is not BROKEN else None
+    known = known_signals(waypoints, signals) if signals is not None else None   # else not checked
+    return signals or (), read_requirements(ctx, top, known, period=period)
 
 
 # --------------------------------------------------------------------------- public API
@@ -605,11 +609,11 @@ def _build(root: YNode | None, ctx: _Ctx, name: str | None, family: str | None) 
         "search": ctx.attempt(_mapping, ctx, top, "search"),
         "provenance": ctx.attempt(_mapping, ctx, top, "provenance"),
     }
+    judged = ctx.attempt(_requirements_part, ctx, top, parts)
     ctx.finish()
     scenario = Scenario(version=int(version), source=ctx.source, **parts)
-    with_requirements = ctx.attempt(_with_requirements, ctx, top, scenario)
-    ctx.finish()
-    scenario = with_requirements
+    if judged is not None:
+        scenario = replace(scenario, signals=judged[0], requirements=judged[1])
     if scenario.search is not None:     # the search's space, checked on plain runs too
         read_search(ctx, top.get("search"), "search", top.line_of("search"),
                     obstacles=tuple(o.name for o in scenario.obstacles), waypoints=len(scenario.mission.waypoints),

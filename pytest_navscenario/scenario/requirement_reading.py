@@ -14,7 +14,7 @@ import re
 from typing import Any, Iterable, Sequence
 
 from ..core.errors import ScenarioError
-from .reading import Ctx, SectionReader, did_you_mean, read_section
+from .reading import BROKEN, Ctx, SectionReader, did_you_mean, read_section
 from .requirements import (BUILTIN_SIGNALS, REGION, REQUIREMENT, REQUIREMENTS, SIGNAL, SIGNAL_KINDS, SIGNALS,
                            Region, Requirement, Signal, waypoint_signals)
 from .yaml_tree import YScalar, YSeq, describe
@@ -22,41 +22,52 @@ from .yaml_tree import YScalar, YSeq, describe
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 
 
-def read_signals(ctx: Ctx, top: SectionReader) -> tuple[Signal, ...]:
+def read_signals(ctx: Ctx, top: SectionReader) -> tuple[Signal, ...] | None:
+    """The declared signals, each entry read on its own (a loader collecting mistakes gets every
+    entry's); None when an entry could not be read (its mistake is recorded)."""
     out: list[Signal] = []
     seen: dict[str, int] = {}
+    broken = False
     for i, item in enumerate(top.sequence("signals", SIGNALS.max, SIGNALS.what)):
-        path = f"signals[{i}]"
-        sec = SectionReader(ctx, item, path, SIGNAL.names, line=item.line or top.line_of("signals"),
-                            what="a signal mapping such as {name: d_walker, distance_to: walker}")
-        values: dict[str, Any] = {"distance_to": _names(ctx, sec, "distance_to")}
-        inside = sec.section("inside", REGION.names, REGION.what)
-        values["inside"] = _region(ctx, inside) if inside is not None else None
-        values = read_section(ctx, sec, SIGNAL, values)
-        signal = Signal(**values)
-        name, line = signal.name, sec.line_of("name")
-        if not _IDENT.match(name):
-            raise ctx.fail(f"{name!r} cannot be named in a formula", f"{path}.name", line,
-                           "use letters, digits and '_', starting with a letter (d_walker)")
-        from ..stl import RESERVED_WORDS
-        if name in RESERVED_WORDS:
-            raise ctx.fail(f"{name!r} is a word of the formula language, not a signal name", f"{path}.name", line,
-                           f"rename it, e.g. {name.lower()}_signal (reserved: always, eventually, G, F, X, ...)")
-        if name in BUILTIN_SIGNALS or name.startswith("d_waypoint"):
-            raise ctx.fail(f"{name!r} is a built-in signal's name", f"{path}.name", line,
-                           f"choose another name; the built-in {name!r} needs no declaration")
-        if name in seen:
-            raise ctx.fail(f"signal {name!r} is declared twice (first at signals[{seen[name]}])", f"{path}.name",
-                           line, "rename one of them")
-        seen[name] = i
-        given = [k for k in SIGNAL_KINDS if sec.has(k)]
-        if len(given) != 1:
-            raise ctx.fail(f"signal {name!r} has {'none' if not given else ' and '.join(given)} of "
-                           f"{', '.join(SIGNAL_KINDS)}", path, sec.line,
-                           "give exactly one of them, e.g. 'distance_to: walker'")
-        ctx.lines[path] = sec.line
-        out.append(signal)
-    return tuple(out)
+        signal = ctx.attempt(_signal, ctx, top, i, item, seen)
+        if signal is BROKEN:
+            broken = True
+        else:
+            out.append(signal)
+    return None if broken else tuple(out)
+
+
+def _signal(ctx: Ctx, top: SectionReader, i: int, item: Any, seen: dict[str, int]) -> Signal:
+    path = f"signals[{i}]"
+    sec = SectionReader(ctx, item, path, SIGNAL.names, line=item.line or top.line_of("signals"),
+                        what="a signal mapping such as {name: d_walker, distance_to: walker}")
+    values: dict[str, Any] = {"distance_to": _names(ctx, sec, "distance_to")}
+    inside = sec.section("inside", REGION.names, REGION.what)
+    values["inside"] = _region(ctx, inside) if inside is not None else None
+    values = read_section(ctx, sec, SIGNAL, values)
+    signal = Signal(**values)
+    name, line = signal.name, sec.line_of("name")
+    if not _IDENT.match(name):
+        raise ctx.fail(f"{name!r} cannot be named in a formula", f"{path}.name", line,
+                       "use letters, digits and '_', starting with a letter (d_walker)")
+    from ..stl import RESERVED_WORDS
+    if name in RESERVED_WORDS:
+        raise ctx.fail(f"{name!r} is a word of the formula language, not a signal name", f"{path}.name", line,
+                       f"rename it, e.g. {name.lower()}_signal (reserved: always, eventually, G, F, X, ...)")
+    if name in BUILTIN_SIGNALS or name.startswith("d_waypoint"):
+        raise ctx.fail(f"{name!r} is a built-in signal's name", f"{path}.name", line,
+                       f"choose another name; the built-in {name!r} needs no declaration")
+    if name in seen:
+        raise ctx.fail(f"signal {name!r} is declared twice (first at signals[{seen[name]}])", f"{path}.name",
+                       line, "rename one of them")
+    seen[name] = i
+    given = [k for k in SIGNAL_KINDS if sec.has(k)]
+    if len(given) != 1:
+        raise ctx.fail(f"signal {name!r} has {'none' if not given else ' and '.join(given)} of "
+                       f"{', '.join(SIGNAL_KINDS)}", path, sec.line,
+                       "give exactly one of them, e.g. 'distance_to: walker'")
+    ctx.lines[path] = sec.line
+    return signal
 
 
 def _names(ctx: Ctx, sec: SectionReader, key: str) -> tuple[str, ...]:
@@ -86,41 +97,49 @@ def read_requirements(ctx: Ctx, top: SectionReader, known: Iterable[str] | None,
                       source: str = "", period: float | None = None) -> tuple[Requirement, ...]:
     """The requirements, each formula parsed and its signals checked against ``known`` (None: not
     checked here), its intervals against the control ``period`` (s; None: not checked here)."""
+    out: list[Requirement] = []
+    seen: dict[str, int] = {}
+    names = None if known is None else tuple(sorted(set(known)))
+    for i, item in enumerate(top.sequence("requirements", REQUIREMENTS.max, REQUIREMENTS.what)):
+        requirement = ctx.attempt(_requirement, ctx, top, i, item, seen, names, source, period)
+        if requirement is not BROKEN:
+            out.append(requirement)
+    return tuple(out)
+
+
+def _requirement(ctx: Ctx, top: SectionReader, i: int, item: Any, seen: dict[str, int],
+                 known: tuple[str, ...] | None, source: str, period: float | None) -> Requirement:
     from ..stl import StlSyntaxError, parse
 
     check = known is not None
-    known = tuple(sorted(set(known or ())))
-    out: list[Requirement] = []
-    seen: dict[str, int] = {}
-    for i, item in enumerate(top.sequence("requirements", REQUIREMENTS.max, REQUIREMENTS.what)):
-        path = f"requirements[{i}]"
-        sec = SectionReader(ctx, item, path, REQUIREMENT.names, line=item.line or top.line_of("requirements"),
-                            what='a requirement mapping such as {name: keep-clear, spec: "always (clearance >= 0.3)"}')
-        values = read_section(ctx, sec, REQUIREMENT)
-        name, spec, line = values["name"], values["spec"], sec.line_of("spec")
-        if name in seen:
-            raise ctx.fail(f"requirement {name!r} is written twice (first at requirements[{seen[name]}])",
-                           f"{path}.name", sec.line_of("name"), "rename one of them")
-        seen[name] = i
-        try:
-            formula = parse(spec)
-        except StlSyntaxError as exc:
-            column = getattr(exc, "column", None)
-            where = f" at column {column}" if column else ""
-            message = getattr(exc, "message", str(exc))
-            raise ctx.fail(f"the formula {spec!r} is not STL{where}: {message}", f"{path}.spec", line,
-                           getattr(exc, "hint", "") or "see the operators page (reference/stl.md)") from None
-        unknown = sorted(set(formula.signals) - set(known)) if check else ()
-        if unknown:
-            hint = did_you_mean(unknown[0], known) if len(known) else ""
-            raise ctx.fail(f"the formula names {', '.join(map(repr, unknown))}, which is no signal of this "
-                           f"scenario (known: {', '.join(known)})", f"{path}.spec", line,
-                           f"{hint + '; ' if hint.startswith('did') else ''}declare it under 'signals:' "
-                           f"(e.g. {{name: {unknown[0]}, distance_to: <obstacle>}}) or use a known one")
-        if period is not None:
-            _check_period(ctx, formula, period, f"{path}.spec", line)
-        out.append(Requirement(name=name, spec=spec, scale=values["scale"], source=source))
-    return tuple(out)
+    known = known or ()
+    path = f"requirements[{i}]"
+    sec = SectionReader(ctx, item, path, REQUIREMENT.names, line=item.line or top.line_of("requirements"),
+                        what='a requirement mapping such as {name: keep-clear, spec: "always (clearance >= 0.3)"}')
+    values = read_section(ctx, sec, REQUIREMENT)
+    name, spec, line = values["name"], values["spec"], sec.line_of("spec")
+    if name in seen:
+        raise ctx.fail(f"requirement {name!r} is written twice (first at requirements[{seen[name]}])",
+                       f"{path}.name", sec.line_of("name"), "rename one of them")
+    seen[name] = i
+    try:
+        formula = parse(spec)
+    except StlSyntaxError as exc:
+        column = getattr(exc, "column", None)
+        where = f" at column {column}" if column else ""
+        message = getattr(exc, "message", str(exc))
+        raise ctx.fail(f"the formula {spec!r} is not STL{where}: {message}", f"{path}.spec", line,
+                       getattr(exc, "hint", "") or "see the operators page (docs/reference/requirements-language.md)") from None
+    unknown = sorted(set(formula.signals) - set(known)) if check else ()
+    if unknown:
+        hint = did_you_mean(unknown[0], known) if len(known) else ""
+        raise ctx.fail(f"the formula names {', '.join(map(repr, unknown))}, which is no signal of this "
+                       f"scenario (known: {', '.join(known)})", f"{path}.spec", line,
+                       f"{hint + '; ' if hint.startswith('did') else ''}declare it under 'signals:' "
+                       f"(e.g. {{name: {unknown[0]}, distance_to: <obstacle>}}) or use a known one")
+    if period is not None:
+        _check_period(ctx, formula, period, f"{path}.spec", line)
+    return Requirement(name=name, spec=spec, scale=values["scale"], source=source)
 
 
 def _check_period(ctx: Ctx, formula: Any, period: float, field: str, line: int | None) -> None:

@@ -133,3 +133,19 @@ def test_a_shared_file_is_merged_and_the_scenarios_own_requirement_wins(tmp_path
     with pytest.raises(ScenarioError) as info:
         load_shared(shared)
     assert info.value.line == 2 and info.value.field == "requirements[0].spec"
+
+
+def test_mistakes_in_requirements_are_reported_with_the_files_other_mistakes():
+    from pytest_navscenario.core.errors import ScenarioErrors
+    text = scenario_text("""\
+        signals:
+          - {name: d_walker, distance_to: walker}
+        requirements:
+          - {name: a, spec: "always ((d_walker >= 0.8)"}
+          - {name: b, spec: "always (d_walkr >= 0.8)"}
+        simulation: {timestep: -1}
+        """)
+    with pytest.raises(ScenarioErrors) as info:
+        loads_scenario(text, "s.yaml")
+    fields = [e.field for e in info.value.errors]
+    assert fields == ["requirements[0].spec", "requirements[1].spec", "simulation.timestep"]   # in file order

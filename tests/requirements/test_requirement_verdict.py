@@ -100,3 +100,22 @@ def test_a_shared_requirements_file_applies_to_every_scenario_and_has_an_ini_twi
     (project.path / "rules.yaml").write_text('requirements:\n  - {name: gentle, spec: "always (speed <= "}\n')
     bad = project.runpytest(*PLUGIN, "scenarios")
     bad.stderr.fnmatch_lines(["*ini option nav_requirements: *rules.yaml:2: requirements[[]0[]].spec: *"])
+
+
+def test_navscenario_run_prints_and_records_each_requirement(tmp_path):
+    import subprocess
+    import sys
+
+    path = tmp_path / "crossing.yaml"
+    path.write_text(crossing(KEEPS, BREAKS))
+    run = [sys.executable, "-m", "pytest_navscenario.cli.main", "run", str(path)]
+    text = subprocess.run(run, capture_output=True, text=True, cwd=tmp_path)
+    assert text.returncode == 1, text.stderr
+    assert "outcome: requirement" in text.stdout
+    assert "requirement keep-away: always (d_walker >= 0.5): robustness +0.61 m (kept)" in text.stdout
+    assert "requirement slow-near-people: always ((d_walker < 1.5) implies (speed <= 0.3)): robustness -0.39 " \
+           "(violated, first violated at t=" in text.stdout
+    out = subprocess.run([*run, "--json"], capture_output=True, text=True, cwd=tmp_path)
+    record = json.loads(out.stdout)
+    assert [(r["name"], r["violated"]) for r in record["requirements"]] == [("keep-away", False),
+                                                                         ("slow-near-people", True)]
