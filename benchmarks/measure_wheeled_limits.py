@@ -1,6 +1,6 @@
 """What the wheeled body crosses, measured in MuJoCo: the highest step, the steepest ramp and the
 widest gap a straight-driving planner gets across (bisection, 7 episodes each), for a few bodies.
-The figures behind ``scenario/crossing.py``'s WHEELED_* estimates (which stay under them).
+The figures behind ``scenario/ground/crossing.py``'s WHEELED_* estimates (which stay under them).
 
     python benchmarks/measure_wheeled_limits.py
 
@@ -28,7 +28,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests", "searc
 
 from straight_planner import Straight  # noqa: E402
 
-from pytest_navscenario.scenario.crossing import body_capability  # noqa: E402
+from pytest_navscenario.scenario.ground.crossing import body_capability  # noqa: E402
 from pytest_navscenario.scenario.model import Footprint, Mission, Pose, Robot, Safety, Scenario  # noqa: E402
 from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, WheeledBody  # noqa: E402
 from pytest_navscenario.sim.episode import simulate  # noqa: E402

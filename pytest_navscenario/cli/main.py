@@ -146,6 +146,8 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     module = importlib.import_module(SUBCOMMANDS[args.command][0])
     runner = getattr(module, f"run_{args.command.replace('-', '_')}", None) or module.run
+    from ..core import interrupts
+    restore = interrupts.install(sigterm=False)   # a planner's or controller's own KeyboardInterrupt is its error
     try:
         return int(runner(args) or 0)
     except NavScenarioError as exc:
@@ -157,6 +159,9 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into e.g. `head`, which closed early: not an error
         sys.stderr.close()
         return 0
+    finally:
+        if restore is not None:
+            restore()
 
 
 if __name__ == "__main__":

@@ -277,7 +277,12 @@ class Controller:
     def pytest_runtest_logreport(self, report: pytest.TestReport) -> None:
         """Controller: gather the record, write a failing item's artifacts, tell feature plugins."""
         nav = getattr(report, "nav", None)
-        if nav is None or report.when != "call" or _is_worker(self.config):
+        if nav is None and report.when == "???" and report.failed and not _is_worker(self.config):
+            from .payload import crashed_item_payload   # xdist: the item's worker died running it
+            nav = crashed_item_payload(self.config, report)
+            if nav is not None:
+                report.nav = nav   # type: ignore[attr-defined]
+        if nav is None or report.when not in ("call", "???") or _is_worker(self.config):
             return
         from .state import STATE_KEY
         state = self.config.stash.get(STATE_KEY, None)

@@ -23,6 +23,11 @@ Record fields (format_version 1)::
     collision         null, or who hit whom: {"obstacle", "time", "robot_moving" (false: the robot
                       stood still and was hit), "robot_speed", "obstacle_speed"} (m/s)
     wall_time         s
+    error             only in the record of an episode that never finished: what ended it
+                      ("WorkerDied": its process died 3 times; "RayTaskLost"; or the exception's
+                      type); its outcome is "subject-error" and its metrics are null
+
+Every scenario item that ran has a record, crashed or not, so the rates count it.
 
 Files are written whole and atomically (``atomic_write_text``), so an interrupted run leaves
 either the previous file or a complete new one.
@@ -80,6 +85,7 @@ def make_record(result: EpisodeResult, *, nodeid: str, path: str, repeat: int = 
         "metrics": json_safe(result.metrics.as_dict()),
         "collision": _collision_record(result),
         "wall_time": result.wall_time,
+        **({"error": result.error} if result.error is not None else {}),
     }
 
 

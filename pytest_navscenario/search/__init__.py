@@ -5,8 +5,14 @@ Out: a ``SearchReport`` (every candidate simulated, the distinct failures, each 
 seed) and frozen scenario files with provenance, which are ordinary regression scenarios.
 
 Read first: ``space.py`` (what may change, by how much, and which candidates are valid), then
-``engine.py`` (the strategies and shrinking, driven by Hypothesis), ``freeze.py`` (writing) and
-``suite.py`` (the generated suite as scenario files).
+``engine.py`` (``run_search``, ``SearchConfig`` and the ask/tell loop), ``strategies/`` (one module
+per strategy, one registry of their names, ``protocol.Strategy`` the interface), ``report.py``
+(``Candidate``, ``Failure``, ``SearchReport``), ``evaluation.py`` (one candidate's episode and the
+``Simulator`` that records it), ``evaluators.py`` (the ``Evaluator`` hooks and their defaults),
+``confirming.py`` and ``holding.py`` (failures that hold), ``shrinker.py`` (shrinking, driven by
+Hypothesis), ``fitness.py`` (reading an episode: robustness and cause signature), ``parallel.py``
+and ``batched.py`` (evaluators on worker processes and in lockstep batches), ``freeze.py``
+(writing) and ``suite.py`` (the generated suite as scenario files).
 
 Names are imported lazily so that importing this package stays cheap.
 """
@@ -14,9 +20,11 @@ from __future__ import annotations
 
 from ..core.lazy import lazy_exports
 
-_EXPORTS = {name: "engine" for name in (
-    "run_search", "shrink_failure", "Candidate", "Failure", "SearchReport", "STRATEGIES",
-    "is_duplicate", "is_near_failure", "ShrinkBudget", "shrink_plan", "shrink_order", "shrink_all")}
+_EXPORTS = {name: "engine" for name in ("run_search", "SearchConfig", "STRATEGIES", "is_duplicate",
+                                         "is_near_failure")}
+_EXPORTS.update({name: "report" for name in ("Candidate", "Failure", "SearchReport")})
+_EXPORTS.update({name: "shrinker" for name in ("shrink_failure", "ShrinkBudget", "shrink_plan", "shrink_order",
+                                                "shrink_all")})
 _EXPORTS.update(SearchSpace="space", scenarios_around="space", invalid_reason="space",
                 freeze_failures="freeze", write_search_log="freeze", write_suite="suite")
 __all__ = sorted(_EXPORTS)

@@ -1,12 +1,12 @@
 """A search's simulations in batches, in this process: the evaluator ``run_search`` uses when the
-subject answers the batch protocol (harness/batch.py, sim/batch.py).
+subject answers the batch protocol (harness/batch.py, sim/batching/batch.py).
 
 Generations: ``batch_evaluator`` queues each generation the search proposes and runs everything
 queued as one batch when the first of its results is asked for. The search proposes the next
 generation before it reads this one's results (engine._search_loop, the strategy's lag), so a batch
 holds the generations in flight (two of 8 candidates today), up to the batch size.
 
-Shrinking: each failure is shrunk by its own thread running ``engine.shrink_failure`` exactly as a
+Shrinking: each failure is shrunk by its own thread running ``shrinker.shrink_failure`` exactly as a
 serial run does, except that its simulations are handed to a coordinator, which runs every
 thread's next simulation as one batch. Only one thread runs at a time (a thread runs until it asks
 for a simulation or finishes, then hands over), so Hypothesis's shrinker never runs in two threads
@@ -21,8 +21,10 @@ import threading
 from typing import Any, Iterator, Sequence
 
 from ..core.interrupts import deferred
-from .engine import (Candidate, EvalContext, Failure, Proposal, SearchReport, _Simulator, _Stop,
-                     evaluate_candidates, iter_candidates, shrink_failure, shrink_order, shrink_status, unpack)
+from .evaluation import EvalContext, Proposal, Simulator, Stop, evaluate_candidates, iter_candidates, unpack
+from .evaluators import Evaluator
+from .report import Candidate, Failure, SearchReport
+from .shrinker import shrink_all, shrink_failure, shrink_order, shrink_status
 
 Proposals = Sequence[Proposal]   # (offsets, origin[, noise run]): confirmation runs batch like the rest
 
@@ -49,7 +51,7 @@ class _Source:
         return False
 
 
-class batch_evaluator:   # noqa: N801  (used like a function: evaluator=batch_evaluator())
+class batch_evaluator(Evaluator):   # noqa: N801  (used like a function: evaluator=batch_evaluator())
     """An evaluator that simulates the generations in flight together and shrinks the failures
     side by side, in batches of ``ctx.batch`` (see the module docstring)."""
 
@@ -95,11 +97,9 @@ class batch_evaluator:   # noqa: N801  (used like a function: evaluator=batch_ev
         """The search ended early: forget the generations not simulated."""
         self._queue = []
 
-    def shrink_failures(self, sim: _Simulator, caps: Sequence[int], progress: Any) -> None:
-        """Shrink every failure with a cap (engine.shrink_plan) side by side, their simulations in
-        batches; record them failure by failure in engine.shrink_order."""
-        from .engine import shrink_all
-
+    def shrink_failures(self, sim: Simulator, caps: Sequence[int], progress: Any) -> None:
+        """Shrink every failure with a cap (shrinker.shrink_plan) side by side, their simulations in
+        batches; record them failure by failure in shrinker.shrink_order."""
         report = sim.report
         order = [i for i in shrink_order(report.failures) if caps[i] > 0]
         if not order:
@@ -126,7 +126,7 @@ class batch_evaluator:   # noqa: N801  (used like a function: evaluator=batch_ev
                 progress(report)
 
 
-class _ThreadSimulator(_Simulator):
+class _ThreadSimulator(Simulator):
     """A shrink thread's simulator: each simulation (a layout, or its confirmation runs under
     fresh noise seeds, holding.py) is asked of the coordinator and waited for."""
 
@@ -143,7 +143,7 @@ class _ThreadSimulator(_Simulator):
 
     def check_stop(self) -> None:
         if self.shrink.rounds.stopping:
-            raise _Stop()
+            raise Stop()
 
 
 class _Shrink:
@@ -169,7 +169,7 @@ class _Shrink:
         self.rounds.handed_back.set()
         self.turn.wait()
         if self.rounds.stopping:
-            raise _Stop()
+            raise Stop()
         answer, self.answer = self.answer, None
         return answer
 

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 from .space import INSERT_PREFIX
 
@@ -50,6 +50,11 @@ class Reading:
     path: tuple[tuple[float, float], ...]   # robot centre, PATH_POINTS samples
     closest: tuple[float, float, float]     # (t, x, y) of the closest approach
     margins: dict[str, float]
+
+    @property
+    def closest_margin(self) -> str:
+        """The name of the smallest margin ("" for a failure, which has none): what came closest."""
+        return min(self.margins, key=self.margins.get) if self.margins else ""
 
 
 class Route:
@@ -132,7 +137,7 @@ def terrain_culprit(scenario: Any, label: str, x: float, y: float, margin: float
     quoted = re.findall(r"'([^']*)'", label or "")
     if quoted and quoted[-1] in names:
         return f"terrain:{quoted[-1]}"
-    from ..scenario.ground import element_at
+    from ..scenario.ground.surface import element_at
     i = element_at(scenario, x, y, margin=margin)
     return f"terrain:{scenario.terrain[i].name}" if i is not None else ""
 
@@ -185,6 +190,15 @@ def _failure_point(res: Any, pose: Any) -> tuple[float, float] | None:
 
 
 def _margins(res: Any, pose: Any, route: Route) -> dict[str, float]:
+    """Every source's margins (MARGIN_SOURCES), in order, as one dict."""
+    out: dict[str, float] = {}
+    for source in MARGIN_SOURCES:
+        out.update(source(res, pose, route))
+    return out
+
+
+def mission_margins(res: Any, pose: Any, route: Route) -> dict[str, float]:
+    """The margins of the mission itself: time, stall, clearance, efficiency, safety."""
     m, sc = res.metrics, res.scenario
     spare = spare_time(sc, route)
     out = {"time": _unit((sc.mission.timeout - m.duration) / spare),
@@ -250,3 +264,11 @@ def _safety_margin(res: Any, pose: Any) -> float | None:
         ahead = np.stack([p[:, 0] + wx * h, p[:, 1] + wy * h, p[:, 2] + v[:, 2] * h], axis=1)
         best = min(best, closest_approach(sc.obstacles, sc.robot.footprint, ahead)[0])
     return _unit((best - safety.margin) / SAFETY_SCALE)
+
+
+#: Where a successful episode's margins come from, in order: each source maps (EpisodeResult, poses,
+#: route) to named margins in [0, 1] (0: at the edge of failing). The seam for requirements: an STL
+#: requirement (scenario ``requirements:``) joins as one more source giving ``requirement:<name>`` its
+#: robustness divided by its declared scale (never raw units in one min: a speed in m/s would mask a
+#: distance in m), and ``Reading.closest_margin`` names the margin that was smallest, for the signature.
+MARGIN_SOURCES: list[Callable[[Any, Any, Route], dict[str, float]]] = [mission_margins]

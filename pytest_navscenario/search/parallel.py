@@ -6,7 +6,7 @@ moment the generation is proposed (the search loop proposes the next generation 
 the results of this one, engine._search_loop), and the candidates come back in proposal order.
 Each distinct failure becomes one ``ShrinkJob`` the moment it is found, so its shrinking runs
 beside the rest of the search instead of after it. A candidate is a pure function of the
-evaluation context and its offsets (``engine.evaluate_candidate``), a shrink a pure function of
+evaluation context and its offsets (``evaluation.evaluate_candidate``), a shrink a pure function of
 the failure and its cap, and the strategy sees results at the same point as in a serial run, so
 the search takes the same path, finds the same failures and writes the same files as a serial
 run with the same search seed; only the measured wall times differ, as they do between two
@@ -20,8 +20,10 @@ from dataclasses import dataclass
 from typing import Any, Iterator, Sequence
 
 from ..core.interrupts import deferred
-from .engine import (Candidate, EvalContext, Failure, SearchReport, _Simulator, evaluate_candidate,
-                     evaluate_candidates, shrink_failure, shrink_order, shrink_status, unpack)
+from .evaluation import EvalContext, Simulator, evaluate_candidate, evaluate_candidates, unpack
+from .evaluators import Evaluator
+from .report import Candidate, Failure, SearchReport
+from .shrinker import shrink_failure, shrink_order, shrink_status
 from .holding import Estimate
 
 _CONTEXTS: dict[str, EvalContext] = {}   # worker side: the first copy of each context received
@@ -59,7 +61,7 @@ def _context(token: str, ctx: EvalContext) -> EvalContext:
 
 @dataclass(frozen=True)
 class CandidateBatchJob:
-    """Several candidates simulated together in a worker (``engine.evaluate_candidates``: in
+    """Several candidates simulated together in a worker (``evaluation.evaluate_candidates``: in
     lockstep when the subject answers the batch protocol): one worker's share of a generation."""
     ctx: EvalContext
     proposals: tuple[tuple[tuple[float, ...], str, int], ...]   # (offsets, origin, noise run)
@@ -79,7 +81,7 @@ class CandidateBatchJob:
 
 @dataclass(frozen=True)
 class ShrinkJob:
-    """Shrink one failure in a worker, as a serial run would (``engine.shrink_failure`` with its
+    """Shrink one failure in a worker, as a serial run would (``shrinker.shrink_failure`` with its
     own simulations, one after the other); the failures of a search shrink side by side."""
     ctx: EvalContext
     found: Candidate
@@ -95,7 +97,7 @@ class ShrinkJob:
         ctx = _context(self.token, self.ctx)
         scratch = SearchReport(seed_name="", seed_source=None, subject="", subject_version=None,
                                strategy="", seed_value=0, budget=0, shrink_budget=self.cap, params=[])
-        sim = _Replay(ctx, scratch, self.known) if self.known else _Simulator(ctx, scratch, None)
+        sim = _Replay(ctx, scratch, self.known) if self.known else Simulator(ctx, scratch, None)
         failure = shrink_failure(ctx.space, sim, self.found, self.cap, self.estimate)
         cands = scratch.candidates
         index = next((i for i, c in enumerate(cands) if c is failure.shrunk), -1)
@@ -110,7 +112,7 @@ class ShrinkJob:
         return outcome
 
 
-class _Replay(_Simulator):
+class _Replay(Simulator):
     """Answers a shrink's simulations from those a shorter shrink of the same failure ran (with
     the same answers the shrinker asks the same questions in the same order, so a longer shrink
     begins with exactly those) and simulates the rest: a cap raised after the search costs only
@@ -133,8 +135,10 @@ class _Replay(_Simulator):
         return self.record(dataclasses.replace(cand, metrics=dict(cand.metrics)), phase)
 
 
-class executor_evaluator:   # noqa: N801  (used like a function: evaluator=executor_evaluator(ex))
+class executor_evaluator(Evaluator):   # noqa: N801  (used like a function: evaluator=executor_evaluator(ex))
     """An evaluator that runs each generation on ``executor`` (see the module docstring)."""
+
+    shrinks_early = True
 
     def __init__(self, executor: Any):
         from ..harness.batch import Batching
@@ -183,11 +187,11 @@ class executor_evaluator:   # noqa: N801  (used like a function: evaluator=execu
         job = ShrinkJob(ctx, _stripped(found), cap, token, tuple(_stripped(c) for c in known), estimate)
         self._shrinks.append((found, cap, self._submit([job])[0]))
 
-    def shrink_failures(self, sim: _Simulator, caps: Sequence[int], progress: Any) -> None:
-        """Shrink every failure with a cap (engine.shrink_plan), one job each; a job begun during
+    def shrink_failures(self, sim: Simulator, caps: Sequence[int], progress: Any) -> None:
+        """Shrink every failure with a cap (shrinker.shrink_plan), one job each; a job begun during
         the search with a smaller cap is continued (its simulations replayed, not run again) and
         one whose failure gets no cap is given up. Record the shrink simulations failure by
-        failure, in the order a serial run records them (engine.shrink_order). Ctrl-C keeps the
+        failure, in the order a serial run records them (shrinker.shrink_order). Ctrl-C keeps the
         failures not yet shrunk as found (run_search notes them)."""
         report = sim.report
         order = [i for i in shrink_order(report.failures) if caps[i] > 0]

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..scenario.model import Scenario, content_hash
-from .engine import Candidate, SearchReport
+from .report import Candidate, SearchReport
 from .freeze import candidate_provenance, candidate_scenario, save_standalone, standalone_scenario
 from .space import SearchSpace
 

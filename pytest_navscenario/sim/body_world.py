@@ -1,4 +1,4 @@
-"""The MuJoCo world of a robot that rides the ground: gravity on, the terrain (sim/terrain.py),
+"""The MuJoCo world of a robot that rides the ground: gravity on, the terrain (sim/ground/terrain.py),
 obstacles standing on the ground, the body (sim/bodies/), and what the episode asks of it: which
 contact of the chassis is a collision (with an obstacle, or with a terrain face) and the height of
 the ground under a point.
@@ -15,11 +15,11 @@ import mujoco
 import numpy as np
 
 from ..core.errors import ScenarioError
-from ..scenario import ground
+from ..scenario.ground import surface as ground
 from ..scenario.model import Scenario
 from .bodies.base import ROBOT_GROUP
 from .safety import SafetyLayer
-from .terrain import add_terrain, terrain_of_geom
+from .ground.terrain import add_terrain, terrain_of_geom
 from .trajectory import Collision
 from . import world as planar
 from .world import PARTS_GROUP, UNSEEN_GROUP, World, _add_obstacles, obstacle_geom_names

@@ -35,7 +35,7 @@ def test_ci_makes_a_new_environment_and_installs_every_extra_into_it_before_any_
     lines = _lines()
     venv = _first(lines, r"-m venv \"?\$")                           # into a fresh temporary folder
     assert re.search(r"mktemp -d", "\n".join(lines[:venv])), "the new environment's folder is a new temp dir"
-    install = _first(lines, r"pip install .*-e \"?\.\[dev,ray,onnx,gpu\]")
+    install = _first(lines, r"pip install .*-e \"?\.\[dev,ray,onnx,gpu[],]")
     assert install > venv and "$venv/bin/python -m pip" in lines[install].replace('"', "")
     path = _first(lines, r'^export PATH="\$venv/bin:\$PATH"')
     first_test = _first(lines, r"^(python -m )?pytest ")

@@ -22,7 +22,7 @@ from pytest_navscenario.core.rates import Sprt, clopper_pearson, wilson_interval
 from pytest_navscenario.core.seeds import repeat_seed
 from pytest_navscenario.harness.runner import run_scenario
 from pytest_navscenario.scenario.loader import load_scenario, loads_scenario
-from pytest_navscenario.search.engine import (EvalContext, SearchReport, _Simulator, evaluate_candidate, run_search,
+from pytest_navscenario.search.engine import (EvalContext, SearchReport, Simulator, evaluate_candidate, run_search,
                                               shrink_failure)
 from pytest_navscenario.search.freeze import SearchRecorder, read_search_log
 from pytest_navscenario.search.holding import Estimate, hold_test
@@ -116,7 +116,7 @@ def test_shrinking_keeps_a_failure_robust():
     shrunk = {}
     for hold in (0.9, 0.0):
         ctx = EvalContext(space, Picky, 12, None, hold_test(hold), hold)
-        sim = _Simulator(ctx, SearchReport("crate", None, "picky", None, "evolve", 0, 10, 60, []), None)
+        sim = Simulator(ctx, SearchReport("crate", None, "picky", None, "evolve", 0, 10, 60, []), None)
         found = evaluate_candidate(ctx, (-1.45,), "explore")
         found.sim = 1
         shrunk[hold] = shrink_failure(space, sim, found, 60, Estimate("held", [True] * 4, hold))

@@ -193,3 +193,32 @@ def test_empty_space_is_refused(seed):
     space = SearchSpace(seed, {"frozen": ["crate", "far"]})
     with pytest.raises(ValueError, match="empty"):
         run_search(seed, Straight, budget=3, space=space)
+
+
+def test_a_search_config_is_the_same_search_as_its_keywords(seed):
+    from pytest_navscenario.search.engine import SearchConfig
+
+    by_keywords = run_search(seed, Straight, budget=6, seed_value=2, strategy="random", shrink_budget=0)
+    by_config = run_search(seed, Straight, SearchConfig(budget=6, seed_value=2, strategy="random", shrink_budget=0))
+    assert [c.offsets for c in by_config.candidates] == [c.offsets for c in by_keywords.candidates]
+    assert [c.outcome for c in by_config.candidates] == [c.outcome for c in by_keywords.candidates]
+    with pytest.raises(TypeError, match="budgett"):
+        run_search(seed, Straight, budgett=6)
+
+
+def test_a_margin_source_joins_the_fitness_and_names_what_came_closest(seed, monkeypatch):
+    """The seam STL requirements plug into (fitness.MARGIN_SOURCES): a source's margins join the
+    robustness of a successful episode, and the smallest is named."""
+    from pytest_navscenario.harness.runner import run_scenario
+    from pytest_navscenario.search import fitness
+
+    res = run_scenario(seed, Straight())
+    assert res.outcome.value == "success"
+    route = fitness.Route(seed)
+    plain, _ = fitness.read_episode(res, route)
+    assert plain.closest_margin in plain.margins and "requirement:slow" not in plain.margins
+    monkeypatch.setattr(fitness, "MARGIN_SOURCES", [*fitness.MARGIN_SOURCES,
+                                                     lambda res, pose, route: {"requirement:slow": 0.01}])
+    joined, _ = fitness.read_episode(res, route)
+    assert joined.closest_margin == "requirement:slow" and joined.margins["requirement:slow"] == 0.01
+    assert joined.robustness < plain.robustness

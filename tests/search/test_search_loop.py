@@ -17,7 +17,7 @@ from pytest_navscenario.core.errors import ScenarioError
 from pytest_navscenario.harness.runner import run_scenario
 from pytest_navscenario.scenario.loader import loads_scenario
 from pytest_navscenario.search.engine import (
-    Candidate, EvalContext, SearchReport, _search_loop, _Simulator, evaluate_candidate, run_search,
+    Candidate, EvalContext, SearchReport, _search_loop, Simulator, evaluate_candidate, run_search,
     shrink_failure)
 from pytest_navscenario.search.space import INSERT_PREFIX, SearchSpace
 from pytest_navscenario.search.strategies import Evolve, HillClimb
@@ -110,7 +110,7 @@ def test_shrinking_removes_an_inserted_obstacle_that_does_not_matter(lane):
     ctx = EvalContext(space, Straight)
     found = evaluate_candidate(ctx, cause, "test")
     assert found.failed and found.culprit == "crate"
-    sim = _Simulator(ctx, _report(space), None)
+    sim = Simulator(ctx, _report(space), None)
     failure = shrink_failure(space, sim, found, 12)
     shrunk = space.apply(failure.shrunk.offsets)
     assert f"{INSERT_PREFIX}1" not in [o.name for o in shrunk.obstacles]
@@ -126,7 +126,7 @@ def test_shrinking_keeps_an_inserted_obstacle_that_causes_the_failure(lane):
     ctx = EvalContext(space, Straight)
     found = evaluate_candidate(ctx, cause, "test")
     assert found.failed and found.culprit == f"{INSERT_PREFIX}1" and found.signature[1] == "inserted"
-    failure = shrink_failure(space, _Simulator(ctx, _report(space), None), found, 8)
+    failure = shrink_failure(space, Simulator(ctx, _report(space), None), found, 8)
     assert failure.shrunk.offsets[space.index["inserted[0].on"]] >= 0.5
     assert failure.shrunk.signature == found.signature
 
@@ -412,7 +412,7 @@ def test_hillclimb_lowers_clearance_monotonically(lane):
     space = SearchSpace(lane, {"insert": 0, "remove": 0})
     report = _report(space, "hillclimb", 16)
     climb = HillClimb(space, report, 16, 0)
-    _search_loop(climb, _Simulator(EvalContext(space, Straight), report, None), 16, lambda c: None)
+    _search_loop(climb, Simulator(EvalContext(space, Straight), report, None), 16, lambda c: None)
     seed_clearance = report.candidates[0].clearance
     assert sum(len(c) for c in climb.climbs) >= 2 and climb.climbs[0][0] < seed_clearance
     for steps in climb.climbs:   # a climb restarts from the seed after it found a failure
@@ -517,7 +517,7 @@ def test_the_next_generation_is_handed_over_before_this_one_is_told(lane, strate
     strat = strategy(space, report, 40, 3)
     tell = strat.tell
     strat.tell = lambda results: (events.append("tell"), tell(results))
-    _search_loop(strat, _Simulator(EvalContext(space, Straight), report, None, eager), 40, lambda c: None)
+    _search_loop(strat, Simulator(EvalContext(space, Straight), report, None, eager), 40, lambda c: None)
     assert report.sims_used == 40 and strat.lag == lag
     generations = events.count("evaluate")
     assert events.count("tell") == generations

@@ -201,7 +201,7 @@ def test_the_summary_says_which_run_the_lowest_clearance_came_from():
     """Issue 23 item 4: "best clearance 0.029 m" beside frozen failures of 0.26-0.55 m read as a
     failure's; the summary says it is the lowest of any run and whether that run passed."""
     from pytest_navscenario.plugin.search_report import lowest_clearance_text
-    from pytest_navscenario.search.engine import Candidate, Failure, SearchReport
+    from pytest_navscenario.search.report import Candidate, Failure, SearchReport
 
     def cand(sim, outcome, clearance, phase="search"):
         return Candidate(sim, phase, "explore", (0.1,), outcome, clearance, "box", "", {}, "h", 0.0)

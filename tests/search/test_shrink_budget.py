@@ -9,7 +9,7 @@ import pytest
 
 from pytest_navscenario.scenario.loader import loads_scenario
 from pytest_navscenario.search.engine import (
-    Candidate, EvalContext, Failure, SearchReport, ShrinkBudget, _Simulator, run_search, shrink_failure,
+    Candidate, EvalContext, Failure, SearchReport, ShrinkBudget, Simulator, run_search, shrink_failure,
     shrink_order, shrink_plan)
 from pytest_navscenario.search.space import SearchSpace
 from straight_planner import Straight
@@ -102,7 +102,7 @@ def test_each_failure_shrinks_alone_with_its_cap_in_any_order(lane, searched):
         if caps[i] == 0:
             continue
         scratch = SearchReport("lane", None, "?", None, "random", 0, 24, 0, [p.name for p in space.params])
-        alone = shrink_failure(space, _Simulator(ctx, scratch, None), r.failures[i].found, caps[i])
+        alone = shrink_failure(space, Simulator(ctx, scratch, None), r.failures[i].found, caps[i])
         assert alone.shrunk.offsets == r.failures[i].shrunk.offsets
         assert alone.shrink_sims == r.failures[i].shrink_sims
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from pytest_navscenario.core.errors import ScenarioError
-from pytest_navscenario.scenario import ground
+from pytest_navscenario.scenario.ground import surface as ground
 from pytest_navscenario.scenario.model import BoxObstacle, Footprint, Mission, Pose, Robot, Scenario
 from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, Steps, WheeledBody
 from pytest_navscenario.sim.episode import simulate

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from pytest_navscenario.scenario.crossing import body_capability
+from pytest_navscenario.scenario.ground.crossing import body_capability
 from pytest_navscenario.scenario.model import Footprint, Mission, Pose, Robot, Scenario
 from pytest_navscenario.scenario.terrain import LeggedBody, MjcfBody, Pit, Platform, Ramp, Rough, Steps, WheeledBody
 from pytest_navscenario.verdict.feasibility import impassable_reason

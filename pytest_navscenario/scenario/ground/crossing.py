@@ -221,7 +221,7 @@ def steep_areas(scenario, cap: Capability) -> tuple:
         return _STEEP[key]
     except KeyError:
         pass
-    from . import ground
+    from . import surface as ground
     from .heightmap import height_grid
 
     out = []
@@ -249,7 +249,7 @@ def steep_ground(scenario, cap: Capability, px, py) -> np.ndarray:
     areas = steep_areas(scenario, cap) if scenario.terrain else ()
     if not areas:
         return out
-    from . import ground
+    from . import surface as ground
     from .heightmap import height_grid
 
     for i, piece, cells in areas:
