@@ -21,7 +21,7 @@ PAGE = Path(__file__).resolve().parents[2] / "docs" / "contributing.md"
 
 def _section() -> str:
     text = PAGE.read_text()
-    return text[text.index("## Adding a search strategy"):text.index("## Benchmarks and the changelog")]
+    return text[text.index("## Adding a search strategy"):text.index("## Benchmarks, the measurement log and the changelog")]
 
 
 def _blocks() -> list[str]:
