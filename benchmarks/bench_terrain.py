@@ -22,7 +22,7 @@ import time
 from dataclasses import replace
 
 from pytest_navscenario.scenario.loader import load_scenario, loads_scenario
-from pytest_navscenario.scenario.terrain import PlanarBody
+from pytest_navscenario.scenario.bodies import PlanarBody
 from pytest_navscenario.sim.episode import simulate
 from pytest_navscenario.subjects.loading import make_planner
 

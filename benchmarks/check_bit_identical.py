@@ -151,7 +151,8 @@ def cases(extra: list[str]):
 
 
 NEWER_EVENT_FIELDS = ("robot_speed", "robot_moving", "obstacle_speed", "terrain",   # terrain: issue 25
-                      "ground")     # a safety stop before the ground (issue 25): older code has none
+                      "ground",     # a safety stop before the ground (issue 25): older code has none
+                      "yaw_rate")   # the turn rate at a safety stop (issue 32): older code has none
 
 
 def _event(ev):

@@ -24,25 +24,28 @@ sys.path.insert(0, str(ROOT / "tests" / "ros"))
 TB3 = ROOT / "tests" / "data" / "fuse_turtlebot3.bag"
 
 
-def import_with(checkout: Path, bag: Path, out: Path) -> None:
+def import_with(checkout: Path, bag: Path, out: Path, options: list[str] = ()) -> None:
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
     env["PYTHONPATH"] = str(checkout)
     subprocess.run([sys.executable, "-c", "import sys; from pytest_navscenario.cli import main; "
-                    "sys.exit(main(sys.argv[1:]))", "from-bag", str(bag), "-o", str(out), "--force", "--no-plot"],
+                    "sys.exit(main(sys.argv[1:]))", "from-bag", str(bag), "-o", str(out), "--force", "--no-plot", *options],
                    env=env, check=True, stdout=subprocess.DEVNULL, cwd=checkout)   # cwd: -c puts it first on the path
 
 
-def fit_of(scenario, bag: Path):
+def fit_of(scenario, bag: Path, match: str = "off"):
     """The fit figure of ``scenario`` against ``bag``'s scans, and what to draw: the sampled returns
-    and the points where the seed blocks a beam."""
+    and the points where the seed blocks a beam; the poses corrected by ``match`` (``--scan-match``)
+    as the import that made the seed did."""
     from pytest_navscenario.ros.bag_import.fit import _segments, cast, fit_figure
     from pytest_navscenario.ros.bag_import.mount import choose_mount
     from pytest_navscenario.ros.bag_import.projection import beam_rays, map_scans, settle_timing
     from pytest_navscenario.ros.bag_import.reading import read_bag
+    from pytest_navscenario.ros.bag_import.scan_match import correct_drift
 
     data = read_bag(bag)
     mount, _ = choose_mount(data, None)
     settle_timing(data, mount)
+    correct_drift(data, mount, match)
     smap = map_scans(data, mount)
     fig = fit_figure(scenario, data, mount, smap.sample, smap.first)
     r = beam_rays(data, smap.sample, mount)
@@ -69,9 +72,11 @@ def draw(ax, scenario, returns, spots, path, fig, title, truth=None) -> None:
     if truth is not None:
         for x, y, r, _ in truth.pillars:
             ax.add_patch(Circle((x, y), r, fill=False, ls="--", color="tab:green"))
-        for x, y, ln, w, _, _ in truth.boxes:
-            ax.add_patch(Polygon([(x - ln / 2, y - w / 2), (x + ln / 2, y - w / 2), (x + ln / 2, y + w / 2),
-                                  (x - ln / 2, y + w / 2)], fill=False, ls="--", color="tab:green"))
+        for x, y, ln, w, yaw, _ in truth.boxes:
+            c, s = np.cos(np.radians(yaw)), np.sin(np.radians(yaw))
+            corners = [(-ln / 2, -w / 2), (ln / 2, -w / 2), (ln / 2, w / 2), (-ln / 2, w / 2)]
+            ax.add_patch(Polygon([(x + c * u - s * v, y + s * u + c * v) for u, v in corners], fill=False, ls="--",
+                                 color="tab:green"))
     for o in scenario.obstacles:
         ax.add_patch(Polygon(np.asarray(obstacle_polygon(o).exterior.coords), facecolor="0.85", edgecolor="k", lw=0.8))
     ax.plot(path[:, 0], path[:, 1], "-", color="tab:blue", lw=0.8)

@@ -78,9 +78,10 @@ def _batch_size(raw: str) -> int:
         n = int(value)
     except ValueError:
         n = 0
-    if n < 1:
+    if not 1 <= n <= 100_000:    # = plugin.options.MAX_BATCH (not imported: `run --help` stays light)
         from ..core.errors import NavScenarioError
-        raise NavScenarioError(f"--batch {raw!r}: expected auto, a whole number of episodes >= 1, or off")
+        raise NavScenarioError(f"--batch {raw!r}: expected auto, a whole number of episodes from 1 to 100000, "
+                               f"or off")
     return n
 
 
@@ -126,6 +127,17 @@ def look_in_current_folder(spec: str) -> None:
         load_subject(spec, project=[os.getcwd()])
 
 
+def _warn_movers_inside(scenarios: list, files: list[str]) -> None:
+    """Moving obstacles that start or end inside a wall (issue 37: written by hand into a DynaBARN
+    seed) run, but not as in Gazebo: said on stderr with the file and field."""
+    from ..verdict.movers import movers_inside
+
+    for scenario, path in zip(scenarios, files):
+        if not isinstance(scenario, Exception):
+            for field, message in movers_inside(scenario.obstacles):
+                print(f"navscenario run: warning: {path}: {field}: {message}", file=sys.stderr)
+
+
 def run_run(args: argparse.Namespace) -> int:
     """The files' episodes (``_run_files``); then the processes the planner or the body
     controller started and left running are ended and named on stderr, as pytest does
@@ -158,6 +170,7 @@ def _run_files(args: argparse.Namespace) -> int:
         scenarios = [load_scenario(files[0])]
     else:   # each file that cannot load is that file's error; the others run
         scenarios = [_load_or_error(load_scenario, path) for path in files]
+    _warn_movers_inside(scenarios, files)
     look_in_current_folder(args.subject)
     tick_limit = args.tick_limit or None
     if alone:

@@ -236,6 +236,7 @@ class ProcessExecutor:
         self._generation = 0
         self._keys = itertools.count()
         self._open: dict[int, _Slot] = {}      # submitted, result not yet taken
+        self.deaths: list[str] = []            # each pool that broke: which worker died, what ran again
 
     def _ensure_pool(self) -> ProcessPoolExecutor:
         if self._pool is None:
@@ -269,11 +270,22 @@ class ProcessExecutor:
                 f"or function, or a 'package.module:Attribute' string") from None
 
     def submit(self, jobs: Sequence[Any]) -> list[Pending]:
+        """Each job on the pool. A pool broken since the last look (a worker died between two
+        batches: a search submits its next generation before it waits) is replaced first, its
+        unfinished jobs run again (``_recover``), instead of refusing every later job."""
+        if self._pool is not None and getattr(self._pool, "_broken", False):
+            self._recover()
         pool = self._ensure_pool()
         pendings = []
         for job in jobs:
             key = next(self._keys)
-            slot = _Slot(key, job, pool.submit(_pool_run, key, job), self._generation)
+            try:
+                future = pool.submit(_pool_run, key, job)
+            except BrokenProcessPool:     # it broke while this batch was being submitted
+                self._recover()
+                pool = self._ensure_pool()
+                future = pool.submit(_pool_run, key, job)
+            slot = _Slot(key, job, future, self._generation)
             self._open[key] = slot
             pendings.append(Pending(job, lambda slot=slot: self._wait(slot), lambda slot=slot: self._cancel(slot)))
         return pendings
@@ -320,6 +332,7 @@ class ProcessExecutor:
         culprits = {last[pid]: why for pid, why in dead.items() if pid in last}
         started = set(last.values())
         pool = self._ensure_pool()
+        again = 0
         for slot in self._open.values():
             done_ok = slot.future.done() and not slot.future.cancelled() and slot.future.exception() is None
             if done_ok:
@@ -331,6 +344,9 @@ class ProcessExecutor:
             if slot.attempts < MAX_ATTEMPTS:   # else its broken future stays: _wait reports it
                 slot.future = pool.submit(_pool_run, slot.key, slot.job)
                 slot.generation = self._generation
+                again += 1
+        who = "; ".join(f"worker pid {pid} {why}" for pid, why in sorted(dead.items())) or "a worker process died"
+        self.deaths.append(f"{who}: the pool was replaced and {again} unfinished job(s) were run again")
 
     def _let_workers_go(self) -> None:
         """Close this process's end of the "parent alive" pipe: every worker still running exits."""

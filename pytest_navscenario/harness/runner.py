@@ -112,15 +112,18 @@ def verdict(scenario: Scenario, facts: Any, ep_seed: int, name: str, version: st
     running (core/processes.py). ``ran``: the scenario as simulated (``perturbed(scenario,
     ep_seed)``, computed when not given): judged and measured; ``scenario`` is reported."""
     from ..verdict import metrics, oracle
+    from ..verdict.requirements import check_requirements
 
     if ran is None:
         ran = perturbed(scenario, ep_seed)
 
     t1 = time.perf_counter()
+    checked = check_requirements(ran, facts.trajectory)
     outcome, message = oracle.classify(
         ran, facts.trajectory, collision=facts.collision, safety_stop=facts.safety_stop,
         subject_failure=facts.subject_failure, goal_reached=facts.goal_reached,
-        stuck_after=stuck_after if facts.end == "stuck" else None, terrain_event=facts.terrain_event)
+        stuck_after=stuck_after if facts.end == "stuck" else None, terrain_event=facts.terrain_event,
+        requirements=checked)
     figures = metrics.compute_metrics(ran, facts.trajectory, collision=facts.collision)
     t2 = time.perf_counter()
     timings = dict(facts.timings)
@@ -130,4 +133,4 @@ def verdict(scenario: Scenario, facts: Any, ep_seed: int, name: str, version: st
         subject=name, subject_version=version, message=message, collision=facts.collision,
         safety_stop=facts.safety_stop, subject_failure=facts.subject_failure,
         wall_time=t2 - t0, timings=timings, terrain_event=facts.terrain_event,
-        left_running=tuple(f"pid {p.pid}: {p.command}" for p in left))
+        left_running=tuple(f"pid {p.pid}: {p.command}" for p in left), requirements=checked)

@@ -174,6 +174,10 @@ class ScenarioFile(pytest.File):
         family_from_folder = not scenario.family
         if family_from_folder:  # may become the folder's path: see separate_families
             scenario = dataclasses.replace(scenario, family=self.path.parent.name)
+        shared = get_state(self.config).settings.requirements
+        if shared is not None:  # --nav-requirements: the suite's requirements beside the scenario's own
+            from ..scenario.requirement_reading import with_shared
+            scenario = with_shared(scenario, shared)
         model = get_state(self.config).settings.sensor_model
         if model:   # --nav-sensor-model: a lidar noise model for scenarios that declare none
             from ..scenario.sensor_model import with_sensor_model
@@ -246,6 +250,21 @@ def _fmt(value: Any, unit: str = "", digits: int = 3) -> str:
     if value != value or value in (float("inf"), float("-inf")):
         return "n/a"
     return f"{value:.{digits}f}{unit}"
+
+
+def _culprit_line(result: Any) -> list[str]:
+    """The clearance that explains the outcome, when the minimum is to another obstacle: a robot
+    stopped for a person that passed nearer a wall (metrics.culprit_clearance)."""
+    if not len(result.trajectory.t):
+        return []
+    from ..verdict.metrics import culprit_clearance
+    found = culprit_clearance(result)
+    if found is None:
+        return []
+    name, dist, time = found
+    why = "the safety stop was for it" if result.safety_stop is not None else "the collision was with it"
+    return [f"  clearance to {name!r}: {_fmt(dist, ' m')} at t={_fmt(time, ' s', 2)} ({why}; the minimum "
+            f"above is to another obstacle)"]
 
 
 def _field_line(scenario: Any, field: str) -> int | None:
@@ -370,6 +389,8 @@ class ScenarioItem(pytest.Item):
             ("nav_seed", str(result.seed)),
             ("nav_repeat", str(self.repeat)),
         ])
+        for req in result.requirements:     # issue 34: each requirement's robustness (< 0: violated)
+            self.user_properties.append((f"nav_requirement_{req.name}", _fmt(req.robustness, digits=4)))
         if not result.passed:
             raise ScenarioFailed(result)
 
@@ -428,11 +449,18 @@ class ScenarioItem(pytest.Item):
                          f"({_fmt(c.x, '', 2)}, {_fmt(c.y, '', 2)}), depth {_fmt(c.depth, ' m', 4)}")
         if r.safety_stop is not None:
             s = r.safety_stop
+            from ..verdict.oracle import stop_motion
             lines.append(f"  safety stop:   predicted hit of obstacle {s.obstacle!r} at t="
-                         f"{_fmt(s.time, ' s', 2)}, speed {_fmt(s.speed, ' m/s', 2)}")
+                         f"{_fmt(s.time, ' s', 2)}, "
+                         + (f"speed {_fmt(s.speed, ' m/s', 2)}" if not s.speed < 0.005 else stop_motion(s)))
         if r.subject_failure is not None:
             f = r.subject_failure
             lines.append(f"  planner error: {f.message} (tick {f.tick}, t={_fmt(f.time, ' s', 2)})")
+        for q in r.requirements:     # issue 34: every requirement, kept or not, with its robustness
+            unit = f" {q.unit}" if q.unit else ""
+            state = (f"violated first at t={_fmt(q.first_violation, ' s', 2)}" if q.violated and
+                     q.first_violation is not None else ("violated" if q.violated else "kept"))
+            lines.append(f"  requirement:   {q.name}: {q.spec}: robustness {q.robustness:+.3g}{unit}, {state}")
         obstacle = f" to {m.min_clearance_obstacle!r}" if m.min_clearance_obstacle else ""
         if m.min_clearance == float("inf"):   # one form in the terminal (outcomes-metrics.md)
             lines.append("  min clearance: none (no obstacles)")
@@ -440,6 +468,7 @@ class ScenarioItem(pytest.Item):
             lines.append(f"  min clearance: {_fmt(m.min_clearance, ' m')}{obstacle} at t="
                          f"{_fmt(m.min_clearance_time, ' s', 2)}, robot at ({_fmt(m.min_clearance_x, '', 2)}, "
                          f"{_fmt(m.min_clearance_y, '', 2)})")
+        lines += _culprit_line(r)
         lines.append(f"  duration:      {_fmt(m.duration, ' s', 2)} (timeout "
                      f"{_fmt(r.scenario.mission.timeout, ' s', 1)}), path {_fmt(m.path_length, ' m', 2)}, "
                      f"efficiency {_fmt(m.path_efficiency, '', 2)}, goal error "

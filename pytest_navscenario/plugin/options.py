@@ -11,6 +11,7 @@ import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -79,6 +80,10 @@ OPTIONS = (
      "without one; needs the optional extra pytest-navscenario[gpu]; trajectories within a "
      "tolerance of the CPU's, not bit for bit; scenarios it cannot simulate, such as terrain and "
      "3D lidars, run alone on the CPU and the summary says so). See docs/how-to/gpu-batches.md."),
+    ("--nav-requirements", "nav_requirements",
+     "a shared requirements file (YAML with 'signals:' and 'requirements:', STL formulas) checked on "
+     "every scenario of the run and by --navsearch, besides each scenario's own requirements (a "
+     "scenario's own requirement of the same name wins). Default: none. See docs/tutorial/requirements.md."),
     ("--nav-isolate", "nav_isolate",
      "yes: run the episodes in a worker process even without -n or --nav-workers, so that a "
      "planner that ends its process (os._exit, a crash in C code, the out-of-memory killer) fails "
@@ -129,7 +134,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
                 "nav_summary": "{yes,no}", "nav_tick_limit": "SECONDS", "nav_repeat": "N",
                 "nav_reset_timeout": "SECONDS", "nav_ray": "ADDRESS", "nav_workers": "N",
                 "nav_batch": "N", "nav_isolate": "{yes,no}", "nav_batch_engine": "{cpu,warp}",
-                "nav_sensor_model": "SPEC"}
+                "nav_sensor_model": "SPEC", "nav_requirements": "PATH"}
     for opt, ini, text in OPTIONS:
         group.addoption(opt, dest=ini, default=None, metavar=metavars[ini],   # argparse %-formats help
                         help=(text + f" [ini: {ini}]").replace("%", "%%"))
@@ -149,6 +154,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addini("nav_batch_engine", helps["nav_batch_engine"], default="cpu")
     parser.addini("nav_isolate", helps["nav_isolate"], type="bool", default=False)
     parser.addini("nav_sensor_model", helps["nav_sensor_model"], default="")
+    parser.addini("nav_requirements", helps["nav_requirements"], default="")
     parser.addini("nav_scenario_glob",
                   "file name patterns of scenario files (space separated); files matching them are "
                   "collected when they are a YAML mapping with 'version' and 'mission' keys "
@@ -175,6 +181,7 @@ class Settings:
     sensor_model: "dict[str, float] | None" = None   # --nav-sensor-model: lidar noise keys; None: off
     batch: int = 16                   # --nav-batch: episodes a batch at most (1: no batches)
     batch_engine: str = "cpu"         # --nav-batch-engine: "cpu" or "warp" (sim/batching/batch.py)
+    requirements: Any = None          # --nav-requirements: scenario.requirement_reading.SharedRequirements
 
 
 _EXPECTED = {"nav_seed": "a whole number >= 0", "nav_summary": "yes or no (true or false)",
@@ -182,7 +189,7 @@ _EXPECTED = {"nav_seed": "a whole number >= 0", "nav_summary": "yes or no (true 
              "nav_tick_limit": "seconds >= 0 (0: no limit)",
              "nav_repeat": "a whole number of runs per scenario from 1 to 10000",
              "nav_reset_timeout": "seconds > 0",
-             "nav_batch": "auto, a whole number of episodes >= 1, or off",
+             "nav_batch": "auto, a whole number of episodes from 1 to 100000, or off",
              "nav_batch_engine": "cpu or warp"}
 
 
@@ -278,7 +285,22 @@ def read_settings(config: pytest.Config) -> Settings:
                     summary=summary, tick_limit=tick_limit, repeat=repeat, globs=globs,
                     scenario_paths=paths, reset_timeout=reset_timeout, ray=read_ray_address(config),
                     sensor_model=read_sensor_model(config), batch=read_batch(config),
+                    requirements=read_requirements(config),
                     batch_engine=read_batch_engine(config))
+
+
+def read_requirements(config: pytest.Config) -> Any:
+    """--nav-requirements / ini nav_requirements: the shared requirements file, read and checked
+    (formulas parsed); None when not given. A mistake in it is a usage error at its line."""
+    raw, where, base = _value(config, "nav_requirements")
+    if not raw:
+        return None
+    from ..core.errors import ScenarioError
+    from ..scenario.requirement_reading import load_shared
+    try:
+        return load_shared(resolve_path(raw, base))
+    except ScenarioError as exc:
+        raise pytest.UsageError(f"{where}: {exc}") from None
 
 
 def read_sensor_model(config: pytest.Config) -> "dict[str, float] | None":
@@ -294,6 +316,7 @@ def read_sensor_model(config: pytest.Config) -> "dict[str, float] | None":
 
 
 DEFAULT_BATCH = 16   # = harness.batch.DEFAULT_BATCH (not imported: plugin load stays light)
+MAX_BATCH = 100_000  # episodes a batch at most (each holds a MuJoCo data and its records)
 
 
 def read_batch(config: pytest.Config) -> int:
@@ -309,9 +332,10 @@ def read_batch(config: pytest.Config) -> int:
         n = int(value)
     except ValueError:
         n = 0
-    if not 1 <= n <= 100_000:
-        raise pytest.UsageError(f"{where}: expected auto, a whole number of episodes per batch >= 1, or off "
-                                f"(1 and off: every episode alone), got {raw!r} (e.g. --nav-batch=32)")
+    if not 1 <= n <= MAX_BATCH:
+        raise pytest.UsageError(f"{where}: expected auto, a whole number of episodes per batch from 1 to "
+                                f"{MAX_BATCH}, or off (1 and off: every episode alone), got {raw!r} (e.g. "
+                                f"--nav-batch=32)")
     return n
 
 

@@ -142,9 +142,14 @@ def episode_from_payload(payload: dict[str, Any]) -> EpisodeResult:
         wall_time=rec.get("wall_time", 0.0),
         timings=dict(payload.get("timings") or {}),
         terrain_event=ev(TerrainEvent, "terrain"),
+        requirements=_requirements(rec.get("requirements") or ()),
     )
 
 
+def _requirements(records: Any) -> tuple:
+    from ..verdict.requirements import RequirementResult
+    return tuple(RequirementResult.from_dict({**r, "robustness": math.nan if r["robustness"] is None
+                                              else r["robustness"]}) for r in records)
 def crashed_item_payload(config: pytest.Config, report: pytest.TestReport) -> dict[str, Any] | None:
     """Controller: the ``report.nav`` of a scenario item whose xdist worker process died while
     running it (xdist reports it with ``when == "???"`` and no payload), rebuilt from its scenario

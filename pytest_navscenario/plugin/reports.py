@@ -87,6 +87,7 @@ class ReportState:
     views: dict[tuple[str, int], dict[str, Any]] = field(default_factory=dict)  # for the HTML's viewer
     xfailed: dict[tuple[str, int], str] = field(default_factory=dict)  # expected failures: xfail reason
     side_by_side: dict[tuple[str, int], Path | bytes] = field(default_factory=dict)  # regressions: A | B
+    signal_plots: dict[tuple[str, int], Path | bytes] = field(default_factory=dict)  # requirements over time
     baseline_index: dict[tuple[str, int], dict[str, Any]] = field(default_factory=dict)
     bad_baseline_subjects: set[str] = field(default_factory=set)
     notes: list[str] = field(default_factory=list)
@@ -251,6 +252,12 @@ def pytest_navscenario_episode_report(config: pytest.Config, report: pytest.Test
             state.plots[key] = save_figure(fig, path)
         else:
             state.plots[key] = png_bytes(fig)
+        if rec.get("requirements") and (failed or state.settings.html is not None):
+            from ..report.requirement_plot import requirements_figure
+            signals = requirements_figure(episode)
+            if signals is not None:
+                state.signal_plots[key] = (save_figure(signals, path.with_name(f"{path.stem}-requirements.png"))
+                                           if to_file else png_bytes(signals))
         base = state.baseline_index.get(key)
         if (failed and base is not None and base["outcome"] == "success"
                 and base["scenario_hash"] == rec["scenario_hash"]):
@@ -390,9 +397,12 @@ def _write_html(config: pytest.Config, state: ReportState) -> None:
         side = state.side_by_side.get(key)
         side_png = side.read_bytes() if isinstance(side, Path) and side.is_file() else (
             side if isinstance(side, bytes) else None)
+        signals = state.signal_plots.get(key)
+        signals_png = signals.read_bytes() if isinstance(signals, Path) and signals.is_file() else (
+            signals if isinstance(signals, bytes) else None)
         entries.append(Entry(record=rec, plot_png=png, reproduce=_reproduce(config, rec),
                              view=state.views.get(key), compare_png=side_png,
-                             xfail_reason=state.xfailed.get(key)))
+                             xfail_reason=state.xfailed.get(key), requirements_png=signals_png))
     bars = None
     if state.comparison is not None and state.comparison.pairs:
         from ..report.plots import bars_figure, png_bytes
@@ -433,6 +443,11 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
         if n:
             _gate_line(tr, state.settings.mode, f"{n} scenario(s) the baseline passed fail now",
                        f"{n} regression(s) against the baseline")
+        kept = state.comparison.broke_requirements
+        if kept:
+            what = ", ".join(f"{label}: {name}" for label, name in kept[:5]) + (" ..." if len(kept) > 5 else "")
+            _gate_line(tr, state.settings.mode, f"{len(kept)} requirement(s) the baseline kept are violated now ({what})",
+                       f"{len(kept)} requirement(s) the baseline kept are violated now ({what})")
     files = [p for p in state.plots.values() if isinstance(p, Path)]
     if files:
         folders = sorted({str(p.parent) for p in files})

@@ -82,14 +82,16 @@ STATE_KEY = pytest.StashKey[SearchState]()
 
 
 
-def _make_job(name: str, path: Path, sensor_model: Any = None) -> Job:
+def _make_job(name: str, path: Path, sensor_model: Any = None, requirements: Any = None) -> Job:
     from ..core.errors import NavScenarioError
     from ..scenario.loader import load_scenario
+    from ..scenario.requirement_reading import with_shared
     from ..scenario.sensor_model import with_sensor_model
     from ..search.space import SearchSpace, invalid_reason
 
     try:
         seed = with_sensor_model(load_scenario(path), sensor_model)   # --nav-sensor-model
+        seed = with_shared(seed, requirements)                         # --nav-requirements
         if not seed.name:
             import dataclasses
             seed = dataclasses.replace(seed, name=path.stem)
@@ -118,7 +120,7 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     jobs = {}
     for name in settings.names:
         path = find_seed(name, core.settings.scenario_paths, Path(config.rootpath))
-        jobs[name] = _make_job(name, path, core.settings.sensor_model)
+        jobs[name] = _make_job(name, path, core.settings.sensor_model, core.settings.requirements)
     config.stash[STATE_KEY] = SearchState(settings, jobs, hasattr(config, "workerinput"))
 
 

@@ -184,12 +184,14 @@ def section(config: pytest.Config, entry: dict[str, Any]) -> Any:
         notes.append(f"stopped early: {r.stop_reason}")
     if entry.get("error"):
         notes.append(f"ERROR {entry['error']}")
+    from ..search.discards import discard_advice
+    advice = [a.line() for a in discard_advice(r.discarded, r.sims_used, getattr(entry.get("job"), "space", None))]
     rows = entry.get("rows") or []
     sec = SearchSection(
         title=title, facts=facts, progress=progress, failures=rows,
         outcomes=dict(Counter(c.outcome for c in r.candidates if c.phase == "search")),
         shrink_outcomes=dict(Counter(c.outcome for c in r.candidates if c.phase == "shrink")),
-        discarded=dict(r.discarded), skipped=r.skipped, notes=notes)
+        discarded=dict(r.discarded), skipped=r.skipped, notes=notes, discard_advice=advice)
     sec.chart_png = png_bytes(progress_figure(progress, title=f"{title}: how the search went"))
     return sec
 

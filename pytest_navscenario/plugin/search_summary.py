@@ -65,6 +65,8 @@ def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
              + f" + {r.shrink_sims} shrinking"
              + (f" (shrink budget {r.shrink_total})" if r.shrink_total else "") + f", {r.wall_time:.1f} s"]
     lines += _holding_lines(r)
+    from ..search.discards import discard_advice    # why many were discarded, what to change (issue 32)
+    lines += [f"  {a.line()}" for a in discard_advice(r.discarded, r.sims_used, getattr(entry["job"], "space", None))]
     unshrunk = sum(1 for f in r.failures if f.note.startswith("not shrunk: the shrink budget"))
     if unshrunk:
         lines.append(f"  {unshrunk} of {len(r.failures)} failure(s) frozen as found: the shrink budget "
@@ -88,7 +90,7 @@ def format_entry(entry: dict[str, Any], config: pytest.Config) -> list[str]:
         state = "new " if f.new else "kept"
         c = f.clearance
         held = f", {f.estimate.describe()}" if f.estimate is not None and f.estimate.runs else ""
-        lines.append(f"  {state} {_rel(config, f.path)}  {f.outcome}, clearance "
+        lines.append(f"  {state} {_rel(config, f.path)}  {f.what}, clearance "
                      + (f"{c:.3f} m" if math.isfinite(c) else "n/a") + held + ("" if f.new else " (already frozen)"))
     pictures = [row.picture for row in entry.get("rows") or [] if row.picture]
     if pictures:

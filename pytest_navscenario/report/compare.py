@@ -21,7 +21,7 @@ from typing import Any, Iterable, Sequence
 from .results_file import OUTCOMES, ResultsFileError, read_results
 from .stats import mcnemar_exact, rate_with_interval
 
-RATE_OUTCOMES = ("success", "safety-stop", "timeout", "collision", "fall", "subject-error")
+RATE_OUTCOMES = ("success", "safety-stop", "timeout", "collision", "fall", "requirement", "subject-error")
 # compared over the pairs both subjects passed: (record metrics key, label)
 METRICS = (("path_efficiency", "path efficiency"), ("duration", "duration (s)"),
            ("mean_speed", "mean speed (m/s)"), ("min_clearance", "min clearance (m)"))
@@ -106,6 +106,13 @@ class Comparison:
     subject_specs: dict[str, str] = field(default_factory=dict)
     extra_args: str = ""
     command_prefix: str = ""        # e.g. "cd /rootdir && "
+    # requirement_compare.RequirementComparison per requirement both sides checked (issue 34)
+    requirements: list = field(default_factory=list)
+
+    @property
+    def broke_requirements(self) -> list[tuple[str, str]]:
+        """(pair label, requirement): A kept the requirement, B violated it."""
+        return [(label, r.name) for r in self.requirements for label in r.broke]
 
     @property
     def broke(self) -> list[Pair]:
@@ -119,7 +126,7 @@ class Comparison:
 
     @property
     def has_regressions(self) -> bool:
-        return bool(self.broke)
+        return bool(self.broke) or bool(self.broke_requirements)
 
     def nothing_compared(self) -> str | None:
         """Why not a single pair was compared, or None when one was. Nothing compared is no
@@ -254,7 +261,9 @@ def compare_records(a: Sequence[dict[str, Any]], b: Sequence[dict[str, Any]], *,
     if ia and ib and not pairs:
         warnings.append(f"no scenario of {a_name} could be paired with one of {b_name}: "
                         f"were both runs made on the same suite?")
+    from .requirement_compare import compare_requirements
     return Comparison(
+        requirements=compare_requirements(pairs),
         a_name=a_name, b_name=b_name,
         a_subject=_subject_label(list(ia.values()), a_name, warnings),
         b_subject=_subject_label(list(ib.values()), b_name, warnings),
@@ -287,8 +296,9 @@ def _p(p: float) -> str:
     return "<0.001" if p < 0.001 else f"{p:.3f}"
 
 
+OPTIONAL_OUTCOMES = ("subject-error", "fall", "requirement")   # a column only when some episode had it
 SHORT = {"success": "success", "safety-stop": "safety-stop", "timeout": "timeout",
-         "collision": "collision", "fall": "fall", "subject-error": "error"}
+         "collision": "collision", "fall": "fall", "requirement": "requirement", "subject-error": "error"}
 
 
 def format_comparison(cmp: Comparison, *, max_listed: int = 50, max_unpaired: int | None = None,
@@ -299,7 +309,7 @@ def format_comparison(cmp: Comparison, *, max_listed: int = 50, max_unpaired: in
              f"{len(cmp.pairs)} paired scenario runs (same nodeid and repeat index); rates over these pairs",
              "with 95 % Wilson intervals; change = B - A success; p = exact McNemar test on success"]
     outcomes = [o for o in RATE_OUTCOMES        # errors and falls get a column when there are any
-                if o not in ("subject-error", "fall") or cmp.overall.a[o].count or cmp.overall.b[o].count]
+                if o not in OPTIONAL_OUTCOMES or cmp.overall.a[o].count or cmp.overall.b[o].count]
     fw = max([14] + [len(f.family) for f in cmp.families])
     header = f"{'family':<{fw}} {'n':>4}  {'':2}" + "".join(f" {SHORT[o]:>15}" for o in outcomes) \
         + f" {'change':>8} {'broke':>5} {'fixed':>5} {'p':>6}"
@@ -339,6 +349,8 @@ def format_comparison(cmp: Comparison, *, max_listed: int = 50, max_unpaired: in
                 + (f" ({p.b.get('message')})" if p.b.get("message") and not _passed(p.b) else ""),
                 f"    reproduce: {cmp.reproduce_command(p)}"]
 
+    from .requirement_compare import format_requirements
+    lines += format_requirements(cmp.requirements, max_listed)
     listing("B broke (regressions: A passed, B failed)", broke, pair_lines)
     listing("B fixed (A failed, B passed)", fixed, pair_lines)
     listing("not comparable", cmp.not_comparable, lambda u: [f"  {u.label}: {u.reason}"])
@@ -350,6 +362,8 @@ def format_comparison(cmp: Comparison, *, max_listed: int = 50, max_unpaired: in
     lines.append("")
     verdict = (f"{len(broke)} regression(s), {len(fixed)} fix(es)" if cmp.pairs
                else "nothing to compare")
+    if cmp.broke_requirements:
+        verdict += f", {len(cmp.broke_requirements)} requirement(s) A kept that B violates"
     lines.append(f"result: {verdict}; {len(cmp.not_comparable)} not comparable, "
                  f"{len(cmp.only_a)} only in A, {len(cmp.only_b)} only in B")
     return "\n".join(lines)

@@ -71,7 +71,7 @@ def holding_rows(records: list[dict[str, Any]], measured: dict[tuple[str, str], 
                      "measured": prov.get("failure_probability"), "measured_interval":
                      prov.get("failure_probability_interval"), "measured_runs": prov.get("confirmation_runs"),
                      "threshold": threshold, "holds": not (threshold and hi < threshold) and k > 0,
-                     "mujoco_version": prov.get("mujoco_version")})
+                     "confirmation": prov.get("confirmation"), "mujoco_version": prov.get("mujoco_version")})
     return rows
 
 
@@ -85,11 +85,7 @@ def format_holding(rows: list[dict[str, Any]]) -> str:
              + (f"; {len(lost)} no longer hold:" if lost else ":")]
     for r in sorted(rows, key=lambda r: r["holds"]):
         lo, hi = r["interval"]
-        was = ""
-        if r["measured"] is not None:
-            mlo, mhi = r["measured_interval"] or (0.0, 1.0)
-            was = (f"; the search measured {r['measured']:.2f} ({mlo:.2f}-{mhi:.2f}) over "
-                   f"{r['measured_runs'] or 1} run(s)")
+        was = _measured_text(r)
         verdict = ("holds" if r["holds"] else "FIXED (passes every run)" if not r["failed"]
                    else f"NO LONGER HOLDS (below the threshold {r['threshold']:g})")
         lines.append(f"  {r['path']}::{r['scenario']}: fails in {r['failed']}/{r['runs']} runs "
@@ -98,3 +94,17 @@ def format_holding(rows: list[dict[str, Any]]) -> str:
         if note:
             lines.append(f"    {note}")
     return "\n".join(lines)
+
+
+def _measured_text(row: dict[str, Any]) -> str:
+    """What the search measured when it froze the failure, in words that cannot be mistaken for
+    a 95 % interval where there was none: a scenario without randomness fails every run, and one
+    run decided it; otherwise the rate over its runs, then the interval, labelled."""
+    if row.get("confirmation") == "exact":
+        return "; the search found it fails every run (the scenario has no randomness: one run decides)"
+    if row["measured"] is None:
+        return ""
+    runs = int(row["measured_runs"] or 1)
+    mlo, mhi = row["measured_interval"] or (0.0, 1.0)
+    return (f"; the search measured a failure rate of {row['measured']:.2f} over {runs} run"
+            f"{'s' if runs != 1 else ''} (95 % {mlo:.2f}-{mhi:.2f})")

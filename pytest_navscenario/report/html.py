@@ -28,7 +28,8 @@ from ..core.files import atomic_write_text
 if TYPE_CHECKING:  # pragma: no cover
     from .compare import Comparison
 
-OUTCOMES = ("success", "safety-stop", "timeout", "collision", "fall", "subject-error")
+OUTCOMES = ("success", "safety-stop", "timeout", "collision", "fall", "requirement", "subject-error")
+_OPTIONAL = ("subject-error", "fall", "requirement")     # a column only when some episode had it
 METRICS = (("min_clearance", "min clearance (m)", 2), ("min_obstacle_gap", "narrowest gap (m)", 2),
            ("path_efficiency", "path efficiency", 2), ("duration", "duration (s)", 1),
            ("mean_speed", "mean speed (m/s)", 2))
@@ -43,6 +44,7 @@ class Entry:
     view: dict[str, Any] | None = None   # view_data(result): the interactive time-slider view
     compare_png: bytes | None = None     # a regression: the scenario under the baseline | this run
     xfail_reason: str | None = None      # marked xfail and failed as expected (pytest's wasxfail)
+    requirements_png: bytes | None = None  # each requirement's signals and thresholds over time (issue 34)
 
     @property
     def failed(self) -> bool:
@@ -110,8 +112,9 @@ def view_data(result: Any, max_points: int = 400) -> dict[str, Any] | None:
     """A compact, JSON-able picture of one episode for the report's interactive viewer: obstacle
     outlines, footprint, goal, and the poses and speeds at up to ``max_points`` instants; moving
     obstacles (``mov``: index into ``obs``, offsets dx/dy at the same instants) move with the slider;
-    on terrain the ground's shading, the elements' outlines, the base's height and pitch and where
-    it fell or tipped over (``_terrain_view``)."""
+    the obstacles' names (``on``); on terrain the ground's shading, the elements' outlines and names,
+    the base's height, pitch and roll and where it fell or tipped over (``_terrain_view``). The
+    viewer (report.js) draws them on axes in metres with a scale bar."""
     import numpy as np
 
     from ..scenario.geometry import obstacle_polygon
@@ -137,6 +140,7 @@ def view_data(result: Any, max_points: int = 400) -> dict[str, Any] | None:
         "x": np.round(pose[:, 0], 3).tolist(), "y": np.round(pose[:, 1], 3).tolist(),
         "yaw": np.round(pose[:, 2], 3).tolist(), "v": np.round(np.hypot(vel[:, 0], vel[:, 1]), 2).tolist(),
         "obs": [np.round(np.asarray(obstacle_polygon(o).exterior.coords), 3).tolist() for o in s.obstacles],
+        "on": [o.name for o in s.obstacles],       # their names, written on them (and moved with them)
         "fp": {"shape": fp.shape, "length": fp.length, "width": fp.width, "radius": fp.radius},
         "goal": [s.mission.goal.x, s.mission.goal.y, s.mission.goal_tolerance.position],
         "vmax": max(0.1, float(s.robot.limits.max_speed)),
@@ -163,10 +167,13 @@ def _terrain_view(result: Any, idx: Any, pose: Any) -> dict[str, Any]:
     out: dict[str, Any] = {
         "gnd": {"png": shading_png(s, (x0, x1, y0, y1)), "ext": [round(v, 3) for v in (x0, x1, y0, y1)]},
         "ter": [np.round(ground.outline(el), 3).tolist() for el in s.terrain],
+        "tn": [ground.describe_element(el) for el in s.terrain],   # "platform 'dock'", on its outline
     }
     if getattr(traj, "z", None) is not None and getattr(traj, "pitch", None) is not None:
         out["z"] = np.round(np.asarray(traj.z, dtype=float)[idx], 3).tolist()
         out["pitch"] = np.round(-np.degrees(np.asarray(traj.pitch, dtype=float)[idx]), 1).tolist()
+        if getattr(traj, "roll", None) is not None:
+            out["roll"] = np.round(np.degrees(np.asarray(traj.roll, dtype=float)[idx]), 1).tolist()
     event = getattr(result, "terrain_event", None)
     if event is not None:
         out["ev"] = {"x": round(event.x, 3), "y": round(event.y, 3), "t": round(event.time - 0.005, 2),
@@ -196,7 +203,7 @@ def _summary(records: Sequence[dict[str, Any]]) -> dict[str, Any]:
     groups = sorted(families.items())
     if len(groups) > 1:
         groups.append(("all", list(records)))
-    outcomes = [o for o in OUTCOMES if o not in ("subject-error", "fall") or any(r["outcome"] == o for r in records)]
+    outcomes = [o for o in OUTCOMES if o not in _OPTIONAL or any(r["outcome"] == o for r in records)]
     rows = [{"family": fam, "n": len(recs), "counts": Counter(r["outcome"] for r in recs)} for fam, recs in groups]
     return {"outcomes": outcomes, "rows": rows}
 
@@ -210,7 +217,7 @@ def _comparison(cmp: "Comparison | None") -> dict[str, Any] | None:
 
     fams = cmp.families + ([cmp.overall] if len(cmp.families) > 1 else [])
     return {
-        "outcomes": [o for o in RATE_OUTCOMES if o not in ("subject-error", "fall")
+        "outcomes": [o for o in RATE_OUTCOMES if o not in _OPTIONAL
                      or cmp.overall.a[o].count or cmp.overall.b[o].count],
         "families": fams,
         "metrics": CMP_METRICS,

@@ -16,13 +16,17 @@ Record fields (format_version 1)::
                       conftest hook provided it)
     seed              the episode's effective noise seed
     repeat            repeat index (0 unless --nav-repeat)
-    outcome           "success" | "collision" | "fall" | "safety-stop" | "timeout" | "subject-error"
+    outcome           "success" | "collision" | "fall" | "safety-stop" | "requirement" | "timeout" |
+                      "subject-error"
     passed            outcome == success
     message           one line: why this outcome
     metrics           Metrics.as_dict(); non-finite floats written as null (strict JSON)
     collision         null, or who hit whom: {"obstacle", "time", "robot_moving" (false: the robot
                       stood still and was hit), "robot_speed", "obstacle_speed"} (m/s)
     wall_time         s
+    requirements      the scenario's requirements checked (issue 34), each {"name", "spec",
+                      "robustness" (in "unit"; < 0 violated), "violated", "first_violation" (s or
+                      null), "unit", "scale", "span"}; [] without requirements
     error             only in the record of an episode that never finished: what ended it
                       ("WorkerDied": its process died 3 times; "RayTaskLost"; or the exception's
                       type); its outcome is "subject-error" and its metrics are null
@@ -48,7 +52,7 @@ from ..scenario.model import content_hash
 FORMAT = "navscenario-results"
 FORMAT_VERSION = 1
 REQUIRED_FIELDS = ("nodeid", "scenario", "family", "scenario_hash", "subject", "outcome", "metrics")
-OUTCOMES = ("success", "collision", "fall", "safety-stop", "timeout", "subject-error")
+OUTCOMES = ("success", "collision", "fall", "safety-stop", "requirement", "timeout", "subject-error")
 
 
 class ResultsFileError(NavScenarioError):
@@ -85,6 +89,7 @@ def make_record(result: EpisodeResult, *, nodeid: str, path: str, repeat: int = 
         "metrics": json_safe(result.metrics.as_dict()),
         "collision": _collision_record(result),
         "wall_time": result.wall_time,
+        "requirements": [json_safe(r.as_dict()) for r in result.requirements],
         **({"error": result.error} if result.error is not None else {}),
     }
 

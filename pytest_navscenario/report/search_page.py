@@ -26,7 +26,7 @@ from ..core.files import atomic_write_text
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-OUTCOME_ORDER = ("success", "safety-stop", "timeout", "collision", "subject-error", "harness-error")
+OUTCOME_ORDER = ("success", "safety-stop", "requirement", "timeout", "collision", "subject-error", "harness-error")
 
 
 @dataclass
@@ -78,6 +78,7 @@ class SearchSection:
     discarded: dict[str, int] = field(default_factory=dict)        # reason -> count
     skipped: int = 0
     notes: list[str] = field(default_factory=list)                 # cut short, unshrunk, errors
+    discard_advice: list[str] = field(default_factory=list)        # why many were discarded, what to change
     chart_png: bytes | None = None
 
     @property

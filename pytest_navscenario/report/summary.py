@@ -53,7 +53,7 @@ def format_summary(records: list[dict[str, Any]]) -> str:
     if len(groups) > 1:
         groups[ALL] = list(records)
     outcomes = list(RATE_OUTCOMES)
-    for extra in ("fall", "subject-error"):          # a column only when some episode had it
+    for extra in ("fall", "requirement", "subject-error"):          # a column only when some episode had it
         if any(r["outcome"] == extra for r in records):
             outcomes.append(extra)
 

@@ -1,6 +1,6 @@
 """Terrain in the pictures: the map shaded by the ground's height with contour lines and the
 elements' outlines and names, where the robot fell, tipped over or got stuck, and a side profile of
-the route (the ground under it, the base's height and its pitch along the distance driven).
+the route (the ground under it, the base's height, its pitch and roll along the distance driven).
 
 Called by ``plots.py`` (maps, side-by-side) and ``html.py`` (the time-slider's shading) only for
 scenarios with terrain: a flat scenario's pictures are unchanged. matplotlib is imported inside the
@@ -60,10 +60,12 @@ def _norm(heights: np.ndarray) -> Any:
 
 
 def draw_terrain(ax: "Axes", scenario: Any, extent: tuple[float, float, float, float], *,
-                 colorbar: bool = True) -> Any:
+                 colorbar: bool = True, labels: Any = None) -> Any:
     """The ground's height as shading and contour lines under everything else, the elements'
     outlines with their names, and (``colorbar``) a height scale right of the map, under the
-    legend; returns the shading."""
+    legend; returns the shading. With ``labels`` (a labels.LabelPlacer) the names are placed
+    clear of the other labels and the markers (the goal, a gap's width), on the element when
+    there is room, else beside it."""
     from matplotlib.collections import PolyCollection
 
     xs, ys, z = ground_grid(scenario, extent)
@@ -85,12 +87,18 @@ def draw_terrain(ax: "Axes", scenario: Any, extent: tuple[float, float, float, f
     outlines = [ground.outline(el) for el in scenario.terrain]
     ax.add_collection(PolyCollection(outlines, closed=True, facecolors="none", edgecolors="#4e342e",
                                      linewidths=0.9, zorder=1.5), autolim=False)
+    style = dict(fontsize=6.5, color="#3e2723", zorder=8,
+                 bbox=dict(boxstyle="round,pad=0.12", fc="#fff8e1", ec="none", alpha=0.75))
     for el, corners in zip(scenario.terrain, outlines):
         cx, cy = corners.mean(axis=0)
-        if x0 <= cx <= x1 and y0 <= cy <= y1:
-            ax.annotate(ground.describe_element(el), (cx, cy), ha="center", va="center", fontsize=6.5,
-                        color="#3e2723", zorder=8,
-                        bbox=dict(boxstyle="round,pad=0.12", fc="#fff8e1", ec="none", alpha=0.75))
+        if not (x0 <= cx <= x1 and y0 <= cy <= y1):
+            continue
+        if labels is None:
+            ax.annotate(ground.describe_element(el), (cx, cy), ha="center", va="center", **style)
+        else:
+            from .labels import ring
+            labels.add(ground.describe_element(el), (float(cx), float(cy)), priority=3,
+                       offsets=[(0.0, 0.0), *ring((10.0, 22.0, 40.0, 64.0))], **style)
     return shade
 
 
@@ -102,32 +110,37 @@ def draw_terrain_event(ax: "Axes", result: Any) -> None:
     marker, colour, what = EVENT_MARKERS.get(event.kind, ("X", "#8d1b1b", event.kind))
     where = f" {event.element}" if event.element else ""
     extra = f", {event.drop:.2f} m drop" if event.kind == "fell" and event.drop else ""
-    ax.plot(event.x, event.y, marker=marker, ms=13, color=colour, mec="white", zorder=12, ls="none",
+    ax.plot(event.x, event.y, marker=marker, ms=13, color=colour, mec="white", zorder=13, ls="none",
             label=f"{what}{where} t={event.time:.1f} s{extra}")
 
 
 def route_profile(result: Any) -> dict[str, np.ndarray]:
     """Along the route: distance driven (m, horizontal), the ground under the base, the base's
-    height (the ground for the planar body) and its pitch (degrees, positive nose up)."""
+    height (the ground for the planar body), its pitch (degrees, positive nose up) and its roll
+    (degrees)."""
     traj = result.trajectory
     pose = np.asarray(traj.pose, dtype=float)
     if not len(pose):
-        return {"s": np.zeros(0), "ground": np.zeros(0), "z": np.zeros(0), "pitch": np.zeros(0)}
+        return {"s": np.zeros(0), "ground": np.zeros(0), "z": np.zeros(0), "pitch": np.zeros(0),
+                "roll": np.zeros(0)}
     step = np.hypot(np.diff(pose[:, 0]), np.diff(pose[:, 1]))
     dist = np.concatenate([[0.0], np.cumsum(step)])
     under = ground.ground_height(result.scenario, pose[:, 0], pose[:, 1])
     z = np.asarray(traj.z, dtype=float) if getattr(traj, "z", None) is not None else under
     pitch = (-np.degrees(np.asarray(traj.pitch, dtype=float)) if getattr(traj, "pitch", None) is not None
              else np.zeros(len(pose)))
-    return {"s": dist, "ground": under, "z": z, "pitch": pitch}
+    roll = (np.degrees(np.asarray(traj.roll, dtype=float)) if getattr(traj, "roll", None) is not None
+            else np.zeros(len(pose)))
+    return {"s": dist, "ground": under, "z": z, "pitch": pitch, "roll": roll}
 
 
 def draw_profile(ax: "Axes", results: Sequence[Any], labels: Sequence[str] = (), colours: Sequence[str] = ()
                  ) -> None:
     """The side profile: the ground under each route (shaded), the base's height (a line) and its
-    pitch (dashed, on the right-hand axis, degrees nose up), against the distance driven."""
+    pitch (dashed) and roll (dotted) on the right-hand axis in degrees, against the distance
+    driven; so a tip-over by roll shows as plainly as one by pitch."""
     twin = ax.twinx()
-    top = 0.0
+    top, angles = 0.0, [0.0]
     for k, result in enumerate(results):
         prof = route_profile(result)
         if not len(prof["s"]):
@@ -140,23 +153,54 @@ def draw_profile(ax: "Axes", results: Sequence[Any], labels: Sequence[str] = (),
                             label="ground under the route")
         ax.plot(prof["s"], prof["z"], color=colour, lw=1.4, label=f"{label}base height")
         twin.plot(prof["s"], prof["pitch"], color=colour, lw=1.0, ls="--", alpha=0.8, label=f"{label}pitch")
-        event = getattr(result, "terrain_event", None)
-        if event is not None:
-            i = int(np.argmin(np.abs(np.asarray(result.trajectory.t) - event.time)))
-            marker, c, what = EVENT_MARKERS.get(event.kind, ("X", "#8d1b1b", event.kind))
-            ax.plot(prof["s"][i], prof["z"][i], marker=marker, ms=10, color=c, mec="white", ls="none",
-                    zorder=5, label=f"{label}{what}")
+        twin.plot(prof["s"], prof["roll"], color="#c2185b" if len(results) == 1 else colour, lw=1.0, ls=":",
+                  alpha=0.9, label=f"{label}roll")
+        angles += [float(np.nanmin(prof["pitch"])), float(np.nanmax(prof["pitch"])),
+                   float(np.nanmin(prof["roll"])), float(np.nanmax(prof["roll"]))]
+        _profile_event(ax, result, prof, label)
         top = max(top, float(prof["s"][-1]))
     ax.set_xlim(0.0, max(top, 0.1) * 1.02)          # room for a marker at the end
     ax.set_xlabel("distance driven (m)")
     ax.set_ylabel("height (m)")
-    twin.set_ylabel("pitch (deg, nose up)", fontsize=8)
-    twin.tick_params(labelsize=7)
+    _angle_axis(twin, angles)
     ax.grid(True, color="#e0e0e0", lw=0.5)
     handles = ax.get_legend_handles_labels()
     extra = twin.get_legend_handles_labels()
-    ax.legend(handles[0] + extra[0], handles[1] + extra[1], loc="upper left", fontsize=6.5, framealpha=0.85,
-              ncol=2)
+    # right of the profile, beside its angle axis, in the figure's right margin: inside the plot
+    # it covered the base's height where the route starts at the top
+    import textwrap
+
+    width_in = ax.get_position().width * ax.figure.get_size_inches()[0]
+    names = [textwrap.fill(n, 24, break_on_hyphens=False) for n in handles[1] + extra[1]]
+    ax.legend(handles[0] + extra[0], names, loc="upper left", fontsize=6.5, frameon=False,
+              bbox_to_anchor=(1.0 + 0.6 / width_in, 1.04), borderaxespad=0.0, handlelength=1.8)
+
+
+def _profile_event(ax: "Axes", result: Any, prof: dict[str, np.ndarray], label: str) -> None:
+    """Where the robot fell, tipped over or got stuck, on the base's height line."""
+    event = getattr(result, "terrain_event", None)
+    if event is None:
+        return
+    i = int(np.argmin(np.abs(np.asarray(result.trajectory.t) - event.time)))
+    marker, c, what = EVENT_MARKERS.get(event.kind, ("X", "#8d1b1b", event.kind))
+    ax.plot(prof["s"][i], prof["z"][i], marker=marker, ms=10, color=c, mec="white", ls="none",
+            zorder=5, label=f"{label}{what}")
+
+
+def _angle_axis(twin: "Axes", angles: list[float]) -> None:
+    """The right-hand axis of pitch and roll: plain degrees (no offset text such as
+    "1e-12+9.999993304e-1", which read as 9 degrees for one) over at least -5..5 degrees, so that
+    noise in a flat drive is not blown up to fill the axis."""
+    from matplotlib.ticker import ScalarFormatter
+
+    lo, hi = min(min(angles), -5.0), max(max(angles), 5.0)
+    pad = 0.08 * (hi - lo)
+    twin.set_ylim(lo - pad, hi + pad)
+    formatter = ScalarFormatter(useOffset=False)
+    formatter.set_scientific(False)
+    twin.yaxis.set_major_formatter(formatter)
+    twin.set_ylabel("pitch (nose up), roll (deg)", fontsize=8)
+    twin.tick_params(labelsize=7)
 
 
 def shading_png(scenario: Any, extent: tuple[float, float, float, float], samples: int = 160) -> str:

@@ -6,5 +6,6 @@ Foxglove open, and seed scenarios written as ordinary YAML with a note of everyt
 carried over.
 
 Read first: ``bag_writer.py``, then ``bag_import/`` (its ``__init__`` lists its modules),
-``map_import.py``, ``world_import.py`` with ``aerialist.py`` and ``qgc_plan.py``.
+``map_import.py``, ``world_import.py`` with ``plugin_motion.py`` (models that compiled Gazebo
+plugins move), ``aerialist.py`` and ``qgc_plan.py``.
 """

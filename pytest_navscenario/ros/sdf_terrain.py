@@ -45,8 +45,11 @@ def heightmap_terrain(path: Path, where: str, shape: ET.Element, pose: tuple[flo
         else (0.0, 0.0, 0.0)
     found = find(path, uri)
     if found is None:
+        model = uri[len("model://"):].split("/", 1)[0] if uri.startswith("model://") else ""
+        hint = (f"; pass --model-path with the folder that holds the model '{model}' (e.g. a Gazebo models "
+                f"folder)" if model else "")
         out.warnings.append(f"{where}: heightmap {uri}: no such file beside the world, looked in {path.parent} "
-                            f"and its models/ folder (not imported)")
+                            f"and its models/ folder{hint} (not imported)")
         return
     try:
         values = read_height_file(found)

@@ -7,8 +7,9 @@
   world. The box, cylinder, polyline (a polygon obstacle) and mesh (STL/OBJ found beside the world,
   copied beside the seed) collision geometry of static models becomes obstacles, with the model,
   link and collision poses composed (a world ``<state>`` pose overrides the model's, as Gazebo does
-  on load). A model with plugins (which may move it) is imported where it stands, with a note that
-  what the plugins do is not carried over. Planes are ignored; everything else (other meshes,
+  on load). A model with plugins (compiled code that may move it: DynaBARN's obstacles) is left
+  out, said once, and given back moving with ``--plugin-motion`` (``plugin_motion.py``). Planes
+  are ignored; everything else (other meshes,
   spheres, includes, tilted shapes, non-static models without plugins) is listed in a warning,
   never dropped silently. A ``<heightmap>`` (a PNG) becomes heightfield terrain, its image copied
   beside the seed (``sdf_terrain.py``); the robot then needs a body that rides the ground. A file
@@ -23,6 +24,7 @@ import argparse
 import dataclasses
 import math
 import os
+import re
 import sys
 import tempfile
 import xml.etree.ElementTree as ET
@@ -33,6 +35,7 @@ from ..core.errors import NavScenarioError
 from ..core.files import usual_mode
 from .aerialist import aerialist_obstacles, mission_from_plan, read_aerialist  # noqa: F401 (re-exported)
 from ..scenario.model import BoxObstacle, CylinderObstacle, Mission, Obstacle, Pose, Scenario
+from .plugin_motion import compiled_plugins, given_motion, left_out_warning, movers_in_walls
 from .robot_options import add_robot_arguments, mission_timeout, robot_from_args
 
 
@@ -122,6 +125,8 @@ class SdfWorld:
     meshes: dict[str, bytes] = field(default_factory=dict)   # files to write beside the seed
     roots: tuple[Path, ...] = ()                              # folders meshes may come from
     terrain: list = field(default_factory=list)              # <heightmap>s as heightfields (sdf_terrain.py)
+    # models that compiled plugins move, left out (plugin_motion.py): name -> (libraries, their obstacles)
+    plugin_moved: dict = field(default_factory=dict)
 
 
 def _pose6(elem: ET.Element | None, where: str, path: Path) -> tuple[float, ...]:
@@ -193,7 +198,15 @@ def sdf_obstacles(path: str | Path, model_path: tuple[str | Path, ...] = ()) -> 
                                 f"supported (not imported)")
     tilt = math.radians(1.0)
     for model in world.findall("model"):
+        libs = compiled_plugins(model)
+        before, said = len(out.obstacles), len(out.warnings)
         _model(path, model, (0.0,) * 6, state_poses, out, tilt, top=True)
+        if libs:     # moved by compiled code: left out, said once for all (plugin_motion.py)
+            out.plugin_moved[model.get("name", "?")] = (libs, out.obstacles[before:])
+            out.obstacles = out.obstacles[:before]
+            out.warnings = out.warnings[:said] + [w for w in out.warnings[said:] if " plugin(s) " not in w]
+    if out.plugin_moved:
+        out.warnings.append(left_out_warning(out.plugin_moved))
     _one_of_each_pile(out)
     return out
 
@@ -256,7 +269,7 @@ def _one_of_each_pile(out: SdfWorld) -> None:
             names = [out.obstacles[i].name for i in members]
             o = out.obstacles[members[0]]
             shown = ", ".join(names[:6]) + (", ..." if len(names) > 6 else "")
-            out.warnings.append(f"{len(names)} identical models stand at one spot ({o.x:g}, {o.y:g}): {shown}; "
+            out.warnings.append(f"identical models, {len(names)} of them, stand at one spot ({o.x:g}, {o.y:g}): {shown}; "
                                 f"imported once, as {names[0]} (a dynamic world piles up the models its plugins "
                                 f"move: write their motion by hand)")
             drop.update(members[1:])
@@ -424,8 +437,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--model-path", action="append", default=[], metavar="DIR",
                    help="sdf: a folder where model:// meshes may also be found (like GAZEBO_MODEL_PATH; repeat for "
                         "more); meshes are read only from the world's folder and these")
+    p.add_argument("--plugin-motion", default=None, metavar="FILE.yaml",
+                   help="sdf: the motion of models that compiled Gazebo plugins move (left out otherwise, e.g. "
+                        "DynaBARN's obstacles): a YAML mapping of model name to an obstacles[].motion mapping, e.g. "
+                        "'easylibobs_66: {path: [[-2, 11], [-2, -11]], speed: 1.2, mode: loop}'")
     p.add_argument("--name", default="", metavar="TEXT", help="scenario name (default: the output file's stem)")
     p.add_argument("--force", action="store_true", help="overwrite an existing output file")
+
+
+_LINE = re.compile(r"^\d+: ")     # a repair's warning starts with its line number
 
 
 def run(args: argparse.Namespace) -> int:
@@ -442,12 +462,21 @@ def run(args: argparse.Namespace) -> int:
         waypoints = ()
         world = sdf_obstacles(src, tuple(args.model_path))
         obstacles = world.obstacles
+        if args.plugin_motion:
+            moving = given_motion(world.plugin_moved, args.plugin_motion)
+            obstacles = obstacles + moving
+            left = {n: v for n, v in world.plugin_moved.items() if n not in {o.name for o in moving}}
+            said = left_out_warning(world.plugin_moved)
+            world.warnings = [w for w in world.warnings if w != said] + ([left_out_warning(left)] if left else [])
+            notes.append(f"{len(moving)} plugin-moved model(s) moving as {args.plugin_motion} says: "
+                         + ", ".join(o.name for o in moving))
+            world.warnings.extend(movers_in_walls(obstacles))
         extra = world.meshes
         notes.extend(world.notes)
         if world.ignored_planes:
             notes.append(f"{world.ignored_planes} plane(s) ignored (the ground)")
         for w in world.warnings:   # a repair starts with its line number: file:line: as editors read it
-            print(f"navscenario import: warning: {src}:{w}" if w[:1].isdigit() else
+            print(f"navscenario import: warning: {src}:{w}" if _LINE.match(w) else
                   f"navscenario import: warning: {src}: {w}", file=sys.stderr)
         if world.warnings:
             print(f"navscenario import: warning: {len(world.warnings)} warning(s) about {src} (listed above)",
@@ -457,11 +486,12 @@ def run(args: argparse.Namespace) -> int:
                         obstacles=tuple(obstacles), robot=robot, name=args.name, terrain=terrain,
                         description=f"Imported from {args.format} file {src.name}.")
     if terrain and scenario.robot.body.kind == "planar":   # the planar body cannot ride terrain: guess
-        from ..scenario.terrain import WheeledBody
+        from ..scenario.bodies import WheeledBody
         scenario = dataclasses.replace(scenario, robot=dataclasses.replace(scenario.robot, body=WheeledBody(),
                                                                            drive="diff"))
         notes.append("robot.body: wheeled, drive: diff (a guess: the world does not say which robot drives it; "
                      "set robot.body)")
+        robot_note = robot_note.replace(f", {robot.drive} drive,", ", diff drive,")   # what the seed has
     if terrain:          # the route's length reads the heightfields: from their files, staged as beside the seed
         with tempfile.TemporaryDirectory() as tmp:
             for name, data in extra.items():

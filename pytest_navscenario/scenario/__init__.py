@@ -4,17 +4,26 @@ In: YAML text or files (or plain dicts). Out: a frozen ``Scenario`` (robot, miss
 simulation settings, marks, search bounds), validated with ``file:line: field: message (fix: ...)``
 errors, and YAML that loads back to the same value.
 
-Read first: ``model.py`` (the dataclasses and their units), then ``loader.py`` (validation),
+Read first: ``model.py`` (the dataclasses and their units), then ``loader.py`` (validation; every
+mistake of a file in one pass, kept by ``context.py``),
 ``dump.py`` (writing), ``yaml_tree.py`` (the line-tracking YAML reader), ``geometry.py``
 (footprints and obstacle outlines as shapely polygons), ``motion.py`` (where a moving obstacle is at
-a time: the one function the simulation, the verdict and the pictures share), ``terrain.py`` (terrain
-elements and bodies as data), and the subpackage ``ground/`` (the ground as MuJoCo-free geometry:
-heights, pieces, height grids, what a body can cross, a wheeled chassis' stability; its docstring
-says why it lives here), ``mjcf_files.py`` (an MJCF robot's files).
+a time: the one function the simulation, the verdict and the pictures share).
 
 The format as data: ``keys.py`` (each key's type, range, default, unit, declared beside its
 dataclass), ``format.py`` (the top level), ``reading.py`` (reading by declaration), ``json_schema.py``
 and ``modeline.py`` (the JSON Schema for editors and the first line of written files).
+
+Terrain and bodies: the subpackages ``terrain/`` (the terrain elements, one module each building
+its own pieces, and the 3D lidar; the registry ``ELEMENT_MODULES``) and ``bodies/`` (the kinds of
+body, one module each giving a ``BodyKind`` record; the registry ``BODY_MODULES``; ``chassis.py`` a
+wheeled body's layout), ``mjcf_files.py`` (an MJCF robot's files), and the subpackage ``ground/``:
+the ground's geometry, MuJoCo-free, here because the simulation, the verdict, the pictures, the search and the importers all
+read it and this is the lowest layer they share (``surface.py`` the height under any point and each
+element's pieces, ``heightmap.py`` height grids, ``crossing.py`` what a body can cross).
+
+Requirements: ``requirements.py`` and ``requirement_reading.py`` (the ``signals:`` and
+``requirements:`` sections, STL formulas parsed at load; the shared requirements file).
 """
 from .model import (  # noqa: F401  (the model is the public face of this package)
     SCHEMA_VERSION,

@@ -12,7 +12,9 @@ from ..core.files import atomic_write_text
 from . import keys as K
 from .loader import LATENCY_KEYS, LIDAR_KEYS, LIMITS_KEYS, LOCALISATION_KEYS
 from .model import LIDAR, PERTURB, BoxObstacle, Mark, MeshObstacle, Motion, Obstacle, PolygonObstacle, Pose, Scenario
-from .terrain import BODY, LIDAR3D, PlanarBody
+from .requirements import Signal
+from .bodies import BODY, PlanarBody
+from .terrain import LIDAR3D
 
 
 def _f(value: Any) -> float:
@@ -96,6 +98,21 @@ def _motion_dict(motion: Motion) -> dict[str, Any]:
             "mode": motion.mode, "start": _f(motion.start)}
 
 
+def _signal_dict(signal: Signal) -> dict[str, Any]:
+    out: dict[str, Any] = {"name": signal.name}
+    if signal.distance_to:
+        out["distance_to"] = list(signal.distance_to)
+    elif signal.inside is not None:
+        region = signal.inside
+        out["inside"] = ({"x": _f(region.x), "y": _f(region.y), "radius": _f(region.radius)}
+                         if region.radius is not None else {"points": [[_f(a), _f(b)] for a, b in region.points]})
+    elif signal.speed_toward:
+        out["speed_toward"] = signal.speed_toward
+    else:
+        out["function"] = signal.function
+    return out
+
+
 def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
     """The scenario as plain data in the documented key order. Physical settings (robot, mission,
     obstacles, simulation) are always written in full, so a saved file does not depend on defaults;
@@ -163,6 +180,11 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
             out["reference"] = {"points": [[_f(t), _f(x), _f(y)] for t, x, y in s.reference.points]}
         if s.reference.compare != "time":
             out["reference"]["compare"] = s.reference.compare
+    if s.signals:
+        out["signals"] = [_signal_dict(x) for x in s.signals]
+    if s.requirements:
+        out["requirements"] = [{"name": r.name, "spec": r.spec, **({"scale": _f(r.scale)} if r.scale else {})}
+                               for r in s.requirements]
     if s.search is not None:
         out["search"] = _plain(dict(s.search))
     if s.provenance is not None:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from .keys import REQUIRED, Free, Marks, Rule, Section, Sub, Text, Version, section, walk
 from .model import MISSION, OBSTACLES, REFERENCE, ROBOT, SCHEMA_VERSION, SIMULATION, Scenario
+from .requirements import REQUIREMENTS, SIGNALS
 from .search_keys import SEARCH
 from .terrain import TERRAIN
 
@@ -30,6 +31,8 @@ SCENARIO = section(Scenario, "", "a navigation test case: robot, mission, obstac
     TERRAIN,
     Sub("simulation", "", "physics step, control rate and noise seed", section=SIMULATION),
     Sub("reference", "", "a recorded trajectory to compare the run with", section=REFERENCE, default=None),
+    SIGNALS,
+    REQUIREMENTS,
     Sub("search", "", "the failure search's space around this seed (see the failure search)", section=SEARCH,
         default=None),
     Free("provenance", "", "written by the search: where a frozen failure came from", default=None),

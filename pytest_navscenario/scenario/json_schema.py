@@ -33,6 +33,7 @@ _NOT_BLANK = r"\S"
 _FILE_NAME = r"^(?!\s*\.{1,2}\s*$)[^/\\]*$"                    # no '/', '\', '.' or '..'
 _FOLDER_PATH = r"^$|^(?!(?:.*/)?\s*\.{0,2}\s*(?:/|$))[^\\]*$"   # names separated by '/': no '..', no empty part
 _NO_NUL = r"^[^\x00]*$"
+_INSIDE = r"^(?![/\\])(?![A-Za-z]:)(?!(?:.*[/\\])?\.\.(?:[/\\]|$))"   # relative, no '..' part (the mesh path rules)
 _IDENTIFIER = r"^[A-Za-z_][A-Za-z0-9_]*$"
 
 
@@ -272,6 +273,8 @@ def _text(b: _Builder, key: K.Text, name: str) -> dict[str, Any]:
             patterns.append(_FOLDER_PATH)
     if key.path:
         patterns.append(_NO_NUL)
+    if key.inside:
+        patterns.append(_INSIDE)
     if len(patterns) == 1:
         out["pattern"] = patterns[0]
     elif patterns:

@@ -135,13 +135,15 @@ class Integer(Key):
 class Text(Key):
     """A string. ``nonempty``: blank text is an error; ``name_rules``: a one-line label of at most
     max_name_length characters; ``file_name``: also no '/' or '\\' (it names files); ``path``: a
-    file path relative to the scenario's folder (no NUL byte)."""
+    file path relative to the scenario's folder (no NUL byte); ``inside``: one that must stay in
+    that folder (no absolute path, no '..': the mesh path rules)."""
     _: KW_ONLY
     nullable: bool = True
     nonempty: bool = True
     name_rules: bool = False
     file_name: bool = False
     path: bool = False
+    inside: bool = False
     kind: ClassVar[str] = "text"
 
 

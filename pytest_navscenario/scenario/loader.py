@@ -259,7 +259,7 @@ def _terrain_element(ctx: _Ctx, sec: _Section, element: K.Element, name: str) ->
     values = _read(ctx, sec, decl, {"name": name})
     if element.type not in ("heightfield", "rough"):
         return decl.cls(**values)
-    from .ground.heightmap import HeightmapError, check_rough, load_heightfield
+    from .ground.heightmap import HeightmapError, check_grid_total, check_rough, load_heightfield
 
     try:
         if element.type == "rough":
@@ -267,10 +267,12 @@ def _terrain_element(ctx: _Ctx, sec: _Section, element: K.Element, name: str) ->
         else:
             folder = Path(ctx.source).parent if ctx.source else Path.cwd()
             _, values["digest"] = load_heightfield(folder, values["file"], values["length"], values["width"])
+        ctx.grid_samples = check_grid_total(getattr(ctx, "grid_samples", 0), decl.cls(**values), ctx.source)
     except HeightmapError as exc:
         hint = ("fix the file or the path (relative to the scenario's folder)" if exc.field == "file"
-                else f"change {exc.field}")
-        raise ctx.fail(str(exc), _join(sec.path, exc.field), sec.line_of(exc.field) or sec.line, hint) from None
+                else f"change {exc.field}" if exc.field else "use fewer or coarser grids (rough ground, heightfields)")
+        field = _join(sec.path, exc.field) if exc.field else sec.path
+        raise ctx.fail(str(exc), field, (sec.line_of(exc.field) if exc.field else None) or sec.line, hint) from None
     return decl.cls(**values)
 
 
@@ -425,7 +427,8 @@ def check_scenario(scenario: Scenario, *, _ctx: _Ctx | None = None) -> None:
         _check_clear(scenario, ctx)
         _check_speeds(scenario, ctx)
     if scenario.terrain or scenario.robot.body.kind != "planar" or any(o.z is not None for o in scenario.obstacles):
-        from .ground.surface import body_problem, mission_problem, obstacle_problem, terrain_problem
+        from .bodies import body_problem
+        from .ground.surface import mission_problem, obstacle_problem, terrain_problem
         problem = (body_problem(scenario) or terrain_problem(scenario) or mission_problem(scenario)
                    or obstacle_problem(scenario))
         if problem is not None:
@@ -547,6 +550,20 @@ def _check_clear(scenario: Scenario, ctx: _Ctx) -> None:
                                f"move the {what_moves} or obstacle {obs.name!r} so they are clear")
 
 
+def _with_requirements(ctx: _Ctx, top: _Section, scenario: Scenario) -> Scenario:
+    """The scenario with its ``signals:`` and ``requirements:`` (requirement_reading.py)."""
+    if not (top.has("signals") or top.has("requirements")):
+        return scenario
+    from .requirement_reading import check_obstacle_names, known_signals, read_requirements, read_signals
+
+    signals = read_signals(ctx, top)
+    check_obstacle_names(ctx, signals, tuple(o.name for o in scenario.obstacles))
+    known = known_signals(len(scenario.mission.waypoints), signals)
+    period = 1.0 / scenario.simulation.control_rate
+    return replace(scenario, signals=signals,
+                               requirements=read_requirements(ctx, top, known, period=period))
+
+
 # --------------------------------------------------------------------------- public API
 
 def _build(root: YNode | None, ctx: _Ctx, name: str | None, family: str | None) -> Scenario:
@@ -590,6 +607,9 @@ def _build(root: YNode | None, ctx: _Ctx, name: str | None, family: str | None) 
     }
     ctx.finish()
     scenario = Scenario(version=int(version), source=ctx.source, **parts)
+    with_requirements = ctx.attempt(_with_requirements, ctx, top, scenario)
+    ctx.finish()
+    scenario = with_requirements
     if scenario.search is not None:     # the search's space, checked on plain runs too
         read_search(ctx, top.get("search"), "search", top.line_of("search"),
                     obstacles=tuple(o.name for o in scenario.obstacles), waypoints=len(scenario.mission.waypoints),

@@ -20,7 +20,9 @@ from typing import Any, Literal, Mapping, Union
 
 from .keys import (REQUIRED, SCENARIO_LIMITS, Choice, Element, Elements, Flag, Integer, Listed, Number, Point, Points,
                    Rows, Rule, Scale, Sub, Text, section)
-from .terrain import BODY, LIDAR3D, Body, Lidar3D, PlanarBody, TerrainElement
+from .bodies import BODY, Body, PlanarBody
+from .terrain import LIDAR3D, Lidar3D, TerrainElement
+from .requirements import Requirement, Signal
 
 SCHEMA_VERSION = 1
 DRIVES = ("omni", "diff")
@@ -238,7 +240,7 @@ MESH = section(MeshObstacle, "obstacles[] (mesh)", "a triangle mesh (.stl or .ob
     Number("x", "m", "where the mesh's origin is placed, along x", default=0.0),
     Number("y", "m", "where the mesh's origin is placed, along y", default=0.0),
     Text("file", "", "an .stl (binary or ASCII) or .obj file, relative to the scenario's folder and "
-         "inside it", path=True, example="file: parts/press.stl"),
+         "inside it", path=True, inside=True, example="file: parts/press.stl"),
     Scale("scale", "", "one number for all axes or [sx, sy, sz], e.g. 0.001 for millimetres", le=1000.0,
           default_doc="1"),
     _YAW, _MOTION, _VISIBLE, _Z,
@@ -418,7 +420,7 @@ class Robot:
     safety: Safety = Safety()
     localisation: Localisation = Localisation()
     latency: Latency = Latency()
-    body: Body = PlanarBody()       # how the robot meets the ground (scenario/terrain.py)
+    body: Body = PlanarBody()       # how the robot meets the ground (scenario/bodies/)
     lidar3d: Lidar3D | None = None  # a multi-ring lidar, off by default
 
 
@@ -591,7 +593,9 @@ class Scenario:
     reference: Reference | None = None
     search: Mapping[str, Any] | None = None      # search-space overrides (search.py validates)
     provenance: Mapping[str, Any] | None = None  # written by freeze.py: where a frozen failure came from
-    terrain: tuple[TerrainElement, ...] = ()     # ground that is not the flat floor (scenario/terrain.py)
+    terrain: tuple[TerrainElement, ...] = ()     # ground that is not the flat floor (scenario/terrain/)
+    signals: tuple[Signal, ...] = ()             # declared signals (scenario/requirements.py)
+    requirements: tuple[Requirement, ...] = ()   # STL rules every episode is checked against
     # Where it was loaded from (not part of the content, not dumped): for errors and relative paths.
     source: str | None = field(default=None, compare=False, repr=False)
 
@@ -602,12 +606,14 @@ class Scenario:
         raise KeyError(name)
 
 
-_NOT_CONTENT = {"name", "family", "description", "marks", "provenance", "source", "search"}
+# requirements and their signals judge an episode, they are not what the robot experiences
+_NOT_CONTENT = {"name", "family", "description", "marks", "provenance", "source", "search", "signals",
+                "requirements"}
 # Fields added after scenarios were first hashed: at their default they are left out of the hash,
 # so a file written before them keeps its hash (results files pair scenarios by it).
 _ADDED_DEFAULTS: dict[str, Any] = {"noise_per_metre": 0.0, "dropout_at_max": None, "spurious": 0.0,
                                    "localisation": Localisation(), "latency": Latency(),
-                                   # terrain (scenario/terrain.py): field names unique to what they mean
+                                   # terrain (scenario/terrain/): field names unique to what they mean
                                    "z": None, "mount_height": 0.2, "body": PlanarBody(), "lidar3d": None,
                                    "terrain": (), "perturb": Perturb(), "com_height": None,
                                    # an mjcf body's declared limits (a legged body's are never None)

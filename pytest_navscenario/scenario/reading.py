@@ -14,8 +14,9 @@ import re
 import unicodedata
 from typing import Any, Mapping
 
-from ..core.errors import ScenarioError, ScenarioErrors
+from ..core.errors import ScenarioError
 from . import keys as K
+from .context import BROKEN, MAX_REPORTED, Recorded, _Ctx  # noqa: F401  (MAX_REPORTED: read from here too)
 from .format import key_homes
 from .keys import SCENARIO_LIMITS
 from .yaml_tree import YMap, YNode, YScalar, YSeq, describe, to_plain
@@ -40,63 +41,6 @@ _ALIASES = {  # common synonyms -> the spelling the format uses (for the hint)
 
 
 # --------------------------------------------------------------------------- helpers
-
-MAX_REPORTED = 20   # mistakes of one file reported in one pass (then: fix these and load again)
-
-
-class Recorded(Exception):
-    """A part of the file (a key, a section, a list item) could not be read; its mistakes are in
-    ``_Ctx.errors`` and the reader goes on with the next part (issue 32)."""
-
-
-BROKEN = object()   # the value of a key that could not be read (its mistake is recorded)
-
-
-class _Ctx:
-    """Where we are: the source file (for messages) and the line of every field read; with
-    ``collect``, the mistakes found so far (each part of the file that has one is skipped and
-    the reading goes on, so one pass reports them all, up to MAX_REPORTED)."""
-
-    def __init__(self, source: str | None, *, collect: bool = False):
-        self.source = source
-        self.lines: dict[str, int | None] = {}
-        #: names of the typed lists read so far (obstacles, then terrain) -> "obstacles[i]": one
-        #: name space, so that a name (in ``search: frozen``, a message) means one thing
-        self.element_names: dict[str, str] = {}
-        self.collect = collect
-        self.errors: list[ScenarioError] = []
-
-    def fail(self, message: str, field: str | None, line: int | None, hint: str | None = None) -> ScenarioError:
-        return ScenarioError(message, path=self.source, line=line, field=field, hint=hint)
-
-    def note(self, exc: ScenarioError) -> None:
-        """Keep ``exc`` and go on (collecting), or raise it (not collecting); at MAX_REPORTED
-        mistakes, stop with all of them."""
-        if not self.collect:
-            raise exc
-        self.errors.append(exc)
-        if len(self.errors) >= MAX_REPORTED:
-            raise ScenarioErrors(self.errors, stopped=MAX_REPORTED)
-
-    def attempt(self, read: Any, *args: Any) -> Any:
-        """``read(*args)``, or BROKEN when it found a mistake (recorded: see ``note``)."""
-        try:
-            return read(*args)
-        except Recorded:
-            return BROKEN
-        except ScenarioErrors:
-            raise
-        except ScenarioError as exc:
-            self.note(exc)
-            return BROKEN
-
-    def finish(self) -> None:
-        """Raise what was recorded: the one mistake as itself, several as ScenarioErrors."""
-        if len(self.errors) == 1:
-            raise self.errors[0]
-        if self.errors:
-            raise ScenarioErrors(self.errors)
-
 
 def _did_you_mean(word: Any, options: tuple[str, ...]) -> str:
     text = str(word)
@@ -625,6 +569,7 @@ Ctx = _Ctx
 SectionReader = _Section
 REQUIRED = _REQUIRED
 read_section = _read
+did_you_mean = _did_you_mean
 build_section = _build_section
 read_elements = _read_elements
 READERS = _READ

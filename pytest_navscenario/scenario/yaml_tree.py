@@ -114,7 +114,8 @@ def parse_yaml(text: str, source: str | None, *, max_depth: int, max_nodes: int,
             mark = getattr(exc, "problem_mark", None)
             raise ScenarioError(f"the YAML nests more than {max_depth} levels deep", path=source,
                                 line=None if mark is None else mark.line + 1,
-                                hint=f"keep nesting under {max_depth} levels") from None
+                                hint=f"a scenario needs only a few levels (under {max_depth}); this file "
+                                     f"is not a scenario") from None   # as the composer's own limit says
         raise _yaml_error(exc, source, text) from None
     except RecursionError:  # pragma: no cover - the composer is iterative; belt and braces
         raise ScenarioError("the YAML nests too deeply", path=source,

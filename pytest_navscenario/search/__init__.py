@@ -12,7 +12,8 @@ per strategy, one registry of their names, ``protocol.Strategy`` the interface),
 ``confirming.py`` and ``holding.py`` (failures that hold), ``shrinker.py`` (shrinking, driven by
 Hypothesis), ``fitness.py`` (reading an episode: robustness and cause signature), ``parallel.py``
 and ``batched.py`` (evaluators on worker processes and in lockstep batches), ``freeze.py``
-(writing) and ``suite.py`` (the generated suite as scenario files).
+(writing) and ``suite.py`` (the generated suite as scenario files); ``discards.py`` says why
+many candidates were discarded and what to change in the seed's ``search:`` section.
 
 Names are imported lazily so that importing this package stays cheap.
 """

@@ -330,6 +330,7 @@ class _Search:
         batching = self.evaluator.batching
         if batching is not None and batching.batched:
             report.batching = batching.describe()
+        report.worker_deaths = self.evaluator.worker_deaths()   # a worker killed mid-search (parallel.py)
         if report.interrupted:
             for f in report.failures:
                 if f.shrink_sims == 0 and not f.note and any(f.found.offsets):

@@ -39,6 +39,11 @@ class Evaluator:
     def discard(self) -> None:
         """The search ended early: drop what is still in flight (default: nothing is)."""
 
+    def worker_deaths(self) -> list[str]:
+        """The worker processes that died during this search, each in words (default: none;
+        parallel.py's: its pool was replaced and their jobs run again)."""
+        return []
+
 
 class _FunctionEvaluator(Evaluator):
     def __init__(self, function: Callable[[EvalContext, Sequence[Proposal]], Iterable[Candidate]]):

@@ -14,6 +14,11 @@ of their mean so that a candidate near two failure modes ranks above one near a 
 * safety: the smallest clearance of the poses the safety layer predicts (near a safety stop);
 * efficiency: path efficiency (a long detour is near a timeout too).
 
+With requirements (issue 34; ``requirements:`` or ``--nav-requirements``) the margins are theirs
+alone: each requirement's robustness over its scale (declared, else the range of its signals in
+the episode), so that one in m/s does not mask one in m; a violation is a failure whose culprit is
+``requirement:<name>`` (the requirement violated first), placed where the robot was at that time.
+
 A failure's robustness is -1 + progress / 2: failures rank before every success, and among
 failures the one that got less far ranks first.
 
@@ -108,6 +113,9 @@ def culprit_of(res: Any) -> str:
     """The obstacle hit, the one the safety layer stopped for, the terrain element the robot
     fell from, tipped on, was stuck at or drove into (``terrain:<name>``), or (timeout) the
     obstacle nearest to where the robot ended, else nearest over the run."""
+    violated = first_violated(res)
+    if violated is not None:
+        return f"requirement:{violated.name}"
     if res.collision is not None:
         if getattr(res.collision, "terrain", False):
             return terrain_culprit(res.scenario, res.collision.obstacle, res.collision.x, res.collision.y)
@@ -152,7 +160,7 @@ def read_episode(res: Any, route: Route) -> tuple[Reading, str]:
     end_xy = _failure_point(res, pose)
     progress = route.fraction(*end_xy) if end_xy is not None else 0.0
     failed = res.outcome.value != "success"
-    margins = _margins(res, pose, route) if not failed else {}
+    margins = (requirement_margins(res) or _margins(res, pose, route)) if not failed else {}
     if failed:
         robustness = -1.0 + progress / 2.0
     else:
@@ -182,11 +190,36 @@ def _culprit_place(culprit: str, scenario: Any, route: Route) -> tuple[str, int]
 
 
 def _failure_point(res: Any, pose: Any) -> tuple[float, float] | None:
+    violated = first_violated(res)
+    if violated is not None and violated.first_violation is not None and len(pose):
+        import numpy as np
+        i = int(np.searchsorted(res.trajectory.t, violated.first_violation - 1e-9))
+        return float(pose[min(i, len(pose) - 1), 0]), float(pose[min(i, len(pose) - 1), 1])
     if res.collision is not None:
         return float(res.collision.x), float(res.collision.y)
     if len(pose):
         return float(pose[-1, 0]), float(pose[-1, 1])
     return None
+
+
+def first_violated(res: Any) -> Any:
+    """The requirement whose violation is the outcome (the first violated; None otherwise)."""
+    if res.outcome.value != "requirement":
+        return None
+    violated = [r for r in getattr(res, "requirements", ()) if r.violated]
+    return min(violated, key=lambda r: (r.first_violation if r.first_violation is not None else 0.0,
+                                        r.robustness)) if violated else None
+
+
+def requirement_margins(res: Any) -> dict[str, float]:
+    """With requirements (issue 34) the graded fitness is theirs alone: each robustness over its
+    scale (the declared ``scale``, else the range of its signals in this episode), so that
+    requirements in different units do not mask each other; {} without requirements."""
+    out = {}
+    for r in getattr(res, "requirements", ()):
+        scale = r.scale if r.scale else (r.span if math.isfinite(r.span) and r.span > 0 else 1.0)
+        out[f"requirement:{r.name}"] = _unit(r.robustness / scale) if math.isfinite(r.robustness) else 1.0
+    return out
 
 
 def _margins(res: Any, pose: Any, route: Route) -> dict[str, float]:
@@ -267,8 +300,8 @@ def _safety_margin(res: Any, pose: Any) -> float | None:
 
 
 #: Where a successful episode's margins come from, in order: each source maps (EpisodeResult, poses,
-#: route) to named margins in [0, 1] (0: at the edge of failing). The seam for requirements: an STL
-#: requirement (scenario ``requirements:``) joins as one more source giving ``requirement:<name>`` its
-#: robustness divided by its declared scale (never raw units in one min: a speed in m/s would mask a
-#: distance in m), and ``Reading.closest_margin`` names the margin that was smallest, for the signature.
+#: route) to named margins in [0, 1] (0: at the edge of failing). A scenario with STL requirements
+#: (``requirements:``) is steered by them instead (``requirement_margins``: each ``requirement:<name>``
+#: its robustness over its scale, never raw units in one min: a speed in m/s would mask a distance in
+#: m), and ``Reading.closest_margin`` names the margin that was smallest.
 MARGIN_SOURCES: list[Callable[[Any, Any, Route], dict[str, float]]] = [mission_margins]

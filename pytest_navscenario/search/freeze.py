@@ -42,6 +42,11 @@ PROVENANCE_METRICS = ("min_clearance", "min_clearance_obstacle", "path_length", 
                       "path_efficiency", "min_obstacle_gap")
 
 
+def _cause(failure: Any) -> str:
+    signature = getattr(failure.shrunk, "signature", ()) or ()
+    return str(signature[1]) if len(signature) > 1 else ""
+
+
 @dataclass
 class FrozenFile:
     path: Path
@@ -49,6 +54,14 @@ class FrozenFile:
     outcome: str
     clearance: float
     estimate: Estimate | None = None   # how often it fails under the seed's randomness (holding.py)
+    cause: str = ""          # the signature's culprit: "requirement:<name>" for a violated requirement
+
+    @property
+    def what(self) -> str:
+        """The outcome, with the requirement it violated ("requirement keep-away-from-people")."""
+        if self.outcome == "requirement" and self.cause.startswith("requirement:"):
+            return f"requirement {self.cause.split(':', 1)[1]}"
+        return self.outcome
 
 
 def _clean(value: Any) -> Any:
@@ -172,7 +185,8 @@ def freeze_failures(report: SearchReport, space: SearchSpace, out_dir: str | Pat
         new = not path.exists()
         if new:
             save_standalone(scenario, space.seed, path)
-        written.append(FrozenFile(path, new, failure.shrunk.outcome, failure.shrunk.clearance, failure.estimate))
+        written.append(FrozenFile(path, new, failure.shrunk.outcome, failure.shrunk.clearance, failure.estimate,
+                                  _cause(failure)))
     return written
 
 
@@ -249,7 +263,8 @@ def end_record(report: SearchReport, search_id: str) -> dict[str, Any]:
             "shrink_budget": report.shrink_total, "failures": len(report.failures),
             "rejected": len(report.rejected), "unconfirmed": len(report.unconfirmed),
             "hold": report.hold, "randomness": list(report.randomness), "interrupted": report.interrupted,
-            "stop_reason": report.stop_reason, "wall_time": round(report.wall_time, 3)}
+            "stop_reason": report.stop_reason, "worker_deaths": list(report.worker_deaths),
+            "wall_time": round(report.wall_time, 3)}
 
 
 def log_records(report: SearchReport, space: SearchSpace, search_id: str = "") -> list[dict[str, Any]]:
@@ -429,7 +444,7 @@ class SearchRecorder:
                 continue
             seen.add(path)
             out.append(FrozenFile(path, failure.key in self._mine, failure.shrunk.outcome, failure.shrunk.clearance,
-                                  failure.estimate))
+                                  failure.estimate, _cause(failure)))
         return out
 
 
@@ -462,22 +477,53 @@ def write_junit(items: Iterable[tuple[SearchReport, SearchSpace]], path: str | P
 
 def _with_body_copy(scenario: Scenario, seed: Scenario, folder: Path) -> Scenario:
     """The frozen scenario with its MJCF robot copied beside it (``bodies/<stem>-<hash>/``, named
-    by the robot file's content digest, with the files it names in the same layout), as meshes are:
-    the frozen file lives elsewhere than its seed, and the robot must lie in its folder."""
+    by the robot's content digest, every file MuJoCo opens for it in the layout it has in the seed's
+    folder: scenario/mjcf_files.robot_files), as meshes are: the frozen file lives elsewhere than
+    its seed, and the robot must lie in its folder. The controller's module comes too when the seed
+    found it beside itself (``_controller_copy``)."""
     import shutil
 
-    from ..scenario.mjcf_files import mjcf_files
+    from ..scenario.mjcf_files import robot_files
 
     body = scenario.robot.body
     if body.kind != "mjcf":
         return scenario
-    base = (Path(seed.source).parent if seed.source else Path.cwd()) / body.file
-    src_dir = base.resolve().parent
+    seed_dir = (Path(seed.source).parent if seed.source else Path.cwd()).resolve()
+    base = (seed_dir / body.file).resolve()
     rel_dir = Path("bodies") / f"{base.stem}-{body.digest or 'robot'}"
-    for file in mjcf_files(base):
-        target = folder / rel_dir / file.relative_to(src_dir)
+    for file in robot_files(base, seed_dir):
+        target = folder / rel_dir / file.relative_to(seed_dir)
         if not target.exists():
             target.parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(file, target)
-    moved = (rel_dir / base.name).as_posix()
+    _controller_copy(body.controller, seed_dir, folder)
+    moved = (rel_dir / base.relative_to(seed_dir)).as_posix()
     return replace(scenario, robot=replace(scenario.robot, body=replace(body, file=moved)))
+
+
+def _controller_copy(controller: str, seed_dir: Path, folder: Path) -> None:
+    """Copy the module (or the package, its .py files) that ``controller`` names from the seed's
+    folder into the frozen file's folder, where the controller lookup (sim/bodies/mjcf.py: sys.path,
+    the current folder, the scenario's folder) finds it when the frozen file runs from anywhere. A
+    module found elsewhere (installed, on sys.path, in the project) is found there again; a file of
+    the same name already in ``folder`` is kept (the first seed's)."""
+    import shutil
+
+    from ..core.user_code import _in_folder, spec_module
+
+    module = spec_module(controller)
+    if module is None or folder.resolve() == seed_dir:
+        return
+    top = module.split(".")[0]
+    found = _in_folder(top, seed_dir)
+    if found is None or not found.origin or found.origin in ("namespace", "built-in", "frozen"):
+        return
+    origin = Path(found.origin)
+    if origin.name.startswith("__init__."):
+        for src in origin.parent.rglob("*.py"):
+            target = folder / top / src.relative_to(origin.parent)
+            if not target.exists():
+                target.parent.mkdir(parents=True, exist_ok=True)
+                shutil.copyfile(src, target)
+    elif origin.suffix == ".py" and not (folder / origin.name).exists():
+        shutil.copyfile(origin, folder / origin.name)

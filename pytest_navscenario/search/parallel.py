@@ -153,7 +153,13 @@ class executor_evaluator(Evaluator):   # noqa: N801  (used like a function: eval
     def _token_for(self, ctx: EvalContext) -> str:
         if ctx is not self._ctx:
             self._ctx, self._token, self._shrinks = ctx, uuid.uuid4().hex, []
+            self._deaths_from = len(getattr(self.executor, "deaths", ()))
         return self._token
+
+    def worker_deaths(self) -> list[str]:
+        """The worker processes that died during this search (the pool replaced, what they had
+        not finished run again: dispatch/local.py), for the search log's end record."""
+        return list(getattr(self.executor, "deaths", ())[getattr(self, "_deaths_from", 0):])
 
     def _submit(self, jobs: list[Any]) -> list[Any]:
         pending = self.executor.submit(jobs)

@@ -115,6 +115,7 @@ class SearchReport:
     episode_seed: int | None = None   # the run's base seed (--nav-seed) every episode used
     first_failure: int = 0            # simulation number of the first failing candidate (0: none)
     batching: str = ""                # how the simulations ran in batches (search/batched.py), or ""
+    worker_deaths: list[str] = field(default_factory=list)   # workers that died, their jobs run again
 
     @property
     def discarded_total(self) -> int:

@@ -21,7 +21,7 @@ from .space import FLAG_ON, SearchSpace, invalid_reason, offsets_strategy
 
 DEFAULT_SHRINK_BUDGET = "25%"   # of the search budget, for the whole shrink phase
 MIN_SHRINK_SIMS = 10       # a failure given a share of the shrink budget gets at least this many
-SEVERITY = ("collision", "fall", "subject-error", "safety-stop", "timeout")   # shrunk first .. last
+SEVERITY = ("collision", "fall", "subject-error", "safety-stop", "requirement", "timeout")   # shrunk first .. last
 
 
 @dataclass(frozen=True)

@@ -4,8 +4,9 @@ In: a ``Scenario`` and a planner (any object of the protocol in ``subjects.proto
 ``SimResult``: the recorded ``Trajectory`` (sim/trajectory.py) and the event that ended the
 episode (collision, safety stop, subject failure), bit-identical for the same scenario and seed.
 
-Read first: ``episode.py`` (the control loop as an ``Episode``: observe, safety check, act, record,
-step physics), then ``world.py`` (the MuJoCo model built from the scenario, compiled and cached),
+Read first: ``episode.py`` (``simulate``: one episode of any scenario), ``loop.py`` (the control
+loop as an ``Episode``: observe, safety check, act, record, step physics), ``riding_episode.py``
+(the same loop for a body that rides the ground), then ``world.py`` (the MuJoCo model built from the scenario, compiled and cached),
 ``lidar.py`` (beam tables and the scan), ``command.py`` (calling the planner, validating its answer,
 the drive limits), ``safety.py`` (the collision safety layer), ``moving.py`` (moving obstacles:
 their mocap positions every physics step, their velocities for the safety layer, who moved in a
@@ -36,7 +37,7 @@ _EXPORTS = {name: "world" for name in (
     "compiled_world", "clear_model_cache", "build_spec", "World", "steps_per_tick",
     "wrap_angle", "LIDAR_HEIGHT", "ROBOT_HEIGHT", "ROBOT_MASS", "TRACKING_TAU", "FORCE_HEADROOM",
     "MODEL_CACHE_SIZE", "TWO_PI")}
-_EXPORTS.update(model_xml="body_world", any_world="body_world", simulate="episode", SimResult="episode", Episode="episode", STILL="episode",
+_EXPORTS.update(model_xml="body_world", any_world="body_world", simulate="episode", SimResult="loop", Episode="loop", STILL="loop",
                 validate_command="command", lidar_angles="lidar",
                 SafetyLayer="safety", TickDeadline="deadline", PlannerTimeout="deadline",
                 Trajectory="trajectory", Collision="trajectory", SafetyStop="trajectory",

@@ -29,6 +29,7 @@ class SafetyStop:
     speed: float           # robot speed (m/s) when halted
     ground: str = ""       # the ground it would have driven into, as a phrase ("a drop of 0.50 m
                            # ahead"): the ground layer (sim/ground/ground_safety.py) of a 3D lidar
+    yaw_rate: float = 0.0  # rad/s when halted: a robot turning in place has speed 0 and still sweeps
 
 
 @dataclass(frozen=True)

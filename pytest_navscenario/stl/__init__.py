@@ -25,6 +25,10 @@ from __future__ import annotations
 from .errors import StlError, StlEvaluationError, StlSyntaxError
 from .evaluation import Evaluation, evaluate, robustness
 from .formula import Formula, parse
+from .lexer import KEYWORDS
+
+#: Words that cannot name a signal (operators and their one-letter RTAMT spellings: G, F, U...).
+RESERVED_WORDS = frozenset(KEYWORDS)
 
 __all__ = ["parse", "Formula", "StlError", "StlSyntaxError", "StlEvaluationError",
-           "robustness", "evaluate", "Evaluation"]
+           "robustness", "evaluate", "Evaluation", "RESERVED_WORDS"]

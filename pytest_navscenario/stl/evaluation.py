@@ -26,11 +26,12 @@ from .formula import Formula, parse
 from .plan import LENGTH, plan, plan_for, samples
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Evaluation:
     """A formula's verdict on one trace. ``robustness`` is ``rho[0]``; ``violated`` is
     ``robustness < 0``; the first violation (``None`` when it holds) in seconds from the first
-    sample and as a sample index; ``rho`` the robustness at every sample."""
+    sample and as a sample index; ``rho`` the robustness at every sample. (Compared by identity:
+    ``rho`` is an array.)"""
 
     robustness: float
     violated: bool

@@ -14,7 +14,7 @@ from __future__ import annotations
 from .tree import (BINARY_TEMPORAL, COMPARISONS, EDGE_UNARY, FUTURE_UNARY, PAST_UNARY,
                   Node, number, render)
 from .errors import StlSyntaxError
-from .lexer import MISTAKES, Token, tokenize
+from .lexer import KEYWORDS, MISTAKES, Token, tokenize
 
 #: Infix operators -> RTAMT's precedence level (higher binds tighter).
 INFIX = {"*": 26, "/": 25, "+": 24, "-": 23, **{c: 22 for c in COMPARISONS},
@@ -27,6 +27,8 @@ UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
 _NEG_LEVEL = 27          # unary minus binds tighter than any infix operator
 _FUNCTIONS = ("abs", "sqrt", "exp", "pow", "rise", "fall")
 _EXAMPLE = "e.g. 'always (d_walker >= 0.8)'"
+#: Tokens that can only follow an operand: a reserved word before one was meant as a signal.
+_AFTER_AN_OPERAND = frozenset(COMPARISONS | {"+", "*", "/", ")", "eof", ",", "]"})
 
 
 class Parser:
@@ -102,6 +104,9 @@ class Parser:
     def prefix(self) -> Node:
         tok = self.tok
         kind = tok.kind
+        if tok.text in KEYWORDS and self.tokens[self.pos + 1].kind in _AFTER_AN_OPERAND:
+            raise self.error(f"{tok.text!r} is a reserved word ({kind}), not a signal", tok,
+                             "rename the signal: the reserved words are " + ", ".join(sorted(KEYWORDS)))
         if kind == "(":
             return self.parenthesis()
         if kind == "num":

@@ -43,22 +43,13 @@ import math
 import os
 from collections import OrderedDict
 from pathlib import Path
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
 from ..core.errors import ScenarioError
-from .paths import (
-    box_box_distance,
-    footprint_core,
-    min_obstacle_gap,
-    obstacle_shapes,
-    path_through,
-    reference_path,
-    is_outlined,
-    shortest_path,
-    static_obstacles,
-)
+from .gaps import box_box_distance, footprint_core, is_outlined, min_obstacle_gap, obstacle_shapes, static_obstacles
+from .paths import path_through, reference_path, shortest_path
 from ..scenario.motion import displacement, tracks
 from ..sim.trajectory import Collision, Trajectory
 from .result import Metrics
@@ -181,6 +172,27 @@ def min_clearance(scenario: Scenario, t: np.ndarray, pose: np.ndarray
         return math.inf, "", NAN, NAN, NAN
     dist, name, i = best
     return dist, name, float(t[i]), float(pose[i, 0]), float(pose[i, 1])
+
+
+def culprit_clearance(result: Any) -> tuple[str, float, float] | None:
+    """(obstacle, distance, time) of the closest approach to the obstacle the outcome is about (a
+    safety stop's or a collision's), when that is not the obstacle of ``min_clearance``: a robot
+    stopped for a person can pass nearer a wall, and the clearance that explains the stop is the
+    person's. None otherwise (or without a trajectory)."""
+    import dataclasses
+
+    event = result.safety_stop or result.collision
+    name = getattr(event, "obstacle", "") if event is not None else ""
+    m = result.metrics
+    if not name or name == m.min_clearance_obstacle:
+        return None
+    try:
+        obstacle = result.scenario.obstacle(name)
+    except KeyError:
+        return None
+    one = dataclasses.replace(result.scenario, obstacles=(obstacle,))
+    dist, _, time, _, _ = min_clearance(one, result.trajectory.t, result.trajectory.pose)
+    return (name, dist, time) if math.isfinite(dist) else None
 
 
 def closest_approach(obstacles: Sequence, footprint, pose: np.ndarray) -> tuple[float, str, int] | None:

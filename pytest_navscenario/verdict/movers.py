@@ -115,3 +115,30 @@ def describe(c: Crossing) -> tuple[str, str]:
             f"before the timeout (it would reach ({x1:.3g}, {y1:.3g}))")
     return field, (f"{what}: the simulation would move it through as if that were not there; route the motion "
                    f"around it, or move the one that stands")
+
+
+def movers_inside(obstacles) -> list[tuple[str, str]]:
+    """(field, message) for each moving obstacle whose path starts or ends inside a static obstacle
+    (DynaBARN's paths start and end inside the arena's walls, where Gazebo hides its obstacles): not
+    an error (a scenario may mean it), a warning, since MuJoCo moves it through the wall."""
+    from shapely import affinity
+
+    from ..scenario.geometry import obstacle_polygon
+
+    still = [(o.name, obstacle_polygon(o)) for o in obstacles if getattr(o, "motion", None) is None]
+    out = []
+    for i, o in enumerate(obstacles):
+        m = getattr(o, "motion", None)
+        if m is None or not m.path:
+            continue
+        base = obstacle_polygon(o)
+        for which, (x, y) in (("starts", m.path[0]), ("ends", m.path[-1])):
+            at = affinity.translate(base, x - o.x, y - o.y)
+            inside = [n for n, p in still if at.intersection(p).area > AREA]
+            if inside:
+                out.append((f"obstacles[{i}].motion.path",
+                            f"moving obstacle {o.name!r} {which} inside static obstacle {inside[0]!r} at ({x:g}, {y:g}) "
+                            f"(as DynaBARN's obstacles come out of the arena's walls in Gazebo): the simulation moves "
+                            f"it through the wall as if it were not there, and the pytest plugin reports the scenario "
+                            f"as infeasible (a mover through a static obstacle); start and end its path outside"))
+    return out

@@ -2,7 +2,7 @@
 
 A pure function of the scenario, the recorded trajectory and the events the simulation
 reported (collision, safety stop, planner failure, a terrain event). Precedence, first match
-wins: subject-error, collision, fall, safety-stop, timeout, success. On terrain a collision may be
+wins: subject-error, collision, fall, safety-stop, requirement, timeout, success. On terrain a collision may be
 the chassis against a terrain face; a fall is falling off an edge or into a hole, or tipping over;
 being stuck on terrain (driven but held by a step or a slope) is a timeout with that cause. Success needs the goal reached
 (after every waypoint, the runner decides that) within ``mission.timeout``.
@@ -10,6 +10,7 @@ being stuck on terrain (driven but held by a step or a slope) is a timeout with 
 from __future__ import annotations
 
 import math
+from typing import Sequence
 
 import numpy as np
 
@@ -23,9 +24,11 @@ MAX_MESSAGE = 300  # characters of a planner's own error message kept in the one
 def classify(scenario: Scenario, trajectory: Trajectory, *, collision: Collision | None,
              safety_stop: SafetyStop | None, subject_failure: SubjectFailure | None,
              goal_reached: bool, stuck_after: float | None = None,
-             terrain_event: TerrainEvent | None = None) -> tuple[Outcome, str]:
+             terrain_event: TerrainEvent | None = None, requirements: Sequence = ()) -> tuple[Outcome, str]:
     """Return ``(outcome, message)`` for one episode; the message is one line for a failure report.
-    ``stuck_after``: the episode was ended early because the robot was stuck that long (a timeout)."""
+    ``stuck_after``: the episode was ended early because the robot was stuck that long (a timeout).
+    ``requirements``: the scenario's requirements checked (verdict/requirements.py); one violated
+    is the outcome ``requirement`` unless a collision, fall or safety stop came first."""
     if subject_failure is not None:
         return Outcome.SUBJECT_ERROR, (
             f"planner error at tick {subject_failure.tick} (t={subject_failure.time:.2f} s): "
@@ -38,10 +41,14 @@ def classify(scenario: Scenario, trajectory: Trajectory, *, collision: Collision
         if getattr(safety_stop, "ground", ""):
             return Outcome.SAFETY_STOP, (
                 f"safety stop at t={safety_stop.time:.2f} s: predicted to drive into {safety_stop.ground} "
-                f"at {safety_stop.speed:.2f} m/s (seen by the 3D lidar)")
+                f"{stop_motion(safety_stop)} (seen by the 3D lidar)")
         return Outcome.SAFETY_STOP, (
             f"safety stop at t={safety_stop.time:.2f} s: predicted to hit "
-            f"'{safety_stop.obstacle}' at {safety_stop.speed:.2f} m/s")
+            f"'{safety_stop.obstacle}' {stop_motion(safety_stop)}")
+    violated = [r for r in requirements if r.violated]
+    if violated:
+        from .requirements import violation_message
+        return Outcome.REQUIREMENT, violation_message(violated)
     duration = trajectory.duration
     timeout = scenario.mission.timeout
     if goal_reached and duration <= timeout:
@@ -56,6 +63,15 @@ def classify(scenario: Scenario, trajectory: Trajectory, *, collision: Collision
                                  f"{stuck_after:g} s; episode ended early at {duration:.1f} s of "
                                  f"{timeout:.1f} s")
     return Outcome.TIMEOUT, _timeout_message(scenario, trajectory, goal_reached)
+
+
+def stop_motion(stop: SafetyStop) -> str:
+    """How the robot moved when the safety layer halted it: "at 0.82 m/s", or, for a robot that
+    turned in place (its speed rounds to 0.00 but its footprint still sweeps), "turning in place at
+    35 deg/s" ("at 0.00 m/s" read as a robot standing still that was stopped for nothing)."""
+    if stop.speed >= 0.005:
+        return f"at {stop.speed:.2f} m/s"
+    return f"turning in place at {abs(math.degrees(getattr(stop, 'yaw_rate', 0.0))):.0f} deg/s"
 
 
 def terrain_message(event: TerrainEvent) -> str:

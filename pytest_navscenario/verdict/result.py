@@ -17,6 +17,7 @@ class Outcome(str, enum.Enum):
     COLLISION = "collision"          # any robot-obstacle contact, or the chassis against a terrain face
     FALL = "fall"                    # the robot fell (off an edge, into a hole) or tipped over (terrain)
     SAFETY_STOP = "safety-stop"      # the safety layer halted the robot
+    REQUIREMENT = "requirement"      # one of the scenario's own requirements (STL) was violated
     TIMEOUT = "timeout"              # the goal was not reached in time
     SUCCESS = "success"              # goal (after all waypoints) reached within tolerance, in time
 
@@ -82,6 +83,7 @@ class EpisodeResult:
     timings: dict[str, float] = field(default_factory=dict)  # s: physics, rays, planner, harness
     terrain_event: TerrainEvent | None = None   # fell, tipped over or stuck on terrain
     left_running: tuple[str, ...] = ()          # processes the planner started and left running ("pid N: cmd")
+    requirements: tuple = ()                    # verdict/requirements.RequirementResult, one per requirement
     error: str | None = None                    # the episode never finished: the exception's type (WorkerDied, ...)
 
     @property

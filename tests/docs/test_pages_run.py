@@ -21,7 +21,8 @@ from docs_pages import (MASKS, MarkupError, apply_rewrites, matches, read_blocks
 ROOT = Path(__file__).resolve().parents[2]
 README = ROOT / "README.md"
 TUTORIAL = [ROOT / "docs" / "tutorial" / name for name in
-            ("first-scenario.md", "own-planner.md", "first-search.md", "compare-in-ci.md", "terrain.md")]
+            ("first-scenario.md", "own-planner.md", "first-search.md", "compare-in-ci.md", "terrain.md",
+             "requirements.md")]
 UPDATE = os.environ.get("NAVSCENARIO_DOCS_UPDATE") == "1"
 
 
@@ -46,7 +47,7 @@ def _finish(result, pages) -> None:
 
 @pytest.mark.heavy
 def test_tutorial_runs_as_written(tmp_path):
-    """Tutorials 1-5 in order, in one project: the reader's folder beside a checkout of this project."""
+    """Tutorials 1-6 in order, in one project: the reader's folder beside a checkout of this project."""
     _copy_scenarios(tmp_path / "pytest-navscenario" / "scenarios")
     result = run_pages(TUTORIAL, home=tmp_path, cwd=tmp_path, update=UPDATE)
     assert result.ran, "no command ran: the tutorial pages lost their <!-- run --> markers"

@@ -35,8 +35,8 @@ def _scales(fig):
 
 
 def _texts(fig):
-    return [t.get_text() for ax in fig.axes for t in ax.texts] + \
-           [t.get_text() for leg in fig.legends for t in leg.get_texts()]
+    return [t.get_text().replace("\n", " ") for ax in fig.axes for t in ax.texts] + \
+           [t.get_text().replace("\n", " ") for leg in fig.legends for t in leg.get_texts()]
 
 
 def test_a_fall_on_the_map_and_in_the_profile(runs):

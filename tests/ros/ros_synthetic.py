@@ -26,8 +26,16 @@ class World:
 def _hit_distances(world: World, ox: float, oy: float, dirs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Horizontal distance along each unit direction (k, 2) to the first obstacle side, and that
     obstacle's height (inf distance where nothing is hit)."""
+    best, height, _ = _hits(world, ox, oy, dirs)
+    return best, height
+
+
+def _hits(world: World, ox, oy, dirs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``_hit_distances`` and |cos| of the angle between each beam and the surface's normal where
+    it meets it (1 head-on, near 0 grazing)."""
     best = np.full(len(dirs), np.inf)
     height = np.zeros(len(dirs))
+    cosine = np.ones(len(dirs))
     for cx, cy, r, h in world.pillars:
         fx, fy = ox - cx, oy - cy
         b = dirs[:, 0] * fx + dirs[:, 1] * fy
@@ -36,7 +44,10 @@ def _hit_distances(world: World, ox: float, oy: float, dirs: np.ndarray) -> tupl
         t = np.where(disc >= 0, -b - np.sqrt(np.maximum(disc, 0)), np.inf)
         t = np.where(t > 1e-6, t, np.inf)
         closer = t < best
+        with np.errstate(invalid="ignore"):
+            cos_p = np.abs(b + t) / r
         best, height = np.where(closer, t, best), np.where(closer, h, height)
+        cosine = np.where(closer, np.minimum(cos_p, 1.0), cosine)
     for cx, cy, ln, wd, yaw, h in world.boxes:
         c, s = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
         # ray in the box frame, slab test
@@ -49,17 +60,21 @@ def _hit_distances(world: World, ox: float, oy: float, dirs: np.ndarray) -> tupl
         tmax = np.minimum(np.maximum(t1x, t2x), np.maximum(t1y, t2y))
         t = np.where((tmax >= tmin) & (tmin > 1e-6), tmin, np.inf)
         closer = t < best
+        x_face = np.minimum(t1x, t2x) >= np.minimum(t1y, t2y)      # entered through an x face
         best, height = np.where(closer, t, best), np.where(closer, h, height)
-    return best, height
+        cosine = np.where(closer, np.where(x_face, np.abs(dx), np.abs(dy)), cosine)
+    return best, height, cosine
 
 
 def laser_ranges(world: World, x, y, yaw, angles: np.ndarray, z: float = 0.2,
-                 range_max: float = 10.0) -> np.ndarray:
+                 range_max: float = 10.0, grazing: float = 0.0) -> np.ndarray:
     """A planar scan from a laser at (x, y, yaw) and height ``z``: inf where nothing is hit. ``x``,
-    ``y``, ``yaw`` may be arrays, one pose per beam (a laser that moves while it scans)."""
+    ``y``, ``yaw`` may be arrays, one pose per beam (a laser that moves while it scans).
+    ``grazing`` (degrees): a beam meeting a surface at less than this from it returns nothing
+    (inf), as a real lidar's too weak echo does."""
     a = np.asarray(yaw) + angles
-    d, h = _hit_distances(world, np.asarray(x), np.asarray(y), np.stack([np.cos(a), np.sin(a)], 1))
-    d = np.where((h >= z) & (d <= range_max), d, np.inf)
+    d, h, cosine = _hits(world, np.asarray(x), np.asarray(y), np.stack([np.cos(a), np.sin(a)], 1))
+    d = np.where((h >= z) & (d <= range_max) & (cosine >= math.sin(math.radians(grazing))), d, np.inf)
     return d.astype(np.float32)
 
 
@@ -178,7 +193,9 @@ def pose_at(truth: np.ndarray, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def robot_bag(path: Path, world: World, truth: np.ndarray, *, drift: np.ndarray | None = None,
               ros1: bool = False, scans: bool = True, cloud: dict | None = None, extra=None,
               tf_map: bool = True, laser: tuple[float, float, float] = LASER, pitch: float = 0.0,
-              world_at=None, timing: ScanTiming | None = None, odom_keep=None, scan_at=None) -> Path:
+              world_at=None, timing: ScanTiming | None = None, odom_keep=None, scan_at=None,
+              angles: np.ndarray = SCAN_ANGLES, range_noise: float = 0.0, range_max: float = 10.0,
+              grazing: float = 0.0) -> Path:
     """A bag of a robot driving ``truth`` ((n, 4) t, x, y, yaw in the map frame) through ``world``.
 
     ``drift`` ((n, 3) the map -> odom transform at each time): the odometry is the truth seen
@@ -191,8 +208,12 @@ def robot_bag(path: Path, world: World, truth: np.ndarray, *, drift: np.ndarray 
     takes each beam at its own time (the scan starts at the pose's time; each beam is cast from the
     truth interpolated at its time) and stamps and declares it as ``ScanTiming`` says; without it,
     every beam at once, as a simulator does. ``odom_keep(t)`` False: that odometry message is not
-    written (a gap).
+    written (a gap). ``angles``: the beams of an untimed scan (default 360, one a degree);
+    ``range_noise``: the standard deviation (m) of Gaussian noise on every return (seeded: the
+    same bag each time), as a real laser has; ``grazing`` (degrees): beams meeting a surface at
+    a shallower angle return nothing (laser_ranges).
     """
+    noise = np.random.default_rng(0)
     p = math.radians(pitch)
     tilt = np.array([[math.cos(p), 0, math.sin(p)], [0, 1, 0], [-math.sin(p), 0, math.cos(p)]])  # sensor -> level
     drift = np.zeros((len(truth), 3)) if drift is None else drift
@@ -217,11 +238,13 @@ def robot_bag(path: Path, world: World, truth: np.ndarray, *, drift: np.ndarray 
             if scan_at is not None and not scan_at(t):
                 pass
             elif scans and timing is None:
+                ranges = laser_ranges(world, lx, ly, yaw, angles, z=laser[2], range_max=range_max, grazing=grazing)
+                if range_noise:
+                    ranges = (ranges + noise.normal(0.0, range_noise, len(ranges))).astype(np.float32)
                 bag.write("/scan", "sensor_msgs/msg/LaserScan", t, {
-                    "header": {"stamp": stamp(t), "frame_id": "laser"}, "angle_min": float(SCAN_ANGLES[0]),
-                    "angle_max": float(SCAN_ANGLES[-1]), "angle_increment": float(SCAN_ANGLES[1] - SCAN_ANGLES[0]),
-                    "range_min": 0.05, "range_max": 10.0,
-                    "ranges": laser_ranges(world, lx, ly, yaw, SCAN_ANGLES, z=laser[2])})
+                    "header": {"stamp": stamp(t), "frame_id": "laser"}, "angle_min": float(angles[0]),
+                    "angle_max": float(angles[-1]), "angle_increment": float(angles[1] - angles[0]),
+                    "range_min": 0.05, "range_max": range_max, "ranges": ranges})
             elif scans:
                 bt = timing.beam_times(t)
                 bx, by, byaw = pose_at(truth, bt)
@@ -321,3 +344,25 @@ def stop_drive(speed: float = 0.5, stop_x: float = 2.0, duration: float = 8.0, d
     """(n, 4) t, x, y, yaw: along +x at ``speed`` until ``stop_x``, then standing still."""
     t = np.arange(0.0, duration + 1e-9, dt)
     return np.stack([t, np.minimum(speed * t, stop_x), 0 * t, 0 * t], 1)
+
+
+ROOM = World(pillars=[(0.3, 0.2, 0.2, 1.0), (-1.5, -0.5, 0.25, 1.0), (2.5, -1.8, 0.15, 1.0)],
+             boxes=[(0.0, 3.5, 9.0, 0.1, 0.0, 1.0), (0.0, -3.5, 9.0, 0.1, 0.0, 1.0),
+                    (4.5, 0.0, 0.1, 7.0, 0.0, 1.0), (-4.5, 0.0, 0.1, 7.0, 0.0, 1.0),
+                    (-2.5, 2.0, 1.0, 0.6, 30.0, 1.0), (3.0, 1.5, 0.6, 0.6, 0.0, 1.0)])
+
+
+def drift_bag(folder: Path, drift_deg: float = 6.0, drift_m: float = 0.35, seconds: float = 46.0,
+              angles: np.ndarray | None = None) -> tuple[Path, np.ndarray]:
+    """A robot driving a 2 m circle and a bit in a furnished room; its odometry drifts linearly to
+    ``drift_deg`` and ``drift_m`` by the end; no map -> odom in the bag; a 720-beam laser (or
+    ``angles``) with 1 cm of range noise. Returns the bag and the truth (issue 37)."""
+    t = np.arange(0.0, seconds, 0.1)
+    a = t * (2 * math.pi / 40.0)
+    truth = np.stack([t, 2.0 * np.cos(a) - 0.5, 1.6 * np.sin(a), a + math.pi / 2], 1)
+    f = t / t[-1]
+    drift = np.stack([drift_m * f * 0.8, -drift_m * f * 0.6, np.radians(drift_deg) * f], 1)
+    path = robot_bag(folder / "drift", ROOM, truth, drift=drift, tf_map=False,
+                     angles=np.radians(np.arange(-180.0, 180.0, 0.5)) if angles is None else angles,
+                     range_noise=0.01, range_max=12.0)
+    return path, truth

@@ -91,3 +91,25 @@ def test_the_figure_is_written_beside_the_seed(tmp_path):
     body = json.loads((tmp_path / "s.fit.json").read_text())
     assert set(body) >= {"scans", "beams", "blocked", "missed", "median_error", "start_seed", "start_scan"}
     assert body["blocked"] < 0.02 and body["median_error"] < 0.05 and body["warnings"] == []
+
+
+def test_a_seed_whose_start_is_much_clearer_than_the_first_scan_warns(bag):
+    """Issue 37: the start clearance warns both ways; a seed missing the wall nearest the start is
+    as wrong as one with a wall too near."""
+    fig = _figure(bag, [o for o in _truth_obstacles() if o.name != "b1"])
+    assert fig.start_seed > fig.start_scan + 0.5
+    (warning,) = [w for w in fig.warnings if "at the start" in w]
+    assert f"{fig.start_scan:.2f} m" in warning and "lacks what the robot saw nearest" in warning
+
+
+def test_a_720_beam_laser_gives_the_seed_720_beams_and_says_so(tmp_path, capsys):
+    """Issue 37: the beam count was capped at 360 without a word."""
+    from pytest_navscenario.cli import main
+    from pytest_navscenario.scenario.loader import load_scenario
+    t = np.arange(20) * 0.1
+    path = robot_bag(tmp_path / "b", WORLD, np.stack([t, -2.0 + 0.5 * t, 0 * t, 0 * t], 1), tf_map=False,
+                     angles=np.radians(np.arange(-180.0, 180.0, 0.5)))
+    assert main(["from-bag", str(path), "-o", str(tmp_path / "s.yaml"), "--no-plot"]) == 0
+    lidar = load_scenario(tmp_path / "s.yaml").robot.lidar
+    assert (lidar.beams, lidar.fov) == (720, 360.0)
+    assert "robot.lidar: 720 beams over 360 deg, as /scan's scans" in capsys.readouterr().out

@@ -101,6 +101,31 @@ def test_the_command_line_writes_a_seed_that_loads_with_its_heightmap(tmp_path, 
     assert seed.robot.body.kind == "wheeled"
 
 
+def test_the_import_says_the_drive_the_seed_has(tmp_path, capsys):
+    """#36: a world with terrain gets the wheeled body and drive: diff; the robot line printed must
+    say diff, not the omni drive of the default robot it started from."""
+    from pytest_navscenario.cli import main
+
+    Image.fromarray((np.arange(17 * 17).reshape(17, 17) % 50).astype(np.uint8)).save(tmp_path / "low.png")
+    src = _world(tmp_path, _heightmap("low.png", size="8 8 0.5", pos="0 0 0", pose="10 0 0 0 0 0"))
+    assert main(["import", "sdf", str(src), "--start=0,0,0", "--goal=4,0,0", "-o", str(tmp_path / "s.yaml")]) == 0
+    printed = capsys.readouterr().out
+    robot_line = next(line for line in printed.splitlines() if "navscenario import: robot:" in line)
+    assert "diff drive" in robot_line and "omni" not in robot_line
+
+
+def test_a_model_heightmap_not_found_hints_at_model_path(tmp_path, capsys):
+    """#36: a model:// heightmap that is not beside the world says where it looked and to pass
+    --model-path with the folder holding the model, not only '(not imported)'."""
+    from pytest_navscenario.cli import main
+
+    src = _world(tmp_path, _heightmap("model://hills/materials/textures/hills.png", pose="0 0 0 0 0 0"))
+    main(["import", "sdf", str(src), "--start=0,0,0", "--goal=4,0,0", "-o", str(tmp_path / "s.yaml")])
+    err = capsys.readouterr().err
+    assert "model://hills/materials/textures/hills.png" in err
+    assert "--model-path" in err and "'hills'" in err
+
+
 @pytest.mark.parametrize("how", ["absolute", "file", "model", "dotdot", "symlink"])
 def test_a_heightmap_from_outside_the_worlds_folder_is_refused_as_a_mesh_is(tmp_path, how):
     from pytest_navscenario.ros.world_import import WorldImportError

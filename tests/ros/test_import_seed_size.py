@@ -54,7 +54,8 @@ def test_an_l_shaped_counter_becomes_one_polygon_on_the_truth(seed_file):
         assert poly.buffer(0.04).contains(face), face
     x0, y0, x1, _ = poly.bounds
     assert (x0, y0, x1) == pytest.approx((-0.3, 0.25, 1.3), abs=0.16)   # the wall thickness again
-    assert len(row[0].points) <= 12                               # simplified, not a cell outline
+    # simplified, not a cell outline (14 since issue 37: the end seen edge-on keeps the cells grazing beams carved)
+    assert len(row[0].points) <= 16
 
 
 def test_near_obstacles_are_searchable_and_far_ones_a_fixed_background(seed_file):

@@ -42,21 +42,25 @@ def test_polylines_meshes_and_plugin_models_are_imported(tmp_path, capsys):
     write_stl(tmp_path / "models" / "lathe" / "meshes" / "ell.stl", ELL)
     src = world(tmp_path, POLYLINE + MESH + MISSING + DOOR)
     got = sdf_obstacles(src)
-    bench, lathe, door = got.obstacles
+    bench, lathe = got.obstacles
     assert bench.kind == "polygon" and bench.height == 0.9 and bench.yaw == pytest.approx(90.0)
     assert obstacle_polygon(bench).bounds == pytest.approx((0.0, 3.0, 2.0, 5.0), abs=1e-4)
     assert lathe.kind == "mesh" and lathe.file == "meshes/ell.stl" and lathe.scale == (0.5, 0.5, 0.5)
     assert lathe.height == pytest.approx(0.4) and Polygon(lathe.footprint).area == pytest.approx(1.75 / 4)
-    assert door.kind == "box" and (door.x, door.y) == (6.0, 0.0)     # non-static, but moved by a plugin
-    # a model moved by a plugin is a warning (issue 24), not a note: it will not stand there
-    assert any("model door: plugin(s) swing (libdoor.so) may move or change it" in n and "not carried over" in n
-               for n in got.warnings)
+    # a model a compiled plugin moves is left out (issue 37: where it stands is not where it will be),
+    # said with its plugin and how to give it back
+    (door,) = got.plugin_moved["door"][1]
+    assert door.kind == "box" and (door.x, door.y) == (6.0, 0.0)
+    assert any(w.startswith("1 model(s) moved by compiled Gazebo plugins left out: door (plugin(s) libdoor.so)")
+               and "--plugin-motion" in w for w in got.warnings)
     assert len(got.warnings) == 2 and "mesh model://ghost/meshes/none.stl: no such file" in got.warnings[0]
 
     out = tmp_path / "seed" / "w.yaml"
-    assert main(["import", "sdf", str(src), "--start=0,-2,0", "--goal=8,-2,0", "-o", str(out)]) == 0
+    (tmp_path / "motion.yaml").write_text("door: static\n")
+    assert main(["import", "sdf", str(src), "--start=0,-2,0", "--goal=8,-2,0", "-o", str(out),
+                 "--plugin-motion", str(tmp_path / "motion.yaml")]) == 0
     printed = capsys.readouterr()
-    assert "plugin(s) swing (libdoor.so)" in printed.err and "(not imported)" in printed.err
+    assert "left out" not in printed.err and "(not imported)" in printed.err
     seed = load_scenario(out)                      # the mesh was copied beside it
     assert (out.parent / "meshes" / "ell.stl").is_file()
     assert [o.name for o in seed.obstacles] == ["bench", "lathe", "door"]
@@ -91,8 +95,8 @@ DYNABARN = Path(__file__).resolve().parents[1] / "data" / "dynabarn_world_1.worl
 
 def test_a_barn_dynamic_world_is_recovered_with_every_repair_listed(tmp_path, capsys):
     """DynaBARN world 1 (MIT), which a strict XML parser refuses (``<pose frame=>``): read as Gazebo
-    classic reads it, each repair with its line, the plugin-moved cylinders a warning each, their
-    pile at one spot imported once and said so, the three walls where they stand."""
+    classic reads it, each repair with its line, the three walls where they stand; the six cylinders
+    its compiled plugins move (piled at one spot in the file) left out, said once (issue 37)."""
     import xml.etree.ElementTree as ET
     with pytest.raises(ET.ParseError):
         ET.parse(DYNABARN)
@@ -100,18 +104,65 @@ def test_a_barn_dynamic_world_is_recovered_with_every_repair_listed(tmp_path, ca
     repairs = [w for w in got.warnings if "not well-formed XML" in w]
     assert [w.split(":")[0] for w in repairs] == ["348", "389", "427"]
     assert all("repaired and read as Gazebo would" in w for w in repairs)
-    pile = [w for w in got.warnings if "identical models stand at one spot" in w]
-    assert len(pile) == 1 and pile[0].startswith("6 identical models stand at one spot (-0.225, 0.075)")
-    assert [w for w in got.warnings if "easylibobs_66: plugin(s)" in w]
     walls = {o.name: (o.x, o.y, o.length, o.width) for o in got.obstacles if isinstance(o, BoxObstacle)}
     assert walls == {"back_wall": (-10.0, 0.0, 0.5, 20.0), "top_wall": (0.0, 10.0, 20.0, 0.5),
                      "bottom_wall": (0.0, -10.0, 20.0, 0.5)}
-    assert len(got.obstacles) == 4
+    assert len(got.obstacles) == 3
+    (left,) = [w for w in got.warnings if "moved by compiled Gazebo plugins left out" in w]
+    assert left.startswith("6 model(s) moved by compiled Gazebo plugins left out: easylibobs_66, easylibobs_171")
+    assert "easylibobs_66.so" in left and "not written in the world file" in left and "--plugin-motion" in left
+    assert not [w for w in got.warnings if "identical models" in w or "may move or change it" in w]
     out = tmp_path / "dyn.yaml"
     assert main(["import", "sdf", str(DYNABARN), "--start=-2.25,3,90", "--goal=-2,-8,0", "-o", str(out)]) == 0
     err = capsys.readouterr().err
     assert f"warning: {DYNABARN}:348: not well-formed XML" in err
-    assert len(load_scenario(out).obstacles) == 4
+    assert f"warning: {DYNABARN}: 6 model(s) moved by compiled Gazebo plugins left out" in err
+    assert len(load_scenario(out).obstacles) == 3
+
+
+def test_identical_models_at_one_spot_do_not_read_as_a_line_number(tmp_path, capsys):
+    """Issue 37: 'dyna_0.world:11 identical models' read as line 11 of the file."""
+    pillar = ("<model name='p{i}'><static>1</static><pose>1 2 0 0 0 0</pose><link name='l'><collision name='c'>"
+              "<geometry><cylinder><radius>0.2</radius><length>1</length></cylinder></geometry></collision>"
+              "</link></model>")
+    src = world(tmp_path, "".join(pillar.format(i=i) for i in range(11)))
+    assert main(["import", "sdf", str(src), "--start=0,-2,0", "--goal=8,-2,0", "-o", str(tmp_path / "s.yaml")]) == 0
+    err = capsys.readouterr().err
+    assert f"{src}: identical models, 11 of them, stand at one spot (1, 2)" in err and f"{src}:11" not in err
+
+
+def test_the_motion_of_plugin_moved_models_is_given_and_starting_inside_a_wall_is_warned(tmp_path, capsys):
+    """Issue 37 points 4 and 5: --plugin-motion puts DynaBARN's cylinders back, moving as the user
+    says; one whose path starts and ends inside the arena's walls (as DynaBARN's do) is warned about."""
+    motion = tmp_path / "motion.yaml"
+    motion.write_text("easylibobs_66: {path: [[-2.0, 10.0], [-2.0, -10.0]], speed: 1.2, mode: loop}\n"
+                      "easylibobs_171: {path: [[3.0, 5.0], [-3.0, 5.0]], speed: 0.8, mode: back-and-forth}\n")
+    out = tmp_path / "dyn.yaml"
+    assert main(["import", "sdf", str(DYNABARN), "--start=-2.25,3,90", "--goal=-2,-8,0", "-o", str(out),
+                 "--plugin-motion", str(motion)]) == 0
+    err = capsys.readouterr().err
+    seed = load_scenario(out)
+    mover = seed.obstacle("easylibobs_66")
+    assert mover.radius == 0.5 and mover.motion.path == ((-2.0, 10.0), (-2.0, -10.0)) and mover.motion.mode == "loop"
+    assert seed.obstacle("easylibobs_171").motion.speed == 0.8 and len(seed.obstacles) == 5
+    assert "4 model(s) moved by compiled Gazebo plugins left out: easylibobs_148" in err
+    assert "moving obstacle 'easylibobs_66' starts inside static obstacle 'top_wall' at (-2, 10)" in err
+    assert "moving obstacle 'easylibobs_66' ends inside static obstacle 'bottom_wall' at (-2, -10)" in err
+    assert "easylibobs_171' starts inside" not in err
+
+
+def test_a_wrong_plugin_motion_names_the_file_line_and_field(tmp_path, capsys):
+    motion = tmp_path / "motion.yaml"
+    motion.write_text("easylibobs_66: {path: [[-2.0, 9.0], [-2.0, -9.0]], speed: 1.2}\nnobody: {velocity: [1, 0]}\n")
+    args = ["import", "sdf", str(DYNABARN), "--start=-2.25,3,90", "--goal=-2,-8,0", "-o", str(tmp_path / "s.yaml"),
+            "--plugin-motion", str(motion)]
+    assert main(args) != 0
+    assert (f"{motion}:2: nobody: not a model the world's compiled plugins move (those are: easylibobs_66, "
+            f"easylibobs_171") in capsys.readouterr().err
+    motion.write_text("easylibobs_66: {path: [[-2.0, 9.0], [-2.0, -9.0]], speed: -1}\n")
+    assert main(args) != 0
+    assert f"{motion}:1: easylibobs_66: motion.speed: must be > 0" in capsys.readouterr().err
+    assert not (tmp_path / "s.yaml").exists()
 
 
 def test_a_recovered_world_without_a_world_is_an_error(tmp_path):
@@ -143,3 +194,17 @@ def test_a_mesh_from_outside_the_worlds_folder_is_refused(tmp_path, uri, capsys)
     allowed = sdf_obstacles(src, model_path=(outside,)) if uri.startswith("file") else \
         sdf_obstacles(src, model_path=(tmp_path,))
     assert [o.kind for o in allowed.obstacles] == ["mesh"]
+
+
+def test_a_hand_written_mover_starting_inside_a_wall_is_warned_when_run(tmp_path, capsys):
+    """Issue 37 point 5: motion written by hand into a DynaBARN seed, starting inside the arena's
+    wall, ran without a word."""
+    seed = tmp_path / "dyn.yaml"
+    seed.write_text("version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 0, y: 3}, timeout: 20}\nobstacles:\n"
+                    "  - {type: box, name: top_wall, x: 0, y: 10, length: 20, width: 0.5}\n"
+                    "  - {type: cylinder, name: mover, radius: 0.5, motion: {path: [[-4, 10], [-4, -5]], speed: 1.0}}\n")
+    main(["run", str(seed)])
+    err = capsys.readouterr().err
+    assert (f"navscenario run: warning: {seed}: obstacles[1].motion.path: moving obstacle 'mover' starts inside "
+            f"static obstacle 'top_wall' at (-4, 10)") in err
+    assert "ends inside" not in err

@@ -251,6 +251,21 @@ def test_an_npy_whose_header_promises_a_huge_array_is_refused_before_its_data_is
         load_heightfield(tmp_path, "short.npy", 2, 2)
 
 
+@pytest.mark.parametrize("data", [b"\x93NUMPY\x01\x00\x06\x00{'a':\n",          # tokenize.TokenError (issue 38)
+                                  b"\x93NUMPY\x01\x00\x08\x00{'a':)\n",       # a SyntaxError
+                                  b"\x93NUMPY\x01\x00\x04\x00\xff\xfe\n\n"])  # not text
+def test_a_malformed_npy_header_is_a_loader_error_naming_the_file(tmp_path, data):
+    from pytest_navscenario import ScenarioError, load_scenario
+    (tmp_path / "bad.npy").write_bytes(data)
+    with pytest.raises(HeightmapError, match=r"bad.npy cannot be read as a NumPy .npy array"):
+        load_heightfield(tmp_path, "bad.npy", 2, 2)
+    (tmp_path / "s.yaml").write_text("version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 5, y: 0}}\n"
+                                     "robot: {drive: diff, body: {type: wheeled}}\nterrain:\n"
+                                     "  - {type: heightfield, x: 3, y: 0, file: bad.npy, length: 2, width: 2, max_height: 0.1}\n")
+    with pytest.raises(ScenarioError, match=r"s.yaml:5: terrain\[0\]\.file: .*bad.npy cannot be read"):
+        load_scenario(tmp_path / "s.yaml")
+
+
 def test_values_at_the_ends_of_the_float_range_map_to_the_heights_without_overflow(tmp_path):
     """(v - low) / (high - low) overflowed for +-1e308: NaN heights, and MuJoCo refused the model."""
     np.save(tmp_path / "h.npy", np.array([[-1e308, 0.0], [0.0, 1e308]]))

@@ -283,7 +283,8 @@ def _places(folder: Path):
     from pytest_navscenario.scenario.model import (FOOTPRINT, GOAL_TOLERANCE, LATENCY, LIDAR, LIMITS, LOCALISATION,
                                                    MISSION, MOTION, OBSTACLES, POSE, REFERENCE, SAFETY, SIMULATION)
     from pytest_navscenario.scenario.search_keys import SEARCH
-    from pytest_navscenario.scenario.terrain import BODY, LIDAR3D, TERRAIN
+    from pytest_navscenario.scenario.bodies import BODY
+    from pytest_navscenario.scenario.terrain import LIDAR3D, TERRAIN
 
     def place(label, sec, wrap, element=None, exclusive=(), **extra):
         base = {**_section_doc(sec, folder, element=element), **extra}
@@ -332,7 +333,7 @@ RUN_ONLY = ("must be greater than", "must not be below", "physics steps", "whole
             "is faster than the simulation can follow",   # a mover's speed against its size, the robot's, the timestep
             # a heightfield's file and its stretch, a rough patch's grid (scenario/ground/heightmap.py)
             "unknown heightfield format", "in the proportion of its columns and rows", "needs a grid of",
-            # a wheeled body's wheels against its footprint, its mass centre against its limits (scenario/ground/chassis.py)
+            # a wheeled body's wheels against its footprint, its mass centre against its limits (scenario/bodies/chassis.py)
             "leave no track", "stick out of", "no room for ball casters", "do not fit one behind the other",
             "would tip over", "would roll over",
             # an obstacle's z against the ground under it (scenario/ground.obstacle_problem)

@@ -7,7 +7,8 @@ from pytest_navscenario.core.errors import ScenarioError
 from pytest_navscenario.scenario.ground import surface as ground
 from pytest_navscenario.scenario.loader import check_scenario
 from pytest_navscenario.scenario.model import Mission, Pose, Robot, Scenario
-from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, Steps, WheeledBody
+from pytest_navscenario.scenario.bodies import WheeledBody
+from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, Steps
 
 WHEELED = Robot(drive="diff", body=WheeledBody())
 
@@ -137,3 +138,14 @@ def test_a_terrain_element_may_not_take_an_obstacles_name(tmp_path):
     sc = load_scenario(write_scene(tmp_path, "  - {type: pit, x: 4, y: 3, length: 1, width: 1, depth: 0.5}",
                                    "  - {type: box, name: pit1, x: 4, y: -3, length: 1, width: 1}"))
     assert sc.terrain[0].name == "pit2"                    # a generated name skips the obstacles' names
+
+
+def test_a_start_on_a_steep_side_slope_is_a_slope_not_a_face():
+    """#36: a plain ramp steeper than about 31 deg, the robot standing across it, spans more than
+    0.3 m under its footprint but has no face: the loader tells a face from a slope by steepness
+    (a jump between neighbouring points), so such a bank can be written; half on a platform is
+    still a face."""
+    bank = Ramp("bank", 0.0, 0.0, length=2.0, width=4.0, rise=1.4, yaw=90.0)   # 35 deg, rising along +y
+    check_scenario(scene([bank], start=(0.0, 0.0), goal=(1.0, 0.2)))
+    with pytest.raises(ScenarioError, match="stands in a face of platform 'dock'"):
+        check_scenario(scene([Platform("dock", 1.5, 0.0, length=3.0, width=3.0, height=1.0)]))

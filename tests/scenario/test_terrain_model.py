@@ -4,7 +4,8 @@ from dataclasses import replace
 
 from pytest_navscenario.scenario.loader import loads_scenario
 from pytest_navscenario.scenario.model import content_hash
-from pytest_navscenario.scenario.terrain import Lidar3D, PlanarBody, Ramp, WheeledBody
+from pytest_navscenario.scenario.bodies import PlanarBody, WheeledBody
+from pytest_navscenario.scenario.terrain import Lidar3D, Ramp
 
 FLAT = """
 version: 1
@@ -38,7 +39,7 @@ def test_bodies_written_before_com_height_and_the_mjcf_limits_hash_as_before():
     """Hashes taken on the branch before com_height (wheeled) and max_step/max_slope/max_gap (mjcf)
     existed: at their defaults (none) the new keys are left out."""
     from pytest_navscenario.scenario.model import Mission, Pose, Scenario
-    from pytest_navscenario.scenario.terrain import LeggedBody, MjcfBody
+    from pytest_navscenario.scenario.bodies import LeggedBody, MjcfBody
 
     base = Scenario(mission=Mission(start=Pose(0.0, 0.0, 0.0), goal=Pose(5.0, 0.0)))
     hashes = {}

@@ -57,7 +57,7 @@ def test_a_search_under_the_realistic_sensor_model_freezes_failures_that_hold(pr
     held = run(project, "scenarios/regressions", "--nav-subject=straight_planner:Picky", "--nav-repeat", "5")
     text = held.stdout.str()
     assert "1 of 1 frozen failure(s) still hold:" in text and "fails in 5/5 runs" in text, text
-    assert "the search measured 1.00 (0.40-1.00) over 4 run(s): holds" in text
+    assert "the search measured a failure rate of 1.00 over 4 runs (95 % 0.40-1.00): holds" in text
     # found under another MuJoCo release: a failure that no longer holds says so
     frozen.write_text(re.sub(r"mujoco_version: .*", "mujoco_version: 3.9.0", frozen.read_text()))
     later = run(project, "scenarios/regressions", "--nav-subject=straight_planner:Careful", "--nav-repeat", "5")

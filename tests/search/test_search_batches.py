@@ -93,4 +93,7 @@ def test_the_search_plugin_batches_and_writes_what_an_unbatched_run_writes(proje
     assert "batches (--nav-batch)" not in alone.stdout.str()
     bad = project.runpytest(*args, "--nav-batch", "some")
     assert bad.ret == pytest.ExitCode.USAGE_ERROR
-    assert "--nav-batch: expected auto, a whole number of episodes per batch >= 1, or off" in bad.stderr.str()
+    assert "--nav-batch: expected auto, a whole number of episodes per batch from 1 to 100000, or off" \
+        in bad.stderr.str()
+    huge = project.runpytest(*args, "--nav-batch=1000000000")      # said its upper bound only as ">= 1"
+    assert huge.ret == pytest.ExitCode.USAGE_ERROR and "from 1 to 100000" in huge.stderr.str()

@@ -14,7 +14,7 @@ from pytest_navscenario.harness.batch import NO_PROTOCOL, Batching, run_batch
 from pytest_navscenario.harness.runner import run_scenario
 from pytest_navscenario.scenario.loader import load_scenario
 from pytest_navscenario.scenario.model import BoxObstacle, CylinderObstacle, Mission, Pose, Robot, Scenario
-from pytest_navscenario.scenario.terrain import WheeledBody
+from pytest_navscenario.scenario.bodies import WheeledBody
 from pytest_navscenario.sim.batching.batch import BatchEpisode, batch_engine, simulate_batch
 from pytest_navscenario.sim.episode import simulate
 from pytest_navscenario.subjects.protocol import Command

@@ -5,7 +5,8 @@ import numpy as np
 
 from pytest_navscenario.scenario.ground import surface as ground
 from pytest_navscenario.scenario.model import Mission, Pose, Robot, Scenario
-from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, Rough, Steps, WheeledBody
+from pytest_navscenario.scenario.bodies import WheeledBody
+from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, Rough, Steps
 from pytest_navscenario.sim.ground.riding import GroundProbe
 
 

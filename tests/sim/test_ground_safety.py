@@ -4,7 +4,8 @@ that never looks down; the 2D lidar, whose plane passes over every drop)."""
 import numpy as np
 import pytest
 
-from pytest_navscenario.scenario.terrain import Lidar3D, WheeledBody
+from pytest_navscenario.scenario.bodies import WheeledBody
+from pytest_navscenario.scenario.terrain import Lidar3D
 from pytest_navscenario.sim.ground.ground_safety import GroundLimits, GroundSafety, limits_of
 from pytest_navscenario.sim.lidar3d import CloudLidar, mount_rotation
 

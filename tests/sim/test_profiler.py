@@ -9,7 +9,7 @@ import threading
 
 import mujoco
 
-import pytest_navscenario.sim.episode as episode_module
+import pytest_navscenario.sim.loop as episode_module
 import pytest_navscenario.sim.batching.lockstep as lockstep_module
 from pytest_navscenario.scenario.loader import load_scenario
 from pytest_navscenario.sim import profiler

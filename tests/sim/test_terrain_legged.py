@@ -11,7 +11,8 @@ import pytest
 
 from pytest_navscenario.scenario.ground.crossing import Capability, walk
 from pytest_navscenario.scenario.model import BoxObstacle, Footprint, Mission, Pose, Robot, Safety, Scenario
-from pytest_navscenario.scenario.terrain import LeggedBody, Pit, Platform, Ramp, Steps, WheeledBody
+from pytest_navscenario.scenario.bodies import LeggedBody, WheeledBody
+from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, Steps
 from pytest_navscenario.sim.episode import simulate
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "search"))

@@ -11,7 +11,8 @@ import pytest
 from pytest_navscenario.core.errors import ScenarioError
 from pytest_navscenario.scenario.ground import surface as ground
 from pytest_navscenario.scenario.model import BoxObstacle, Footprint, Mission, Pose, Robot, Scenario
-from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, Steps, WheeledBody
+from pytest_navscenario.scenario.bodies import WheeledBody
+from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, Steps
 from pytest_navscenario.sim.episode import simulate
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "search"))
@@ -201,3 +202,24 @@ def test_a_heightfield_dipping_below_the_floor_cuts_a_hole_in_it(tmp_path):
     assert len(floor) > 1                                     # slabs round the hole, not one plane
     res = simulate(sc, Straight(), 0)
     assert res.trajectory.z.min() < -0.2 and res.trajectory.pose[-1, 0] > 9.0   # down into it, and out
+
+
+class Slow:
+    """Drives straight along +x at 0.25 m/s."""
+
+    def reset(self, scenario):
+        pass
+
+    def act(self, obs):
+        return (0.25, 0.0, 0.0)
+
+
+def test_caught_in_a_trench_it_names_the_gap_and_the_pit():
+    """#36: a robot whose wheels drop into a 0.15 m trench across its way is stuck in a gap of
+    0.15 m of that pit, not at 'the 1.00 m step' of no element (the trench's far wall)."""
+    trench = Pit("trench", 2.075, 0.0, length=0.15, width=3.0, depth=1.0)
+    res = simulate(scene([trench], goal=(4.0, 0.0)), Slow(), 0)
+    assert res.end == "stuck-terrain", res.end
+    event = res.terrain_event
+    assert event.element == "pit 'trench'"
+    assert event.detail == "its wheels are caught in the 0.15 m gap"

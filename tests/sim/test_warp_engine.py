@@ -19,7 +19,8 @@ from pytest_navscenario.harness.agreement import AGREE, Tolerance, compare
 from pytest_navscenario.harness.batch import Batching, run_batch
 from pytest_navscenario.scenario.loader import load_scenario
 from pytest_navscenario.scenario.model import BoxObstacle, Mission, Pose, Robot, Scenario
-from pytest_navscenario.scenario.terrain import Lidar3D, Ramp, WheeledBody
+from pytest_navscenario.scenario.bodies import WheeledBody
+from pytest_navscenario.scenario.terrain import Lidar3D, Ramp
 from pytest_navscenario.sim.batching.batch import BatchEpisode, batch_engine, simulate_batch
 from pytest_navscenario.sim.batching.warp_engine import WarpEngine, missing
 from pytest_navscenario.subjects.protocol import Command

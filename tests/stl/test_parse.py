@@ -91,6 +91,8 @@ def test_a_formula_knows_its_signals_compares_by_text_and_pickles():
     ("()", 2, "empty parentheses", None),
     ("(a > 0) unless (b > 0)", 9, "'unless' is not supported", "until"),
     ("pow(a) > 0", 6, "expected ','", "pow(x, y)"),
+    ("always (X > 0.5)", 9, "'X' is a reserved word (next), not a signal", "rename the signal"),
+    ("(speed <= 1) until (F < 2)", 21, "'F' is a reserved word (eventually)", "G, H"),
 ])
 def test_a_mistake_names_its_column_and_the_fix(text, column, message, fix):
     with pytest.raises(StlSyntaxError) as info:

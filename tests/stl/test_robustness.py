@@ -155,3 +155,10 @@ def test_an_undefined_verdict_is_an_error_not_a_pass():
         evaluate("x / x > 0", {"x": [0.0, 1.0]}, DT)
     assert "0/0" in info.value.hint
     assert np.isnan(robustness("x / x > 0", {"x": [0.0, 1.0]}, DT)[0])
+
+
+def test_evaluations_compare_without_raising():
+    one = evaluate("always (x > 0)", {"x": [1.0, 2.0]}, DT)
+    two = evaluate("always (x > 0)", {"x": [1.0, 2.0]}, DT)
+    assert one == one and (one == two) is False          # by identity: rho is an array
+    assert one.robustness == two.robustness and np.array_equal(one.rho, two.rho)

@@ -1,6 +1,7 @@
 """Robustness agrees with RTAMT's offline discrete-time evaluator (the reference implementation)
 on random formulas and traces: every operator, bounded and unbounded, windows past the end of
-short traces, with and without parentheses. Derandomized: the same examples on every run.
+short traces, with and without parentheses; and RTAMT reads a formula's canonical text as it reads
+the formula. Derandomized: the same examples on every run.
 
 The default run checks 2 x 150 pairs; the heavy run (CI) 2 x 600 = 1200.
 """
@@ -23,11 +24,16 @@ def _settings(examples: int):
 
 def _agrees(case) -> None:
     text, signals, dt = case
-    ours = robustness(parse(text), signals, dt)
+    formula = parse(text)
+    ours = robustness(formula, signals, dt)
     reference = np.asarray(rtamt_robustness(text, signals, dt))
     assert ours.dtype == np.float64 and ours.shape == reference.shape
     np.testing.assert_allclose(ours, reference, rtol=1e-12, atol=1e-12,
-                               err_msg=f"{text} (read as {parse(text).text}), dt={dt}, {signals}")
+                               err_msg=f"{text} (read as {formula.text}), dt={dt}, {signals}")
+    # the canonical text (what reports show) is RTAMT syntax that RTAMT reads the same way
+    canonical = np.asarray(rtamt_robustness(formula.text, signals, dt))
+    np.testing.assert_allclose(canonical, reference, rtol=1e-12, atol=1e-12,
+                               err_msg=f"RTAMT reads {formula.text} otherwise than {text}")
 
 
 @pytest.fixture(autouse=True)

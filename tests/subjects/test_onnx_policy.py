@@ -287,6 +287,33 @@ def test_a_yaml_bomb_as_the_declaration_is_refused_with_a_hint_about_declaration
     assert "scenario" not in text and "this file is not a policy declaration" in text, text
 
 
+def test_a_declaration_of_a_huge_observation_is_refused_before_anything_that_wide_is_made(tmp_path):
+    """3000 lidar fields of 100000 beams (3e8 values) over a model of symbolic width asked numpy for
+    2.24 GiB at load (issue 38): the declaration is refused at the field that crosses the limit."""
+    import time
+    fields = "".join("  - lidar: {beams: 100000, fov: 360, clip: [0.0, 4.0], std: 4.0}\n" for _ in range(3000))
+    decl = "navscenario-policy: 1\nobservation:\n" + fields + "action:\n  components: [vx, vy, wz]\n"
+    path = write_policy(tmp_path, "huge", constant_model([0, 0, 0], 24), decl)
+    t0 = time.monotonic()
+    text = load_error(path, "huge.policy.yaml:4: observation[1].lidar: brings the observation to 200000 values, "
+                            "more than the limit of 100000")
+    assert time.monotonic() - t0 < 10 and "fix: " in text
+    many = "".join("  - velocity: {components: [vx]}\n" for _ in range(1001))
+    path = write_policy(tmp_path, "many", constant_model([0, 0, 0], 24),
+                        "navscenario-policy: 1\nobservation:\n" + many + "action:\n  components: [vx, vy, wz]\n")
+    load_error(path, "more than 1000 fields")
+
+
+def test_a_number_written_with_an_exponent_is_a_number_as_in_scenario_files(tmp_path):
+    from pytest_navscenario.subjects.policies.declaration import read_declaration
+    decl = DECLARATION_24.replace("scale: limits", "scale: 2e-1").replace("std: 4.0", "std: 4e0")
+    path = tmp_path / "e.policy.yaml"
+    path.write_text(decl)
+    read = read_declaration(path.read_text(), str(path))
+    assert read.action.scale == (0.2, 0.2, 0.2)
+    assert read.observation[0].std[0] == 4.0
+
+
 def test_file_and_metadata_declarations_that_differ_are_refused(tmp_path):
     path = write_policy(tmp_path, "two", constant_model([0, 0, 0], 24, metadata={
         "navscenario.policy": UNIT_SCALE}), DECLARATION_24)

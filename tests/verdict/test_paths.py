@@ -9,7 +9,8 @@ from shapely.geometry import LineString, Polygon
 
 from pytest_navscenario.verdict import paths
 from pytest_navscenario.scenario.geometry import obstacle_polygons
-from pytest_navscenario.verdict.paths import min_obstacle_gap, path_exists, shortest_path
+from pytest_navscenario.verdict.gaps import min_obstacle_gap
+from pytest_navscenario.verdict.paths import path_exists, shortest_path
 from pytest_navscenario.scenario.model import BoxObstacle, CylinderObstacle, Footprint, Mission, Pose, Robot, Scenario
 
 CIRCLE = Footprint(shape="circle", radius=0.3)

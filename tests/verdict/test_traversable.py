@@ -8,9 +8,10 @@ from pathlib import Path
 
 import pytest
 
-from pytest_navscenario.scenario.ground.crossing import body_capability
+from pytest_navscenario.scenario.bodies import body_capability
 from pytest_navscenario.scenario.model import Footprint, Mission, Pose, Robot, Scenario
-from pytest_navscenario.scenario.terrain import LeggedBody, MjcfBody, Pit, Platform, Ramp, Rough, Steps, WheeledBody
+from pytest_navscenario.scenario.bodies import LeggedBody, MjcfBody, WheeledBody
+from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, Rough, Steps
 from pytest_navscenario.verdict.feasibility import impassable_reason
 from pytest_navscenario.verdict.paths import shortest_path
 from pytest_navscenario.verdict.traversable import barriers

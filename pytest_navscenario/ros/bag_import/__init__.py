@@ -12,7 +12,8 @@ map, else the odometry frame:
 * obstacles: every scan streamed (a second pass over the bag), each beam placed with the robot's
   pose at the moment it was measured (``time_increment`` / ``scan_time``, the driver's stamp
   convention) and the laser's mounting (``--laser-pose``, else ``/tf_static``, else the first
-  ``/tf`` transforms, else guessed from the scans); returns accumulated on a grid and free space
+  ``/tf`` transforms, else guessed from the scans); without ``map -> odom`` the poses corrected by
+  scan matching (``--scan-match``); returns accumulated on a grid and free space
   carved along every beam (log-odds occupancy), or every point cloud (streamed, ground removed,
   the robot's height band kept); clustered and fitted as cylinders, compact boxes and wall
   outlines (simplified polygons; with their heights from a 3D lidar); neighbours merged into
@@ -26,8 +27,9 @@ map, else the odometry frame:
 Modules, in the order the data flows: ``topics`` (which topic plays which part), ``reading``
 (first pass: bag -> arrays), ``scans`` (the scans' layout and timing, the streamed second pass),
 ``motion`` (turns, reversing), ``frames`` (map or odometry frame), ``goal``, ``footprint``,
-``mount`` (laser mounting), ``projection`` (beams -> grid), ``occupancy`` (log-odds, free space
-carved), ``clouds`` (second pass: clouds -> grid), ``obstacles`` (grid -> clusters -> obstacles),
+``mount`` (laser mounting), ``scan_match`` (odometry drift corrected by aligning scans),
+``projection`` (beams -> grid), ``occupancy`` (log-odds, free space carved, walls beside the path
+kept), ``clouds`` (second pass: clouds -> grid), ``obstacles`` (grid -> clusters -> obstacles),
 ``outline`` (cells -> wall polygons), ``simplify`` (merge, searchable or fixed), ``known_map`` (the
 bag's /map), ``seed`` (the scenario), ``fit`` (the seed against its scans), ``events``, ``cli``
 (the command line).

@@ -11,6 +11,7 @@ from ..robot_options import RobotOptionError, add_robot_arguments, parse_footpri
 from .clouds import CloudSettings
 from .frames import FRAMES
 from .reading import PATH_AS, BagImportError
+from .scan_match import METHODS
 from .scans import STAMPS
 from .robot import RobotChoice
 from .seed import scenario_from_bag
@@ -64,6 +65,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--scan-time-offset", type=float, default=0.0, metavar="SECONDS",
                    help="add this to every scan's stamp, for a driver that stamps its scans late or early against "
                         "the odometry (default 0)")
+    p.add_argument("--scan-match", choices=METHODS, default="off",
+                   help="correct odometry drift by aligning each key scan to the map of those before it, when the "
+                        "bag has no map -> odom and no pose topic: auto (KISS-ICP when installed, pip install "
+                        "'pytest-navscenario[drift]', else the own correlative matcher), own, kiss-icp, or off "
+                        "(default: the odometry as it is; a corridor gives the matching nothing along it); the "
+                        "output says how far the poses moved")
     p.add_argument("--frame", choices=FRAMES, default="auto",
                    help="the seed's world frame: auto (default: the map frame when the bag has map -> odom on /tf "
                         "or a pose topic in the map frame, else the odometry frame), map (an error without one), odom")
@@ -120,7 +127,7 @@ def import_bag(args: argparse.Namespace):
                              pose_topic=args.pose_topic, cloud_topic=args.cloud_topic,
                              cloud=_cloud_settings(args), goal_topic=args.goal_topic, at=args.at,
                              window=args.window, scan_stamp=args.scan_stamp, scan_offset=args.scan_time_offset,
-                             robot=_robot_choice(args))
+                             robot=_robot_choice(args), scan_match=args.scan_match)
     extra = {}
     if args.path_as != "waypoints":
         extra[csv_name] = reference_csv(seed.path)

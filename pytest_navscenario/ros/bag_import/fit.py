@@ -4,7 +4,8 @@ recorded poses along the recorded beams and compare with the recorded ranges:
 * ``blocked``: the share of beams along which the seed has an obstacle more than ``TOL`` in front of
   what the real lidar saw (its return, or nothing within its range): space the real robot saw free;
 * ``missed``: the share of real returns the seed has nothing at (its first obstacle along the beam
-  more than ``TOL`` behind the return, or none);
+  more than ``TOL`` behind the return, or none); of them ``carved``: those in cells that returns hit
+  repeatedly but later beams carved free (a carving problem, not something left out on purpose);
 
 (``TOL`` measured across the seed's surface where the beam meets it, not along the beam: a beam
 that grazes a wall a centimetre off meets it decimetres from the real return);
@@ -41,6 +42,7 @@ class FitFigure:
     median_error: float           # m, over the real returns
     start_seed: float             # m, the seed's clearance at the start (inf without obstacles)
     start_scan: float             # m, the first scan's nearest return from the robot's centre
+    carved: float = 0.0           # share of real returns missed in cells hit repeatedly yet carved free
     tolerance: float = TOL
     warnings: list[str] = field(default_factory=list)
 
@@ -120,9 +122,10 @@ def cast(ox, oy, dx, dy, edges: np.ndarray, circles: np.ndarray) -> tuple[np.nda
     return best, cosine
 
 
-def fit_figure(scenario, data, mount, sample, first) -> FitFigure:
+def fit_figure(scenario, data, mount, sample, first, carved=None) -> FitFigure:
     """The seed ``scenario`` against the recorded scans ``sample`` (scans.ScanBatch) and the window's
-    ``first`` scan, each beam from where the laser was when it measured it."""
+    ``first`` scan, each beam from where the laser was when it measured it; ``carved(x, y)`` (bool
+    per point): whether a return's cell was hit repeatedly and carved free all the same."""
     from shapely.geometry import Point
 
     from ...scenario.geometry import obstacle_polygon
@@ -138,7 +141,7 @@ def fit_figure(scenario, data, mount, sample, first) -> FitFigure:
         pick = np.linspace(0, len(sample.t) - 1, keep).round().astype(int)
         sample = ScanBatch(sample.t[pick], sample.ranges[pick])
     reach = reach_of(layout.range_max)
-    blocked = missed = beams = returns = 0
+    blocked = missed = beams = returns = lost = 0
     errors = []
     if len(sample.t):
         r = beam_rays(data, sample, mount)
@@ -153,7 +156,11 @@ def fit_figure(scenario, data, mount, sample, first) -> FitFigure:
         # would put the seed's hit decimetres from the real return
         with np.errstate(invalid="ignore"):
             blocked = int(np.count_nonzero((seed < seen_to) & ((seen_to - seed) * cosine > TOL)))
-            missed = int(np.count_nonzero(valid & (~np.isfinite(seed) | ((seed - real) * cosine > TOL))))
+            miss = valid & (~np.isfinite(seed) | ((seed - real) * cosine > TOL))
+        missed = int(np.count_nonzero(miss))
+        if carved is not None and missed:
+            px, py = ox[miss] + real[miss] * np.cos(ang[miss]), oy[miss] + real[miss] * np.sin(ang[miss])
+            lost = int(np.count_nonzero(carved(px, py)))
         errors = np.abs(np.minimum(seed[valid], layout.range_max) - real[valid])
         beams, returns = int(use.sum()), int(valid.sum())
     start = scenario.mission.start
@@ -171,7 +178,7 @@ def fit_figure(scenario, data, mount, sample, first) -> FitFigure:
     fig = FitFigure(scans=len(sample.t), beams=beams, blocked=blocked / beams if beams else 0.0,
                     missed=missed / returns if returns else 0.0,
                     median_error=float(np.median(errors)) if len(errors) else 0.0,
-                    start_seed=float(start_seed), start_scan=start_scan)
+                    start_seed=float(start_seed), start_scan=start_scan, carved=lost / returns if returns else 0.0)
     fig.warnings = _disagreements(fig)
     return fig
 
@@ -185,11 +192,25 @@ def _disagreements(fig: FitFigure) -> list[str]:
                    f"seed's picture, the laser mounting (--laser-pose) and the scan timing (--scan-stamp, "
                    f"--scan-time-offset)")
     if fig.missed > WARN_MISSED:
-        out.append(f"the seed misses {fig.missed:.0%} of the real returns (something the lidar saw is not in the "
-                   f"seed: small or moving things are left out on purpose)")
+        left = fig.missed - fig.carved
+        if fig.carved > WARN_MISSED / 2:
+            out.append(f"the seed misses {fig.missed:.0%} of the real returns, {fig.carved:.0%} of them in cells that "
+                       f"returns hit again and again but later beams carved free: a carving problem (walls erased by "
+                       f"beams that passed them, often because the poses drift: check the seed's picture beside the "
+                       f"returns; a shorter window, --start/--end, keeps them)"
+                       + (f"; the other {left:.0%} are small or moving things, left out on purpose" if left > 0.005
+                          else ""))
+        else:
+            out.append(f"the seed misses {fig.missed:.0%} of the real returns (something the lidar saw is not in the "
+                       f"seed: small or moving things are left out on purpose)")
     if fig.median_error > WARN_ERROR:
         out.append(f"the seed's ranges are {fig.median_error:.2f} m off the real ones (median)")
     if math.isfinite(fig.start_scan) and fig.start_seed < fig.start_scan - WARN_START:
         out.append(f"at the start the seed has an obstacle {fig.start_seed:.2f} m from the robot's centre where "
                    f"the first scan's nearest return is {fig.start_scan:.2f} m away")
+    if math.isfinite(fig.start_scan) and fig.start_seed > fig.start_scan + WARN_START:
+        seed = f"{fig.start_seed:.2f} m away" if math.isfinite(fig.start_seed) else "none at all"
+        out.append(f"at the start the seed's nearest obstacle is {seed} where the first scan's nearest return is "
+                   f"{fig.start_scan:.2f} m from the robot's centre: the seed lacks what the robot saw nearest (a "
+                   f"wall carved away or left out as small): check the seed's picture beside the returns")
     return out

@@ -110,7 +110,8 @@ def to_world_frame(data: BagData, frame: str = "auto", map_frame: str = "map",
             raise BagImportError(f"{data.path}: --frame map, but the bag has no {map_frame} -> {data.odom_frame} on "
                                  f"/tf and no pose topic in {map_frame}" + (f" ({warnings[0]})" if warnings else ""))
         data.notes.append(f"world frame: {data.odom_frame} (odometry): no {map_frame} -> {data.odom_frame} on /tf "
-                          f"and no pose topic in {map_frame}, so odometry drift is not corrected")
+                          f"and no pose topic in {map_frame}, so the bag does not correct the odometry's drift"
+                          + (" (--scan-match auto corrects it by scan matching)" if data.scan_topic else ""))
         return None
     od = data.odom
     world = compose(held(corr, od[:, 0]), od[:, 1:4])

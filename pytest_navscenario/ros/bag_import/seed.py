@@ -32,6 +32,7 @@ from .known_map import map_background, not_on_map
 from .mount import choose_mount
 from .obstacles import FitSettings, _r, fit_obstacles, occupied_clusters
 from .projection import map_scans, settle_timing
+from .scan_match import METHODS, correct_drift
 from .reading import PATH_AS, BagData, BagImportError, close_bag, open_bag, read_bag
 from .robot import RobotChoice, base_robot, describe, seed_robot
 from .streaming import stream_notes
@@ -92,7 +93,7 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
                       cloud: CloudSettings = CloudSettings(), goal_topic: str | None = None,
                       at: float | None = None, window: float = 30.0, size: SeedSize = SeedSize(),
                       scan_stamp: str = "auto", scan_offset: float = 0.0,
-                      robot: RobotChoice = RobotChoice()) -> BagSeed:
+                      robot: RobotChoice = RobotChoice(), scan_match: str = "off") -> BagSeed:
     """Build a seed scenario from a bag (see the package docstring). ``laser_pose`` is x, y (m),
     yaw (degrees) of the laser in the robot's base frame; ``robot_radius`` the seed's circular
     footprint (m; default: from the bag's URDF or Nav2 footprint, else 0.15 m); ``reference_file`` is the CSV name
@@ -102,7 +103,9 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
     ``frame``: "auto" (the map frame when the bag has ``map -> odom`` or a pose topic in it, else
     the odometry frame), "map" or "odom". ``scan_stamp`` ("auto", "start", "end") and
     ``scan_offset`` (s): when each scan was taken (scans.choose_timing). ``robot``: --robot,
-    --footprint, --drive (robot.py; a bag of ours gives the robot of the scenario it ran)."""
+    --footprint, --drive (robot.py; a bag of ours gives the robot of the scenario it ran).
+    ``scan_match`` ("auto", "own", "kiss-icp", "off"): how odometry drift is corrected when the bag
+    has no ``map -> odom`` (scan_match.py)."""
     if robot_radius is not None and not (math.isfinite(robot_radius) and 0 < robot_radius <= 5):
         raise BagImportError(f"--robot-radius must be a length in (0, 5] m, got {robot_radius}")
     if path_as not in PATH_AS:
@@ -117,14 +120,16 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
                         cloud_topic=cloud_topic, at=at, window=window, scan_stamp=scan_stamp,
                         scan_offset=scan_offset, reader=reader)
         return _seed(data, laser_pose, path_as, reference_file, name, robot_radius, settings, frame, map_frame,
-                     pose_topic, cloud, goal_topic, size, robot)
+                     pose_topic, cloud, goal_topic, size, robot, scan_match)
     finally:
         close_bag(reader)
 
 
 def _seed(data: BagData, laser_pose, path_as, reference_file, name, robot_radius, settings, frame, map_frame,
-          pose_topic, cloud, goal_topic, size, choice: RobotChoice) -> BagSeed:
+          pose_topic, cloud, goal_topic, size, choice: RobotChoice, scan_match="off") -> BagSeed:
     corr = to_world_frame(data, frame, map_frame, pose_topic, data.full_odom)
+    if scan_match not in METHODS:
+        raise BagImportError(f"--scan-match must be one of {', '.join(METHODS)}, got {scan_match!r}")
     goal, goal_note = choose_goal(data, corr, goal_topic)
     base, base_how, fp_warnings = base_robot(data, choice)
     if choice.footprint is not None:
@@ -143,6 +148,10 @@ def _seed(data: BagData, laser_pose, path_as, reference_file, name, robot_radius
         notes.append(f"laser {data.scan_frame} at x={mount[0]:.3f} y={mount[1]:.3f} "
                      f"yaw={math.degrees(mount[2]):.1f} deg in {data.base_frame}, {how}")
         settle_timing(data, mount)
+        if corr is None and frame != "odom":    # no map -> odom: the scans correct the odometry's drift
+            matched = correct_drift(data, mount, scan_match)
+            if matched:
+                notes.append(matched)
         smap = map_scans(data, mount, settings.res)
         notes.extend(stream_notes(data))
         if smap.scans:
@@ -171,10 +180,16 @@ def _seed(data: BagData, laser_pose, path_as, reference_file, name, robot_radius
     if background:
         scenario = dataclasses.replace(scenario, search={"frozen": background})
     notes.append(summary)
+    lidar = lidar_note(data, scenario.robot.lidar)
+    if lidar:
+        notes.append(lidar)
     _check_moves(data, scenario)
     fit = None
     if smap is not None and smap.scans:
-        fit = fit_figure(scenario, data, mount, smap.sample, smap.first)
+        fit = fit_figure(scenario, data, mount, smap.sample, smap.first, carved=_carved_cells(smap))
+        if fit.warnings and corr is None and frame != "odom" and scan_match == "off":
+            fit.warnings.append("the bag has no map -> odom: if the odometry drifted, --scan-match auto aligns the "
+                                "scans to one another and moves the poses (the output says how far)")
     od = data.odom
     path_rows = np.stack([od[:, 0] - od[0, 0], od[:, 1], od[:, 2]], axis=1)
     return BagSeed(scenario=scenario, path=path_rows, notes=notes, mount=mount, fit=fit,
@@ -197,7 +212,8 @@ def _on_terrain(scenario: Scenario, terrain: Any, clouds: Any, notes: list[str],
     """The seed with the terrain, a body that rides it and the 3D lidar the bag had (guessed;
     ``keep``: the robot is known, --robot's or the recorded scenario's, and a body and a 3D lidar
     it has are kept)."""
-    from ...scenario.terrain import Lidar3D, WheeledBody
+    from ...scenario.bodies import WheeledBody
+    from ...scenario.terrain import Lidar3D
 
     robot = scenario.robot
     if keep and robot.body.kind != "planar" and robot.lidar3d is not None:
@@ -245,6 +261,19 @@ def _fit_scans(data: BagData, smap, settings: FitSettings, notes: list[str]) -> 
     occ = smap.occupancy
     return _fit(data, grid, settings, notes, f"{smap.scans} scans", occupied=occupied,
                 seen_free=lambda cols, rows: occ.at_cells(cols, rows) < 0.0)
+
+
+def _carved_cells(smap):
+    """Whether points lie in cells that returns hit in REPEATED scans or more and yet the occupancy
+    grid holds free (carved by the beams that passed them)."""
+    from .occupancy import REPEATED
+
+    occ = smap.occupancy
+
+    def carved(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        c, r = np.floor(x / occ.res).astype(np.int64), np.floor(y / occ.res).astype(np.int64)
+        return (occ.at_cells(c, r, occ.hits) >= REPEATED) & (occ.at_cells(c, r) <= 0.0)
+    return carved
 
 
 def _check_moves(data: BagData, scenario: Scenario) -> None:
@@ -394,7 +423,33 @@ def _robot(data: BagData, footprint: Footprint) -> Robot:
     # 20 % above the real peak speed, rounded up to 0.05 m/s: headroom for the planner
     limits = Limits(max_speed=_r(max(0.2, math.ceil(speed * 1.2 * 20) / 20), 2),
                     max_yaw_rate=_r(max(30.0, math.ceil(math.degrees(yaw_rate) * 1.2 / 5) * 5), 1))
-    lidar = Lidar(beams=min(len(data.scan_angles), 360) if data.scan_topic else 72,
+    beams, fov = _lidar_beams(data)
+    lidar = Lidar(beams=beams, fov=fov,
                   range_max=_r(data.range_max if data.scan_topic and math.isfinite(data.range_max) else 8.0, 2),
                   range_min=_r(data.range_min if data.scan_topic else 0.05, 3))
     return Robot(footprint=footprint, drive="diff", limits=limits, lidar=lidar)
+
+
+def _lidar_beams(data: BagData) -> tuple[int, float]:
+    """The seed lidar's beams and field of view (degrees): the bag's scans' own, every beam (up to
+    the scenario's limit), else 72 over a full turn."""
+    from ...scenario.keys import SCENARIO_LIMITS
+
+    if not data.scan_topic or not len(data.scan_angles):
+        return 72, 360.0
+    n = len(data.scan_angles)
+    fov = min(360.0, abs(math.degrees(data.scan_layout.angle_increment)) * n) if n > 1 else 360.0
+    return min(n, int(SCENARIO_LIMITS["max_lidar_beams"])), _r(fov, 2)
+
+
+def lidar_note(data: BagData, lidar: Lidar) -> str | None:
+    """What the seed's lidar took from the bag's scans (said, not silent: a seed with fewer beams
+    than the real laser sees less)."""
+    if not data.scan_topic or not len(data.scan_angles):
+        return None
+    n = len(data.scan_angles)
+    text = f"robot.lidar: {lidar.beams} beams over {lidar.fov:g} deg"
+    if lidar.beams < n:
+        return (text + f", fewer than the {n} of {data.scan_topic} (the scenario's limit); the simulated lidar "
+                f"sees less than the real one did")
+    return text + f", as {data.scan_topic}'s scans (set robot.lidar.beams lower for a faster simulation)"

@@ -33,18 +33,11 @@ from typing import Sequence
 
 import numpy as np
 
+from ..bodies.record import Capability
+
 SPACING = 0.02    # m between the samples of a profile (a threshold of 5 cm is seen)
 FOOT = 0.1        # m: a steep stretch narrower than this is a step's face, wider a slope (words only)
 EPS = 1e-9
-
-
-@dataclass(frozen=True)
-class Capability:
-    """What a body can cross: steps up and down of ``max_step`` metres, slopes of ``max_slope``
-    degrees, gaps of ``max_gap`` metres (0: none)."""
-    max_step: float
-    max_slope: float
-    max_gap: float
 
 
 @dataclass(frozen=True)
@@ -118,58 +111,6 @@ def look_ahead(cap: Capability, move: float, spacing: float = SPACING) -> int:
     return int(math.ceil((move + cap.max_gap) / spacing)) + 3
 
 
-# ---------------------------------------------------------------- what each body can cross
-
-# The wheeled body's limits are estimates from its wheels, measured in MuJoCo with a straight
-# drive (benchmarks/measure_wheeled_limits.py; default body: 50 kg, 10 N m, wheels of 0.1 m). The
-# figures move between MuJoCo patch releases (the highest step the default diff body climbs: 0.036 m
-# under 4.0.0, 0.042 m under 4.0.1; skid 0.064 -> 0.081 m; the widest gap 0.18 -> 0.23 m), so the
-# estimates are bounds with room rather than fits: a step is at most the radius of what meets it
-# first (diff: its ball casters, 0.05 m; skid: its wheels), since a ball or a wheel cannot roll up
-# a step of its own radius (the edge pushes straight back), and at most the chassis' clearance;
-# slopes of 18 deg (diff: the casters carry load and the driven wheels lose grip; measured 17.2
-# under both releases, 16.2 with 0.15 m wheels, where the torque binds) and 35 deg (skid: 34.4);
-# gaps of 2.4 wheel radii. The estimates stay at or above what the body does under every supported
-# release (pyproject.toml pins the series): the shortest path (the metrics' yardstick) and the
-# feasibility check must never rule out what the body really crosses (a path round a sill the robot
-# drives over would make its path efficiency exceed 1), so a step, slope or gap a little above what
-# it does may pass for crossable (tests/verdict/test_traversable.py checks both sides).
-WHEELED_CASTER_STEP = 1.0     # of the caster's radius (diff)
-WHEELED_WHEEL_STEP = 1.0      # of the wheel's radius (skid)
-WHEELED_SLOPE = {"diff": 18.0, "skid": 35.0}   # degrees, at most the torque's limit
-WHEELED_TORQUE_SLOPE = 1.1    # the torque's limit (the slope whose weight it balances), over-estimated by this
-WHEELED_GAP = 2.4             # of the wheel's radius (0.24 m: the default body crossed 0.18 m under MuJoCo
-                              # 4.0.0, 0.23 m under 4.0.1; 0.15 m wheels crossed a rough 0.45 m, not covered)
-
-
-def body_capability(scenario) -> Capability | None:
-    """What the scenario's body can cross: a legged body's declared limits, a wheeled body's
-    estimated ones (see WHEELED_*), None for a body that declares none (planar: no terrain;
-    mjcf: its declared ones, None when undeclared: the harness cannot estimate them from a model)."""
-    body = scenario.robot.body
-    if body.kind == "legged":
-        return Capability(float(body.max_step), float(body.max_slope), float(body.max_gap))
-    if body.kind == "mjcf":
-        if body.max_step is None or body.max_slope is None:
-            return None
-        return Capability(float(body.max_step), float(body.max_slope),
-                          float(body.max_gap) if body.max_gap is not None else 0.0)
-    if body.kind != "wheeled":
-        return None
-    r = float(body.wheel_radius)
-    g = 9.81
-    driven = 4 if body.drive_wheels == "skid" else 2
-    torque = WHEELED_TORQUE_SLOPE * math.degrees(math.asin(min(driven * body.max_wheel_torque / (r * body.mass * g),
-                                                               1.0)))
-    if body.drive_wheels == "skid":
-        step = WHEELED_WHEEL_STEP * r
-    else:
-        from .chassis import wheeled_layout
-        step = WHEELED_CASTER_STEP * wheeled_layout(body, scenario.robot.footprint).caster_radius
-    return Capability(min(step, float(body.clearance)), min(torque, WHEELED_SLOPE[body.drive_wheels]),
-                      WHEELED_GAP * r)
-
-
 # ---------------------------------------------------------------- steep ground, in every direction
 
 
@@ -185,31 +126,48 @@ def steep_cells(h: np.ndarray, dx: float, dy: float, cap: Capability) -> np.ndar
     gx = np.gradient(h, dx, axis=1) if h.shape[1] > 1 else np.zeros_like(h)
     gy = np.gradient(h, dy, axis=0) if h.shape[0] > 1 else np.zeros_like(h)
     steep = np.hypot(gx, gy) > math.tan(math.radians(min(cap.max_slope, 89.9)))
+    if not steep.any():
+        return steep
+    roots = _label(steep)[steep]                # each steep cell's component (its smallest flat index)
+    high = np.full(h.size, -np.inf)
+    low = np.full(h.size, np.inf)
+    np.maximum.at(high, roots, h[steep])
+    np.minimum.at(low, roots, h[steep])
     out = np.zeros(h.shape, dtype=bool)
-    if steep.any():
-        labels = _label(steep)
-        for lab in np.unique(labels[steep]):
-            patch = labels == lab
-            if float(h[patch].max() - h[patch].min()) > cap.max_step:
-                out |= patch
+    out[steep] = (high - low)[roots] > cap.max_step
     return out
 
 
 def _label(mask: np.ndarray) -> np.ndarray:
     """Connected components (8-neighbours) of ``mask``: each cell's label is the smallest flat
-    index in its component (-1 outside), by propagating minima until nothing changes."""
-    big = mask.size
-    labels = np.where(mask, np.arange(big).reshape(mask.shape), big)
-    while True:
-        padded = np.pad(labels, 1, constant_values=big)
-        best = labels.copy()
-        for oy in (-1, 0, 1):
-            for ox in (-1, 0, 1):
-                best = np.minimum(best, padded[1 + oy:1 + oy + mask.shape[0], 1 + ox:1 + ox + mask.shape[1]])
-        best = np.where(mask, best, big)
-        if np.array_equal(best, labels):
-            return np.where(mask, labels, -1)
-        labels = best
+    index in its component (-1 outside). Union by hooking each edge's larger root under its
+    smaller one, then pointer jumping to the roots, until no edge joins two roots: a few rounds
+    of O(cells) numpy work whatever the components' shapes (propagating minima cell by cell took
+    as many rounds as a component is long: minutes for a winding one on a 1024^2 grid)."""
+    rows, cols = mask.shape
+    index = np.arange(mask.size).reshape(mask.shape)
+    a_parts, b_parts = [], []
+    for (dy, dx) in ((0, 1), (1, 0), (1, 1), (1, -1)):      # each neighbour pair once
+        ys, ye = 0, rows - dy
+        xs, xe = max(0, -dx), cols - max(0, dx)
+        both = mask[ys:ye, xs:xe] & mask[ys + dy:ye + dy, xs + dx:xe + dx]
+        a_parts.append(index[ys:ye, xs:xe][both])
+        b_parts.append(index[ys + dy:ye + dy, xs + dx:xe + dx][both])
+    a, b = np.concatenate(a_parts), np.concatenate(b_parts)
+    parent = index.ravel().copy()
+    while a.size:
+        pa, pb = parent[a], parent[b]
+        keep = pa != pb
+        a, b, pa, pb = a[keep], b[keep], pa[keep], pb[keep]
+        if not a.size:
+            break
+        np.minimum.at(parent, np.maximum(pa, pb), np.minimum(pa, pb))
+        while True:                                  # every cell straight to its root
+            up = parent[parent]
+            if np.array_equal(up, parent):
+                break
+            parent = up
+    return np.where(mask, parent.reshape(mask.shape), -1)
 
 
 def steep_areas(scenario, cap: Capability) -> tuple:

@@ -33,6 +33,8 @@ from ..mesh import MeshError, resolve_mesh_path
 
 MAX_HEIGHTFIELD_BYTES = 64_000_000   # a file larger than this is refused before it is read
 MAX_GRID_SIDE = 1024                 # samples along a side (a 1024 x 1024 grid is 8 MB of float64)
+MAX_GRID_SAMPLES = 64 * 1024 ** 2    # all grids of a scenario together (benchmarks/bench_limits.py: 50 rough
+                                     # patches of 1023^2, the barrier search ~20 s and 250 MB)
 MAX_CELL_ASPECT = 4.0                # a cell stretched more than this one way is a size mismatch
 ROUGH_SAMPLES_PER_WAVELENGTH = 8     # rough ground's grid spacing: wavelength / 8
 ROUGH_SIGMA = 1 / 4.5                # the noise filter's sigma, in wavelengths: peaks one wavelength apart
@@ -198,7 +200,9 @@ def _read_npy(path: Path, size: int) -> np.ndarray:
                 raise ValueError(f"unsupported .npy format version {version[0]}.{version[1]}")
             shape, _, dtype = read_header(fp)
             data_bytes = size - fp.tell()
-    except (ValueError, OSError, EOFError) as exc:
+    except Exception as exc:   # ValueError, EOFError, and numpy's header parser's own (tokenize.TokenError...)
+        if isinstance(exc, HeightmapError):
+            raise
         raise HeightmapError(f"{path.name} cannot be read as a NumPy .npy array: {exc}") from None
     if dtype.kind not in "iuf":
         raise HeightmapError(f"{path.name} holds {dtype} values; a heightfield array holds numbers "
@@ -213,7 +217,7 @@ def _read_npy(path: Path, size: int) -> np.ndarray:
                              f"promises {promised} ({shape[1]} x {shape[0]} {dtype} values)")
     try:
         values = np.load(path, allow_pickle=False)
-    except (ValueError, OSError, EOFError) as exc:
+    except Exception as exc:
         raise HeightmapError(f"{path.name} cannot be read as a NumPy .npy array: {exc}") from None
     return values.astype(float)
 
@@ -260,6 +264,23 @@ def load_heightfield(folder: Path, file: str, length: float, width: float) -> tu
     _, values = _file_values(path)
     check_extent(Path(file).name, values.shape, length, width)
     return path, grid_digest(values)
+
+
+def check_grid_total(before: int, element: Any, source: str | None) -> int:
+    """The samples of every grid read so far with ``element``'s (its rough grid, or its file's,
+    read by the loader already); HeightmapError past ``MAX_GRID_SAMPLES``: all the grids are in
+    the MuJoCo model, and the verdict looks for ground the body cannot cross on each of them."""
+    if element.kind == "rough":
+        rows, cols = rough_shape(element.length, element.width, element.wavelength)
+    else:
+        folder = Path(source).parent if source else Path.cwd()
+        rows, cols = _file_values(resolve_heightfield_path(folder, element.file))[1].shape
+    total = before + rows * cols
+    if total > MAX_GRID_SAMPLES:
+        raise HeightmapError(f"brings the rough ground's and heightfields' grids to {total} samples together, "
+                             f"more than the limit of {MAX_GRID_SAMPLES} ({MAX_GRID_SAMPLES // 1024 ** 2} grids of "
+                             f"1024 x 1024)", field="")
+    return total
 
 
 def _file_values(path: Path) -> tuple[Any, np.ndarray]:

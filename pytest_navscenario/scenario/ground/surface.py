@@ -1,6 +1,7 @@
 """The ground as a pure function: the height under any (x, y) of a scenario's terrain, vectorised,
-and each element's outline and pieces. No MuJoCo: the world (sim/ground/terrain.py) builds the same
-pieces as geoms, and the verdict, the loader's checks and the pictures read heights from here.
+and each element's outline and pieces (each element's dataclass builds its own: scenario/terrain/).
+No MuJoCo: the world (sim/ground/terrain.py) builds the same pieces as geoms, and the verdict,
+the loader's checks and the pictures read heights from here.
 
 What each element is (its own frame: +x along ``length``, the direction it rises or runs along):
 
@@ -17,27 +18,12 @@ lowest cut covering it. Solids reach down into cuts (a ramp over a pit bridges i
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
 
-from ..terrain import Heightfield, Pit, Platform, Ramp, Rough, Steps, TerrainElement
-
-FLOOR = 0.0
-
-
-@dataclass(frozen=True)
-class Piece:
-    """One convex block of an element, in the element's frame: ``u0..u1`` along its length, the
-    full width, its top a plane from ``top0`` (at u0) to ``top1`` (at u1). ``cut``: the floor is
-    removed over it (its top lies below the floor)."""
-    element: int          # index in scenario.terrain
-    u0: float
-    u1: float
-    top0: float
-    top1: float
-    cut: bool = False
+from ..terrain import Piece, Pit, TerrainElement
+from ..terrain.base import FLOOR
 
 
 def frame(element: TerrainElement) -> tuple[float, float, float, float]:
@@ -87,26 +73,12 @@ _PIECES: dict = {}
 
 
 def _pieces(terrain: tuple) -> tuple[Piece, ...]:
-    out: list[Piece] = []
-    for i, el in enumerate(terrain):
-        if isinstance(el, Ramp):
-            out.append(Piece(i, -el.length / 2, el.length / 2, el.z, el.z + el.rise))
-        elif isinstance(el, Platform):
-            out.append(Piece(i, -el.length / 2, el.length / 2, el.z + el.height, el.z + el.height))
-        elif isinstance(el, Pit):
-            out.append(Piece(i, -el.length / 2, el.length / 2, -el.depth, -el.depth, cut=True))
-        elif isinstance(el, Steps):
-            sign = 1.0 if el.direction == "up" else -1.0
-            for k in range(el.count):
-                top = el.z + sign * (k + 1) * el.rise
-                u0 = -el.length / 2 + k * el.run
-                out.append(Piece(i, u0, u0 + el.run, top, top, cut=top < FLOOR - 1e-12))
-    return tuple(out)
+    return tuple(piece for i, el in enumerate(terrain) for piece in el.pieces(i))
 
 
 def grid_elements(terrain: Sequence[TerrainElement]) -> list[int]:
     """Indices of the elements given as height grids (rough ground, heightfields)."""
-    return [i for i, el in enumerate(terrain) if isinstance(el, (Rough, Heightfield))]
+    return [i for i, el in enumerate(terrain) if el.grid]
 
 
 def _piece_height(piece: Piece, u: np.ndarray) -> np.ndarray:
@@ -157,6 +129,8 @@ def ground_height(scenario, px, py) -> np.ndarray:
 def grid_low(element: TerrainElement, scenario) -> float:
     """The lowest surface of a grid element (rough ground, heightfield); cached (asked for with
     every height on it)."""
+    if isinstance(element, Rough):   # its heights run from 0 (its tapered border) up: z, without making the grid
+        return float(element.z)
     key = (element, getattr(scenario, "source", None))
     low = _GRID_LOW.get(key)
     if low is None:
@@ -230,9 +204,8 @@ def highest(scenario) -> float:
     return max([FLOOR] + tops)
 
 
-BODY_DRIVES = {"planar": ("omni", "diff"), "wheeled": ("diff",), "legged": ("omni", "diff"),
-               "mjcf": ("omni", "diff")}
-FACE_STEP = 0.3     # m: ground under a footprint differing by more than this stands it in a face
+FACE_STEP = 0.3     # m: ground under a footprint jumping by more than this between neighbouring points
+FACE_SPACING = 0.02 # m between those points: a jump of FACE_STEP over it is a face (86 deg), not a slope
 MAX_BLOCKS = 5000   # terrain blocks, each step of a flight one: 5000 build in ~0.2 s, 100 000 took 17 s and 0.5 GB
 MAX_HOLES = 100     # elements cutting the floor: the floor around 100 holes at random places ~0.15 s
                     # (sim/terrain._floor_parts), around 1000 about 9 s
@@ -243,7 +216,7 @@ def terrain_problem(scenario) -> tuple[str, str, str] | None:
     """(field, message, fix) when the terrain is too large to build in about a second: more than
     MAX_BLOCKS blocks, or more than MAX_HOLES elements cutting the floor; None otherwise."""
     terrain = scenario.terrain
-    blocks = sum(el.count if isinstance(el, Steps) else 1 for el in terrain)
+    blocks = sum(max(1, len(el.pieces(i))) for i, el in enumerate(terrain))
     if blocks > MAX_BLOCKS:
         return ("terrain", f"the terrain has {blocks} blocks (each step of a flight counts), more than the limit "
                            f"of {MAX_BLOCKS}: building its world would take tens of seconds",
@@ -294,29 +267,12 @@ def obstacle_problem(scenario) -> tuple[str, str, str] | None:
     return None
 
 
-def body_problem(scenario) -> tuple[str, str, str] | None:
-    """(field, message, fix) when the robot's body and drive, or its body and the terrain, do not
-    go together; None when they do (which combinations exist: sim/bodies/__init__.py)."""
-    kind, drive = scenario.robot.body.kind, scenario.robot.drive
-    if drive not in BODY_DRIVES[kind]:
-        return ("robot.drive", f"a {kind} body cannot drive '{drive}': it cannot move sideways",
-                f"set robot.drive: {BODY_DRIVES[kind][0]}")
-    if kind == "planar" and scenario.terrain:
-        return ("robot.body", "the planar body (the default) slides on a flat floor and cannot ride terrain",
-                "give the robot a body that meets the ground: robot.body: {type: wheeled} "
-                "(or legged, or mjcf with your own robot)")
-    from .chassis import wheeled_problem
-    return wheeled_problem(scenario)
-
-
 def mission_problem(scenario) -> tuple[str, str, str] | None:
     """(field, message, fix) when the start or the goal stands over a hole (a pit, a stairwell) or
-    inside a terrain face (the ground under its footprint differs by more than FACE_STEP: half on a
-    platform, half off), or a waypoint lies over a hole; None when the mission stands on the ground."""
+    inside a terrain face (``_face_under``: half on a platform, half off), or a waypoint lies over a
+    hole; None when the mission stands on the ground."""
     if not scenario.terrain:
         return None
-    from ..geometry import footprint_polygon
-
     m = scenario.mission
     checks = [("mission.start", m.start, True), ("mission.goal", m.goal, True)]
     checks += [(f"mission.waypoints[{i}]", w, False) for i, w in enumerate(m.waypoints)]
@@ -329,10 +285,8 @@ def mission_problem(scenario) -> tuple[str, str, str] | None:
                                f"{-piece.top0:g} m below the floor",
                         f"move it onto the ground, or move {describe_element(el)}")
         if footprint:
-            outline = np.asarray(footprint_polygon(scenario.robot.footprint, pose.x, pose.y,
-                                                   pose.yaw_rad).exterior.coords)
-            heights = ground_height(scenario, outline[:, 0], outline[:, 1])
-            if float(heights.max() - heights.min()) > FACE_STEP:
+            heights = _face_under(scenario, pose)
+            if heights is not None:
                 el = element_at(scenario, pose.x, pose.y, margin=1.0)
                 what = describe_element(scenario.terrain[el]) if el is not None else "the terrain"
                 return (field, f"the robot's footprint at ({pose.x:g}, {pose.y:g}) stands in a face of "
@@ -340,3 +294,23 @@ def mission_problem(scenario) -> tuple[str, str, str] | None:
                                f"{float(heights.max()):.2f} m",
                         f"move it fully onto {what} or off it")
     return None
+
+
+def _face_under(scenario, pose) -> np.ndarray | None:
+    """The ground's heights under the footprint at ``pose`` when it stands in a face (between two
+    neighbouring points FACE_SPACING apart the ground jumps by more than FACE_STEP: half on a
+    platform, half off); None when it stands on ground, however steep a slope (a side slope of a
+    ramp spans more than FACE_STEP under a wide robot and has no face)."""
+    fp = scenario.robot.footprint
+    hl, hw = (fp.length / 2, fp.width / 2) if fp.shape == "box" else (fp.radius, fp.radius)
+    u = np.linspace(-hl, hl, max(2, int(math.ceil(2 * hl / FACE_SPACING)) + 1))
+    v = np.linspace(-hw, hw, max(2, int(math.ceil(2 * hw / FACE_SPACING)) + 1))
+    gu, gv = np.meshgrid(u, v)
+    c, s = math.cos(pose.yaw_rad), math.sin(pose.yaw_rad)
+    h = ground_height(scenario, (pose.x + c * gu - s * gv).ravel(), (pose.y + s * gu + c * gv).ravel())
+    h = h.reshape(gu.shape)
+    inside = np.ones(gu.shape, bool) if fp.shape == "box" else np.hypot(gu, gv) <= fp.radius + 1e-9
+    h = np.where(inside, h, np.nan)
+    jumps = [np.abs(np.diff(h, axis=axis)) for axis in (0, 1)]
+    jump = max(float(np.nanmax(j, initial=0.0)) for j in jumps)
+    return h[inside] if jump > FACE_STEP else None

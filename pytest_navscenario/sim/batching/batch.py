@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from typing import Any, Protocol, Sequence
 
 from ...scenario.model import Scenario
-from ..episode import SimResult
+from ..loop import SimResult
 
 
 @dataclass(frozen=True)

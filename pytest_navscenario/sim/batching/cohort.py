@@ -28,7 +28,7 @@ import numpy as np
 
 from ...core.errors import SimulationDivergedError
 from ...subjects.protocol import Observation
-from ..episode import Episode, EpisodeOver
+from ..loop import Episode, EpisodeOver
 from ..lidar3d import LEVEL
 from ..world import CONTACT_SENSOR, LIDAR_HEIGHT, MUJOCO_WARNINGS, TWO_PI, divergence_message
 

@@ -19,7 +19,7 @@ import mujoco
 from ...core.errors import SimulationDivergedError, SimulationFatalError
 from ..command import call_planner, planner_traceback, validate_command
 from ..deadline import PlannerTimeout, TickDeadline
-from ..episode import Episode, EpisodeOver, SimResult
+from ..loop import Episode, EpisodeOver, SimResult
 from ..profiler import profiler_off
 from ..trajectory import SubjectFailure
 from ..world import MUJOCO_WARNINGS, divergence_message, fatal_message

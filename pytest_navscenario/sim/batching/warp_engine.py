@@ -25,7 +25,7 @@ from typing import Any, Sequence
 
 from ...scenario.model import Scenario
 from ..body_world import rides_the_ground
-from ..episode import SimResult
+from ..loop import SimResult
 
 INSTALL_HINT = 'pip install "pytest-navscenario[gpu]" (or pip install -e ".[gpu]" in a checkout)'
 

@@ -15,7 +15,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..episode import EpisodeOver
+from ..loop import EpisodeOver
 from .lockstep import Lockstep
 from ..moving import describe_collision
 from ..trajectory import Collision

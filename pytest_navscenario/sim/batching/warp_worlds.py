@@ -8,7 +8,7 @@ positions, sizes and bounding boxes, body poses and inertias, actuator gains and
 a search's candidates around one seed move and resize the seed's obstacles, so they share one.
 ``group_key`` says which episodes can; ``DeviceWorlds`` is one such group.
 
-A tick on the device, the order of the CPU episode's ``step_physics`` (sim/episode.py):
+A tick on the device, the order of the CPU episode's ``step_physics`` (sim/loop.py):
 ``step2`` (finishing the step whose ``step1`` ran at the tick start), then ``spt - 1`` full
 ``step`` calls, each computing the contacts of the state it starts from, then a ``step1`` for the
 contacts and kinematics of the tick's last state. After each of those the contact kernel latches,

@@ -14,17 +14,33 @@ mjcf       omni, diff          the user's MJCF robot and controller (see mjcf.py
 =========  ==================  ==============================================================
 
 ``body_model(scenario)`` gives the simulation's model of the scenario's body (None: planar, which
-``sim/world.py`` builds as it always has, bit for bit).
+``sim/world.py`` builds as it always has, bit for bit), found in ``MODELS`` (the registry). Read
+first: ``protocol.py`` (``BodyModel``, what a body implements), ``base.py`` (a base on a free
+joint, which the three kinds share), then ``wheeled.py``, ``legged.py``, ``mjcf.py``. What each kind
+declares and can cross is on the scenario side: scenario/bodies/.
 """
 from __future__ import annotations
 
+import importlib
+
 from ...core.errors import ScenarioError
 from ...scenario.model import Scenario
+from .protocol import BodyControl, BodyModel  # noqa: F401  (the interface a body implements)
+
+# The registry: a scenario body kind (scenario/bodies/) -> "module:Class" of its model here (None:
+# the planar body, which sim/world.py builds). Adding a kind is one module and one line here.
+MODELS: dict[str, str | None] = {
+    "planar": None,
+    "wheeled": "wheeled:WheeledModel",
+    "legged": "legged:LeggedModel",
+    "mjcf": "mjcf:MjcfModel",
+}
+
 
 def check_body(scenario: Scenario) -> None:
     """ScenarioError when the body and the drive, or the body and the terrain, do not go together
-    (scenario/ground.body_problem: the loader checks the same)."""
-    from ...scenario.ground.surface import body_problem
+    (scenario/bodies: ``body_problem``, which the loader checks too)."""
+    from ...scenario.bodies import body_problem
 
     problem = body_problem(scenario)
     if problem is not None:
@@ -32,17 +48,15 @@ def check_body(scenario: Scenario) -> None:
         raise ScenarioError(message, path=scenario.source, field=field, hint=fix)
 
 
-def body_model(scenario: Scenario):
-    """The simulation's model of the scenario's body, or None for the planar body."""
+def body_model(scenario: Scenario) -> BodyModel | None:
+    """The simulation's model of the scenario's body (a ``BodyModel``), or None for the planar body."""
     check_body(scenario)
     kind = scenario.robot.body.kind
-    if kind == "planar":
+    if kind not in MODELS:
+        raise ScenarioError(f"no simulation model for a '{kind}' body", path=scenario.source, field="robot.body",
+                            hint=f"add one to sim/bodies/__init__.py MODELS (known: {', '.join(MODELS)})")
+    where = MODELS[kind]
+    if where is None:
         return None
-    if kind == "wheeled":
-        from .wheeled import WheeledModel
-        return WheeledModel(scenario)
-    if kind == "legged":
-        from .legged import LeggedModel
-        return LeggedModel(scenario)
-    from .mjcf import MjcfModel
-    return MjcfModel(scenario)
+    module, name = where.split(":")
+    return getattr(importlib.import_module(f".{module}", __name__), name)(scenario)

@@ -20,9 +20,9 @@ sweep would enter
 * ground sloping more steeply than the body's slope limit (between neighbouring ground cells).
 
 The body's limits (``limits_of``): a drop deeper than the body lands from (the simulation's own
-fall threshold for it), a slope steeper than the body climbs (a legged body's ``max_slope``; a
-wheeled body's torque limit: sin(slope) = driven wheels x max_wheel_torque / (mass g radius), and
-never more than its tip angle). What the lidar never saw the layer does not know: it stops for the
+fall threshold for it), a slope steeper than the body climbs (its record's ``climbs`` in
+scenario/bodies/: a legged body's ``max_slope``, a wheeled body's torque limit), never more than
+its tip angle. What the lidar never saw the layer does not know: it stops for the
 ground it has seen, never for ground it has not.
 """
 from __future__ import annotations
@@ -31,6 +31,7 @@ import math
 from dataclasses import dataclass
 import numpy as np
 
+from ...scenario.bodies import climb_limit
 from ...scenario.model import Scenario
 from ..safety import SAMPLE_SPACING, twist_poses
 
@@ -38,7 +39,6 @@ CELL = 0.1                # m, the ground map's cells
 MARGIN_CELLS = 60         # cells of map beyond the scenario's extent (6 m) on every side
 HOLE_LEVEL = 0.02         # m: below the robot's ground by this, a beam is in a hole's shadow
 SLOPE_REACH = 0.3         # m above the robot's ground: higher returns are obstacles, not a slope
-GRAVITY = 9.81
 
 
 @dataclass(frozen=True)
@@ -50,18 +50,8 @@ class GroundLimits:
 
 def limits_of(scenario: Scenario, drop_limit: float) -> GroundLimits:
     """The body's limits; ``drop_limit`` is the simulation's fall threshold for it (the body
-    model's ``drop_limit``)."""
-    body = scenario.robot.body
-    tip = float(getattr(body, "tip_angle", 45.0))
-    if body.kind == "legged":
-        slope = min(float(body.max_slope), tip)
-    elif body.kind == "wheeled":
-        driven = 2 if body.drive_wheels == "diff" else 4
-        grip = driven * body.max_wheel_torque / (body.mass * GRAVITY * body.wheel_radius)
-        slope = min(math.degrees(math.asin(min(grip, 1.0))), tip)
-    else:
-        slope = tip
-    return GroundLimits(float(drop_limit), slope)
+    model's ``drop_limit``), the slope its record's (scenario/bodies: ``climb_limit``)."""
+    return GroundLimits(float(drop_limit), climb_limit(scenario.robot.body))
 
 
 class GroundMap:

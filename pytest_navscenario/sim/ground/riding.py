@@ -1,6 +1,6 @@
 """What a robot riding the ground meets: the ground height under a point (fast, per tick), the
 pose a body rests in on it, and the watch that tells a fall, a tip-over or being stuck on terrain
-from the base's state each tick (``episode.RidingEpisode`` runs it). A classification of what the
+from the base's state each tick (``riding_episode.RidingEpisode`` runs it). A classification of what the
 physics did: nothing here moves the robot.
 """
 from __future__ import annotations
@@ -19,6 +19,7 @@ STUCK_TIME = 3.0          # s of being driven without moving that make the robot
 STUCK_COMMAND = 0.1       # m/s: a setpoint at least this fast counts as driving
 STUCK_MOVING = 0.25       # of the setpoint's speed: slower than this counts as not moving
 LOOK_AHEAD = 0.3          # m beyond the footprint's front where a stuck robot's step is measured
+GAP_SPACING = 0.005       # m between the samples that measure a gap the robot is caught in
 FEATURE = Capability(max_step=0.01, max_slope=5.0, max_gap=0.0)   # what counts as a step or a slope there
 
 
@@ -232,6 +233,11 @@ class TerrainWatch:
             self._end(TerrainEvent("stuck", t, self._name(el), x, y, z, roll=math.degrees(roll),
                                    pitch=math.degrees(pitch),
                                    detail=f"cannot walk the {steep[2]:.0f} deg slope across its way"))
+        gap = self._gap_under(x, y, c, s)
+        if gap is not None:
+            who = "its wheels are" if self.body.kind_name == "wheeled" else "it is"
+            self._end(TerrainEvent("stuck", t, self._name(gap[1]), x, y, z, roll=math.degrees(roll),
+                                   pitch=math.degrees(pitch), detail=f"{who} caught in the {gap[0]:.2f} m gap"))
         h = ground.ground_height(self.scenario, px, py).tolist()
         _, barrier = walk(h, SPACING, h[0], FEATURE)
         slope = math.degrees(max(abs(pitch), abs(roll)))
@@ -251,6 +257,23 @@ class TerrainWatch:
             detail = "high-centred: its chassis rests on the ground" if touching else "its wheels slip"
         self._end(TerrainEvent("stuck", t, self._name(el), x, y, z, roll=math.degrees(roll),
                                pitch=math.degrees(pitch), detail=detail))
+
+    def _gap_under(self, x, y, c, s) -> tuple[float, int | None] | None:
+        """(width along the heading, element) of a gap the robot's centre is over: ground lower by
+        more than FEATURE's step than the ground on both sides within its reach (a trench, a
+        narrow pit its wheels dropped into); None when there is ground on one side only (a drop)."""
+        reach = self.front + LOOK_AHEAD
+        d = np.arange(-round(reach / GAP_SPACING), round(reach / GAP_SPACING) + 1) * GAP_SPACING
+        h = ground.ground_height(self.scenario, x + c * d, y + s * d)
+        mid = len(d) // 2
+        low = h < min(h[0], h[-1]) - FEATURE.max_step
+        if not low[mid]:
+            return None
+        lows = np.flatnonzero(~low)
+        before, after = lows[lows < mid], lows[lows > mid]
+        if not len(before) or not len(after):
+            return None
+        return float((after[0] - before[-1] - 1) * GAP_SPACING), self.probe.element(x, y)
 
     def _steep_ahead(self, x, y, c, s, d) -> tuple[float, float, float] | None:
         """(x, y, slope in degrees) of the first steep ground (``crossing.steep_ground``, for a

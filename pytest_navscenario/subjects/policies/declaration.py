@@ -31,6 +31,7 @@ from __future__ import annotations
 import difflib
 import hashlib
 import math
+import re
 import os
 from dataclasses import dataclass, field
 from typing import Any
@@ -58,7 +59,10 @@ _FIELD_KEYS = {
 }
 ACTION_KEYS = ("components", "clip", "scale")
 _LIMITS = 50_000          # nodes: a declaration is a few dozen
+_NUMBER_WORD = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)[eE][-+]?\d+")   # = scenario.reading's: 1e-3 unquoted
 MAX_LABEL = int(SCENARIO_LIMITS["max_name_length"])   # characters of a name or version
+MAX_OBSERVATION = 100_000   # values in the observation row, all fields together (= one lidar's beam limit)
+MAX_FIELDS = 1_000          # fields in the observation
 
 
 class DeclarationError(SubjectLoadError):
@@ -210,6 +214,8 @@ class _Reader:
 
     def number(self, node: YNode, where: str) -> float:
         value = node.value if isinstance(node, YScalar) else None
+        if isinstance(value, str) and getattr(node, "plain", False) and _NUMBER_WORD.fullmatch(value):
+            value = float(value)       # 2e-1: a string in YAML 1.1, a number in scenario files too
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise self.fail(f"expected a finite number, got {describe(node)}", where, node.line)
         return float(value)
@@ -357,7 +363,15 @@ def _read_observation(r: _Reader, node: YNode) -> tuple[Feature, ...]:
         where = f"{where}.{kind}"
         if isinstance(settings, YScalar) and settings.value is None:
             settings = YMap(line)        # `- velocity:` with nothing after it: the defaults
+        if i >= MAX_FIELDS:
+            raise r.fail(f"the observation has more than {MAX_FIELDS} fields", where, item.line,
+                         "a policy's observation row is a few fields (lidar, target, velocity ...)")
         out.append(_read_feature(r, kind, settings, where, line))
+        total = sum(f.width for f in out)
+        if total > MAX_OBSERVATION:   # refused before any array of that width is made
+            raise r.fail(f"brings the observation to {total} values, more than the limit of {MAX_OBSERVATION} "
+                         f"(each tick's row, its clip and scale arrays are that wide)", where, line,
+                         "declare the fields the policy was trained on; resample the lidar to fewer beams")
     return tuple(out)
 
 
@@ -407,7 +421,8 @@ def _read_action(r: _Reader, node: YNode) -> Action:
         s_line, s_node = keys["scale"]
         if isinstance(s_node, YScalar) and s_node.value == "limits":
             scale = "limits"
-        elif isinstance(s_node, YScalar) and isinstance(s_node.value, str):
+        elif isinstance(s_node, YScalar) and isinstance(s_node.value, str) and not (
+                s_node.plain and _NUMBER_WORD.fullmatch(s_node.value)):
             raise r.fail(f"expected a number, {len(comps)} numbers or 'limits', got {describe(s_node)}",
                          "action.scale", s_line)
         else:

@@ -1,5 +1,5 @@
 """Where a wheeled body's parts sit and whether it can stand: the one layout that the MuJoCo model
-(sim/bodies/wheeled.py), the loader's checks and the crossing estimates (scenario/ground/crossing.py) share.
+(sim/bodies/wheeled.py), the loader's checks and the crossing estimates (scenario/bodies/wheeled.py) share.
 
 Robot frame: x forward, y left, z up from the ground under the footprint's centre.
 
