@@ -13,7 +13,8 @@ import pytest
 
 from pytest_navscenario.scenario.ground.crossing import Capability, _label, steep_cells
 from pytest_navscenario.scenario.model import Footprint, Mission, Pose, Robot, Scenario
-from pytest_navscenario.scenario.terrain import LeggedBody, Platform
+from pytest_navscenario.scenario.bodies import LeggedBody
+from pytest_navscenario.scenario.terrain import Platform
 from pytest_navscenario.verdict.feasibility import impassable_reason
 from pytest_navscenario.verdict.paths import shortest_path
 from pytest_navscenario.verdict.traversable import MAX_BARRIERS, TerrainTooFineWarning, barriers
