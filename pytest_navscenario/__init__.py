@@ -26,7 +26,7 @@ from __future__ import annotations
 from . import _compat
 from .core.lazy import lazy_exports
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
 _EXPORTS = {
     "load_scenario": "scenario.loader", "loads_scenario": "scenario.loader",

@@ -21,7 +21,8 @@ PAGE = Path(__file__).resolve().parents[2] / "docs" / "contributing.md"
 
 def _section() -> str:
     text = PAGE.read_text()
-    return text[text.index("## Adding a search strategy"):text.index("## Benchmarks and the changelog")]
+    start = text.index("## Adding a search strategy")
+    return text[start:text.index("\n## ", start + 1)]          # to the next section, whichever it is
 
 
 def _blocks() -> list[str]:

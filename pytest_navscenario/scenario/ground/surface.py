@@ -22,7 +22,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ..terrain import Piece, Pit, TerrainElement
+from ..terrain import Piece, Pit, Rough, TerrainElement
 from ..terrain.base import FLOOR
 
 
