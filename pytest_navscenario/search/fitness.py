@@ -167,6 +167,10 @@ def read_episode(res: Any, route: Route) -> tuple[Reading, str]:
         vals = list(margins.values())
         robustness = min(vals) + MEAN_SHARE * sum(vals) / len(vals)
     signature = (res.outcome.value, *_culprit_place(culprit, sc, route), _bin(progress))
+    if not failed and margins and next(iter(margins)).startswith("requirement:"):
+        # a success with requirements: its behaviour is which requirement came closest to failing
+        # (evolve keeps the closest candidate of each signature: one per requirement)
+        signature = (res.outcome.value, min(margins, key=margins.get), 0, _bin(progress))
     idx = np.linspace(0, len(pose) - 1, min(PATH_POINTS, len(pose))).astype(int) if len(pose) else []
     path = tuple((round(float(pose[i, 0]), 4), round(float(pose[i, 1]), 4)) for i in idx)
     m = res.metrics

@@ -66,3 +66,13 @@ def test_a_shared_requirement_is_searched_and_frozen_into_the_file(project):
     frozen = [load_scenario(p) for p in sorted((project.path / "frozen").rglob("*.yaml"))]
     assert any(s.requirements and s.requirements[0].name == "keep-away-from-people" for s in frozen)
     assert any(run_scenario(s, "dwa").outcome.value == "requirement" for s in frozen[:3])
+
+
+def test_a_success_with_requirements_is_told_apart_by_the_requirement_that_came_closest():
+    tour = loads_scenario((ROOT / "scenarios" / "dock-tour.yaml").read_text())
+    res = run_scenario(tour, "dwa")
+    assert res.outcome.value == "success"
+    reading, _ = read_episode(res, Route(tour))
+    closest = min(res.requirements, key=lambda r: r.robustness / r.span)
+    assert reading.signature[:2] == ("success", f"requirement:{closest.name}")
+    assert reading.closest_margin == f"requirement:{closest.name}"
