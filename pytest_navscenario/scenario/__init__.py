@@ -4,8 +4,11 @@ In: YAML text or files (or plain dicts). Out: a frozen ``Scenario`` (robot, miss
 simulation settings, marks, search bounds), validated with ``file:line: field: message (fix: ...)``
 errors, and YAML that loads back to the same value.
 
-Read first: ``model.py`` (the dataclasses and their units), then ``loader.py`` (validation; every
-mistake of a file in one pass, kept by ``context.py``),
+Read first: ``model.py`` (the dataclasses and their units: the mission, the simulation, the
+top-level ``Scenario`` and its ``content_hash``; the obstacles in ``obstacles.py``, the robot in
+``robot.py``, all re-exported by ``model.py``), then ``loader.py`` (the entry points; every mistake of
+a file in one pass, kept by ``context.py``; each part's reader in ``part_readers.py``, the checks
+across fields, ``check_scenario``, in ``scenario_checks.py``),
 ``dump.py`` (writing), ``yaml_tree.py`` (the line-tracking YAML reader), ``geometry.py``
 (footprints and obstacle outlines as shapely polygons), ``motion.py`` (where a moving obstacle is at
 a time: the one function the simulation, the verdict and the pictures share).

@@ -175,62 +175,86 @@ def _merge_while_convex(triangles: list[Polygon]) -> list[Polygon]:
     - a merged part keeps the record of the part with more neighbours (small-to-large), so moving
       neighbour lists costs O(n log n) in all.
     """
-    import heapq
+    return _Merging(triangles).run()
 
-    rings = [list(map(tuple, shapely.get_coordinates(t)[:3].tolist())) for t in triangles]
-    parts = [_Part(k, t, ring) for k, (t, ring) in enumerate(zip(triangles, rings))]
-    owner = list(range(len(parts)))                 # union-find over triangles
-    # the quick test's float error stays far below 1e-9 m^2 on obstacles up to 100 m across
-    x0, y0, x1, y1 = shapely.total_bounds(triangles)
-    quick = max(x1 - x0, y1 - y0) <= 100.0
 
-    def part_of(t: int) -> _Part:
+class _Merging:
+    """One run of ``_merge_while_convex``: the parts (one per triangle at first), a union-find from
+    triangles to the part that holds them, each diagonal's corners, and the heap of convex pairs."""
+
+    def __init__(self, triangles: list[Polygon]) -> None:
+        rings = [list(map(tuple, shapely.get_coordinates(t)[:3].tolist())) for t in triangles]
+        self.parts = [_Part(k, t, ring) for k, (t, ring) in enumerate(zip(triangles, rings))]
+        self.owner = list(range(len(self.parts)))     # union-find over triangles
+        # the quick test's float error stays far below 1e-9 m^2 on obstacles up to 100 m across
+        x0, y0, x1, y1 = shapely.total_bounds(triangles)
+        self.quick = max(x1 - x0, y1 - y0) <= 100.0
+        self.corners = self._link(rings)
+        self.heap: list[tuple[int, int, int, int]] = []   # (lower key, higher key, root, root) of convex pairs
+
+    def _link(self, rings: list[list[tuple]]) -> dict[tuple, list[tuple[int, int]]]:
+        """Make the triangles sharing a diagonal neighbours; corner -> triangle pairs of its diagonals."""
+        parts = self.parts
+        sides: dict[tuple, list[int]] = {}
+        for k, ring in enumerate(rings):
+            for i in range(3):
+                u, v = ring[i], ring[(i + 1) % 3]
+                sides.setdefault((u, v) if u < v else (v, u), []).append(k)
+        corners: dict[tuple, list[tuple[int, int]]] = {}
+        for side, owners in sides.items():
+            if len(owners) != 2 or math.dist(*side) <= 1e-12:
+                continue
+            i, j = owners
+            parts[i].edges.setdefault(parts[j], []).append(side)
+            parts[j].edges.setdefault(parts[i], []).append(side)
+            corners.setdefault(side[0], []).append((i, j))
+            corners.setdefault(side[1], []).append((i, j))
+        return corners
+
+    def part_of(self, t: int) -> _Part:
+        owner = self.owner
         root = t
         while owner[root] != root:
             root = owner[root]
         while owner[t] != root:
             owner[t], t = root, owner[t]
-        return parts[root]
+        return self.parts[root]
 
-    sides: dict[tuple, list[int]] = {}
-    for k, ring in enumerate(rings):
-        for i in range(3):
-            u, v = ring[i], ring[(i + 1) % 3]
-            sides.setdefault((u, v) if u < v else (v, u), []).append(k)
-    corners: dict[tuple, list[tuple[int, int]]] = {}   # corner -> triangle pairs of its diagonals
-    for side, owners in sides.items():
-        if len(owners) != 2 or math.dist(*side) <= 1e-12:
-            continue
-        i, j = owners
-        parts[i].edges.setdefault(parts[j], []).append(side)
-        parts[j].edges.setdefault(parts[i], []).append(side)
-        corners.setdefault(side[0], []).append((i, j))
-        corners.setdefault(side[1], []).append((i, j))
+    def push(self, a: _Part, b: _Part) -> None:
+        import heapq
 
-    heap: list[tuple[int, int, int, int]] = []      # (lower key, higher key, root, root) of convex pairs
-
-    def push(a: _Part, b: _Part) -> None:
         lo, hi = (a, b) if a.key < b.key else (b, a)
-        heapq.heappush(heap, (lo.key, hi.key, lo.root, hi.root))
+        heapq.heappush(self.heap, (lo.key, hi.key, lo.root, hi.root))
 
-    def note(a: _Part, b: _Part, convex: bool) -> None:
+    def note(self, a: _Part, b: _Part, convex: bool) -> None:
         if convex:
             a.good.add(b)
             b.good.add(a)
-            push(a, b)
+            self.push(a, b)
         else:
             a.good.discard(b)
             b.good.discard(a)
 
-    for p in parts:
-        for q in p.edges:
-            if p.key < q.key:
-                note(p, q, _convex_union(p, q, quick))
-    while heap:
-        lo_key, hi_key, lo_root, hi_root = heapq.heappop(heap)
-        a, b = parts[lo_root], parts[hi_root]
-        if not (a.alive and b.alive and a.key == lo_key and b.key == hi_key and b in a.good):
-            continue                                # stale: merged away since, or no longer convex
+    def run(self) -> list[Polygon]:
+        """Merge the first convex pair left until none is: the parts in the order of their keys."""
+        import heapq
+
+        parts, heap = self.parts, self.heap
+        for p in parts:
+            for q in p.edges:
+                if p.key < q.key:
+                    self.note(p, q, _convex_union(p, q, self.quick))
+        while heap:
+            lo_key, hi_key, lo_root, hi_root = heapq.heappop(heap)
+            a, b = parts[lo_root], parts[hi_root]
+            if not (a.alive and b.alive and a.key == lo_key and b.key == hi_key and b in a.good):
+                continue                                # stale: merged away since, or no longer convex
+            self._merge(a, b, lo_key)
+        return [p.poly for p in sorted((p for p in parts if p.alive), key=lambda p: p.key)]
+
+    def _merge(self, a: _Part, b: _Part, lo_key: int) -> None:
+        """Merge ``b`` into ``a`` (or the other way: the one with more neighbours stays), then test
+        again the pairs whose angles changed."""
         shared = a.edges[b]
         changed = {c for side in shared for c in side}
         union = a.poly.union(b.poly)
@@ -243,8 +267,18 @@ def _merge_while_convex(triangles: list[Polygon]) -> list[Polygon]:
                 shapely.get_num_coordinates(b.poly) - 2 * len(shared) - 1:   # not a plain splice:
             changed |= (_corners(a.poly) | _corners(b.poly)) - _corners(merged)   # check every corner
         keep, gone = (a, b) if len(a.edges) >= len(b.edges) else (b, a)
+        self._absorb(keep, gone)
+        rekeyed = keep.key != lo_key
+        keep.key, keep.poly, keep.straight = lo_key, merged, straight
+        self._retest(keep, changed)
+        if rekeyed:                                 # its pairs' places in the heap moved
+            for q in keep.good:
+                self.push(keep, q)
+
+    def _absorb(self, keep: _Part, gone: _Part) -> None:
+        """``gone``'s neighbours, convex pairs and corner angles move over to ``keep``."""
         gone.alive = False
-        owner[gone.root] = keep.root
+        self.owner[gone.root] = keep.root
         del keep.edges[gone]
         keep.good.discard(gone)
         for q, sides_q in gone.edges.items():       # the absorbed part's neighbours move over
@@ -255,29 +289,26 @@ def _merge_while_convex(triangles: list[Polygon]) -> list[Polygon]:
             keep.edges.setdefault(q, []).extend(sides_q)
             if q in gone.good:
                 q.good.discard(gone)
-                note(keep, q, True)                 # kept unless one of its corners changed (below)
+                self.note(keep, q, True)            # kept unless one of its corners changed (_retest)
         if len(gone.angle) > len(keep.angle):      # small into large
             keep.angle, gone.angle, keep.short, gone.short = gone.angle, keep.angle, gone.short, keep.short
         for c, angle in gone.angle.items():
             keep.angle[c] = keep.angle.get(c, 0.0) + angle
             keep.short[c] = min(keep.short.get(c, math.inf), gone.short[c])
         gone.edges, gone.good, gone.angle, gone.short = {}, set(), {}, {}
-        rekeyed = keep.key != lo_key
-        keep.key, keep.poly, keep.straight = lo_key, merged, straight
+
+    def _retest(self, keep: _Part, changed: set) -> None:
+        """Test again ``keep``'s pairs with the neighbours that touch a corner whose angle changed."""
         retest = set()
         for c in changed:
-            for i, j in corners.get(c, ()):
-                p, q = part_of(i), part_of(j)
+            for i, j in self.corners.get(c, ()):
+                p, q = self.part_of(i), self.part_of(j)
                 if p is keep and q is not keep:
                     retest.add(q)
                 elif q is keep and p is not keep:
                     retest.add(p)
         for q in retest:
-            note(keep, q, _convex_union(keep, q, quick))
-        if rekeyed:                                 # its pairs' places in the heap moved
-            for q in keep.good:
-                push(keep, q)
-    return [p.poly for p in sorted((p for p in parts if p.alive), key=lambda p: p.key)]
+            self.note(keep, q, _convex_union(keep, q, self.quick))
 
 
 def _ccw(poly: Polygon) -> np.ndarray:

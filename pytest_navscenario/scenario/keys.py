@@ -1,6 +1,6 @@
 """The scenario format as data: each YAML key's type, range, allowed values, default, unit and a
-one-line description, declared next to the dataclass it fills (``model.py``; new sections and
-element types in their own modules, e.g. ``terrain.py``).
+one-line description, declared next to the dataclass it fills (``model.py``, ``obstacles.py``,
+``robot.py``; new sections and element types in their own modules, e.g. ``terrain.py``).
 
 One source for four readers: the loader reads a file by these declarations (``loader.py``), the
 JSON Schema for editors is generated from them (``json_schema.py``), so is the key table of the

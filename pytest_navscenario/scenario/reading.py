@@ -1,7 +1,7 @@
 """Reading YAML nodes by declaration, with file:line errors: the typed getters of one mapping
 (``SectionReader``), numbers with the format's magnitude bound, and one reader per kind of key
 (``keys.py``) so that a section declared there is read without code of its own. ``loader.py``
-reads a whole scenario with these; ``search_keys.py`` reads ``search:``.
+and ``part_readers.py`` read a whole scenario with these; ``search_keys.py`` reads ``search:``.
 
 Every problem raises ``ScenarioError`` naming the file, the line, the dotted field and a fix.
 """
@@ -564,7 +564,7 @@ def _free(ctx: _Ctx, node: YNode, field: str) -> Any:
     check(node, field)
     return to_plain(node)
 
-# Names other modules of the package use (loader.py imports them under the names above).
+# Names other modules of the package use (loader.py and part_readers.py import them under the names above).
 Ctx = _Ctx
 SectionReader = _Section
 REQUIRED = _REQUIRED

@@ -338,7 +338,7 @@ RUN_ONLY = ("must be greater than", "must not be below", "physics steps", "whole
             "would tip over", "would roll over",
             # an obstacle's z against the ground under it (scenario/ground.obstacle_problem)
             "above the ground under it", "lies under the ground", "the planar body's world is a flat floor",
-            # a 3D lidar's rays a scan and its record over the episode (loader._check_lidar3d)
+            # a 3D lidar's rays a scan and its record over the episode (scenario_checks._check_lidar3d)
             "rays a scan, more than the limit", "ranges (float32) would record")
 
 

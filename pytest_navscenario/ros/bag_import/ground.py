@@ -93,11 +93,9 @@ class TerrainGuess:
 
 def terrain_from_ground(gmap: GroundMap, start: tuple[float, float], path_xy: np.ndarray,
                         name: str = "ground") -> TerrainGuess:
-    """The terrain in the ground map (see the module docstring)."""
+    """The terrain in the ground map (see the module docstring): the floor, the raised regions the
+    robot drove on or can drive onto as one heightfield, the holes beside the path as pits."""
     import shapely
-    from shapely.geometry import box
-
-    from ...scenario.terrain import Heightfield, Pit
 
     out = TerrainGuess()
     heights, span, x0, y0 = gmap.grid()
@@ -109,16 +107,35 @@ def terrain_from_ground(gmap: GroundMap, start: tuple[float, float], path_xy: np
     cy = y0 + (np.arange(ny) + 0.5) * res
     gx, gy = np.meshgrid(cx, cy)
     seen = np.isfinite(heights)
-    near = seen & (np.hypot(gx - start[0], gy - start[1]) <= START_RADIUS)
-    floor = float(np.median(heights[near])) if near.sum() >= 5 else _mode(heights[seen])
-    out.floor = floor
-    rel = heights - floor
-    out.notes.append(f"ground: {int(seen.sum())} cells of {res:g} m seen by {gmap.clouds} cloud(s); the floor "
-                     f"(z = 0 in the seed) is the ground "
-                     + ("around the start" if near.sum() >= 5 else "seen most often")
-                     + f", z={floor:.2f} m in the world frame")
+    out.floor = _floor(out, gmap, heights, seen, gx, gy, start)
+    cells = _Cells(heights - out.floor, span, seen, gx, gy, x0, y0, res)
+    path = shapely.LineString(path_xy) if len(path_xy) >= 2 else shapely.Point(start)
+    kept = _raised_regions(out, cells, path)
+    if kept:
+        _add_heightfield(out, cells, kept, name)
+    _add_pits(out, cells, path, name)
+    return out
 
-    def regions(mask: np.ndarray) -> list:
+
+@dataclass
+class _Cells:
+    """The ground map's grid against the floor: heights above it (``rel``, NaN where unseen), the
+    returns' height spans, which cells were seen, the cells' centres, the grid's corner and cell size."""
+    rel: np.ndarray
+    span: np.ndarray
+    seen: np.ndarray
+    gx: np.ndarray
+    gy: np.ndarray
+    x0: float
+    y0: float
+    res: float
+
+    def regions(self, mask: np.ndarray) -> list:
+        """The connected regions of the cells in ``mask``, of 4 cells or more, as shapely polygons."""
+        import shapely
+        from shapely.geometry import box
+
+        x0, y0, res = self.x0, self.y0, self.res
         cells = [box(x0 + i * res, y0 + j * res, x0 + (i + 1) * res, y0 + (j + 1) * res)
                  for j, i in zip(*np.nonzero(mask))]
         if not cells:
@@ -126,10 +143,25 @@ def terrain_from_ground(gmap: GroundMap, start: tuple[float, float], path_xy: np
         merged = shapely.union_all(cells)
         return [g for g in getattr(merged, "geoms", [merged]) if g.area >= 4 * res * res]
 
-    path = shapely.LineString(path_xy) if len(path_xy) >= 2 else shapely.Point(start)
+
+def _floor(out: TerrainGuess, gmap: GroundMap, heights: np.ndarray, seen: np.ndarray, gx: np.ndarray,
+           gy: np.ndarray, start: tuple[float, float]) -> float:
+    """The floor's height in the world frame: the ground around the start, else the height seen most often."""
+    near = seen & (np.hypot(gx - start[0], gy - start[1]) <= START_RADIUS)
+    floor = float(np.median(heights[near])) if near.sum() >= 5 else _mode(heights[seen])
+    out.notes.append(f"ground: {int(seen.sum())} cells of {gmap.res:g} m seen by {gmap.clouds} cloud(s); the floor "
+                     f"(z = 0 in the seed) is the ground "
+                     + ("around the start" if near.sum() >= 5 else "seen most often")
+                     + f", z={floor:.2f} m in the world frame")
+    return floor
+
+
+def _raised_regions(out: TerrainGuess, cells: _Cells, path: Any) -> list:
+    """The raised regions seen from above that the robot drove on or can drive onto (an edge meets
+    the floor gently somewhere); the others (steep all round: crates, docks) are left to the obstacles."""
     kept, dropped = [], 0
-    for region in regions(seen & (rel > TOLERANCE) & (span <= SURFACE)):   # raised ground seen from above
-        gentle = bool(np.any(_edge_steps(region, rel, gx, gy, res) <= GENTLE))
+    for region in cells.regions(cells.seen & (cells.rel > TOLERANCE) & (cells.span <= SURFACE)):
+        gentle = bool(np.any(_edge_steps(region, cells.rel, cells.gx, cells.gy, cells.res) <= GENTLE))
         if path.intersects(region) or gentle:
             kept.append(region)
         else:
@@ -137,42 +169,63 @@ def terrain_from_ground(gmap: GroundMap, start: tuple[float, float], path_xy: np
     if dropped:
         out.notes.append(f"ground: {dropped} raised region(s) with steep sides all round that the robot never drove "
                          f"on are left to the obstacles (a crate and a dock look alike to a lidar)")
-    if kept:
-        out.raised = shapely.union_all(kept)
-        bx0, by0, bx1, by1 = out.raised.bounds
-        bx0, by0, bx1, by1 = bx0 - res, by0 - res, bx1 + res, by1 + res
-        i0, i1 = int(round((bx0 - x0) / res)), int(round((bx1 - x0) / res))
-        j0, j1 = int(round((by0 - y0) / res)), int(round((by1 - y0) / res))
-        sub = np.zeros((j1 - j0, i1 - i0))
-        si0, sj0 = max(i0, 0), max(j0, 0)
-        si1, sj1 = min(i1, nx), min(j1, ny)
-        window = rel[sj0:sj1, si0:si1]
-        wx, wy = gx[sj0:sj1, si0:si1], gy[sj0:sj1, si0:si1]
-        mask = shapely.contains_xy(out.raised.buffer(res * 0.01), wx, wy)
-        # the regions' outlines filled: cells in them the lidar did not see (the far part of a
-        # dock's top) take their seen neighbours' heights
-        outline = shapely.union_all([shapely.Polygon(r.exterior) for r in kept]).buffer(res * 0.01)
-        filled = _fill(np.where(mask, window, np.nan), shapely.contains_xy(outline, wx, wy))
-        sub[sj0 - j0:sj1 - j0, si0 - i0:si1 - i0] = np.clip(np.nan_to_num(filled, nan=0.0), 0, None)
-        top = float(sub.max())
-        file = f"terrain/{name}.png"
-        out.files[file] = _png16(sub, top)
-        rows, cols = sub.shape
-        out.elements.append(Heightfield(name=name, x=_r((bx0 + bx1) / 2), y=_r((by0 + by1) / 2), file=file,
-                                        length=_r((cols - 1) * res), width=_r((rows - 1) * res),
-                                        min_height=0.0, max_height=_r(top)))
-        # the heightfield's samples are the cells' centres: its extent is one cell less each way
-        out.notes.append(f"ground: {len(kept)} raised region(s) the robot drove on or can drive onto (up to "
-                         f"{top:.2f} m above the floor) -> heightfield '{name}' ({file}, {cols} x {rows} samples of "
-                         f"{res:g} m); unseen cells within the regions take their neighbours' heights, the "
-                         f"rest of its box is the floor")
-    for k, region in enumerate(regions(seen & (rel < -HOLE))):
+    return kept
+
+
+def _add_heightfield(out: TerrainGuess, cells: _Cells, kept: list, name: str) -> None:
+    """The kept raised regions as one heightfield (its PNG in ``out.files``), unseen cells inside
+    them filled from their seen neighbours, the rest of its box the floor."""
+    import shapely
+
+    from ...scenario.terrain import Heightfield
+
+    rel, gx, gy, x0, y0, res = cells.rel, cells.gx, cells.gy, cells.x0, cells.y0, cells.res
+    ny, nx = rel.shape
+    out.raised = shapely.union_all(kept)
+    bx0, by0, bx1, by1 = out.raised.bounds
+    bx0, by0, bx1, by1 = bx0 - res, by0 - res, bx1 + res, by1 + res
+    i0, i1 = int(round((bx0 - x0) / res)), int(round((bx1 - x0) / res))
+    j0, j1 = int(round((by0 - y0) / res)), int(round((by1 - y0) / res))
+    sub = np.zeros((j1 - j0, i1 - i0))
+    si0, sj0 = max(i0, 0), max(j0, 0)
+    si1, sj1 = min(i1, nx), min(j1, ny)
+    window = rel[sj0:sj1, si0:si1]
+    wx, wy = gx[sj0:sj1, si0:si1], gy[sj0:sj1, si0:si1]
+    mask = shapely.contains_xy(out.raised.buffer(res * 0.01), wx, wy)
+    # the regions' outlines filled: cells in them the lidar did not see (the far part of a
+    # dock's top) take their seen neighbours' heights
+    outline = shapely.union_all([shapely.Polygon(r.exterior) for r in kept]).buffer(res * 0.01)
+    filled = _fill(np.where(mask, window, np.nan), shapely.contains_xy(outline, wx, wy))
+    sub[sj0 - j0:sj1 - j0, si0 - i0:si1 - i0] = np.clip(np.nan_to_num(filled, nan=0.0), 0, None)
+    top = float(sub.max())
+    file = f"terrain/{name}.png"
+    out.files[file] = _png16(sub, top)
+    rows, cols = sub.shape
+    out.elements.append(Heightfield(name=name, x=_r((bx0 + bx1) / 2), y=_r((by0 + by1) / 2), file=file,
+                                    length=_r((cols - 1) * res), width=_r((rows - 1) * res),
+                                    min_height=0.0, max_height=_r(top)))
+    # the heightfield's samples are the cells' centres: its extent is one cell less each way
+    out.notes.append(f"ground: {len(kept)} raised region(s) the robot drove on or can drive onto (up to "
+                     f"{top:.2f} m above the floor) -> heightfield '{name}' ({file}, {cols} x {rows} samples of "
+                     f"{res:g} m); unseen cells within the regions take their neighbours' heights, the "
+                     f"rest of its box is the floor")
+
+
+def _add_pits(out: TerrainGuess, cells: _Cells, path: Any, name: str) -> None:
+    """Each hole seen below the floor, off the driven path, as a pit (its rotated rectangle, its
+    bottom the lowest tenth seen in it)."""
+    import shapely
+
+    from ...scenario.terrain import Pit
+
+    rel, seen, res = cells.rel, cells.seen, cells.res
+    for k, region in enumerate(cells.regions(seen & (rel < -HOLE))):
         rect = region.minimum_rotated_rectangle
         corners = np.asarray(rect.exterior.coords)[:4]
         e1, e2 = corners[1] - corners[0], corners[2] - corners[1]
         length, width = float(np.hypot(*e1)), float(np.hypot(*e2))
         yaw = math.degrees(math.atan2(e1[1], e1[0]))
-        inside = shapely.contains_xy(region, gx, gy) & seen
+        inside = shapely.contains_xy(region, cells.gx, cells.gy) & seen
         # its bottom: the lowest tenth of what was seen in it (the rest is its walls)
         depth = float(-np.percentile(rel[inside], 10)) if inside.any() else HOLE
         centre = rect.centroid
@@ -186,7 +239,6 @@ def terrain_from_ground(gmap: GroundMap, start: tuple[float, float], path_xy: np
         out.notes.append(f"ground: a hole {length:.1f} x {width:.1f} m, {depth:.2f} m deep (the lowest tenth seen) -> "
                          f"pit '{pit.name}': the part the lidar saw into (an edge hides the ground right behind it), "
                          f"as its rotated rectangle")
-    return out
 
 
 def _edge_steps(region: Any, rel: np.ndarray, gx: np.ndarray, gy: np.ndarray, res: float) -> np.ndarray:

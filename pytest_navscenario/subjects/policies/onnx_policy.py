@@ -124,50 +124,18 @@ def load_model(spec: str, path: str) -> LoadedModel:
 
 
 def _load(spec: str, path: str) -> LoadedModel:
+    """Open the model, find its declaration, check its input and output against it, run it once."""
     import numpy as np
 
-    ort = import_onnxruntime(spec)
-    options = ort.SessionOptions()
-    options.intra_op_num_threads = 1
-    options.inter_op_num_threads = 1
-    options.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
-    options.log_severity_level = 3          # errors only: ours say what is wrong
-    try:
-        session = ort.InferenceSession(path, options, providers=["CPUExecutionProvider"])
-    except Exception as exc:
-        raise SubjectLoadError(f"subject {spec!r}: ONNX Runtime cannot load {path}: {type(exc).__name__}: "
-                               f"{str(exc).strip()} (is it an ONNX model file, whole and not a Git LFS "
-                               f"pointer? re-export it)") from None
+    session = _session(spec, path)
     try:
         metadata = dict(session.get_modelmeta().custom_metadata_map or {})
     except Exception:
         metadata = {}
     decl = find_declaration(path, metadata)
     where = f"{spec!r} ({path}, declared in {decl.source})"
-
-    inputs = {i.name: i for i in session.get_inputs()}
-    if decl.input is not None and decl.input not in inputs:
-        raise SubjectLoadError(f"subject {where}: the declaration's input {decl.input!r} is not an input of "
-                               f"the model; its inputs: {_shapes(inputs.values())} (fix: input: in the "
-                               f"declaration)")
-    if len(inputs) != 1:
-        raise SubjectLoadError(f"subject {where}: the model has {len(inputs)} inputs ({_shapes(inputs.values())}); "
-                               f"navscenario feeds one, the observation row (export the policy with a single "
-                               f"input; recurrent policies with a state input are not supported)")
-    inp = next(iter(inputs.values()))
-    outputs = {o.name: o for o in session.get_outputs()}
-    if decl.output is not None:
-        if decl.output not in outputs:
-            raise SubjectLoadError(f"subject {where}: the declaration's output {decl.output!r} is not an output "
-                                   f"of the model; its outputs: {_shapes(outputs.values())} (fix: output: in "
-                                   f"the declaration)")
-        out = outputs[decl.output]
-    elif len(outputs) != 1:
-        raise SubjectLoadError(f"subject {where}: the model has {len(outputs)} outputs "
-                               f"({_shapes(outputs.values())}); say which one is the action with "
-                               f"'output: NAME' in the declaration")
-    else:
-        out = next(iter(outputs.values()))
+    inp = _the_input(session, decl, where)
+    out = _the_output(session, decl, where)
     if out.type not in _FLOAT_TYPES:
         raise SubjectLoadError(f"subject {where}: output {out.name!r} is of type {out.type}; navscenario reads the "
                                f"action as floats (tensor(float), tensor(double) or tensor(float16)): a "
@@ -177,6 +145,74 @@ def _load(spec: str, path: str) -> LoadedModel:
         raise SubjectLoadError(f"subject {where}: input {inp.name!r} is of type {inp.type}; navscenario "
                                f"feeds floats (tensor(float), tensor(double) or tensor(float16))")
     dtype = np.dtype(_FLOAT_TYPES[inp.type])
+    shape, batched_rank, fixed = _check_shapes(inp, out, decl, where)
+    from .features import Featurizer
+    model = LoadedModel(path=path, session=session, input_name=inp.name, output_name=out.name, decl=decl,
+                        featurizer=Featurizer(decl, dtype), fixed_batch=fixed, batched_rank=batched_rank,
+                        name=decl.name or os.path.splitext(os.path.basename(path))[0],
+                        version=decl.version or model_digest(path))
+    _trial(model, where, decl.width, decl.action.width)
+    if fixed is not None:
+        how = "once per episode per tick" if fixed == 1 else f"on slices of {fixed} episodes"
+        what = "has a fixed batch dimension" if batched_rank else "has no batch dimension"
+        note = (f"{spec}: the model's input {inp.name!r} {what} ({shape_text(shape)}), so it is called {how}, "
+                f"not once per tick for a whole batch; export it with a dynamic batch dimension (e.g. "
+                f"torch.onnx.export(..., dynamic_axes={{'{inp.name}': {{0: 'batch'}}, '{out.name}': "
+                f"{{0: 'batch'}}}})) to run a batch in one call")
+        model.notes = (note,)
+        warnings.warn(PolicyWarning(note), stacklevel=2)
+    return model
+
+
+def _session(spec: str, path: str) -> Any:
+    """An ONNX Runtime session on the CPU, one thread, sequential (the same answers every run)."""
+    ort = import_onnxruntime(spec)
+    options = ort.SessionOptions()
+    options.intra_op_num_threads = 1
+    options.inter_op_num_threads = 1
+    options.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
+    options.log_severity_level = 3          # errors only: ours say what is wrong
+    try:
+        return ort.InferenceSession(path, options, providers=["CPUExecutionProvider"])
+    except Exception as exc:
+        raise SubjectLoadError(f"subject {spec!r}: ONNX Runtime cannot load {path}: {type(exc).__name__}: "
+                               f"{str(exc).strip()} (is it an ONNX model file, whole and not a Git LFS "
+                               f"pointer? re-export it)") from None
+
+
+def _the_input(session: Any, decl: Any, where: str) -> Any:
+    """The model's one input (the observation row), the declaration's if it names one."""
+    inputs = {i.name: i for i in session.get_inputs()}
+    if decl.input is not None and decl.input not in inputs:
+        raise SubjectLoadError(f"subject {where}: the declaration's input {decl.input!r} is not an input of "
+                               f"the model; its inputs: {_shapes(inputs.values())} (fix: input: in the "
+                               f"declaration)")
+    if len(inputs) != 1:
+        raise SubjectLoadError(f"subject {where}: the model has {len(inputs)} inputs ({_shapes(inputs.values())}); "
+                               f"navscenario feeds one, the observation row (export the policy with a single "
+                               f"input; recurrent policies with a state input are not supported)")
+    return next(iter(inputs.values()))
+
+
+def _the_output(session: Any, decl: Any, where: str) -> Any:
+    """The model's output that is the action: the declaration's, or its only one."""
+    outputs = {o.name: o for o in session.get_outputs()}
+    if decl.output is not None:
+        if decl.output not in outputs:
+            raise SubjectLoadError(f"subject {where}: the declaration's output {decl.output!r} is not an output "
+                                   f"of the model; its outputs: {_shapes(outputs.values())} (fix: output: in "
+                                   f"the declaration)")
+        return outputs[decl.output]
+    if len(outputs) != 1:
+        raise SubjectLoadError(f"subject {where}: the model has {len(outputs)} outputs "
+                               f"({_shapes(outputs.values())}); say which one is the action with "
+                               f"'output: NAME' in the declaration")
+    return next(iter(outputs.values()))
+
+
+def _check_shapes(inp: Any, out: Any, decl: Any, where: str) -> tuple[list, bool, int | None]:
+    """The input's and the output's shapes against the declaration's observation and action widths:
+    (the input's shape, whether it has a batch dimension, its fixed batch size or None if dynamic)."""
     width = decl.width
     shape = list(inp.shape)
     if len(shape) not in (1, 2) or (isinstance(shape[-1], int) and shape[-1] != width):
@@ -196,22 +232,7 @@ def _load(spec: str, path: str) -> LoadedModel:
             f"has {n_out} values ({', '.join(COMPONENTS[c] for c in decl.action.components)}) (fix: "
             f"action.components in the declaration; the model should answer "
             f"{shape_text([shape[0], n_out] if batched_rank else [n_out])})")
-    from .features import Featurizer
-    model = LoadedModel(path=path, session=session, input_name=inp.name, output_name=out.name, decl=decl,
-                        featurizer=Featurizer(decl, dtype), fixed_batch=fixed, batched_rank=batched_rank,
-                        name=decl.name or os.path.splitext(os.path.basename(path))[0],
-                        version=decl.version or model_digest(path))
-    _trial(model, where, width, n_out)
-    if fixed is not None:
-        how = "once per episode per tick" if fixed == 1 else f"on slices of {fixed} episodes"
-        what = "has a fixed batch dimension" if batched_rank else "has no batch dimension"
-        note = (f"{spec}: the model's input {inp.name!r} {what} ({shape_text(shape)}), so it is called {how}, "
-                f"not once per tick for a whole batch; export it with a dynamic batch dimension (e.g. "
-                f"torch.onnx.export(..., dynamic_axes={{'{inp.name}': {{0: 'batch'}}, '{out.name}': "
-                f"{{0: 'batch'}}}})) to run a batch in one call")
-        model.notes = (note,)
-        warnings.warn(PolicyWarning(note), stacklevel=2)
-    return model
+    return shape, batched_rank, fixed
 
 
 def _trial(model: LoadedModel, where: str, width: int, n_out: int) -> None:
