@@ -142,7 +142,7 @@ def test_the_plot_shows_the_believed_pose_beside_the_true_one(tmp_path):
 
     result = run_scenario(scenario("", robot=DRIFT), GoTo)
     fig = trajectory_figure(result)
-    labels = [t.get_text() for leg in fig.legends for t in leg.get_texts()]
+    labels = [" ".join(t.get_text().split()) for leg in fig.legends for t in leg.get_texts()]  # wrapped entries
     assert "believed pose (localisation drift)" in labels
     assert any(t.get_text().startswith("believed: ") and t.get_text().endswith(" m off") for t in fig.axes[0].texts)
     fig.savefig(tmp_path / "drift.png")
