@@ -7,4 +7,6 @@ docs/reference/planner-protocol.md#where-a-subject-is-looked-up.)
 pytest_plugins = ["pytester"]
 
 # Folders pytest must not collect (e.g. data files that would look like scenarios) go here.
+# (Scenario files that tests load as data are kept as .txt in tests/data, e.g. dock-tip.txt, so that
+# no run collects them.)
 collect_ignore: list[str] = []

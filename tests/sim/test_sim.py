@@ -343,7 +343,10 @@ def _stop_as_pinned(s):
 # MuJoCo's and numpy's float results can differ in the last bit between versions and CPUs, so
 # the pins hold for the environment they were recorded in. A change to the loop that changes them
 # changes every recorded trajectory: say so in the change, or find the bug.
-PINNED_ENV = ("4.0.0", "2.4", "x86_64")
+# MuJoCo by its release series (pyproject pins 4.0): these planar episodes hash the same under 4.0.0
+# and 4.0.1 (checked), so the pins hold for the series, not for one patch release (issue 32: they
+# were skipped under 4.0.1, the release PyPI serves).
+PINNED_ENV = ("4.0", "2.4", "x86_64")
 PINNED = {
     "waypoints, noise, dropout, goal": "3de91d901a5a7f68",
     "safety stop": "e2ab22233c4f6003",
@@ -368,7 +371,7 @@ def test_trajectories_keep_their_pinned_bits(case):
     assert res.end == {"waypoints, noise, dropout, goal": "goal", "safety stop": "safety-stop",
                        "collision, safety off": "collision"}[case]
     assert len(res.trajectory.waypoint_times) == (2 if res.end == "goal" else 0)
-    env = (mujoco.__version__, ".".join(np.__version__.split(".")[:2]), platform.machine())
+    env = (".".join(mujoco.__version__.split(".")[:2]), ".".join(np.__version__.split(".")[:2]), platform.machine())
     if env != PINNED_ENV:
         pytest.skip(f"digests pinned for MuJoCo, numpy, machine = {PINNED_ENV}, this is {env}")
     assert _digest(res) == PINNED[case], "the episode's bits changed (see the note above PINNED)"
