@@ -1,18 +1,7 @@
-"""One episode: the control loop that runs a planner against a scenario in the MuJoCo world.
-
-``simulate(scenario, planner, seed)`` runs an ``Episode`` and returns the raw facts (trajectory,
-collision, safety stop, planner failure, goal reached, timings); ``harness.runner.run_scenario``
-turns them into an outcome and metrics. The episode starts the robot at the start pose and resets
-the planner; then each control tick it observes (true state, mission progress, lidar scan), checks
-the safety layer, asks the planner to act (under the tick deadline, command validated, drive
-limits), records, and steps the physics one step at a time with a contact check after each step.
-
-The loop is the hot path of every suite and search (besides MuJoCo and the planner, ~10 us a tick):
-each step is a method that binds its hot values to locals; per-tick facts go into lists,
-physics-rate states into preallocated arrays, and the planner sees read-only views of rows written
-once. ``benchmarks/bench_episode.py`` measures it, ``benchmarks/check_bit_identical.py`` checks that
-a change to it keeps every trajectory's bits.
-"""
+"""One episode's front door: ``simulate(scenario, planner, seed)`` runs the scenario's episode (the
+planar ``loop.Episode``, or ``riding_episode.RidingEpisode`` for a robot that rides the ground) and
+returns its raw facts. The loop itself, its steps and its cost are described in ``loop.py``; the
+loop's names are re-exported here, where the rest of the package has always imported them."""
 from __future__ import annotations
 
 from typing import Any
