@@ -106,7 +106,7 @@ def _candidates(count: int):
 
 
 def part_episodes(count: int, batch: int) -> int:
-    from pytest_navscenario.sim.batch import BatchEpisode, simulate_batch
+    from pytest_navscenario.sim.batching.batch import BatchEpisode, simulate_batch
     from pytest_navscenario.sim.episode import simulate
     from pytest_navscenario.subjects.planners.dwa import DynamicWindowPlanner
 
@@ -158,9 +158,9 @@ def _where_it_goes(chunks, ticks: int) -> None:
     about 1 us an episode-tick, so these runs are apart from the paired ones above)."""
     import mujoco
 
-    import pytest_navscenario.sim.cohort as cohort
-    import pytest_navscenario.sim.lockstep as lockstep
-    from pytest_navscenario.sim.batch import BatchEpisode, simulate_batch
+    import pytest_navscenario.sim.batching.cohort as cohort
+    import pytest_navscenario.sim.batching.lockstep as lockstep
+    from pytest_navscenario.sim.batching.batch import BatchEpisode, simulate_batch
     from pytest_navscenario.subjects.planners.dwa import DynamicWindowPlanner
 
     acc: dict[str, float] = {}
@@ -254,7 +254,7 @@ def part_planner(count: int, batch: int) -> int:
     """dwa alone: the observations of a batch's episodes recorded once, then replayed to fresh
     planners: act per episode against act_batch per tick (the planner's own cost, no simulation
     between the calls)."""
-    from pytest_navscenario.sim.batch import BatchEpisode, simulate_batch
+    from pytest_navscenario.sim.batching.batch import BatchEpisode, simulate_batch
     from pytest_navscenario.subjects.planners.dwa import DynamicWindowPlanner
 
     class Recording(DynamicWindowPlanner):
@@ -376,7 +376,7 @@ def part_physics() -> int:
 
 
 def part_free(count: int, batch: int, repeats: int) -> int:
-    from pytest_navscenario.sim.batch import BatchEpisode, simulate_batch
+    from pytest_navscenario.sim.batching.batch import BatchEpisode, simulate_batch
     from pytest_navscenario.sim.episode import simulate
     from pytest_navscenario.subjects.planners.dwa import DynamicWindowPlanner
 

@@ -35,7 +35,7 @@ sys.path.insert(0, ROOT)
 from pytest_navscenario.harness.agreement import AGREE, compare, summary  # noqa: E402
 from pytest_navscenario.harness.batch import batch_planner_of  # noqa: E402
 from pytest_navscenario.scenario.loader import load_scenario  # noqa: E402
-from pytest_navscenario.sim.batch import BatchEpisode, batch_engine  # noqa: E402
+from pytest_navscenario.sim.batching.batch import BatchEpisode, batch_engine  # noqa: E402
 from pytest_navscenario.subjects.loading import make_planner  # noqa: E402
 
 DEFAULT_SIZES = "1,2,4,8,16,32,64,128,256,512,1024,2048,4096"
@@ -105,7 +105,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--no-graph", action="store_true", help="no CUDA graph capture of a tick (GPU only)")
     args = ap.parse_args(argv)
 
-    from pytest_navscenario.sim.warp_engine import WarpEngine, missing
+    from pytest_navscenario.sim.batching.warp_engine import WarpEngine, missing
     why = missing()
     if why is not None:
         print(f"the warp engine cannot run: {why}")

@@ -1,5 +1,5 @@
 """Heightfield ray casting: a 16 x 360 lidar scan (5760 rays) against rough ground of 32, 64, 128
-and 256 cells a side, by MuJoCo's mj_multiRay and by the lidars' own cast (sim/hfield_rays.py),
+and 256 cells a side, by MuJoCo's mj_multiRay and by the lidars' own cast (sim/ground/hfield_rays.py),
 alternated A B A B in one run; CPU time (time.process_time) medians and the median of the per-pair
 ratios, and the largest distance difference between the two.
 
@@ -22,10 +22,10 @@ import time
 import mujoco
 import numpy as np
 
-from pytest_navscenario.scenario.heightmap import height_grid
+from pytest_navscenario.scenario.ground.heightmap import height_grid
 from pytest_navscenario.scenario.terrain import Rough
-from pytest_navscenario.sim.heightfield import add_heightfield, placed_grid
-from pytest_navscenario.sim.hfield_rays import cast_grids
+from pytest_navscenario.sim.ground.heightfield import add_heightfield, placed_grid
+from pytest_navscenario.sim.ground.hfield_rays import cast_grids
 
 
 def fan(rings: int = 16, beams: int = 360) -> np.ndarray:

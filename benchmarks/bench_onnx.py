@@ -134,7 +134,7 @@ def part_suite(a: argparse.Namespace, spec: str) -> int:
     try:
         import pytest_navscenario.harness.batch  # noqa: F401
     except ImportError:
-        print("suite: not measured: the batch engine (harness/batch.py, sim/batch.py: the 'batch' helper's "
+        print("suite: not measured: the batch engine (harness/batch.py, sim/batching/batch.py: the 'batch' helper's "
               "branch) is not in this tree; --part policy measures the policy's side alone")
         return 2
     scenarios = load_suite(a.count)

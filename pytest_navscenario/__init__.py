@@ -18,6 +18,7 @@ glue at the top down to the scenario model (imports only point down, checked in 
     sim/                   MuJoCo world, control loop, lidar, safety layer (the only mujoco user)
     subjects/              planner protocol, loading subjects, external planners, built-in planners
     scenario/              the scenario model, YAML loading and dumping, footprint geometry
+    stl/                   requirements in signal temporal logic: parsing, robustness (numpy)
     core/                  errors and atomic file writes, shared by all
 """
 from __future__ import annotations

@@ -1,7 +1,8 @@
 """Old import paths keep working.
 
-Before 0.2 the package was one flat folder (``pytest_navscenario.loader``,
-``pytest_navscenario.search_space``, ...). Code that users wrote against those paths keeps
+Before its subpackages (core, scenario, sim, ...) the package was one flat folder
+(``pytest_navscenario.loader``, ``pytest_navscenario.search_space``, ...; never released so). Code
+written against those paths keeps
 running: importing an old path gives a module whose attributes are looked up in the modules that
 now hold them, with a DeprecationWarning naming the new path. A name that no longer exists fails
 with an AttributeError that says where to look.

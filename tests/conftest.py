@@ -16,6 +16,15 @@ import pytest
 # stale ruamel.yaml (rosbags' metadata reader failed on valid YAML after one).
 SCHEMA_CHECK_MISSING = [name for name in ("jsonschema", "ruamel") if importlib.util.find_spec(name) is None]
 
+# Extension modules built with pybind11 register their types once per process: imported a second
+# time they fail ('generic_type: type "FillType" is already registered!'). pytester's in-process runs
+# drop the modules first imported inside them, so one of these first imported by a plugin run inside
+# a test was re-imported by the next test of that worker (8 from-bag and terrain-picture tests failed
+# with contourpy, depending on which tests a worker got). Imported here first, they are kept.
+for _name in ("contourpy", "mujoco", "onnxruntime", "kiss_icp"):
+    if importlib.util.find_spec(_name) is not None:
+        importlib.import_module(_name)
+
 
 def pytest_report_header(config: pytest.Config) -> str | None:
     if SCHEMA_CHECK_MISSING:

@@ -32,7 +32,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "one side-by-side trajectory plot per scenario into DIR (exit status 2 when none "
                         "can be made, e.g. a subject with no spec to re-run it by)")
     p.add_argument("--max-plots", type=int, default=10, metavar="N",
-                   help="at most N side-by-side plots (default 10)")
+                   help="at most N side-by-side plots (default 10; 0 = no limit): each re-runs one "
+                        "scenario with both subjects; the scenarios B broke come first, then those it fixed")
     p.add_argument("--a-subject", metavar="SPEC",
                    help="subject to re-run A with (default: the --nav-subject spec A's records carry, "
                         "subject_spec; needed when A's subject came from a conftest hook)")
@@ -86,11 +87,13 @@ def _side_by_side(cmp, args: argparse.Namespace) -> bool:
 
     from ..report.rerun import rerun_side_by_side
 
-    due = (cmp.broke + cmp.fixed)[:max(0, args.max_plots)]
+    changed = cmp.broke + cmp.fixed
+    limit = args.max_plots if args.max_plots > 0 else len(changed)
+    due = changed[:limit]
     if not due:
         print("no side-by-side plots: B neither broke nor fixed a scenario A ran (nothing to show)")
         return False
-    written, problems = rerun_side_by_side(cmp, args.side_by_side, root=args.root, limit=args.max_plots,
+    written, problems = rerun_side_by_side(cmp, args.side_by_side, root=args.root, limit=limit,
                                            a_subject=args.a_subject, b_subject=args.b_subject,
                                            project=[os.getcwd()])
     for line in problems:
@@ -100,5 +103,9 @@ def _side_by_side(cmp, args: argparse.Namespace) -> bool:
               f"side-by-side plot(s) could be made (see above)", file=sys.stderr)
         return True
     print(f"{len(written)} of {len(due)} side-by-side plot(s) written to {args.side_by_side}")
+    if len(due) < len(changed):
+        print(f"side-by-side: B broke or fixed {len(changed)} scenarios; plotted the first {len(due)} "
+              f"(--max-plots {args.max_plots}, default 10: broken ones first); --max-plots {len(changed)} "
+              f"or 0 plots them all")
     return False
 

@@ -81,7 +81,8 @@ DESCRIPTIONS: dict[str, str] = {
                        "width. The layout is a guess: edit it to your training environment's, then run "
                        "'navscenario check-planner MODEL.onnx'. Needs the onnx extra (onnxruntime).",
     "import": "Import another tool's world as a scenario: an Aerialist test definition or a Gazebo "
-              "SDF world (static boxes and cylinders; anything not carried over is listed). Poses "
+              "SDF world (static boxes, cylinders, polylines and STL/OBJ meshes as obstacles, PNG heightmaps as "
+              "terrain; anything not carried over is listed). Poses "
               "are x,y,yaw in metres and degrees, e.g. --start -2.25,3,90.",
 }
 
@@ -121,8 +122,10 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     """The whole parser; with ``only``, only that subcommand's arguments are added (and only its
     module is imported); ``only=""`` adds none (enough for the top-level --help)."""
     from .. import __version__
+    from ..core.versions import mujoco_version
     parser = NavArgumentParser(prog="navscenario", description=DESCRIPTION, epilog=EPILOG)
-    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    parser.add_argument("--version", action="version",
+                        version=f"%(prog)s {__version__} (MuJoCo {mujoco_version()})")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", title="commands")
     for name, (module_name, purpose) in SUBCOMMANDS.items():
         p = sub.add_parser(name, help=purpose, description=DESCRIPTIONS[name])
@@ -143,6 +146,8 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     module = importlib.import_module(SUBCOMMANDS[args.command][0])
     runner = getattr(module, f"run_{args.command.replace('-', '_')}", None) or module.run
+    from ..core import interrupts
+    restore = interrupts.install(sigterm=False)   # a planner's or controller's own KeyboardInterrupt is its error
     try:
         return int(runner(args) or 0)
     except NavScenarioError as exc:
@@ -154,6 +159,9 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into e.g. `head`, which closed early: not an error
         sys.stderr.close()
         return 0
+    finally:
+        if restore is not None:
+            restore()
 
 
 if __name__ == "__main__":

@@ -57,9 +57,9 @@ def add_arguments_run(p: argparse.ArgumentParser) -> None:
 
 
 def _engine(name: str):
-    """The batch engine called ``name`` (sim/batch.py); NavScenarioError saying how to install
+    """The batch engine called ``name`` (sim/batching/batch.py); NavScenarioError saying how to install
     the warp engine's extra when it is missing."""
-    from ..sim.batch import batch_engine
+    from ..sim.batching.batch import batch_engine
     try:
         return batch_engine(name)
     except ValueError as exc:
@@ -84,31 +84,37 @@ def _batch_size(raw: str) -> int:
     return n
 
 
+# what an infinite metric means, in words (the terminal's form; JSON writes null, Python keeps inf)
+UNDEFINED = {"min_clearance": "none (no obstacles)", "min_obstacle_gap": "none (fewer than 2 obstacles)"}
+
+
 def _metrics_lines(metrics: Any) -> list[str]:
     units = {"min_clearance": "m", "min_clearance_time": "s", "min_clearance_x": "m",
              "min_clearance_y": "m", "min_obstacle_gap": "m", "path_length": "m",
              "shortest_path_length": "m", "max_deviation": "m", "mean_deviation": "m",
              "duration": "s", "mean_speed": "m/s", "goal_position_error": "m",
              "goal_yaw_error": "deg", "smoothness": "m/s^3", "angular_smoothness": "rad/s^2",
-             "reference_mean_deviation": "m", "reference_max_deviation": "m"}
+             "reference_mean_deviation": "m", "reference_max_deviation": "m", "max_pitch": "deg",
+             "max_roll": "deg", "climb": "m"}
     rows = []
     for key, value in metrics.as_dict().items():
         if isinstance(value, float):
             if math.isnan(value) and key.startswith("reference_"):
                 continue
-            text = f"{value:.3f}" if math.isfinite(value) else str(value)
-            rows.append(f"  {key:24s} {text} {units.get(key, '')}".rstrip())
+            if math.isfinite(value):
+                rows.append(f"  {key:24s} {value:.3f} {units.get(key, '')}".rstrip())
+            else:   # the terminal's one form of an empty or undefined value (outcomes-metrics.md)
+                rows.append(f"  {key:24s} {UNDEFINED.get(key, 'n/a') if value > 0 else 'n/a'}")
         else:
             rows.append(f"  {key:24s} {value}")
     return rows
 
 
 def _json_safe(value: Any) -> Any:
-    if isinstance(value, float) and not math.isfinite(value):
-        return None if math.isnan(value) else ("inf" if value > 0 else "-inf")
-    if isinstance(value, dict):
-        return {k: _json_safe(v) for k, v in value.items()}
-    return value
+    """Strict JSON, as the results file writes it: every non-finite float (an empty minimum
+    clearance's inf as much as an undefined NaN) becomes null (docs/reference/outcomes-metrics.md)."""
+    from ..core.files import json_safe
+    return json_safe(value)
 
 
 def look_in_current_folder(spec: str) -> None:
@@ -121,6 +127,25 @@ def look_in_current_folder(spec: str) -> None:
 
 
 def run_run(args: argparse.Namespace) -> int:
+    """The files' episodes (``_run_files``); then the processes the planner or the body
+    controller started and left running are ended and named on stderr, as pytest does
+    (core/processes.py), whether the run ended, failed or was interrupted."""
+    try:
+        return _run_files(args)
+    finally:
+        _end_left_running()
+
+
+def _end_left_running() -> None:
+    processes = sys.modules.get("pytest_navscenario.core.processes")   # loaded once an episode ran
+    ended = processes.end_left_behind() if processes is not None else []
+    if ended:
+        shown = [f"pid {p.pid}: {p.command} after {p.episode}" for p in ended[:5]] + (["..."] if len(ended) > 5 else [])
+        print(f"navscenario run: ended {len(ended)} process(es) the planner or controller had left running "
+              f"({'; '.join(shown)})", file=sys.stderr)
+
+
+def _run_files(args: argparse.Namespace) -> int:
     from ..scenario.loader import load_scenario
     from ..harness.runner import run_scenario
 

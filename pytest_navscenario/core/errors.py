@@ -33,6 +33,27 @@ class ScenarioError(NavScenarioError):
         return f"{where}{field}{self.message}{hint}"
 
 
+class ScenarioErrors(ScenarioError):
+    """Several mistakes in one scenario file, each a ScenarioError with its file:line, field and
+    fix, in file order; ``line``, ``field`` and ``hint`` are the first's. ``stopped``: the number
+    of mistakes after which the loader stopped looking (0: it read the whole file)."""
+
+    def __init__(self, errors: list[ScenarioError], *, stopped: int = 0):
+        self.errors = sorted(errors, key=lambda e: (e.line or 0))
+        self.stopped = stopped
+        first = self.errors[0]
+        super().__init__(first.message, path=first.path, line=first.line, field=first.field, hint=first.hint)
+
+    def format(self) -> str:
+        errors = getattr(self, "errors", None)
+        if not errors:
+            return super().format()
+        stopped = getattr(self, "stopped", 0)
+        more = f" (it stops looking at {stopped}: fix these and load it again)" if stopped else ""
+        where = f"{errors[0].path}: " if errors[0].path else ""
+        return f"{where}{len(errors)} mistakes{more}:\n" + "\n".join(f"  {e.format()}" for e in errors)
+
+
 class SubjectLoadError(NavScenarioError):
     """A planner ('subject') spec such as ``pkg.mod:Planner`` cannot be loaded or fails the protocol."""
 

@@ -19,8 +19,11 @@ from __future__ import annotations
 import importlib
 import importlib.machinery
 import importlib.util
+import inspect
 import os
+import site
 import sys
+import sysconfig
 import warnings
 from pathlib import Path
 from typing import Any, Iterable, Sequence
@@ -145,3 +148,45 @@ def _import_hint(module_name: str, exc: BaseException, folders: Sequence[Path]) 
     top = module_name.split(".")[0]
     return (f"{looked}; put {top}.py or the package folder {top}/ there, install it "
             f"(pip install -e .), or add its folder to PYTHONPATH")
+
+
+def _library_folders() -> list[Path]:
+    """The folders of code that is not the user's: the standard library, site-packages (the
+    environment's, the base interpreter's, the user's), and this plugin's own package."""
+    names = ("stdlib", "platstdlib", "purelib", "platlib")
+    places = set()
+    for paths in (sysconfig.get_paths(),
+                  sysconfig.get_paths(vars={"base": sys.base_prefix, "platbase": sys.base_exec_prefix,
+                                            "installed_base": sys.base_prefix,
+                                            "installed_platbase": sys.base_exec_prefix})):
+        places.update(paths[n] for n in names if paths.get(n))
+    try:
+        places.update(site.getsitepackages())
+        places.add(site.getusersitepackages())
+    except AttributeError:   # a virtualenv's old site module
+        pass
+    places.add(os.fspath(Path(__file__).resolve().parents[1]))
+    return [Path(p).resolve() for p in places if p]
+
+
+def own_code(obj: Any, spec: str, *, what: str, error: type[Exception] = SubjectLoadError) -> Any:
+    """``obj`` if it is a class or function defined in a Python file of the user's own (found as
+    the module docstring says), else ``error`` saying why and what to name instead: a builtin
+    (``os:fork``, ``signal:pause``), a callable of the standard library or of an installed
+    package (site-packages), or an object that is neither a class nor a function is refused, so
+    that a scenario file can only name code its user wrote."""
+    fix = f"name a class or function of your own module ({what}s live beside the scenario or in the project)"
+    if not (inspect.isclass(obj) or inspect.isfunction(obj)):
+        raise error(f"{what} {spec!r} is a {type(obj).__name__}, not a class or function of your own "
+                    f"module (fix: {fix})")
+    module = sys.modules.get(getattr(obj, "__module__", None) or "")
+    origin = getattr(module, "__file__", None)
+    if not origin or not origin.endswith(".py"):
+        raise error(f"{what} {spec!r} is defined in {getattr(obj, '__module__', '?')!r}, which is not a "
+                    f"Python file of yours (built in or compiled) (fix: {fix})")
+    path = Path(origin).resolve()
+    for folder in _library_folders():
+        if path.is_relative_to(folder):
+            raise error(f"{what} {spec!r} is defined in {path}, in {folder} (the standard library, an "
+                        f"installed package or this plugin), not in your own code (fix: {fix})")
+    return obj

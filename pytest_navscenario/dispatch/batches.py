@@ -44,7 +44,7 @@ class BatchJob:
     jobs: tuple[EpisodeJob, ...]
     size: int
     alone_after_death: bool = True      # dispatch/local.py: a worker death splits it, no retry
-    engine: str = "cpu"                 # the batch engine (sim/batch.py: "cpu" or "warp")
+    engine: str = "cpu"                 # the batch engine (sim/batching/batch.py: "cpu" or "warp")
 
     def run(self) -> tuple[list[Any], dict[str, Any]]:
         from ..harness.batch import Batching, run_batch

@@ -1,6 +1,6 @@
 """Many episodes of one subject in batches: ``run_batch(scenarios, planner, ...)`` gives each
 scenario the EpisodeResult that ``run_scenario`` gives it alone (wall times aside), running the
-episodes it can in lockstep with one planner call per tick for a batch (sim/batch.py).
+episodes it can in lockstep with one planner call per tick for a batch (sim/batching/batch.py).
 
 Which episodes are batched: with a subject that answers the batch protocol (reset_batch /
 act_batch, subjects/protocol.py) and ``batch`` > 1, consecutive episodes that the engine supports
@@ -83,9 +83,9 @@ def iter_batch(scenarios: Sequence[Scenario], planner: Any = None, *, seeds: Seq
     ``planner`` as for run_scenario (a spec, a class or factory, an object), or with
     ``call_factory`` a zero-argument factory whose planners are passed as objects, as the search
     does (``run_scenario(scenario, factory())``). ``seeds``: each episode's base seed (None: the
-    scenario's own). ``engine``: a ``sim.batch.BatchEngine`` or its name ("cpu", "warp"; None:
+    scenario's own). ``engine``: a ``sim.batching.batch.BatchEngine`` or its name ("cpu", "warp"; None:
     "cpu"). ``batching`` (if given) is added to."""
-    from ..sim.batch import batch_engine
+    from ..sim.batching.batch import batch_engine
 
     n = len(scenarios)
     seeds = list(seeds) if seeds is not None else [None] * n
@@ -158,7 +158,7 @@ def _run_chunk(chunk, scenarios, seeds, planner, call_factory, spare, engine, ti
                report) -> None:
     """One batch: a fresh planner (the subject's factory, or the object given), the engine, the
     verdict of each episode."""
-    from ..sim.batch import BatchEpisode
+    from ..sim.batching.batch import BatchEpisode
 
     from ..core import processes
     from ..subjects.external import running_pids

@@ -4,8 +4,9 @@
     >>> result = run_scenario(load_scenario("scenarios/boxes1.yaml"), "dwa")
     >>> result.outcome, result.metrics.min_clearance
 
-The simulation (sim.py) yields the raw facts; the oracle gives the outcome and one-line message;
-metrics.py the per-episode figures.
+The simulation (``sim.simulate``, sim/episode.py) yields the raw facts; the oracle
+(verdict/oracle.py) gives the outcome and one-line message; verdict/metrics.py the per-episode
+figures.
 """
 from __future__ import annotations
 
@@ -40,6 +41,26 @@ def add_check_time(result: EpisodeResult, seconds: float) -> EpisodeResult:
         result.wall_time += seconds
         result.timings["metrics"] = result.timings.get("metrics", 0.0) + seconds
     return result
+
+
+def unfinished_result(scenario: Scenario, exc: BaseException, *, seed: int, subject: str) -> EpisodeResult:
+    """The record of an episode that never finished because running it raised ``exc`` (its worker
+    process died: ``WorkerDied``, ``RayTaskLost``; or the harness failed): outcome subject-error,
+    ``error`` the exception's type, no trajectory, every metric undefined. So every item that ran
+    has a record and counts in the rates (issue 32): a crash is not a missing row."""
+    from ..sim.trajectory import SubjectFailure, Trajectory
+    from ..verdict.result import Metrics, Outcome
+
+    text = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+    kind = text.split(":", 1)[0] if text.startswith(("WorkerDied:", "RayTaskLost:", "WorkerCrashed:")) else type(exc).__name__
+    detail = text.split(":", 1)[1].strip() if kind != type(exc).__name__ else text
+    message = f"the episode did not finish ({kind}): {detail}" if detail else f"the episode did not finish ({kind})"
+    nan = float("nan")
+    metrics = Metrics(**{f: ("" if f in ("min_clearance_obstacle", "min_gap_obstacles") else nan)
+                         for f in Metrics.__dataclass_fields__})
+    return EpisodeResult(scenario=scenario, outcome=Outcome.SUBJECT_ERROR, metrics=metrics,
+                         trajectory=Trajectory.empty(), seed=seed, subject=subject, message=message,
+                         subject_failure=SubjectFailure(message, -1, nan), error=kind)
 
 
 def effective_seed(scenario_seed: int, base_seed: int | None) -> int:

@@ -159,8 +159,9 @@ def pytest_report_header(config: pytest.Config) -> list[str]:
         return []
     s = state.settings
     limit = f"{s.tick_limit:g} s" if s.tick_limit else "none"
+    from ..core.versions import mujoco_version
     lines = [f"navscenario: subject {state.subject.label}, seed {s.seed} (--nav-seed), "
-             f"tick limit {limit}"]
+             f"tick limit {limit}, MuJoCo {mujoco_version()}"]
     lines += [f"navscenario: subject note: {note}" for note in state.subject.notes]
     if s.repeat > 1:
         lines.append(f"navscenario: {s.repeat} runs per scenario with different noise seeds "
@@ -276,7 +277,12 @@ class Controller:
     def pytest_runtest_logreport(self, report: pytest.TestReport) -> None:
         """Controller: gather the record, write a failing item's artifacts, tell feature plugins."""
         nav = getattr(report, "nav", None)
-        if nav is None or report.when != "call" or _is_worker(self.config):
+        if nav is None and report.when == "???" and report.failed and not _is_worker(self.config):
+            from .payload import crashed_item_payload   # xdist: the item's worker died running it
+            nav = crashed_item_payload(self.config, report)
+            if nav is not None:
+                report.nav = nav   # type: ignore[attr-defined]
+        if nav is None or report.when not in ("call", "???") or _is_worker(self.config):
             return
         from .state import STATE_KEY
         state = self.config.stash.get(STATE_KEY, None)

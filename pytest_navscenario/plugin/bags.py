@@ -107,7 +107,7 @@ def pytest_navscenario_episode_report(config: pytest.Config, report: pytest.Test
     record = payload["record"]
     if state.mode == "failed" and record.get("passed"):
         return
-    if payload.get("trajectory") is None:
+    if payload.get("trajectory") is None or record.get("error"):   # (an episode that never finished)
         state.missing_trajectory += 1
         return
     from ..ros.bag_writer import write_episode_bag

@@ -180,6 +180,7 @@ class ScenarioFile(pytest.File):
             scenario = with_sensor_model(scenario, model)
         repeats = get_state(self.config).settings.repeat
         provenance = scenario.provenance or {}
+        _warn_other_subject(provenance, get_state(self.config).subject)
         if repeats > 1 and "confirmation" in provenance:   # a frozen failure: does it still hold?
             get_state(self.config).frozen[(rel_path(self.config, self.path), name)] = dict(provenance)
         for repeat in range(repeats):
@@ -230,7 +231,8 @@ class ScenarioFailed(Exception):
     """Raised by ScenarioItem.runtest when the outcome is not success (carries the result)."""
 
     def __init__(self, result: Any):
-        super().__init__(f"{result.outcome}: {result.message}")
+        from ..verdict.result import headline
+        super().__init__(headline(result.outcome, result.message))
         self.result = result
 
 
@@ -255,6 +257,26 @@ def _field_line(scenario: Any, field: str) -> int | None:
             return field_line(fh.read(), field)
     except (OSError, TypeError, UnicodeDecodeError):
         return None
+
+
+class OtherSubjectWarning(UserWarning):
+    """A frozen failure runs against another subject than the one its provenance names."""
+
+
+def _warn_other_subject(provenance: dict, subject: Any) -> None:
+    """A pytest warning (shown with the file in the warnings summary; the same text for every file,
+    so pytest lists them under one message) when a frozen failure of the search runs against
+    another subject than the one it was found against: against that one it is only a layout,
+    which it may well pass, and a run that looks like a fixed regression may be no such thing."""
+    import warnings
+
+    found = provenance.get("subject")
+    if not found or "outcome" not in provenance or subject.spec is None or str(found) == subject.spec:
+        return
+    warnings.warn(OtherSubjectWarning(
+        f"frozen failure found against subject {found!r} runs against {subject.spec!r} (from "
+        f"{subject.origin}): against another subject it is only a layout, which it may pass; to re-run "
+        f"the failure as found, add --nav-subject={found}"), stacklevel=2)
 
 
 def _warn_left_running(where: str, left: tuple[str, ...]) -> None:
@@ -319,18 +341,19 @@ class ScenarioItem(pytest.Item):
                           cwd=os.getcwd(), reset_timeout=state.settings.reset_timeout, check_feasible=True)
 
     def runtest(self) -> None:
-        pending, self.nav_pending = self.nav_pending, None
-        if pending is not None:   # submitted at the start of the run loop (an executor)
-            result = pending.result()
-        else:
-            from ..harness.runner import add_check_time, run_scenario
+        try:
+            result = self._episode()
+        except Exception as exc:
+            # The episode never finished (its worker died 3 times, ...): the item still gets a
+            # record (subject-error, ``error`` says what ended it) and counts in the rates; the
+            # exception stays the item's failure.
+            from ..harness.runner import effective_seed, unfinished_result
 
             state = get_state(self.config)
-            result = add_check_time(run_scenario(self.scenario, state.subject.runner_arg,
-                                                 seed=repeat_seed(state.settings.seed, self.repeat),
-                                                 tick_limit=state.settings.tick_limit,
-                                                 reset_timeout=state.settings.reset_timeout), self.nav_checked)
-            self.nav_checked = 0.0
+            seed = effective_seed(self.scenario.simulation.seed, repeat_seed(state.settings.seed, self.repeat))
+            self.nav_result = unfinished_result(self.scenario, exc, seed=seed,
+                                                subject=state.subject.spec or state.subject.label)
+            raise
         self.nav_result = result
         if result.left_running:
             _warn_left_running(self.rel_path, result.left_running)
@@ -349,6 +372,21 @@ class ScenarioItem(pytest.Item):
         ])
         if not result.passed:
             raise ScenarioFailed(result)
+
+    def _episode(self) -> Any:
+        """This item's EpisodeResult: from its executor, or run here."""
+        pending, self.nav_pending = self.nav_pending, None
+        if pending is not None:   # submitted at the start of the run loop (an executor)
+            return pending.result()
+        from ..harness.runner import add_check_time, run_scenario
+
+        state = get_state(self.config)
+        result = add_check_time(run_scenario(self.scenario, state.subject.runner_arg,
+                                             seed=repeat_seed(state.settings.seed, self.repeat),
+                                             tick_limit=state.settings.tick_limit,
+                                             reset_timeout=state.settings.reset_timeout), self.nav_checked)
+        self.nav_checked = 0.0
+        return result
 
     def reproduce_command(self) -> str:
         """The command line that re-runs exactly this item with the same subject and seed."""
@@ -382,7 +420,8 @@ class ScenarioItem(pytest.Item):
 
     def _describe(self, r: Any) -> str:
         m = r.metrics
-        lines = [f"{r.outcome}: {r.message}" if r.message else str(r.outcome)]
+        from ..verdict.result import headline
+        lines = [headline(r.outcome, r.message)]
         if r.collision is not None:
             c = r.collision
             lines.append(f"  collision:     obstacle {c.obstacle!r} at t={_fmt(c.time, ' s', 2)}, contact "
@@ -395,9 +434,12 @@ class ScenarioItem(pytest.Item):
             f = r.subject_failure
             lines.append(f"  planner error: {f.message} (tick {f.tick}, t={_fmt(f.time, ' s', 2)})")
         obstacle = f" to {m.min_clearance_obstacle!r}" if m.min_clearance_obstacle else ""
-        lines.append(f"  min clearance: {_fmt(m.min_clearance, ' m')}{obstacle} at t="
-                     f"{_fmt(m.min_clearance_time, ' s', 2)}, robot at ({_fmt(m.min_clearance_x, '', 2)}, "
-                     f"{_fmt(m.min_clearance_y, '', 2)})")
+        if m.min_clearance == float("inf"):   # one form in the terminal (outcomes-metrics.md)
+            lines.append("  min clearance: none (no obstacles)")
+        else:
+            lines.append(f"  min clearance: {_fmt(m.min_clearance, ' m')}{obstacle} at t="
+                         f"{_fmt(m.min_clearance_time, ' s', 2)}, robot at ({_fmt(m.min_clearance_x, '', 2)}, "
+                         f"{_fmt(m.min_clearance_y, '', 2)})")
         lines.append(f"  duration:      {_fmt(m.duration, ' s', 2)} (timeout "
                      f"{_fmt(r.scenario.mission.timeout, ' s', 1)}), path {_fmt(m.path_length, ' m', 2)}, "
                      f"efficiency {_fmt(m.path_efficiency, '', 2)}, goal error "
@@ -405,6 +447,7 @@ class ScenarioItem(pytest.Item):
         version = f" {r.subject_version}" if r.subject_version else ""
         lines.append(f"  subject:       {r.subject}{version}, episode seed {r.seed}")
         lines.append(f"  scenario:      {self.rel_path}")
+        lines += _unreproduced(r)
         from .artifacts import item_dir
         folder = item_dir(self.config, self.nodeid)
         if folder is not None:
@@ -418,3 +461,19 @@ class ScenarioItem(pytest.Item):
     def reportinfo(self) -> tuple[Path, int, str]:
         # line 0 (shown as 1): pytest needs a line for skip reports
         return self.path, 0, f"scenario {self.name} ({self.scenario.family or 'no family'})"
+
+
+def _unreproduced(r: Any) -> list[str]:
+    """For a frozen failure whose outcome or message is not the one its provenance recorded: what
+    was recorded, and the MuJoCo release it was recorded under when that is not this run's."""
+    from ..core.versions import other_mujoco
+
+    prov = r.scenario.provenance or {}
+    if "outcome" not in prov or (prov.get("outcome") == r.outcome.value and prov.get("message") == r.message):
+        return []
+    lines = [f"  recorded:      {prov.get('outcome')}: {prov.get('message') or ''} (its provenance; this run "
+             f"did not reproduce it)"]
+    note = other_mujoco(prov.get("mujoco_version"))
+    if note:
+        lines.append(f"  MuJoCo:        {note}; re-run its search to record it under this release")
+    return lines

@@ -174,7 +174,7 @@ class Settings:
     ray: str | None = None            # --nav-ray: "auto" or "HOST:PORT"; None: no Ray
     sensor_model: "dict[str, float] | None" = None   # --nav-sensor-model: lidar noise keys; None: off
     batch: int = 16                   # --nav-batch: episodes a batch at most (1: no batches)
-    batch_engine: str = "cpu"         # --nav-batch-engine: "cpu" or "warp" (sim/batch.py)
+    batch_engine: str = "cpu"         # --nav-batch-engine: "cpu" or "warp" (sim/batching/batch.py)
 
 
 _EXPECTED = {"nav_seed": "a whole number >= 0", "nav_summary": "yes or no (true or false)",

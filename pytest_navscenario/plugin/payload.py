@@ -143,3 +143,37 @@ def episode_from_payload(payload: dict[str, Any]) -> EpisodeResult:
         timings=dict(payload.get("timings") or {}),
         terrain_event=ev(TerrainEvent, "terrain"),
     )
+
+
+def crashed_item_payload(config: pytest.Config, report: pytest.TestReport) -> dict[str, Any] | None:
+    """Controller: the ``report.nav`` of a scenario item whose xdist worker process died while
+    running it (xdist reports it with ``when == "???"`` and no payload), rebuilt from its scenario
+    file: outcome subject-error, ``error`` "WorkerCrashed", so that the item has a record and counts
+    in the rates like every other (issue 32). None for what is not a scenario item."""
+    import re
+
+    from ..core.errors import NavScenarioError
+    from ..harness.runner import effective_seed, unfinished_result
+    from ..scenario.loader import load_scenario
+    from .state import get_state
+
+    path, _, name = report.nodeid.partition("::")
+    if not name or not path.endswith((".yaml", ".yml")):
+        return None
+    found = re.fullmatch(r"(.*)\[r(\d+)\]", name)
+    repeat = int(found.group(2)) if found else 0
+    try:
+        scenario = load_scenario(config.rootpath / path)
+    except (NavScenarioError, OSError):
+        return None
+    if not scenario.family:
+        scenario = dataclasses.replace(scenario, family=(config.rootpath / path).parent.name)
+    state = get_state(config)
+    from ..core.seeds import repeat_seed
+    seed = effective_seed(scenario.simulation.seed, repeat_seed(state.settings.seed, repeat))
+    crash = RuntimeError("WorkerCrashed: the pytest-xdist worker running this item died (a planner "
+                         "that ended its process, a crash in C code, the out-of-memory killer)")
+    result = unfinished_result(scenario, crash, seed=seed, subject=state.subject.spec or state.subject.label)
+    spec = state.subject.spec if state.subject.origin != "hook" else None
+    return episode_to_payload(result, nodeid=report.nodeid, path=path, with_trajectory=False,
+                              repeat=repeat, subject_spec=spec)

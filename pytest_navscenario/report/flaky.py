@@ -70,12 +70,16 @@ def holding_rows(records: list[dict[str, Any]], measured: dict[tuple[str, str], 
         rows.append({"path": key[0], "scenario": key[1], "failed": k, "runs": n, "interval": (lo, hi),
                      "measured": prov.get("failure_probability"), "measured_interval":
                      prov.get("failure_probability_interval"), "measured_runs": prov.get("confirmation_runs"),
-                     "threshold": threshold, "holds": not (threshold and hi < threshold) and k > 0})
+                     "threshold": threshold, "holds": not (threshold and hi < threshold) and k > 0,
+                     "mujoco_version": prov.get("mujoco_version")})
     return rows
 
 
 def format_holding(rows: list[dict[str, Any]]) -> str:
-    """One line per frozen failure run with repeats: does it still hold?"""
+    """One line per frozen failure run with repeats: does it still hold? (One that does not and was
+    found under another MuJoCo release says so.)"""
+    from ..core.versions import other_mujoco
+
     lost = [r for r in rows if not r["holds"]]
     lines = [f"{len(rows) - len(lost)} of {len(rows)} frozen failure(s) still hold"
              + (f"; {len(lost)} no longer hold:" if lost else ":")]
@@ -90,4 +94,7 @@ def format_holding(rows: list[dict[str, Any]]) -> str:
                    else f"NO LONGER HOLDS (below the threshold {r['threshold']:g})")
         lines.append(f"  {r['path']}::{r['scenario']}: fails in {r['failed']}/{r['runs']} runs "
                      f"(95 % {lo:.2f}-{hi:.2f}){was}: {verdict}")
+        note = "" if r["holds"] else other_mujoco(r.get("mujoco_version"))
+        if note:
+            lines.append(f"    {note}")
     return "\n".join(lines)

@@ -151,7 +151,7 @@ def _terrain_view(result: Any, idx: Any, pose: Any) -> dict[str, Any]:
     outlines, the base's height and pitch at the view's instants, where it fell or tipped over."""
     import numpy as np
 
-    from ..scenario import ground
+    from ..scenario.ground import surface as ground
     from .terrain_plot import shading_png, terrain_extent
 
     s, traj = result.scenario, result.trajectory

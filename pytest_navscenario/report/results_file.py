@@ -5,6 +5,7 @@ Record fields (format_version 1)::
     format            "navscenario-results"
     format_version    1
     tool_version      package version that wrote it
+    mujoco_version    the MuJoCo release that simulated the episode (its bits are that release's)
     nodeid            pytest node id, e.g. "scenarios/boxes1.yaml::boxes1"
     path              scenario file, relative to the rootdir (posix separators)
     scenario          scenario name
@@ -22,6 +23,11 @@ Record fields (format_version 1)::
     collision         null, or who hit whom: {"obstacle", "time", "robot_moving" (false: the robot
                       stood still and was hit), "robot_speed", "obstacle_speed"} (m/s)
     wall_time         s
+    error             only in the record of an episode that never finished: what ended it
+                      ("WorkerDied": its process died 3 times; "RayTaskLost"; or the exception's
+                      type); its outcome is "subject-error" and its metrics are null
+
+Every scenario item that ran has a record, crashed or not, so the rates count it.
 
 Files are written whole and atomically (``atomic_write_text``), so an interrupted run leaves
 either the previous file or a complete new one.
@@ -35,6 +41,7 @@ from typing import Any, Iterable
 
 from ..core.errors import NavScenarioError
 from ..core.files import atomic_write_text, json_safe
+from ..core.versions import mujoco_version
 from ..verdict.result import EpisodeResult
 from ..scenario.model import content_hash
 
@@ -61,6 +68,7 @@ def make_record(result: EpisodeResult, *, nodeid: str, path: str, repeat: int = 
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
         "tool_version": _tool_version(),
+        "mujoco_version": mujoco_version(),
         "nodeid": nodeid,
         "path": path,
         "scenario": s.name,
@@ -77,6 +85,7 @@ def make_record(result: EpisodeResult, *, nodeid: str, path: str, repeat: int = 
         "metrics": json_safe(result.metrics.as_dict()),
         "collision": _collision_record(result),
         "wall_time": result.wall_time,
+        **({"error": result.error} if result.error is not None else {}),
     }
 
 

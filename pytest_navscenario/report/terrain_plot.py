@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
-from ..scenario import ground
+from ..scenario.ground import surface as ground
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes

@@ -305,7 +305,7 @@ def terrain_markers(scenario: Any) -> list[dict[str, Any]]:
     TRIANGLE_LIST marker: its height sampled on a grid of at most TERRAIN_CELLS a side (two
     triangles a cell, so a step's riser is a steep band one cell wide), coloured by height per
     vertex: blue below the floor, green to brown above."""
-    from ..scenario import ground
+    from ..scenario.ground import surface as ground
 
     out = []
     for i, el in enumerate(scenario.terrain):

@@ -22,16 +22,21 @@ class RobotOptionError(NavScenarioError):
     """--robot, --footprint or --drive cannot be used."""
 
 
-def add_robot_arguments(p: argparse.ArgumentParser, default_timeout: str = "derived") -> None:
+def add_robot_arguments(p: argparse.ArgumentParser, default_timeout: str = "derived", *, timeout: bool = True,
+                        default_robot: str = "the built-in 0.9 x 0.5 m omnidirectional box") -> None:
+    """--robot, --footprint, --drive and (``timeout``) --timeout; ``default_robot`` says what the
+    importer uses without them."""
     p.add_argument("--robot", default=None, metavar="FILE",
                    help="a YAML file with a robot: section (an existing scenario file works): the seed's robot "
-                        "(footprint, drive, limits, lidar); default the built-in 0.9 x 0.5 m omnidirectional box")
+                        f"(footprint, drive, limits, lidar); default {default_robot}")
     p.add_argument("--footprint", default=None, metavar="SHAPE",
                    help="the robot's footprint: circle:RADIUS or box:LENGTHxWIDTH in metres (e.g. circle:0.2, "
                         "box:0.6x0.45); overrides the --robot file's")
     p.add_argument("--drive", choices=("diff", "omni"), default=None,
                    help="the robot's drive: diff (differential, no sideways motion) or omni; overrides the --robot "
                         "file's")
+    if not timeout:
+        return
     p.add_argument("--timeout", type=float, default=None, metavar="SECONDS",
                    help="mission timeout (default: derived from the route's length and the robot's top speed: "
                         f"{TIMEOUT_FACTOR:g} times the driving time plus {TIMEOUT_EXTRA:g} s, at least "

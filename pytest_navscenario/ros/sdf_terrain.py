@@ -4,7 +4,7 @@ A Gazebo (classic) heightmap is a square greyscale image stretched over ``<size>
 centred on the collision's pose plus ``<pos>``; a pixel's height is its value over the image's
 brightest value times ``<size>`` z (``HeightmapShape``: scale z = size z / the image's max colour),
 the image's top row at +y. The scenario's heightfield maps the file's lowest value to
-``min_height`` and its highest to ``max_height`` (scenario/heightmap.py), so the same ground is
+``min_height`` and its highest to ``max_height`` (scenario/ground/heightmap.py), so the same ground is
 ``min_height = lowest / highest * size z``, ``max_height = size z``, resting on the pose's z plus
 ``<pos>`` z. The image is copied beside the seed (``heightmaps/<name>.png``) as it is.
 
@@ -18,7 +18,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any, Callable
 
-from ..scenario.heightmap import HeightmapError, read_height_file
+from ..scenario.ground.heightmap import HeightmapError, read_height_file
 from ..scenario.terrain import Heightfield
 
 

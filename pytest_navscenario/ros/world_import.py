@@ -305,7 +305,7 @@ def _model(path: Path, model: ET.Element, parent: tuple[float, ...], state_poses
             if shape.tag == "heightmap":
                 from .sdf_terrain import heightmap_terrain
                 heightmap_terrain(path, where, shape, cpose, mname if mname not in out.names
-                                  else f"{mname}/{lname}/{cname}", lambda w, u: _find_mesh(w, u, out.roots),
+                                  else f"{mname}/{lname}/{cname}", lambda w, u: _find_inside(w, u, out.roots, where, "heightmap"),
                                   _floats, out)
                 continue
             if shape.tag in ("polyline", "mesh") and not (abs(cpose[3]) > tilt or abs(cpose[4]) > tilt):
@@ -358,17 +358,13 @@ def _outlined(path: Path, mname: str, lname: str, cname: str, where: str, geom: 
     uri = (shape.findtext("uri") or "").strip()
     scale = tuple(_floats(shape.find("scale"), 3, f"{where} mesh scale", path)) if shape.find("scale") is not None \
         else (1.0, 1.0, 1.0)
-    found = _find_mesh(path, uri, out.roots)
+    found = _find_inside(path, uri, out.roots, where, "mesh")
     if found is None:
         out.warnings.append(f"{where}: mesh {uri or '(no uri)'}: no such file beside the world, looked in "
                             f"{path.parent} and its models/ folder" +
                             (f" and {', '.join(str(r) for r in out.roots[1:])}" if len(out.roots) > 1 else "")
                             + " (not imported)")
         return
-    if not any(found.resolve().is_relative_to(r) for r in out.roots):
-        raise WorldImportError(f"{path}: {where}: mesh {uri} is {found.resolve()}, outside the world's folder "
-                               f"{path.parent.resolve()}: meshes are read only from beside the world (the scenario "
-                               f"loader's own rule); copy it there, or name its folder with --model-path")
     try:
         verts, tris = read_mesh(found)
         outline, height = mesh_outline(verts, tris, scale, found.name)
@@ -382,6 +378,19 @@ def _outlined(path: Path, mname: str, lname: str, cname: str, where: str, geom: 
     out.names.add(name)
     out.obstacles.append(MeshObstacle(name=name, x=x, y=y, yaw=yaw, file=rel, scale=scale,
                                       footprint=outline, height=height))
+
+
+def _find_inside(world: Path, uri: str, roots: tuple[Path, ...], where: str, what: str) -> Path | None:
+    """The file of a mesh's or heightmap's ``uri`` (``_find_mesh``), None when there is none;
+    WorldImportError when it lies outside the world's folder and the --model-path folders (an
+    absolute path, file://, model://../../, ../../, a link out): the scenario loader's own rule, the
+    same for every file the import copies."""
+    found = _find_mesh(world, uri, roots)
+    if found is not None and not any(found.resolve().is_relative_to(r) for r in roots):
+        raise WorldImportError(f"{world}: {where}: {what} {uri} is {found.resolve()}, outside the world's folder "
+                               f"{world.parent.resolve()}: {what} files are read only from beside the world (the "
+                               f"scenario loader's own rule); copy it there, or name its folder with --model-path")
+    return found
 
 
 def _find_mesh(world: Path, uri: str, roots: tuple[Path, ...] = ()) -> Path | None:

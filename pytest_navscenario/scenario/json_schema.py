@@ -28,7 +28,7 @@ SCHEMA_FILE = f"scenario-v{SCHEMA_VERSION}.json"
 MODELINE_PATH = f".navscenario/{SCHEMA_FILE}"
 DRAFT = "https://json-schema.org/draft/2020-12/schema"
 
-_NO_CONTROL = r"^[^\n\r\t\x00]*$"
+_NO_CONTROL = r"^[^\x00-\x1f\x7f-\x9f]*$"     # one line, no control characters (an escape would drive a terminal)
 _NOT_BLANK = r"\S"
 _FILE_NAME = r"^(?!\s*\.{1,2}\s*$)[^/\\]*$"                    # no '/', '\', '.' or '..'
 _FOLDER_PATH = r"^$|^(?!(?:.*/)?\s*\.{0,2}\s*(?:/|$))[^\\]*$"   # names separated by '/': no '..', no empty part

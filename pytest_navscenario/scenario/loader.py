@@ -68,6 +68,7 @@ from .model import (  # noqa: F401  (DRIVES ... PERSON_SPEED: re-exported, they 
 )
 from .reading import (  # the readers, under the names this module always used
     _MAX_ABS,
+    BROKEN,
     _Ctx,
     _Section,
     _build_section,
@@ -121,9 +122,8 @@ def _robot(ctx: _Ctx, top: _Section) -> Robot:
 
 def _mjcf_file(ctx: _Ctx, body: Any) -> Any:
     """An MJCF body's file: beside the scenario (the mesh path rules), there and readable; its
-    digest (a hash of the file's bytes) made part of the content. MuJoCo reads it at run time."""
-    import hashlib
-
+    digest (a hash of its bytes and of every file MuJoCo will open for it: scenario/mjcf_files.py)
+    made part of the content. MuJoCo reads it at run time."""
     from .mesh import MeshError, resolve_mesh_path
 
     field = "robot.body.file"
@@ -136,13 +136,16 @@ def _mjcf_file(ctx: _Ctx, body: Any) -> Any:
         raise ctx.fail(str(exc), field, line, fix) from None
     if path.exists() and not path.is_file():   # a folder, or a named pipe that reading would wait on
         raise ctx.fail(f"{path} is not a file", field, line, fix)
-    try:
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise ctx.fail(f"{path} does not exist", field, line, fix) from None
+    if not path.exists():
+        raise ctx.fail(f"{path} does not exist", field, line, fix)
+    from .mjcf_files import MjcfFileError, robot_digest
+    try:   # the file and every file MuJoCo will open for it: inside the folder, regular, hashed
+        return replace(body, digest=robot_digest(path, folder))
+    except MjcfFileError as exc:
+        raise ctx.fail(str(exc), field, line, "keep the robot's included files, meshes and textures in the "
+                                              "scenario's folder, named by relative paths") from None
     except OSError as exc:
         raise ctx.fail(f"{path} cannot be read: {exc.strerror or exc}", field, line, fix) from None
-    return replace(body, digest=hashlib.sha256(data).hexdigest()[:16])
 
 
 def _pose(ctx: _Ctx, node: YNode | None, path: str, line: int | None, what: str) -> Pose:
@@ -161,16 +164,18 @@ def _mission(ctx: _Ctx, top: _Section) -> Mission:
     values: dict[str, Any] = {}
     for key in ("start", "goal"):
         if not sec.has(key):
-            raise sec.missing(key, decl[key].example)
-        values[key] = _pose(ctx, sec.get(key), f"mission.{key}", sec.line_of(key), f"the {key} pose")
+            ctx.note(sec.missing(key, decl[key].example))
+            values[key] = BROKEN
+            continue
+        values[key] = ctx.attempt(_pose, ctx, sec.get(key), f"mission.{key}", sec.line_of(key), f"the {key} pose")
     waypoints = []
     listed = decl["waypoints"]
     items = sec.sequence("waypoints", listed.max, listed.what)
     for i, item in enumerate(items):
         ctx.lines[f"mission.waypoints[{i}]"] = item.line
-        waypoints.append(_pose(ctx, item, f"mission.waypoints[{i}]", item.line or sec.line_of("waypoints"),
-                               "a waypoint"))
-    values["waypoints"] = tuple(waypoints)
+        waypoints.append(ctx.attempt(_pose, ctx, item, f"mission.waypoints[{i}]",
+                                     item.line or sec.line_of("waypoints"), "a waypoint"))
+    values["waypoints"] = BROKEN if BROKEN in waypoints else tuple(waypoints)
     return Mission(**_read(ctx, sec, decl, values))
 
 
@@ -254,7 +259,7 @@ def _terrain_element(ctx: _Ctx, sec: _Section, element: K.Element, name: str) ->
     values = _read(ctx, sec, decl, {"name": name})
     if element.type not in ("heightfield", "rough"):
         return decl.cls(**values)
-    from .heightmap import HeightmapError, check_rough, load_heightfield
+    from .ground.heightmap import HeightmapError, check_rough, load_heightfield
 
     try:
         if element.type == "rough":
@@ -420,7 +425,7 @@ def check_scenario(scenario: Scenario, *, _ctx: _Ctx | None = None) -> None:
         _check_clear(scenario, ctx)
         _check_speeds(scenario, ctx)
     if scenario.terrain or scenario.robot.body.kind != "planar" or any(o.z is not None for o in scenario.obstacles):
-        from .ground import body_problem, mission_problem, obstacle_problem, terrain_problem
+        from .ground.surface import body_problem, mission_problem, obstacle_problem, terrain_problem
         problem = (body_problem(scenario) or terrain_problem(scenario) or mission_problem(scenario)
                    or obstacle_problem(scenario))
         if problem is not None:
@@ -567,34 +572,45 @@ def _build(root: YNode | None, ctx: _Ctx, name: str | None, family: str | None) 
     for key in TOP_KEYS:
         if top.has(key):
             lines[key] = top.line_of(key)
-    scenario_name = top.string("name", name or "")
-    if scenario_name:
-        _check_name(ctx, scenario_name, "name", top.line_of("name"), file_name=True)
-    scenario_family = top.string("family", family or "", nonempty=False)
-    if scenario_family:
-        _check_family(ctx, scenario_family, top.line_of("family"))
-    scenario = Scenario(
-        version=int(version),
-        name=scenario_name,
-        family=scenario_family,
-        description=top.string("description", "", nonempty=False),
-        marks=_marks(ctx, top),
-        robot=_robot(ctx, top),
-        mission=_mission(ctx, top),
-        obstacles=_obstacles(ctx, top),
-        terrain=_read_elements(ctx, top, SCENARIO["terrain"], _terrain_element),
-        simulation=_simulation(ctx, top),
-        reference=_reference(ctx, top),
-        search=_mapping(ctx, top, "search"),
-        provenance=_mapping(ctx, top, "provenance"),
-        source=ctx.source,
-    )
+    # Each part is read on its own: with ctx.collect a mistake in one is recorded and the others
+    # are still read, so that one pass reports every mistake it can find (ctx.finish).
+    parts = {
+        "name": ctx.attempt(_name, ctx, top, name),
+        "family": ctx.attempt(_family, ctx, top, family),
+        "description": ctx.attempt(lambda: top.string("description", "", nonempty=False)),
+        "marks": ctx.attempt(_marks, ctx, top),
+        "robot": ctx.attempt(_robot, ctx, top),
+        "mission": ctx.attempt(_mission, ctx, top),
+        "obstacles": ctx.attempt(_obstacles, ctx, top),
+        "terrain": ctx.attempt(_read_elements, ctx, top, SCENARIO["terrain"], _terrain_element),
+        "simulation": ctx.attempt(_simulation, ctx, top),
+        "reference": ctx.attempt(_reference, ctx, top),
+        "search": ctx.attempt(_mapping, ctx, top, "search"),
+        "provenance": ctx.attempt(_mapping, ctx, top, "provenance"),
+    }
+    ctx.finish()
+    scenario = Scenario(version=int(version), source=ctx.source, **parts)
     if scenario.search is not None:     # the search's space, checked on plain runs too
         read_search(ctx, top.get("search"), "search", top.line_of("search"),
                     obstacles=tuple(o.name for o in scenario.obstacles), waypoints=len(scenario.mission.waypoints),
                     terrain=tuple(el.name for el in scenario.terrain))
+        ctx.finish()
     check_scenario(scenario, _ctx=ctx)
     return scenario
+
+
+def _name(ctx: _Ctx, top: _Section, default: str | None) -> str:
+    scenario_name = top.string("name", default or "")
+    if scenario_name:
+        _check_name(ctx, scenario_name, "name", top.line_of("name"), file_name=True)
+    return scenario_name
+
+
+def _family(ctx: _Ctx, top: _Section, default: str | None) -> str:
+    scenario_family = top.string("family", default or "", nonempty=False)
+    if scenario_family:
+        _check_family(ctx, scenario_family, top.line_of("family"))
+    return scenario_family
 
 
 def loads_scenario(text: str | bytes, source: str | os.PathLike | None = None, *,
@@ -609,7 +625,7 @@ def loads_scenario(text: str | bytes, source: str | os.PathLike | None = None, *
     if len(text) > SCENARIO_LIMITS["max_file_bytes"]:
         raise ScenarioError(f"the text is {len(text)} characters, more than the limit of "
                             f"{SCENARIO_LIMITS['max_file_bytes']:g}", path=src, hint="this is not a scenario file")
-    ctx = _Ctx(src)
+    ctx = _Ctx(src, collect=True)
     root = parse_yaml(text, src, max_depth=int(SCENARIO_LIMITS["max_depth"]),
                       max_nodes=int(SCENARIO_LIMITS["max_nodes"]), list_limits=_LIST_LIMITS)
     return _build(root, ctx, name, family)
@@ -626,7 +642,7 @@ def scenario_from_dict(data: Mapping[str, Any], source: str | os.PathLike | None
                           max_nodes=int(SCENARIO_LIMITS["max_nodes"]), source=src)
     except RecursionError:
         raise ScenarioError("the mapping nests too deeply", path=src) from None
-    return _build(root, _Ctx(src), None, None)
+    return _build(root, _Ctx(src, collect=True), None, None)
 
 
 _BOMS = ((codecs.BOM_UTF32_LE, "utf-32"), (codecs.BOM_UTF32_BE, "utf-32"), (codecs.BOM_UTF8, "utf-8-sig"),

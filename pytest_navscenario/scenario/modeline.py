@@ -8,7 +8,9 @@ holds pyproject.toml, setup.cfg, setup.py, tox.ini, pytest.ini, .git or .navscen
 scenario's own folder), written relative to the scenario file, as the language server resolves it.
 ``navscenario schema -o .navscenario/scenario-v1.json`` writes that file once per project; the
 search and the importers write it too when they write scenarios into a project that lacks it (or
-has an older one), so their files work in an editor without setup.
+has an older one), and beside the scenario in a folder with no project marker (the file its
+modeline names there), so their files work in an editor without setup. (``save_scenario``, the
+library's own writer, writes no schema.)
 """
 from __future__ import annotations
 
@@ -61,14 +63,12 @@ def with_modeline(text: str, scenario_path: str | os.PathLike) -> str:
     return modeline(scenario_path) + "\n" + text
 
 
-def ensure_project_schema(scenario_path: str | os.PathLike) -> Path | None:
-    """Write the schema the modeline of ``scenario_path`` names, when the scenario is inside a
-    project (see ``project_root``) and the file is missing or not this version's; None outside a
-    project (nothing is written into a bare folder)."""
-    root = project_root(scenario_path)
-    if root is None:
-        return None
-    target = root / ".navscenario" / schema_file_name()
+def ensure_project_schema(scenario_path: str | os.PathLike) -> Path:
+    """Write the schema the modeline of ``scenario_path`` names when the file is missing or not
+    this version's: at the project's root (see ``project_root``), or, in a folder with no project
+    marker, beside the scenario (issue 32: an import there wrote a modeline naming a file that did
+    not exist). Returns the schema's path."""
+    target = project_schema(scenario_path)
     if target in _ENSURED:
         return target
     from ..core.files import atomic_write_text

@@ -11,9 +11,10 @@ import difflib
 import math
 import numbers
 import re
+import unicodedata
 from typing import Any, Mapping
 
-from ..core.errors import ScenarioError
+from ..core.errors import ScenarioError, ScenarioErrors
 from . import keys as K
 from .format import key_homes
 from .keys import SCENARIO_LIMITS
@@ -40,18 +41,61 @@ _ALIASES = {  # common synonyms -> the spelling the format uses (for the hint)
 
 # --------------------------------------------------------------------------- helpers
 
-class _Ctx:
-    """Where we are: the source file (for messages) and the line of every field read."""
+MAX_REPORTED = 20   # mistakes of one file reported in one pass (then: fix these and load again)
 
-    def __init__(self, source: str | None):
+
+class Recorded(Exception):
+    """A part of the file (a key, a section, a list item) could not be read; its mistakes are in
+    ``_Ctx.errors`` and the reader goes on with the next part (issue 32)."""
+
+
+BROKEN = object()   # the value of a key that could not be read (its mistake is recorded)
+
+
+class _Ctx:
+    """Where we are: the source file (for messages) and the line of every field read; with
+    ``collect``, the mistakes found so far (each part of the file that has one is skipped and
+    the reading goes on, so one pass reports them all, up to MAX_REPORTED)."""
+
+    def __init__(self, source: str | None, *, collect: bool = False):
         self.source = source
         self.lines: dict[str, int | None] = {}
         #: names of the typed lists read so far (obstacles, then terrain) -> "obstacles[i]": one
         #: name space, so that a name (in ``search: frozen``, a message) means one thing
         self.element_names: dict[str, str] = {}
+        self.collect = collect
+        self.errors: list[ScenarioError] = []
 
     def fail(self, message: str, field: str | None, line: int | None, hint: str | None = None) -> ScenarioError:
         return ScenarioError(message, path=self.source, line=line, field=field, hint=hint)
+
+    def note(self, exc: ScenarioError) -> None:
+        """Keep ``exc`` and go on (collecting), or raise it (not collecting); at MAX_REPORTED
+        mistakes, stop with all of them."""
+        if not self.collect:
+            raise exc
+        self.errors.append(exc)
+        if len(self.errors) >= MAX_REPORTED:
+            raise ScenarioErrors(self.errors, stopped=MAX_REPORTED)
+
+    def attempt(self, read: Any, *args: Any) -> Any:
+        """``read(*args)``, or BROKEN when it found a mistake (recorded: see ``note``)."""
+        try:
+            return read(*args)
+        except Recorded:
+            return BROKEN
+        except ScenarioErrors:
+            raise
+        except ScenarioError as exc:
+            self.note(exc)
+            return BROKEN
+
+    def finish(self) -> None:
+        """Raise what was recorded: the one mistake as itself, several as ScenarioErrors."""
+        if len(self.errors) == 1:
+            raise self.errors[0]
+        if self.errors:
+            raise ScenarioErrors(self.errors)
 
 
 def _did_you_mean(word: Any, options: tuple[str, ...]) -> str:
@@ -93,9 +137,9 @@ class _Section:
         self.node = node
         self.line = line if line is not None else node.line
         for key, (key_line, _) in node.items.items():
-            if key not in keys:
-                raise ctx.fail(f"unknown key {str(key)!r}", _join(path, str(key)), key_line,
-                               _unknown_key_hint(key, keys, path))
+            if key not in keys:   # collecting: noted, and the key is left unread
+                ctx.note(ctx.fail(f"unknown key {str(key)!r}", _join(path, str(key)), key_line,
+                                  _unknown_key_hint(key, keys, path)))
 
     def has(self, key: str) -> bool:
         return key in self.node.items
@@ -256,7 +300,9 @@ def _read(ctx: _Ctx, sec: _Section, decl: K.Section, values: dict[str, Any] | No
         if key.name not in items and key.default is not _REQUIRED:
             values[field] = key.default             # absent: its default (most keys of most files)
         else:
-            values[field] = _READ[key.kind](ctx, sec, key)
+            values[field] = ctx.attempt(_READ[key.kind], ctx, sec, key)
+    if any(v is BROKEN for v in values.values()):
+        raise Recorded()                            # the section's rules need every key
     for rule in decl.rules:
         if rule.check is not None:
             problem = rule.check(values, sec.node.items)
@@ -401,39 +447,13 @@ def _read_elements(ctx: _Ctx, top: _Section, key: K.Elements, build: Any = None)
     article = "an" if key.item[:1] in "aeiou" else "a"
     given: dict[str, int] = {}
     parsed: list[tuple[K.Element, _Section, str | None]] = []
+    broken = False
     for i, item in enumerate(items):
-        path = f"{key.name}[{i}]"
-        line = item.line or top.line_of(key.name)
-        if not isinstance(item, YMap):
-            raise ctx.fail(f"expected {article} {key.item} mapping, got {describe(item)}", path, line,
-                           f"write '- {key.example}'")
-        type_item = item.items.get("type")
-        if type_item is None:
-            raise ctx.fail("missing required field 'type'", f"{path}.type", line,
-                           f"add 'type: {types[0]}' or 'type: {types[1]}'")
-        kind = type_item[1].value if isinstance(type_item[1], YScalar) else None
-        element = key.element(kind) if isinstance(kind, str) else None
-        if element is None:
-            raise ctx.fail(f"unknown {key.item} type {describe(type_item[1])}", f"{path}.type",
-                           type_item[0] or line, _did_you_mean(kind if kind is not None else "", types))
-        keys = type_keys[kind]
-        for name, (key_line, _) in item.items.items():
-            if name in keys:
-                continue
-            other = next((t for t, t_keys in type_keys.items() if name in t_keys), None)
-            if other is not None:
-                raise ctx.fail(f"'{name}' does not apply to type: {kind} (it is a {other} key)", f"{path}.{name}",
-                               key_line or line, f"remove '{name}', or set type: {other}")
-        sec = _Section(ctx, item, path, keys, line=line)
-        name = _read_text(ctx, sec, element.section.by_name["name"]) if "name" in item.items else None
-        if name is not None:
-            if name in given or name in ctx.element_names:
-                first = f"{key.name}[{given[name]}]" if name in given else ctx.element_names[name]
-                raise ctx.fail(f"name {name!r} is already used by {first}", f"{path}.name",
-                               sec.line_of("name"), "names of obstacles and terrain elements must be unique; "
-                               "rename one of them")
-            given[name] = i
-        parsed.append((element, sec, name))
+        found = ctx.attempt(_parse_element, ctx, top, key, i, item, type_keys, given)
+        if found is BROKEN:
+            broken = True
+        else:
+            parsed.append(found)
     taken = set(given) | set(ctx.element_names)
     counters = dict.fromkeys(types, 0)
     result = []
@@ -445,10 +465,55 @@ def _read_elements(ctx: _Ctx, top: _Section, key: K.Elements, build: Any = None)
                 if name not in taken:
                     break
             taken.add(name)
-        result.append(build(ctx, sec, element, name) if build is not None
-                      else element.section.cls(**_read(ctx, sec, element.section, {"name": name})))
+        made = ctx.attempt(build, ctx, sec, element, name) if build is not None else \
+            ctx.attempt(lambda: element.section.cls(**_read(ctx, sec, element.section, {"name": name})))
+        if made is BROKEN:
+            broken = True
+        else:
+            result.append(made)
+    if broken:
+        raise Recorded()
     ctx.element_names.update((item.name, f"{key.name}[{i}]") for i, item in enumerate(result))
     return tuple(result)
+
+
+def _parse_element(ctx: _Ctx, top: _Section, key: K.Elements, i: int, item: YNode,
+                   type_keys: dict[str, tuple[str, ...]], given: dict[str, int]) -> tuple[Any, _Section, str | None]:
+    """List item ``i`` of a typed list: its element (by ``type``), its section and its given name."""
+    types = key.type_names
+    article = "an" if key.item[:1] in "aeiou" else "a"
+    path = f"{key.name}[{i}]"
+    line = item.line or top.line_of(key.name)
+    if not isinstance(item, YMap):
+        raise ctx.fail(f"expected {article} {key.item} mapping, got {describe(item)}", path, line,
+                       f"write '- {key.example}'")
+    type_item = item.items.get("type")
+    if type_item is None:
+        raise ctx.fail("missing required field 'type'", f"{path}.type", line,
+                       f"add 'type: {types[0]}' or 'type: {types[1]}'")
+    kind = type_item[1].value if isinstance(type_item[1], YScalar) else None
+    element = key.element(kind) if isinstance(kind, str) else None
+    if element is None:
+        raise ctx.fail(f"unknown {key.item} type {describe(type_item[1])}", f"{path}.type",
+                       type_item[0] or line, _did_you_mean(kind if kind is not None else "", types))
+    keys = type_keys[kind]
+    for name, (key_line, _) in item.items.items():
+        if name in keys:
+            continue
+        other = next((t for t, t_keys in type_keys.items() if name in t_keys), None)
+        if other is not None:
+            raise ctx.fail(f"'{name}' does not apply to type: {kind} (it is a {other} key)", f"{path}.{name}",
+                           key_line or line, f"remove '{name}', or set type: {other}")
+    sec = _Section(ctx, item, path, keys, line=line)
+    name = _read_text(ctx, sec, element.section.by_name["name"]) if "name" in item.items else None
+    if name is not None:
+        if name in given or name in ctx.element_names:
+            first = f"{key.name}[{given[name]}]" if name in given else ctx.element_names[name]
+            raise ctx.fail(f"name {name!r} is already used by {first}", f"{path}.name",
+                           sec.line_of("name"), "names of obstacles and terrain elements must be unique; "
+                           "rename one of them")
+        given[name] = i
+    return (element, sec, name)
 
 
 def _read_variant(ctx: _Ctx, sec: _Section, key: K.Variant) -> Any:
@@ -499,6 +564,11 @@ def _check_name(ctx: _Ctx, name: str, field: str, line: int | None, *, file_name
         raise ctx.fail(f"is {len(name)} characters long, more than {limit}", field, line, "shorten it")
     if any(ch in name for ch in "\n\r\t\x00"):
         raise ctx.fail("must be one line without tabs", field, line, "remove the line breaks")
+    control = next((ch for ch in name if unicodedata.category(ch) == "Cc"), None)
+    if control is not None:   # an escape sequence would drive the terminal that prints the name
+        raise ctx.fail(f"{name!r} holds the control character U+{ord(control):04X}: names are printed in "
+                       f"terminals and reports, where it would act (clear the screen, recolour, retitle)",
+                       field, line, "remove the control characters (\\e, \\a, \\x1b ... in YAML escapes)")
     if file_name and (any(ch in name for ch in "/\\") or name.strip() in (".", "..")):
         raise ctx.fail(f"{name!r} cannot be used: scenario names and families become file and folder names",
                        field, line, "use letters, digits, '-', '_' and '.', without '/' or '\\'")

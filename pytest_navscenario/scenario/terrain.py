@@ -166,7 +166,7 @@ class WheeledBody:
     that gives limits.max_speed). ``track`` (lateral wheel spacing) and ``wheelbase`` (skid: axle
     spacing) default to the footprint's size (the wheels inside it); the mass centre sits
     ``com_height`` above the ground (None: at the wheels' axle). The robot counts as tipped over when
-    its roll or pitch passes ``tip_angle`` degrees (scenario/chassis.py: the layout)."""
+    its roll or pitch passes ``tip_angle`` degrees (scenario/ground/chassis.py: the layout)."""
     drive_wheels: Literal["diff", "skid"] = "diff"
     wheel_radius: float = 0.1            # m
     wheel_width: float = 0.05            # m
@@ -203,11 +203,11 @@ class MjcfBody:
     ``base`` body (None: the first body with a free joint) is the robot, driven by ``controller``
     (``pkg.mod:Attr``, loaded like a subject), which turns each velocity command into the model's
     actuator controls. ``digest`` is what the loader read from the file (a hash of its bytes): it
-    makes the model part of the content, wherever the file lives (files it includes are not
-    hashed). What it can cross is the user's to declare (the harness cannot estimate it from an
+    makes the model part of the content, wherever the file lives (with every file MuJoCo opens
+    for it: scenario/mjcf_files.robot_digest). What it can cross is the user's to declare (the harness cannot estimate it from an
     arbitrary model): ``max_step`` and ``max_slope`` together, and ``max_gap`` (None: no gap), and the
     path search and the feasibility check then treat it as a legged body's limits
-    (scenario/crossing.py); undeclared, they ignore the terrain for it."""
+    (scenario/ground/crossing.py); undeclared, they ignore the terrain for it."""
     file: str
     controller: str
     base: str | None = None

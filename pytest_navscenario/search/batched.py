@@ -1,5 +1,5 @@
 """A search's simulations in batches, in this process: the evaluator ``run_search`` uses when the
-subject answers the batch protocol (harness/batch.py, sim/batch.py).
+subject answers the batch protocol (harness/batch.py, sim/batching/batch.py).
 
 Generations: ``batch_evaluator`` queues each generation the search proposes and runs everything
 queued as one batch when the first of its results is asked for. The search proposes the next

@@ -199,7 +199,7 @@ def run_search(seed: Scenario, subject_factory: Callable[[], Any], config: Searc
     ``batch`` > 1 simulates each generation's candidates together, in lockstep, when the subject
     answers the batch protocol (harness/batch.py): the same search, faster; search/batched.py's
     ``batch_evaluator`` also batches the generations in flight together and the failures' shrinks.
-    ``engine`` names the batch engine ("cpu"; "warp": MuJoCo Warp, sim/warp_engine.py, whose
+    ``engine`` names the batch engine ("cpu"; "warp": MuJoCo Warp, sim/batching/warp_engine.py, whose
     trajectories agree with the CPU's within a tolerance, not bit for bit).
     ``recorder`` (``Recorder``) is told every candidate and failure as the search goes, so that a
     search killed at any moment has written what it found (search/freeze.py: ``SearchRecorder``).

@@ -43,7 +43,7 @@ class EvalContext:
     hold: Sprt | None = None
     hold_threshold: float = 0.0
     batch: int = 1        # candidates simulated together (harness/batch.py) by evaluate_candidates
-    engine: str = "cpu"   # the batch engine that steps them (sim/batch.py: "cpu" or "warp")
+    engine: str = "cpu"   # the batch engine that steps them (sim/batching/batch.py: "cpu" or "warp")
 
     def run_seed(self, run: int) -> int | None:
         """The base seed of noise run ``run`` (0: the search's own, the run's --nav-seed)."""

@@ -146,7 +146,7 @@ def terrain_culprit(scenario: Any, label: str, x: float, y: float, margin: float
     quoted = re.findall(r"'([^']*)'", label or "")
     if quoted and quoted[-1] in names:
         return f"terrain:{quoted[-1]}"
-    from ..scenario.ground import element_at
+    from ..scenario.ground.surface import element_at
     i = element_at(scenario, x, y, margin=margin)
     return f"terrain:{scenario.terrain[i].name}" if i is not None else ""
 

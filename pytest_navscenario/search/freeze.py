@@ -29,7 +29,9 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from ..core.files import atomic_write_text
+from ..core.versions import mujoco_version
 from ..scenario.model import Scenario, content_hash
+from ..verdict.result import headline
 from .report import Candidate, Failure, SearchReport
 from .holding import Estimate
 from .space import SearchSpace
@@ -84,6 +86,7 @@ def candidate_provenance(report: SearchReport, cand: Candidate, space: SearchSpa
         "strategy": report.strategy,
         "budget": report.budget,
         "nav_seed": report.episode_seed or 0,
+        "mujoco_version": mujoco_version(),    # the release whose bits it records (core/versions.py)
     }
 
 
@@ -448,7 +451,7 @@ def write_junit(items: Iterable[tuple[SearchReport, SearchSpace]], path: str | P
                 tc.add_error_info(message=c.message, error_type="harness-error")
             elif c.failed:
                 clearance = "nan" if not math.isfinite(c.clearance) else f"{c.clearance:.3f}"
-                tc.add_failure_info(message=f"{c.outcome}: {c.message} (min clearance {clearance} m)",
+                tc.add_failure_info(message=f"{headline(c.outcome, c.message)} (min clearance {clearance} m)",
                                     failure_type=c.outcome)
             cases.append(tc)
         suites.append(TestSuite(f"navsearch {report.seed_name} vs {report.subject} ({report.strategy}, "

@@ -10,7 +10,21 @@ step physics), then ``world.py`` (the MuJoCo model built from the scenario, comp
 the drive limits), ``safety.py`` (the collision safety layer), ``moving.py`` (moving obstacles:
 their mocap positions every physics step, their velocities for the safety layer, who moved in a
 collision), ``faults.py`` (localisation drift and latency: what the planner is handed) and
-``deadline.py`` (the per-tick time limit).
+``deadline.py`` (the per-tick time limit). A body that rides the ground: ``body_world.py`` (its
+world) and the subpackages ``bodies/`` (wheeled, legged, the user's MJCF) and ``ground/`` (the
+terrain in MuJoCo, heightfields and their ray cast, riding, the ground's safety layer). Many
+episodes at once: ``batching/`` (the batch engines: CPU lockstep and MuJoCo Warp).
+
+Terrain and bodies (a robot that rides the ground): ``body_world.py`` (its world: gravity, the
+terrain, which chassis contact is a collision), ``bodies/`` (wheeled, legged, MJCF; ``base.py``
+first), ``terrain.py`` and ``heightfield.py`` (the terrain as geoms), ``riding.py`` (the ground
+under the robot, the watch for falls, tip-overs, being stuck), ``ground_safety.py`` and
+``lidar3d.py`` (the 3D lidar and the safety layer's view of the ground), ``hfield_rays.py``; the
+episode is ``episode.RidingEpisode``.
+
+Batches: ``batch.py`` (the engine interface), ``lockstep.py`` and ``cohort.py`` (the CPU engine,
+bit-identical to running alone), ``warp_engine.py``, ``warp_worlds.py`` and ``warp_loop.py`` (MuJoCo
+Warp, optional extra ``gpu``); ``profiler.py`` keeps MuJoCo's profiler off.
 
 Names are imported lazily so that importing this package does not import MuJoCo.
 """

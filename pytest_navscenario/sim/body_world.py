@@ -1,4 +1,4 @@
-"""The MuJoCo world of a robot that rides the ground: gravity on, the terrain (sim/terrain.py),
+"""The MuJoCo world of a robot that rides the ground: gravity on, the terrain (sim/ground/terrain.py),
 obstacles standing on the ground, the body (sim/bodies/), and what the episode asks of it: which
 contact of the chassis is a collision (with an obstacle, or with a terrain face) and the height of
 the ground under a point.
@@ -15,11 +15,11 @@ import mujoco
 import numpy as np
 
 from ..core.errors import ScenarioError
-from ..scenario import ground
+from ..scenario.ground import surface as ground
 from ..scenario.model import Scenario
 from .bodies.base import ROBOT_GROUP
 from .safety import SafetyLayer
-from .terrain import add_terrain, terrain_of_geom
+from .ground.terrain import add_terrain, terrain_of_geom
 from .trajectory import Collision
 from . import world as planar
 from .world import PARTS_GROUP, UNSEEN_GROUP, World, _add_obstacles, obstacle_geom_names
@@ -27,6 +27,9 @@ from .world import PARTS_GROUP, UNSEEN_GROUP, World, _add_obstacles, obstacle_ge
 GRAVITY = -9.81
 FACE_NZ = 0.7            # a chassis contact whose normal is steeper than ~45 degrees from vertical
                          # is a terrain face (a step's riser, a pit's wall), not the ground below
+EDGE_ABOVE = 0.02        # m: a face touched no higher than this above the ground the robot last stood on
+                         # is that ground's edge, which it goes over (a fall or a tip-over follows), not
+                         # terrain it drove into (a riser rises above it: the chassis meets it higher up)
 
 
 def obstacle_bases(scenario: Scenario) -> list[float]:
@@ -75,13 +78,19 @@ class BodyWorld(World):
     chassis_sensor: int = 0
     element_names: tuple = ()
 
-    def first_collision(self, d: mujoco.MjData, obstacles: tuple, t: float) -> Collision | None:
+    def first_collision(self, d: mujoco.MjData, obstacles: tuple, t: float,
+                        level: float | None = None) -> Collision | None:
         """The deepest contact of the robot with an obstacle, or of its chassis with a terrain face
         (a contact whose normal is within ~45 degrees of horizontal), or None. Wheels, casters and
         feet meet the terrain freely, and the chassis resting on the ground (high-centred) is no
         collision. (``body.robot_geoms``: the geoms that meet obstacles; ``chassis_geoms``: those
-        whose terrain contacts count.)"""
+        whose terrain contacts count.) ``level``: the ground height the robot last stood on; a face
+        touched no higher than EDGE_ABOVE over it is the edge of that ground, on which a robot going
+        over it rolls or pitches while it falls or tips (which of the contact or the tip-over comes
+        first moved by ~0.05 s between MuJoCo 4.0.0 and 4.0.1, turning a tip-over off a dock into a
+        "collision with the face"): no collision, the terrain watch names the fall."""
         best = None
+        floor = -np.inf if level is None else level + EDGE_ABOVE
         contacts = d.contact
         chassis, obstacle_of_geom, terrain = self.body.chassis_geoms, self.obstacle_of_geom, self.terrain_of_geom
         robot = self.body.robot_geoms
@@ -98,7 +107,8 @@ class BodyWorld(World):
                 hit = (dist, obstacles[idx].name, k, False)
             else:
                 element = terrain.get(other)
-                if element is None or mine not in chassis or abs(float(contacts.frame[k][2])) >= FACE_NZ:
+                if element is None or mine not in chassis or abs(float(contacts.frame[k][2])) >= FACE_NZ \
+                        or float(contacts.pos[k][2]) <= floor:
                     continue
                 hit = (dist, self.element_names[element] if element >= 0 else "floor", k, True)
             if best is None or hit[0] < best[0]:

@@ -45,7 +45,7 @@ class TickDeadline:
         self._old_timer = (0.0, 0.0)
         self._entered_at = 0.0
         self._armed_at = 0.0
-        self.scale = 1          # a batch call of k episodes may take k times the limit (sim/batch.py)
+        self.scale = 1          # a batch call of k episodes may take k times the limit (sim/batching/batch.py)
 
     def __enter__(self) -> "TickDeadline":
         if self._use_alarm:

@@ -28,7 +28,7 @@ from ..scenario.model import Mission, Scenario
 from ..subjects.protocol import Observation
 from .command import Drive, call_planner, planner_traceback, validate_command
 from .deadline import PlannerTimeout, TickDeadline
-from .ground_safety import ground_safety
+from .ground.ground_safety import ground_safety
 from .lidar import Lidar, base_rotation
 from .lidar3d import CloudLidar, LEVEL
 from .faults import Faults
@@ -37,10 +37,11 @@ from .profiler import profiler_off
 from .trajectory import Collision, SafetyStop, SubjectFailure, TerrainEvent, Trajectory
 from .world import (MUJOCO_WARNINGS, TWO_PI, compiled_world, divergence_message, fatal_message,
                     on_mujoco_warning, steps_per_tick)
-from ..scenario import ground
+from ..scenario.ground import surface as ground
 from .bodies.base import base_state, quat_to_rpy, world_yaw_rate
+from .bodies.mjcf import BodyControllerError
 from .body_world import compiled_body_world, rides_the_ground
-from .riding import GroundProbe, TerrainStop, TerrainWatch, resting_pose
+from .ground.riding import GroundProbe, TerrainStop, TerrainWatch, resting_pose
 
 __all__ = ["Episode", "RidingEpisode", "SimResult", "simulate", "validate_command"]
 
@@ -60,10 +61,10 @@ class SimResult:
     subject_failure: SubjectFailure | None = None
     goal_reached: bool = False
     end: str = ""              # "goal", "collision", "safety-stop", "subject-error", "timeout", "max-ticks", "stuck",
-                               # and on terrain (sim/riding.py) "fell", "tipped", "stuck-terrain"
+                               # and on terrain (sim/ground/riding.py) "fell", "tipped", "stuck-terrain"
     ticks: int = 0             # planner ticks run
     timings: dict[str, float] = field(default_factory=dict)  # s: physics, rays, planner, safety, harness, total
-    terrain_event: TerrainEvent | None = None   # fell, tipped over, stuck on terrain (sim/riding.py)
+    terrain_event: TerrainEvent | None = None   # fell, tipped over, stuck on terrain (sim/ground/riding.py)
 
 
 class EpisodeOver(Exception):
@@ -600,7 +601,7 @@ class RidingEpisode(Episode):
         self.setpoint = (0.0, 0.0, 0.0)
         self.stepping = (self.model, self.data, self.ctrl, self.base_qpos, self.base_qvel, self.pose_buf,
                          self.qvel_buf, range(self.spt - 1))
-        # the safety layer's view of the ground, from the 3D lidar's scans (sim/ground_safety.py)
+        # the safety layer's view of the ground, from the 3D lidar's scans (sim/ground/ground_safety.py)
         self.ground = ground_safety(scenario, self.body.drop_limit) if self.cloud is not None else None
 
     def _allocate_records(self, n_steps: int) -> None:
@@ -614,7 +615,12 @@ class RidingEpisode(Episode):
         m, d, start = self.model, self.data, self.scenario.mission.start
         z, roll, pitch = resting_pose(self.scenario, start.x, start.y, start.yaw_rad)
         self.body.place(d, start.x, start.y, start.yaw_rad, self.body.start_height(z), roll, pitch)
-        self.control = self.body.begin(d)
+        try:
+            self.control = self.body.begin(d)
+        except BodyControllerError as exc:   # the user's controller: a subject error, as a planner's
+            self._controller_failed(exc)
+        if hasattr(self.control, "deadline"):
+            self.control.deadline = self.deadline
         if self.moving is not None:
             self.moving.write(0)
         mujoco.mj_step1(m, d)
@@ -703,13 +709,17 @@ class RidingEpisode(Episode):
         state's base recorded; the contacts are looked at only when the chassis touches something."""
         m, d, ctrl, qpos7, qvel6, pose_buf, qvel_buf, inner = self.stepping
         self.setpoint = setpoint
-        self.control.command(ctrl, setpoint, self.state3d)
+        try:
+            self.control.command(ctrl, setpoint, self.state3d)
+        except BodyControllerError as exc:
+            self._controller_failed(exc)
         rows = self.moving.rows_for_tick(self.i) if self.moving is not None else None
         mocap = self.moving.mocap_pos if rows is not None else None
         sensordata, k_chassis = self.sensordata, self.chassis_sensor
         step = mujoco.mj_step
         t0 = perf_counter()
         collision = None
+        level = self.watch.level          # a face under the ground it stood on is an edge it goes over
         mujoco.mj_step2(m, d)
         i = self.i + 1
         pose_buf[i] = qpos7
@@ -719,7 +729,7 @@ class RidingEpisode(Episode):
                 mocap[:] = rows[k + 1]
             step(m, d)
             if sensordata[k_chassis] > 0.0:
-                collision = self.world.first_collision(d, self.obstacles, i * self.dt)
+                collision = self.world.first_collision(d, self.obstacles, i * self.dt, level)
                 if collision is not None:
                     break
             i += 1
@@ -730,7 +740,7 @@ class RidingEpisode(Episode):
                 mocap[:] = rows[self.spt]
             mujoco.mj_step1(m, d)
             if sensordata[k_chassis] > 0.0:
-                collision = self.world.first_collision(d, self.obstacles, i * self.dt)
+                collision = self.world.first_collision(d, self.obstacles, i * self.dt, level)
         self.i = i
         self.t_physics += perf_counter() - t0
         if collision is not None:
@@ -740,6 +750,13 @@ class RidingEpisode(Episode):
             raise SimulationDivergedError(divergence_message(self.scenario, self.data, self.i * self.dt))
 
     step_physics_moving = step_physics
+
+    def _controller_failed(self, exc: Exception) -> None:
+        """The MJCF body's controller raised, overran its tick or answered nonsense: the episode
+        ends as a subject error with its message and traceback (a record in the results file)."""
+        cause = exc.__cause__ if exc.__cause__ is not None else exc
+        self.failure = SubjectFailure(str(exc), max(0, self.tick - 1), self.i * self.dt, planner_traceback(cause))
+        raise EpisodeOver("subject-error") from None
 
     def trajectory(self) -> Trajectory:
         """The base's recorded rows as x, y, yaw and velocities in the heading frame, plus the

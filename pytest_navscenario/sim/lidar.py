@@ -19,8 +19,8 @@ import mujoco
 import numpy as np
 
 from ..scenario.model import Scenario
-from .heightfield import HFIELD_GROUP, placed_grids
-from .hfield_rays import cast_grids
+from .ground.heightfield import HFIELD_GROUP, placed_grids
+from .ground.hfield_rays import cast_grids
 from .world import MODEL_CACHE_SIZE, TWO_PI, World
 
 

@@ -25,7 +25,7 @@ import mujoco
 import numpy as np
 
 from ..scenario.model import Scenario
-from .heightfield import placed_grids
+from .ground.heightfield import placed_grids
 from .lidar import datasheet_noise, grid_hits, lidar_mask
 from .world import World
 

@@ -3,7 +3,7 @@ bodies, and their velocities for the safety layer.
 
 Positions come from ``scenario.motion`` (a pure function of time, so the verdict and the pictures
 recompute exactly the same ones); on terrain each one's base is at its own ``z`` or, without one,
-on the highest ground under its outline at that step (``scenario.ground``: a person walks up a
+on the highest ground under its outline at that step (``scenario.ground.surface``: a person walks up a
 ramp, a cart rolls off a platform's edge down onto the floor) and are computed in chunks of ``CHUNK_TICKS`` ticks in one
 vectorised call per obstacle; writing a row into ``mocap_pos`` before each physics step is then one
 numpy copy (the design notes measured a per-step numpy expression at ~4 us a step; a copy of a
@@ -62,7 +62,7 @@ class MovingObstacles:
         for j, track in enumerate(self.tracks):
             self.table[:, j, :2] = track.positions(times)
         if self.on_ground:
-            from ..scenario.ground import ground_height
+            from ..scenario.ground.surface import ground_height
             for j, outline in self.on_ground:
                 px = self.table[:, j, 0:1] + outline[None, :, 0]
                 py = self.table[:, j, 1:2] + outline[None, :, 1]

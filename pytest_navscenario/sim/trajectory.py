@@ -28,7 +28,7 @@ class SafetyStop:
     obstacle: str          # the obstacle the predicted sweep would have hit ("" for the ground)
     speed: float           # robot speed (m/s) when halted
     ground: str = ""       # the ground it would have driven into, as a phrase ("a drop of 0.50 m
-                           # ahead"): the ground layer (sim/ground_safety.py) of a 3D lidar
+                           # ahead"): the ground layer (sim/ground/ground_safety.py) of a 3D lidar
 
 
 @dataclass(frozen=True)

@@ -234,7 +234,7 @@ def build_spec(scenario: Scenario) -> mujoco.MjSpec:
     _add_obstacles(spec, scenario)
     if scenario.robot.lidar3d is not None:   # the floor a 3D lidar sees (it touches nothing)
         add_floor_plane(spec, contype=0, conaffinity=0)
-    # the robot's contacts at every step, for the batch engine's physics (sim/cohort.py: a
+    # the robot's contacts at every step, for the batch engine's physics (sim/batching/cohort.py: a
     # tick stepped in one mujoco.rollout call is looked at only when it had a contact); a
     # sensor never changes the dynamics
     spec.add_sensor(name=CONTACT_SENSOR, type=mujoco.mjtSensor.mjSENS_CONTACT,

@@ -9,7 +9,7 @@ and optionally ``name`` / ``version`` string attributes (copied into the results
 Angles here are in **radians** (YAML scenarios use degrees; see the scenario model).
 
 A planner may also implement the **batch protocol** (``BatchPlanner``), so that the harness can
-run many episodes in lockstep with one planner call per tick for all of them (sim/batch.py)::
+run many episodes in lockstep with one planner call per tick for all of them (sim/batching/batch.py)::
 
     reset_batch(self, scenarios: Sequence[Scenario]) -> None
         # once per batch; episode i is scenarios[i] (its id)

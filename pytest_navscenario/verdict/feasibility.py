@@ -156,7 +156,7 @@ def _terrain(scenario: Scenario, stops, inflation: float) -> tuple:
     standing there)."""
     if not scenario.terrain:
         return ()
-    from ..scenario.crossing import body_capability
+    from ..scenario.ground.crossing import body_capability
     from .paths import inflated_polygon
     from .traversable import barriers, lenient
 
@@ -180,7 +180,7 @@ def _terrain_words(scenario: Scenario, a, b) -> str | None:
     the barriers the obstacle-free way from a to b crosses; None without terrain barriers."""
     if not scenario.terrain:
         return None
-    from ..scenario.crossing import body_capability
+    from ..scenario.ground.crossing import body_capability
     from .paths import inflated_polygon, path_through_discs
     from .traversable import barriers
 

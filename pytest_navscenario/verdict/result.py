@@ -82,9 +82,17 @@ class EpisodeResult:
     timings: dict[str, float] = field(default_factory=dict)  # s: physics, rays, planner, harness
     terrain_event: TerrainEvent | None = None   # fell, tipped over or stuck on terrain
     left_running: tuple[str, ...] = ()          # processes the planner started and left running ("pid N: cmd")
+    error: str | None = None                    # the episode never finished: the exception's type (WorkerDied, ...)
 
     @property
     def passed(self) -> bool:
         return self.outcome.passed
 
 
+def headline(outcome: Any, message: str) -> str:
+    """"outcome: message", a failure's first line, without saying the outcome twice: some
+    messages carry it themselves ("timeout: stuck on terrain ...") since they are read alone too."""
+    outcome = str(outcome)
+    if not message:
+        return outcome
+    return message if message.startswith(f"{outcome}:") else f"{outcome}: {message}"

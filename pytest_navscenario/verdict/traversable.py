@@ -1,6 +1,6 @@
 """What the robot's body cannot cross on the scenario's terrain, as obstacles for the path search.
 
-The rule is the legged body's (``scenario/crossing.py``), with the body's ``Capability``
+The rule is the legged body's (``scenario/ground/crossing.py``), with the body's ``Capability``
 (``crossing.body_capability``: a legged body's declared limits, a wheeled body's estimated ones):
 
 * a *face* (where the ground jumps: a step's riser, a platform's edge, a pit's wall, a ramp's
@@ -12,7 +12,7 @@ The rule is the legged body's (``scenario/crossing.py``), with the body's ``Capa
 * a pit is enclosed by its walls: a hole.
 
 Ramps, steps, platforms and pits are exact (their faces are found along their edges, 5 cm apart,
-from ``scenario.ground``'s heights on either side); rough ground and height files are checked on
+from ``scenario.ground.surface``'s heights on either side); rough ground and height files are checked on
 their grid (a cell where the ground jumps by more than ``max_step`` to a neighbour, and connected
 cells steeper than ``max_slope`` whose heights span more than ``max_step``).
 
@@ -30,8 +30,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..scenario import ground
-from ..scenario.crossing import Capability, body_capability, steep_cells, steep_piece
+from ..scenario.ground import surface as ground
+from ..scenario.ground.crossing import Capability, body_capability, steep_cells, steep_piece
 from ..scenario.model import BoxObstacle, Scenario
 
 EDGE_SPACING = 0.05     # m between the points along an element's edge where faces are measured
@@ -144,7 +144,7 @@ def _grid_barriers(scenario: Scenario, cap: Capability) -> list[BoxObstacle]:
     """Rough ground and height files: barrier cells on the element's own grid, as boxes (a run
     of cells along a row is one box)."""
     out = []
-    from ..scenario.heightmap import height_grid
+    from ..scenario.ground.heightmap import height_grid
 
     for i in ground.grid_elements(scenario.terrain):
         el = scenario.terrain[i]

@@ -74,9 +74,24 @@ def test_only_the_item_whose_episode_killed_the_worker_is_charged(project: pytes
     result.assert_outcomes(passed=3, failed=1)
     assert "scenarios/doomed.yaml::doomed - RemoteEpisodeError: WorkerDied" in out, out[-3000:]
     assert "died 3 times (last: exit code 3;" in out
-    records = read_results(project.path / "r.jsonl")
-    assert sorted(r["scenario"] for r in records) == ["a", "bystander", "e"]
-    assert all(r["outcome"] == "success" for r in records)
+    records = {r["scenario"]: r for r in read_results(project.path / "r.jsonl")}
+    assert sorted(records) == ["a", "bystander", "doomed", "e"]
+    assert all(records[n]["outcome"] == "success" for n in ("a", "bystander", "e"))
+    assert_crash_recorded(records["doomed"], out)
+
+
+def assert_crash_recorded(record: dict, out: str) -> None:
+    """Issue 32: the item whose worker died has a record (before: none, and the summary's rate
+    table read "n 3, success 100 %") saying what ended it, and it counts in the rates."""
+    assert record["outcome"] == "subject-error" and record["error"] == "WorkerDied", record
+    assert record["message"].startswith("the episode did not finish (WorkerDied): the worker process "
+                                        "running this episode died 3 times"), record["message"]
+    assert record["metrics"]["min_clearance"] is None and record["passed"] is False
+    rates = out[out.index("outcome rates"):].splitlines()
+    assert rates[1].split() == ["family", "n", "success", "safety-stop", "timeout", "collision",
+                                "subject-error"], rates[:4]
+    assert rates[3].split()[1:3] == ["4", "75.0%"], rates[:4]
+    assert "wrote 4 record(s)" in out
 
 
 def test_a_serial_run_survives_a_planner_that_ends_its_process_with_nav_isolate(project: pytest.Pytester):
@@ -86,7 +101,9 @@ def test_a_serial_run_survives_a_planner_that_ends_its_process_with_nav_isolate(
     assert "episodes run on 1 local worker process(es)" in out and "(--nav-isolate)" in out
     result.assert_outcomes(passed=3, failed=1)
     assert "died 3 times (last: exit code 3;" in out, out[-3000:]
-    assert len(read_results(project.path / "r.jsonl")) == 3
+    records = {r["scenario"]: r for r in read_results(project.path / "r.jsonl")}
+    assert len(records) == 4
+    assert_crash_recorded(records["doomed"], out)
 
 
 @pytest.mark.heavy
@@ -128,3 +145,19 @@ def test_a_pool_runs_thousands_of_jobs_without_hanging(tmp_path):
     done = subprocess.run([sys.executable, "quick.py"], cwd=tmp_path, capture_output=True, text=True,
                           timeout=120, env=dict(os.environ))
     assert done.returncode == 0 and done.stdout.strip() == "6000", done.stderr[-2000:]
+
+
+def test_an_item_whose_xdist_worker_died_has_a_record_and_counts(project: pytest.Pytester):
+    """Under xdist's own distribution (``--dist load``, or a run with Python tests beside the
+    scenarios) the planner's os._exit ends the xdist worker itself: before, xdist's crash report
+    carried no record, so the results file had 3 records for 4 items and the rates left it out."""
+    result = run(project, "-n", "2", "--dist", "load")
+    out = result.stdout.str()
+    result.assert_outcomes(passed=3, failed=1)
+    records = {r["scenario"]: r for r in read_results(project.path / "r.jsonl")}
+    assert sorted(records) == ["a", "bystander", "doomed", "e"], out[-3000:]
+    doomed = records["doomed"]
+    assert doomed["outcome"] == "subject-error" and doomed["error"] == "WorkerCrashed", doomed
+    assert doomed["nodeid"] == "scenarios/doomed.yaml::doomed" and doomed["family"] == "scenarios"
+    assert doomed["message"].startswith("the episode did not finish (WorkerCrashed): the pytest-xdist worker")
+    assert "wrote 4 record(s)" in out

@@ -185,6 +185,34 @@ def test_side_by_side_reruns_regressions_with_both_subjects(tmp_path, capsys):
     assert "moved.yaml changed since the run" in captured.err
 
 
+def test_side_by_side_says_its_cap_and_how_to_raise_it(tmp_path, capsys):
+    """Issue 32 item 3: "10 of 10 side-by-side plot(s)" for 12 regressions hid the other two."""
+    from pytest_navscenario.scenario.loader import loads_scenario
+    from pytest_navscenario.scenario.model import content_hash
+
+    text = "version: 1\nmission: {start: {x: 0, y: 0}, goal: {x: 1.5, y: 0}, timeout: 5}\n"
+    (tmp_path / "s").mkdir()
+    a_recs = []
+    for name in ("p", "q", "r"):
+        (tmp_path / "s" / f"{name}.yaml").write_text(text)
+        a_recs.append(dict(rec(f"s/{name}.yaml::{name}", "success", h=content_hash(loads_scenario(text)),
+                               subject="dwa", spec="dwa"), path=f"s/{name}.yaml"))
+    b_recs = [dict(r, outcome="collision") for r in a_recs]
+    a, b = tmp_path / "a.jsonl", tmp_path / "b.jsonl"
+    write_results(a, a_recs)
+    write_results(b, b_recs)
+    args = ["compare", str(a), str(b), "--side-by-side", str(tmp_path / "sbs"), "--root", str(tmp_path)]
+    assert main([*args, "--max-plots", "2"]) == 0
+    out = capsys.readouterr().out
+    assert "2 of 2 side-by-side plot(s) written" in out
+    assert ("side-by-side: B broke or fixed 3 scenarios; plotted the first 2 (--max-plots 2, default 10: "
+            "broken ones first); --max-plots 3 or 0 plots them all") in out
+    assert main([*args, "--max-plots", "0"]) == 0
+    out = capsys.readouterr().out
+    assert "3 of 3 side-by-side plot(s) written" in out and "plotted the first" not in out
+    assert len(list((tmp_path / "sbs").glob("*.png"))) == 3
+
+
 def test_reproduce_commands_use_the_recorded_spec_never_the_display_name(files, tmp_path, capsys):
     """Issue 23 item 2: a planner named "careful" ran as --nav-subject=mynav:Careful."""
     broke = dict(BASE, **{"scenarios/boxes/b2.yaml::b2": "safety-stop"})

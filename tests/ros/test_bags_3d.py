@@ -94,7 +94,7 @@ def test_a_bag_of_a_robot_on_terrain_has_its_3d_pose_and_the_ground(tmp_path):
     from test_sensors_riding import RAMP, Straight
 
     from pytest_navscenario.ros.bag_writer import TERRAIN_TOPIC
-    from pytest_navscenario.scenario import ground
+    from pytest_navscenario.scenario.ground import surface as ground
 
     s = loads_scenario(RAMP.replace("  lidar3d: {rings: 16, beams: 360, mount_z: 0.5}\n", ""))
     assert s.robot.lidar3d is None

@@ -78,3 +78,64 @@ def test_a_long_aerialist_mission_gets_a_timeout_it_can_be_driven_in(tmp_path, c
     assert main(["import", "aerialist", str(DATA / "aerialist_mission1.yaml"), "--start=0,0,90", "--goal=0,53,90",
                  "--timeout", "80", "-o", str(tmp_path / "given.yaml")]) == 0
     assert load_scenario(tmp_path / "given.yaml").mission.timeout == 80.0
+
+
+@pytest.fixture(scope="module")
+def own_bag(tmp_path_factory):
+    """A bag this tool wrote (--nav-bag's writer) of dwa on boxes2: its /navscenario/scenario holds
+    the run's robot, a 0.9 x 0.5 m box with an omnidirectional drive."""
+    from pytest_navscenario.harness.runner import run_scenario
+    from pytest_navscenario.ros.bag_writer import write_episode_bag
+
+    result = run_scenario(load_scenario(SCENARIOS / "boxes2.yaml"), "dwa")
+    return write_episode_bag(result, tmp_path_factory.mktemp("own") / "ep"), result.scenario.robot
+
+
+def test_from_bag_of_a_bag_of_ours_keeps_the_robot_it_ran(own_bag, tmp_path, capsys):
+    """Issue 32: the seed had the default 0.15 m circle and a differential drive."""
+    bag, robot = own_bag
+    assert robot.footprint == Footprint(shape="box", length=0.9, width=0.5) and robot.drive == "omni"
+    out = tmp_path / "seed.yaml"
+    assert main(["from-bag", str(bag), "-o", str(out), "--no-plot"]) == 0
+    seed = load_scenario(out)
+    assert seed.robot.footprint == robot.footprint and seed.robot.drive == "omni"
+    assert seed.robot.limits == robot.limits and seed.robot.lidar == robot.lidar
+    text = capsys.readouterr().out
+    assert "footprint: the scenario the bag recorded (/navscenario/scenario: a 0.9 x 0.5 m box, omni drive)" in text
+
+
+def test_from_bag_takes_robot_footprint_and_drive_as_the_other_importers(own_bag, tmp_path, capsys):
+    bag, _ = own_bag
+    out = tmp_path / "seed.yaml"
+    assert main(["from-bag", str(bag), "-o", str(out), "--no-plot", "--footprint", "circle:0.3",
+                 "--drive", "diff"]) == 0
+    seed = load_scenario(out)
+    assert seed.robot.footprint == Footprint(shape="circle", radius=0.3) and seed.robot.drive == "diff"
+    robot_file = tmp_path / "robot.yaml"
+    robot_file.write_text("robot:\n  footprint: {shape: box, length: 0.6, width: 0.4}\n  drive: diff\n"
+                          "  limits: {max_speed: 0.7}\n")
+    out2 = tmp_path / "seed2.yaml"
+    assert main(["from-bag", str(bag), "-o", str(out2), "--no-plot", "--robot", str(robot_file)]) == 0
+    seed2 = load_scenario(out2)
+    assert seed2.robot.footprint == Footprint(shape="box", length=0.6, width=0.4)
+    assert (seed2.robot.drive, seed2.robot.limits.max_speed) == ("diff", 0.7)
+    capsys.readouterr()
+    assert main(["from-bag", str(bag), "-o", str(tmp_path / "x.yaml"), "--footprint", "circle:0.3",
+                 "--robot-radius", "0.2"]) != 0
+    assert "give one (--robot-radius R is --footprint circle:R)" in capsys.readouterr().err
+
+
+def test_an_import_into_a_folder_with_no_project_writes_the_schema_its_modeline_names(tmp_path):
+    """Issue 32: the seed's first line named .navscenario/scenario-v1.json, which nobody wrote."""
+    from pytest_navscenario.scenario.json_schema import schema_text
+    from pytest_navscenario.scenario.modeline import PREFIX, project_root
+
+    folder = tmp_path / "seeds"
+    folder.mkdir()
+    out = folder / "room.yaml"
+    assert project_root(out) is None                                   # a bare folder
+    assert main(["from-map", str(_map(tmp_path)), "--start=1,1,0", "--goal=5,3,0", "-o", str(out)]) == 0
+    first = out.read_text().splitlines()[0]
+    assert first.startswith(PREFIX)
+    named = folder / first[len(PREFIX):]
+    assert named.is_file() and named.read_text() == schema_text()

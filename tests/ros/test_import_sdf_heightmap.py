@@ -11,7 +11,7 @@ import pytest
 from PIL import Image
 
 from pytest_navscenario.ros.world_import import sdf_obstacles
-from pytest_navscenario.scenario.heightmap import HeightGrid, load_heightfield, read_height_file
+from pytest_navscenario.scenario.ground.heightmap import HeightGrid, load_heightfield, read_height_file
 
 
 def _world(folder: Path, models: str) -> Path:
@@ -70,7 +70,7 @@ def test_the_imported_grid_is_the_one_gazebo_builds(tmp_path):
     """Samples of the scenario's grid equal Gazebo's heights at the image's pixels."""
     from types import SimpleNamespace
 
-    from pytest_navscenario.scenario.heightmap import height_grid
+    from pytest_navscenario.scenario.ground.heightmap import height_grid
 
     img = (np.arange(9 * 9).reshape(9, 9) * 3).astype(np.uint8)
     img[4, 4] = 0
@@ -99,3 +99,27 @@ def test_the_command_line_writes_a_seed_that_loads_with_its_heightmap(tmp_path, 
     (hf,) = seed.terrain
     assert hf.kind == "heightfield" and hf.digest and (out.parent / hf.file).is_file()
     assert seed.robot.body.kind == "wheeled"
+
+
+@pytest.mark.parametrize("how", ["absolute", "file", "model", "dotdot", "symlink"])
+def test_a_heightmap_from_outside_the_worlds_folder_is_refused_as_a_mesh_is(tmp_path, how):
+    from pytest_navscenario.ros.world_import import WorldImportError
+
+    outside = tmp_path / "secret"
+    outside.mkdir()
+    Image.fromarray(np.full((9, 9), 7, dtype=np.uint8)).save(outside / "h.png")
+    world = tmp_path / "a" / "b"
+    world.mkdir(parents=True)
+    if how == "symlink":
+        (world / "h.png").symlink_to(outside / "h.png")
+    uri = {"absolute": str(outside / "h.png"), "file": f"file://{outside / 'h.png'}",
+           "model": "model://../../secret/h.png", "dotdot": "../../secret/h.png", "symlink": "h.png"}[how]
+    for what, models in [("heightmap", _heightmap(uri)),
+                         ("mesh", _heightmap(uri).replace("<heightmap>", "<mesh>").replace("</heightmap>", "</mesh>")
+                          .replace("h.png", "h.stl"))]:
+        if what == "mesh":
+            (outside / "h.stl").write_text("solid s\nendsolid s\n")
+            if how == "symlink":
+                (world / "h.stl").symlink_to(outside / "h.stl")
+        with pytest.raises(WorldImportError, match=f"{what} .* outside the world's folder"):
+            sdf_obstacles(_world(world, models))

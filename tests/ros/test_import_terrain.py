@@ -66,7 +66,10 @@ def test_the_crate_is_the_only_obstacle_and_the_guesses_are_said(seed):
     robot = seed.scenario.robot
     assert robot.body.kind == "wheeled" and robot.lidar3d is not None and robot.lidar3d.mount_z == 0.5
     text = "\n".join(seed.notes)
-    assert "robot.body: wheeled (a guess" in text and "heightfield 'ground'" in text
+    # the bag is ours: its /navscenario/scenario says the body (no guess), --robot-radius the footprint
+    assert "robot.body: wheeled (a guess" not in text and "heightfield 'ground'" in text
+    assert "from the scenario the bag recorded (/navscenario/scenario" in text
+    assert robot.footprint.shape == "circle" and robot.footprint.radius == 0.45
     assert "pit 'ground-hole1'" in text and "were that ground seen in the obstacle band" in text
 
 

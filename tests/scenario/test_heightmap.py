@@ -7,8 +7,8 @@ import pytest
 from PIL import Image
 
 from pytest_navscenario.core.errors import ScenarioError
-from pytest_navscenario.scenario import heightmap
-from pytest_navscenario.scenario.heightmap import HeightmapError, height_grid, load_heightfield
+from pytest_navscenario.scenario.ground import heightmap
+from pytest_navscenario.scenario.ground.heightmap import HeightmapError, height_grid, load_heightfield
 from pytest_navscenario.scenario.model import Scenario
 from pytest_navscenario.scenario.terrain import Heightfield, Rough
 

@@ -330,9 +330,9 @@ RUN_ONLY = ("must be greater than", "must not be below", "physics steps", "whole
             "does not increase", "does not exist", "unknown mesh format", "leaves the scenario's folder",
             "is an absolute path", "is not a file", "cannot be read",
             "is faster than the simulation can follow",   # a mover's speed against its size, the robot's, the timestep
-            # a heightfield's file and its stretch, a rough patch's grid (scenario/heightmap.py)
+            # a heightfield's file and its stretch, a rough patch's grid (scenario/ground/heightmap.py)
             "unknown heightfield format", "in the proportion of its columns and rows", "needs a grid of",
-            # a wheeled body's wheels against its footprint, its mass centre against its limits (scenario/chassis.py)
+            # a wheeled body's wheels against its footprint, its mass centre against its limits (scenario/ground/chassis.py)
             "leave no track", "stick out of", "no room for ball casters", "do not fit one behind the other",
             "would tip over", "would roll over",
             # an obstacle's z against the ground under it (scenario/ground.obstacle_problem)

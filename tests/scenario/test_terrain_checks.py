@@ -4,7 +4,7 @@ drive omni: each a ScenarioError naming the field and the fix (check_scenario, r
 import pytest
 
 from pytest_navscenario.core.errors import ScenarioError
-from pytest_navscenario.scenario import ground
+from pytest_navscenario.scenario.ground import surface as ground
 from pytest_navscenario.scenario.loader import check_scenario
 from pytest_navscenario.scenario.model import Mission, Pose, Robot, Scenario
 from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, Steps, WheeledBody

@@ -7,6 +7,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import mujoco
 import pytest
 
 from test_search import SEED_YAML
@@ -47,6 +48,7 @@ def test_a_search_under_the_realistic_sensor_model_freezes_failures_that_hold(pr
     scenario = load_scenario(frozen)
     assert (scenario.robot.lidar.noise_sigma, scenario.robot.lidar.dropout) == (0.02, 0.01)   # the model, written
     assert scenario.provenance["failure_probability"] == 1.0
+    assert scenario.provenance["mujoco_version"] == mujoco.__version__          # the release that found it
     assert "crate.yaml" not in {p.name for p in (project.path / "scenarios").glob("*.yaml")} or \
         "noise_sigma" not in (project.path / "scenarios" / "crate.yaml").read_text()        # the seed unchanged
     html = (project.path / "search.html").read_text()
@@ -56,9 +58,12 @@ def test_a_search_under_the_realistic_sensor_model_freezes_failures_that_hold(pr
     text = held.stdout.str()
     assert "1 of 1 frozen failure(s) still hold:" in text and "fails in 5/5 runs" in text, text
     assert "the search measured 1.00 (0.40-1.00) over 4 run(s): holds" in text
+    # found under another MuJoCo release: a failure that no longer holds says so
+    frozen.write_text(re.sub(r"mujoco_version: .*", "mujoco_version: 3.9.0", frozen.read_text()))
     later = run(project, "scenarios/regressions", "--nav-subject=straight_planner:Careful", "--nav-repeat", "5")
     text = later.stdout.str()
     assert "0 of 1 frozen failure(s) still hold; 1 no longer hold" in text, text
+    assert f"it was recorded under MuJoCo 3.9.0, this run simulates with MuJoCo {mujoco.__version__}" in text, text
     assert re.search(r"fails in [0-3]/5 runs .*: (NO LONGER HOLDS \(below the threshold 0\.9\)|FIXED)", text), text
 
 

@@ -45,3 +45,36 @@ class Exits:
     def control(self, command, model, data):
         import sys
         sys.exit(3)
+
+
+class Sleeps(Cart):
+    """Sleeps in control() far longer than any tick limit (a controller that hangs)."""
+
+    def control(self, command, model, data):
+        import time
+        time.sleep(30)
+
+
+class Interrupts(Cart):
+    """Raises its own KeyboardInterrupt (not the user's Ctrl-C)."""
+
+    def control(self, command, model, data):
+        raise KeyboardInterrupt("my own")
+
+
+class Forks(Cart):
+    """Starts a child process that outlives its episode."""
+
+    def reset(self, model, data):
+        import subprocess
+        super().reset(model, data)
+        subprocess.Popen(["sleep", "60"])
+
+
+def make_cart():
+    """A zero-argument factory function (accepted as a class is)."""
+    return Cart()
+
+
+from os import fork  # noqa: E402  (a builtin imported into the user's module: refused all the same)
+from shutil import rmtree  # noqa: E402,F401  (a standard-library function: refused)

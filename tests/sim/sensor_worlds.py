@@ -10,8 +10,8 @@ import mujoco
 import numpy as np
 
 from pytest_navscenario.scenario.loader import loads_scenario
-from pytest_navscenario.scenario.heightmap import height_grid
-from pytest_navscenario.sim.heightfield import add_heightfield
+from pytest_navscenario.scenario.ground.heightmap import height_grid
+from pytest_navscenario.sim.ground.heightfield import add_heightfield
 from pytest_navscenario.sim.world import World
 
 ROBOT_GROUP = 5

@@ -1,4 +1,4 @@
-"""The CPU batch engine (sim/batch.py, lockstep.py, cohort.py): episodes stepped in lockstep with one
+"""The CPU batch engine (sim/batching/batch.py, lockstep.py, cohort.py): episodes stepped in lockstep with one
 planner call a tick end at different ticks with exactly the trajectories and endings they have
 alone, and a failing planner call fails the episodes of that call only (issue 27)."""
 from __future__ import annotations
@@ -15,7 +15,7 @@ from pytest_navscenario.harness.runner import run_scenario
 from pytest_navscenario.scenario.loader import load_scenario
 from pytest_navscenario.scenario.model import BoxObstacle, CylinderObstacle, Mission, Pose, Robot, Scenario
 from pytest_navscenario.scenario.terrain import WheeledBody
-from pytest_navscenario.sim.batch import BatchEpisode, batch_engine, simulate_batch
+from pytest_navscenario.sim.batching.batch import BatchEpisode, batch_engine, simulate_batch
 from pytest_navscenario.sim.episode import simulate
 from pytest_navscenario.subjects.protocol import Command
 

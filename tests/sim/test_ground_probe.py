@@ -1,12 +1,12 @@
-"""The episode's ground probe (sim/riding.GroundProbe, asked every tick whether the body stands,
+"""The episode's ground probe (sim/ground/riding.GroundProbe, asked every tick whether the body stands,
 fell or is stuck) answers exactly what scenario/ground.ground_height answers, bit for bit, over
 ramps, steps, pits, rough ground and height grids, and on their edges."""
 import numpy as np
 
-from pytest_navscenario.scenario import ground
+from pytest_navscenario.scenario.ground import surface as ground
 from pytest_navscenario.scenario.model import Mission, Pose, Robot, Scenario
 from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, Rough, Steps, WheeledBody
-from pytest_navscenario.sim.riding import GroundProbe
+from pytest_navscenario.sim.ground.riding import GroundProbe
 
 
 def scene(terrain):

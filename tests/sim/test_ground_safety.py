@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from pytest_navscenario.scenario.terrain import Lidar3D, WheeledBody
-from pytest_navscenario.sim.ground_safety import GroundLimits, GroundSafety, limits_of
+from pytest_navscenario.sim.ground.ground_safety import GroundLimits, GroundSafety, limits_of
 from pytest_navscenario.sim.lidar3d import CloudLidar, mount_rotation
 
 from sensor_worlds import build, scenario
@@ -68,7 +68,7 @@ def test_the_bodys_limits():
 
 
 def test_rough_ground_the_body_can_ride_does_not_halt_it():
-    from pytest_navscenario.scenario.heightmap import height_grid
+    from pytest_navscenario.scenario.ground.heightmap import height_grid
     from pytest_navscenario.scenario.terrain import Rough
 
     rough = Rough("yard", 4.0, 0.0, length=10.0, width=6.0, amplitude=0.08, wavelength=1.0, seed=2)

@@ -6,9 +6,9 @@ import mujoco
 import numpy as np
 import pytest
 
-from pytest_navscenario.scenario.heightmap import height_grid
+from pytest_navscenario.scenario.ground.heightmap import height_grid
 from pytest_navscenario.scenario.terrain import Rough
-from pytest_navscenario.sim.heightfield import HFIELD_GROUP, add_heightfield
+from pytest_navscenario.sim.ground.heightfield import HFIELD_GROUP, add_heightfield
 
 
 @pytest.mark.parametrize("yaw, z", [(0.0, 0.0), (30.0, 0.4)])

@@ -8,10 +8,10 @@ import mujoco
 import numpy as np
 import pytest
 
-from pytest_navscenario.scenario.heightmap import HeightGrid, height_grid
+from pytest_navscenario.scenario.ground.heightmap import HeightGrid, height_grid
 from pytest_navscenario.scenario.terrain import Heightfield, Rough
-from pytest_navscenario.sim.heightfield import add_heightfield, placed_grid
-from pytest_navscenario.sim.hfield_rays import cast_grids
+from pytest_navscenario.sim.ground.heightfield import add_heightfield, placed_grid
+from pytest_navscenario.sim.ground.hfield_rays import cast_grids
 
 TOLERANCE = 1e-5    # m
 
@@ -120,7 +120,7 @@ def test_rays_that_cannot_come_down_to_the_grid_are_left_out_with_every_answer_u
     """A tilted 2D lidar fan and a 16-ring scan from above a rough patch: the cast that first leaves
     out the rays starting above the grid's top that do not come down to it within range gives the
     same distances, bit for bit, as casting every ray."""
-    from pytest_navscenario.sim import hfield_rays
+    from pytest_navscenario.sim.ground import hfield_rays
 
     element = Rough("yard", 1.0, 0.5, length=6.0, width=5.0, amplitude=0.1, wavelength=0.6, seed=7, yaw=20.0)
     placed = placed_grid(element, height_grid(element))

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from pytest_navscenario.scenario.heightmap import height_grid
+from pytest_navscenario.scenario.ground.heightmap import height_grid
 from pytest_navscenario.scenario.terrain import Lidar3D, Rough
 from pytest_navscenario.sim.lidar import Lidar, sensor_origin
 from pytest_navscenario.sim.lidar3d import CloudLidar, mount_rotation, sensor_directions

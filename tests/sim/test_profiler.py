@@ -10,10 +10,10 @@ import threading
 import mujoco
 
 import pytest_navscenario.sim.episode as episode_module
-import pytest_navscenario.sim.lockstep as lockstep_module
+import pytest_navscenario.sim.batching.lockstep as lockstep_module
 from pytest_navscenario.scenario.loader import load_scenario
 from pytest_navscenario.sim import profiler
-from pytest_navscenario.sim.batch import BatchEpisode, simulate_batch
+from pytest_navscenario.sim.batching.batch import BatchEpisode, simulate_batch
 from pytest_navscenario.sim.episode import simulate
 from pytest_navscenario.subjects.planners.dwa import DynamicWindowPlanner
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pytest_navscenario.scenario.crossing import Capability, walk
+from pytest_navscenario.scenario.ground.crossing import Capability, walk
 from pytest_navscenario.scenario.model import BoxObstacle, Footprint, Mission, Pose, Robot, Safety, Scenario
 from pytest_navscenario.scenario.terrain import LeggedBody, Pit, Platform, Ramp, Steps, WheeledBody
 from pytest_navscenario.sim.episode import simulate
@@ -142,7 +142,7 @@ def test_moving_obstacles_walk_on_the_ground_or_at_their_own_height():
     keeps it; the robot standing beside sees the first where it is."""
     import mujoco
 
-    from pytest_navscenario.scenario import ground
+    from pytest_navscenario.scenario.ground import surface as ground
     from pytest_navscenario.scenario.model import CylinderObstacle, Motion
     from pytest_navscenario.sim.body_world import compiled_body_world
     from pytest_navscenario.sim.moving import MovingObstacles

@@ -3,7 +3,9 @@ controller of theirs (tests/sim/cart_controller.py): it rides the terrain (up a 
 meets obstacles, and a file that MuJoCo cannot load, a model without a free base, a controller that
 cannot be found or breaks the protocol are clear errors naming the file and the field."""
 import math
+import re
 import shutil
+import time
 import sys
 from pathlib import Path
 
@@ -112,17 +114,52 @@ def test_a_controller_that_cannot_be_found_or_breaks_the_protocol(tmp_path):
     with pytest.raises(ScenarioError, match=r"robot.body.controller: body controller 'no_such_mod:Cart': cannot "
                                             r"import module 'no_such_mod'"):
         simulate(load_scenario(write(tmp_path, CART_BODY.replace("cart_controller", "no_such_mod"))), Straight(), 0)
-    with pytest.raises(BodyControllerError, match=r"'cart_controller:TooFew' returned 1 controls \(the model has 2"):
-        simulate(load_scenario(write(tmp_path, CART_BODY.replace("Cart", "TooFew"))), Straight(), 0)
-    with pytest.raises(BodyControllerError, match="raised RuntimeError: motor driver offline"):
-        simulate(load_scenario(write(tmp_path, CART_BODY.replace("Cart", "Raises"))), Straight(), 0)
-    with pytest.raises(BodyControllerError, match=r"'cart_controller:ReturnsText' returned 'full ahead' \(a str\)"):
-        simulate(load_scenario(write(tmp_path, CART_BODY.replace("Cart", "ReturnsText"))), Straight(), 0)
+    for name, message in [("TooFew", r"'cart_controller:TooFew' returned 1 controls \(the model has 2"),
+                          ("Raises", "raised RuntimeError: motor driver offline"),
+                          ("ReturnsText", r"'cart_controller:ReturnsText' returned 'full ahead' \(a str\)")]:
+        res = simulate(load_scenario(write(tmp_path, CART_BODY.replace("Cart", name))), Straight(), 0)
+        assert res.end == "subject-error"                 # a subject error of its episode, as a planner's
+        assert re.search(message, res.subject_failure.message)
+    assert "motor driver offline" in simulate(load_scenario(write(tmp_path, CART_BODY.replace("Cart", "Raises"))),
+                                              Straight(), 0).subject_failure.traceback
 
 
 def test_a_controller_calling_sys_exit_ends_its_episode_not_the_run(tmp_path):
-    with pytest.raises(BodyControllerError, match=r"'cart_controller:Exits' raised SystemExit: 3"):
-        simulate(load_scenario(write(tmp_path, CART_BODY.replace("Cart", "Exits"))), Straight(), 0)
+    res = simulate(load_scenario(write(tmp_path, CART_BODY.replace("Cart", "Exits"))), Straight(), 0)
+    assert res.end == "subject-error"
+    assert "'cart_controller:Exits' raised SystemExit: 3" in res.subject_failure.message
+    res = simulate(load_scenario(write(tmp_path, CART_BODY.replace("Cart", "Interrupts"))), Straight(), 0)
+    assert "raised KeyboardInterrupt: my own" in res.subject_failure.message
+
+
+@pytest.mark.parametrize("spec,why", [
+    ("os:fork", "not a class or function"), ("os:abort", "not a class or function"),
+    ("signal:pause", "not a class or function"), ("cart_controller:fork", "not a class or function"),
+    ("shutil:rmtree", "the standard library, an installed package"),
+    ("cart_controller:rmtree", "the standard library, an installed package"),
+    ("subprocess:Popen", "the standard library, an installed package"),
+    ("numpy:ndarray", "not a class or function"),   # a C class: not Python code of the user's
+    ("pytest:main", "the standard library, an installed package")])
+def test_a_controller_must_be_a_class_or_function_of_the_users_own_code(tmp_path, spec, why):
+    path = write(tmp_path, CART_BODY.replace("cart_controller:Cart", spec))
+    with pytest.raises(ScenarioError) as err:
+        simulate(load_scenario(path), Straight(), 0)
+    assert err.value.field == "robot.body.controller" and err.value.line == 6
+    assert why in str(err.value) or "is defined in" in str(err.value)
+    assert "fix: name a class or function of your own module" in str(err.value)
+
+
+def test_a_factory_function_of_the_users_module_is_a_controller(tmp_path):
+    res = simulate(load_scenario(write(tmp_path, CART_BODY.replace("Cart", "make_cart"), RAMP)), Straight(), 0)
+    assert res.end == "goal"
+
+
+def test_a_controller_that_sleeps_is_bounded_by_the_tick_limit(tmp_path):
+    t0 = time.monotonic()
+    res = simulate(load_scenario(write(tmp_path, CART_BODY.replace("Cart", "Sleeps"))), Straight(), 0, tick_limit=0.2)
+    assert time.monotonic() - t0 < 10
+    assert res.end == "subject-error"
+    assert "per-tick limit of 0.2 s" in res.subject_failure.message and "control()" in res.subject_failure.message
 
 
 def test_mujocos_fatal_error_ends_the_episode_with_the_cause_and_the_size_memory_that_fixes_it(tmp_path):

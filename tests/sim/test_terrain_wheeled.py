@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from pytest_navscenario.core.errors import ScenarioError
-from pytest_navscenario.scenario import ground
+from pytest_navscenario.scenario.ground import surface as ground
 from pytest_navscenario.scenario.model import BoxObstacle, Footprint, Mission, Pose, Robot, Scenario
 from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, Steps, WheeledBody
 from pytest_navscenario.sim.episode import simulate
@@ -108,6 +108,36 @@ def test_the_chassis_driving_into_a_platform_face_is_a_collision_with_the_terrai
     res = simulate(scene([Platform("wall", 4.0, 0.0, length=1.0, width=3.0, height=0.6)],
                          body=WheeledBody(clearance=0.1)), Straight(), 0)
     assert res.end == "collision" and res.collision.terrain and res.collision.obstacle == "platform 'wall'"
+
+
+# A frozen loading-dock failure (tutorial 5's search): dwa drives along the dock 5 cm inside its
+# edge, a wheel drops off, the chassis rolls over the edge. MuJoCo 4.0.0 called it a tip-over,
+# 4.0.1 a "collision with the face of platform 'dock'" (the chassis on the edge's corner, 0.06 s
+# before the roll passed 45 deg): the verdict must not hang on which comes first.
+DOCK_EDGE = """version: 1
+robot:
+  footprint: {shape: box, length: 0.9, width: 0.5}
+  drive: diff
+  body: {type: wheeled}
+mission: {start: {x: 0, y: 0}, goal: {x: 10, y: 0}, timeout: 30}
+obstacles:
+  - {type: box, name: pallet_a, x: 2.0953, y: 0.6934, length: 1.1927, width: 0.7927, yaw: -16.7896, height: 1.0}
+  - {type: box, name: pallet_b, x: 7.5607, y: 0.829, length: 1.2602, width: 0.8602, yaw: -7.3457, height: 1.0}
+terrain:
+  - {type: platform, name: dock, x: 4.9151, y: 0.5532, length: 14.0, width: 3.0, height: 1.1939}
+"""
+
+
+def test_rolling_over_the_edge_of_the_dock_it_drives_on_is_a_tip_over_not_a_collision_with_its_face():
+    """The edge of the ground the robot stands on is what it goes over, not terrain it drove into
+    (that rises above it, as the test above): the same verdict under every MuJoCo patch release."""
+    from pytest_navscenario.harness.runner import run_scenario
+    from pytest_navscenario.scenario.loader import loads_scenario
+    from pytest_navscenario.verdict.result import Outcome
+
+    res = run_scenario(loads_scenario(DOCK_EDGE), "dwa")
+    assert res.outcome is Outcome.FALL, res.message
+    assert res.message.startswith("tipped over on platform 'dock' at t=8.0 s"), res.message
 
 
 def test_the_planar_body_refuses_terrain_and_a_wheeled_body_refuses_omni_drive():

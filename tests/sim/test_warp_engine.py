@@ -1,4 +1,4 @@
-"""The warp batch engine (sim/warp_engine.py, warp_worlds.py, warp_loop.py): a batch's episodes as
+"""The warp batch engine (sim/batching/warp_engine.py, warp_worlds.py, warp_loop.py): a batch's episodes as
 the worlds of MuJoCo Warp models, run here on Warp's CPU kernels, agree with the CPU engine within
 harness.agreement.AGREE (same outcomes, positions and headings close at every physics step) for
 every feature it claims: static obstacles of every kind, several layouts in one device model,
@@ -20,8 +20,8 @@ from pytest_navscenario.harness.batch import Batching, run_batch
 from pytest_navscenario.scenario.loader import load_scenario
 from pytest_navscenario.scenario.model import BoxObstacle, Mission, Pose, Robot, Scenario
 from pytest_navscenario.scenario.terrain import Lidar3D, Ramp, WheeledBody
-from pytest_navscenario.sim.batch import BatchEpisode, batch_engine, simulate_batch
-from pytest_navscenario.sim.warp_engine import WarpEngine, missing
+from pytest_navscenario.sim.batching.batch import BatchEpisode, batch_engine, simulate_batch
+from pytest_navscenario.sim.batching.warp_engine import WarpEngine, missing
 from pytest_navscenario.subjects.protocol import Command
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -59,7 +59,7 @@ def test_an_unknown_batch_engine_lists_the_known_ones():
 def test_the_warp_engine_without_its_extra_says_how_to_install_it(monkeypatch):
     import importlib.util
 
-    from pytest_navscenario.sim import batch as batch_module
+    from pytest_navscenario.sim.batching import batch as batch_module
 
     real = importlib.util.find_spec
     monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "mujoco_warp" else real(name, *a))
@@ -191,8 +191,8 @@ def test_navscenario_run_with_an_unknown_or_missing_engine_says_so(capsys, monke
     with pytest.raises(SystemExit):
         cli.main(["run", *files, "--batch-engine", "gpu"])
     assert "invalid choice: 'gpu'" in capsys.readouterr().err
-    from pytest_navscenario.sim import batch as batch_module
-    from pytest_navscenario.sim import warp_engine
+    from pytest_navscenario.sim.batching import batch as batch_module
+    from pytest_navscenario.sim.batching import warp_engine
 
     monkeypatch.setattr(batch_module, "_ENGINES", {})
     monkeypatch.setattr(warp_engine, "missing", lambda: "mujoco-warp not installed: " + warp_engine.INSTALL_HINT)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from pytest_navscenario import ScenarioError, loads_scenario
-from pytest_navscenario.scenario.chassis import wheeled_problem
+from pytest_navscenario.scenario.ground.chassis import wheeled_problem
 from pytest_navscenario.scenario.model import Footprint, Limits, Mission, Pose, Robot, Safety, Scenario
 from pytest_navscenario.scenario.terrain import WheeledBody
 from pytest_navscenario.sim.episode import simulate
@@ -140,7 +140,7 @@ def test_a_body_that_cannot_stand_is_refused_with_the_field_and_the_fix(footprin
 
 
 def test_the_wheels_of_a_default_body_fit_every_footprint_the_checks_accept():
-    from pytest_navscenario.scenario.chassis import wheeled_layout
+    from pytest_navscenario.scenario.ground.chassis import wheeled_layout
     for footprint, body in itertools.product(FOOTPRINTS, BODIES):
         sc = scene(footprint, body)
         if wheeled_problem(sc) is not None:

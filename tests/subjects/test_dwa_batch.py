@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from pytest_navscenario.scenario.loader import load_scenario
-from pytest_navscenario.sim.batch import BatchEpisode, simulate_batch
+from pytest_navscenario.sim.batching.batch import BatchEpisode, simulate_batch
 from pytest_navscenario.sim.body_world import rides_the_ground
 from pytest_navscenario.sim.episode import simulate
 from pytest_navscenario.subjects.planners.dwa import DynamicWindowPlanner

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from pytest_navscenario.scenario.crossing import body_capability
+from pytest_navscenario.scenario.ground.crossing import body_capability
 from pytest_navscenario.scenario.model import Footprint, Mission, Pose, Robot, Scenario
 from pytest_navscenario.scenario.terrain import LeggedBody, MjcfBody, Pit, Platform, Ramp, Rough, Steps, WheeledBody
 from pytest_navscenario.verdict.feasibility import impassable_reason
@@ -65,7 +65,7 @@ def test_stairs_are_a_wall_to_the_wheeled_body():
     reason = impassable_reason(scene(upper_level(Steps("stairs", 8.25, 0.0, count=5, rise=0.17, run=0.3,
                                                          width=20.0)), WheeledBody()))
     assert "the terrain the wheeled body cannot cross" in reason and "steps 'stairs' (0.17 m step)" in reason
-    assert "its estimated limits: a 0.04 m step, a 18 deg slope, a 0.19 m gap" in reason
+    assert "its estimated limits: a 0.05 m step, a 18 deg slope, a 0.24 m gap" in reason
 
 
 def test_a_pit_is_a_hole_and_a_narrow_trench_is_strode_over_by_the_legged_body():
@@ -124,10 +124,11 @@ def test_the_legged_simulation_agrees_with_the_path_where_it_can_and_cannot_go()
 @pytest.mark.parametrize("body", [WheeledBody(), WheeledBody(drive_wheels="skid"),
                                   WheeledBody(wheel_radius=0.15, clearance=0.15)], ids=["diff", "skid", "big-wheels"])
 def test_the_wheeled_bodys_estimates_never_rule_out_what_it_crosses(body):
-    """The estimates are at or above what the simulated body does: a step or a ramp 5 % above the
-    estimate stops it (so nothing it climbs is a wall for the shortest path, whose length is the
-    metrics' yardstick), and the measured figures (benchmarks/measure_wheeled_limits.py) are
-    within them."""
+    """The estimates are at or above what the simulated body does under every supported MuJoCo
+    release: a step or a ramp 5 % above the estimate stops it (so the estimate is not absurdly
+    high), and the measured figures (benchmarks/measure_wheeled_limits.py, the higher of MuJoCo
+    4.0.0's and 4.0.1's) are within them, the steps with 10 % room for the next patch release (so
+    nothing the body climbs is a wall for the shortest path, whose length is the metrics' yardstick)."""
     from pytest_navscenario.scenario.model import Safety
     from pytest_navscenario.sim.episode import simulate
 
@@ -143,11 +144,13 @@ def test_the_wheeled_bodys_estimates_never_rule_out_what_it_crosses(body):
     assert crosses([Ramp("r", 5.0, 0.0, length=3.0, width=3.0, rise=rise),
                     Platform("t", 9.5, 0.0, length=6.0, width=3.0, height=rise)]) != "goal"
     # (with 0.15 m wheels a gap of about 0.45 m was measured, roughly: the bisection is not monotonic
-    # there; the estimate, 0.285 m, does not cover it)
-    measured = {"diff": (0.036, 17.2, 0.18), "skid": (0.064, 34.4, 0.172), "big-wheels": (0.047, 16.2, 0.0)}
+    # there; the estimate, 0.36 m, does not cover it)
+    # step, slope, gap: 4.0.0 measured 0.036/17.2/0.18 (diff), 0.064/34.4/0.172 (skid), 0.047/16.2 (big)
+    measured = {"diff": (0.042, 17.2, 0.23), "skid": (0.081, 34.4, 0.191), "big-wheels": (0.055, 16.2, 0.0)}
     key = "skid" if body.drive_wheels == "skid" else ("big-wheels" if body.wheel_radius == 0.15 else "diff")
     step, slope, gap = measured[key]
-    assert cap.max_step >= step and cap.max_slope >= slope and cap.max_gap >= gap
+    # room for a patch release: each step estimate 10 % above the higher measured figure
+    assert cap.max_step >= 1.1 * step and cap.max_slope >= slope and cap.max_gap >= gap
 
 
 def test_the_threshold_seed_is_driven_over_its_sill_and_its_path_efficiency_is_at_most_1():

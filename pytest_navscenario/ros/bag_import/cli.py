@@ -7,10 +7,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..robot_options import RobotOptionError, add_robot_arguments, parse_footprint, read_robot
 from .clouds import CloudSettings
 from .frames import FRAMES
 from .reading import PATH_AS, BagImportError
 from .scans import STAMPS
+from .robot import RobotChoice
 from .seed import scenario_from_bag
 
 
@@ -78,6 +80,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--robot-radius", type=float, default=None, metavar="METRES",
                    help="the seed robot's circular footprint radius, m (default: the base link's collision geometry "
                         "in the URDF on /robot_description, else a Nav2 footprint in the bag, else 0.15)")
+    add_robot_arguments(p, timeout=False, default_robot=(
+        "the robot of the scenario a bag of ours ran (/navscenario/scenario, --nav-bag), else a guess from the "
+        "bag: its URDF's or Nav2 footprint (or --robot-radius), a differential drive, limits 20 %% above the "
+        "recorded peaks"))
     p.add_argument("--name", default="", metavar="TEXT", help="scenario name (default: the output file's stem)")
     p.add_argument("--force", action="store_true", help="overwrite an existing output file")
 
@@ -113,7 +119,8 @@ def import_bag(args: argparse.Namespace):
                              robot_radius=args.robot_radius, frame=args.frame, map_frame=args.map_frame,
                              pose_topic=args.pose_topic, cloud_topic=args.cloud_topic,
                              cloud=_cloud_settings(args), goal_topic=args.goal_topic, at=args.at,
-                             window=args.window, scan_stamp=args.scan_stamp, scan_offset=args.scan_time_offset)
+                             window=args.window, scan_stamp=args.scan_stamp, scan_offset=args.scan_time_offset,
+                             robot=_robot_choice(args))
     extra = {}
     if args.path_as != "waypoints":
         extra[csv_name] = reference_csv(seed.path)
@@ -128,6 +135,21 @@ def import_bag(args: argparse.Namespace):
                                                                "compare the seed with"]:
         print(f"navscenario from-bag: {line}")
     return seed, out
+
+
+def _robot_choice(args: argparse.Namespace) -> RobotChoice:
+    """--robot (read and checked), --footprint, --drive; --robot-radius is --footprint circle:R."""
+    footprint = getattr(args, "footprint", None)
+    if footprint and args.robot_radius is not None:
+        raise BagImportError(f"--footprint {footprint} and --robot-radius {args.robot_radius}: give one (--robot-radius R "
+                             f"is --footprint circle:R)")
+    try:
+        return RobotChoice(robot=read_robot(Path(args.robot)) if getattr(args, "robot", None) else None,
+                           robot_file=getattr(args, "robot", None) or "",
+                           footprint=parse_footprint(footprint) if footprint else None,
+                           footprint_text=footprint or "", drive=getattr(args, "drive", None))
+    except RobotOptionError as exc:
+        raise BagImportError(str(exc)) from None
 
 
 def _list_events(args: argparse.Namespace) -> int:

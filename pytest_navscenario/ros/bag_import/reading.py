@@ -65,6 +65,7 @@ class BagData:
     goals: list[tuple[float, str, float, float, float, str]] = field(default_factory=list)  # t, frame, x, y, yaw, topic
     cmd: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))    # t, forward speed, yaw rate
     description: str | None = None                       # URDF text from /robot_description
+    recorded: str | None = None                          # the scenario YAML on /navscenario/scenario (our bags)
     footprints: list[tuple[str, str, Any]] = field(default_factory=list)  # (source, "polygon"|"radius", value)
     cloud_topic: str | None = None
     cloud_frame: str = ""
@@ -297,6 +298,7 @@ class _Collector:
         self.goals: list[tuple[int, str, float, float, float, str]] = []
         self.cmd: list[tuple[int, float, float]] = []
         self.description: str | None = None
+        self.recorded: str | None = None
         self.footprints: list[tuple[str, str, Any]] = []
         self.known_map: Any = None
         self.tf_seen = 0
@@ -373,6 +375,9 @@ class _Collector:
     def _description(self, topic: str, msg: Any, bag_ns: int) -> None:
         self.description = self.description or msg.data
 
+    def _recorded(self, topic: str, msg: Any, bag_ns: int) -> None:
+        self.recorded = self.recorded or msg.data
+
     def _footprint(self, topic: str, msg: Any, bag_ns: int) -> None:
         pts = [(float(p.x), float(p.y)) for p in msg.polygon.points]
         if len(pts) >= 3 and not self.footprints:
@@ -402,6 +407,7 @@ def _attach_extras(data: BagData, col: _Collector, origin: float) -> None:
         cmd[:, 0] = (cmd[:, 0] - origin) * 1e-9
         data.cmd = cmd[np.argsort(cmd[:, 0], kind="stable")]
     data.description = col.description
+    data.recorded = col.recorded
     data.footprints = col.footprints
     data.known_map = col.known_map
     data.frame = data.odom_frame

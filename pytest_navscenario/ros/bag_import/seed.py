@@ -33,6 +33,7 @@ from .mount import choose_mount
 from .obstacles import FitSettings, _r, fit_obstacles, occupied_clusters
 from .projection import map_scans, settle_timing
 from .reading import PATH_AS, BagData, BagImportError, close_bag, open_bag, read_bag
+from .robot import RobotChoice, base_robot, describe, seed_robot
 from .streaming import stream_notes
 from .simplify import SeedSize, merge_neighbours, split_near_path
 
@@ -90,7 +91,8 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
                       pose_topic: str | None = None, cloud_topic: str | None = None,
                       cloud: CloudSettings = CloudSettings(), goal_topic: str | None = None,
                       at: float | None = None, window: float = 30.0, size: SeedSize = SeedSize(),
-                      scan_stamp: str = "auto", scan_offset: float = 0.0) -> BagSeed:
+                      scan_stamp: str = "auto", scan_offset: float = 0.0,
+                      robot: RobotChoice = RobotChoice()) -> BagSeed:
     """Build a seed scenario from a bag (see the package docstring). ``laser_pose`` is x, y (m),
     yaw (degrees) of the laser in the robot's base frame; ``robot_radius`` the seed's circular
     footprint (m; default: from the bag's URDF or Nav2 footprint, else 0.15 m); ``reference_file`` is the CSV name
@@ -99,7 +101,8 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
     ``at``: cut the ``window`` seconds before this moment instead of ``start``..``end``.
     ``frame``: "auto" (the map frame when the bag has ``map -> odom`` or a pose topic in it, else
     the odometry frame), "map" or "odom". ``scan_stamp`` ("auto", "start", "end") and
-    ``scan_offset`` (s): when each scan was taken (scans.choose_timing)."""
+    ``scan_offset`` (s): when each scan was taken (scans.choose_timing). ``robot``: --robot,
+    --footprint, --drive (robot.py; a bag of ours gives the robot of the scenario it ran)."""
     if robot_radius is not None and not (math.isfinite(robot_radius) and 0 < robot_radius <= 5):
         raise BagImportError(f"--robot-radius must be a length in (0, 5] m, got {robot_radius}")
     if path_as not in PATH_AS:
@@ -114,16 +117,23 @@ def scenario_from_bag(path: str | Path, *, odom_topic: str | None = None, scan_t
                         cloud_topic=cloud_topic, at=at, window=window, scan_stamp=scan_stamp,
                         scan_offset=scan_offset, reader=reader)
         return _seed(data, laser_pose, path_as, reference_file, name, robot_radius, settings, frame, map_frame,
-                     pose_topic, cloud, goal_topic, size)
+                     pose_topic, cloud, goal_topic, size, robot)
     finally:
         close_bag(reader)
 
 
 def _seed(data: BagData, laser_pose, path_as, reference_file, name, robot_radius, settings, frame, map_frame,
-          pose_topic, cloud, goal_topic, size) -> BagSeed:
+          pose_topic, cloud, goal_topic, size, choice: RobotChoice) -> BagSeed:
     corr = to_world_frame(data, frame, map_frame, pose_topic, data.full_odom)
     goal, goal_note = choose_goal(data, corr, goal_topic)
-    fp, fp_how, fp_warnings = footprint_from_bag(data, robot_radius)
+    base, base_how, fp_warnings = base_robot(data, choice)
+    if choice.footprint is not None:
+        fp, fp_how = choice.footprint, f"{describe(choice.footprint)} from --footprint {choice.footprint_text}"
+    elif base is not None and robot_radius is None:
+        fp, fp_how = base.footprint, base_how
+    else:
+        fp, fp_how, more = footprint_from_bag(data, robot_radius)
+        fp_warnings += more
     radius = inner_radius(fp)
     notes = list(data.notes) + [goal_note] + [f"warning: {w}" for w in fp_warnings] + [f"footprint: {fp_how}"]
     obstacles: list[Obstacle] = []
@@ -152,8 +162,12 @@ def _seed(data: BagData, laser_pose, path_as, reference_file, name, robot_radius
         notes += check_path_free(data, obstacles, radius, how, data.cloud_topic)
     obstacles, background = _keep_small(data, obstacles, radius, size, notes)
     scenario, summary = _scenario(data, obstacles, path_as, reference_file, name, fp, goal)
+    scenario = dataclasses.replace(scenario, robot=seed_robot(scenario.robot, base, choice, fp))
+    if base is not None or choice.drive:
+        notes.append(f"robot: {scenario.robot.drive} drive, top speed {scenario.robot.limits.max_speed:g} m/s, from "
+                     + (base_how if base is not None else "the bag") + (f", --drive {choice.drive}" if choice.drive else ""))
     if terrain is not None and terrain.elements:
-        scenario = _on_terrain(scenario, terrain, clouds, notes)
+        scenario = _on_terrain(scenario, terrain, clouds, notes, keep=base is not None)
     if background:
         scenario = dataclasses.replace(scenario, search={"frozen": background})
     notes.append(summary)
@@ -179,9 +193,16 @@ def _ground(data: BagData, clouds: Any, notes: list[str]) -> Any:
     return guess
 
 
-def _on_terrain(scenario: Scenario, terrain: Any, clouds: Any, notes: list[str]) -> Scenario:
-    """The seed with the terrain, a body that rides it and the 3D lidar the bag had (guessed)."""
+def _on_terrain(scenario: Scenario, terrain: Any, clouds: Any, notes: list[str], keep: bool = False) -> Scenario:
+    """The seed with the terrain, a body that rides it and the 3D lidar the bag had (guessed;
+    ``keep``: the robot is known, --robot's or the recorded scenario's, and a body and a 3D lidar
+    it has are kept)."""
     from ...scenario.terrain import Lidar3D, WheeledBody
+
+    robot = scenario.robot
+    if keep and robot.body.kind != "planar" and robot.lidar3d is not None:
+        return dataclasses.replace(scenario, terrain=tuple(terrain.elements))
+    keep_body = keep and robot.body.kind != "planar"
 
     m = clouds.mount if clouds.mount is not None else np.eye(4)
     pitch = math.degrees(math.atan2(-m[2, 0], m[0, 0]))
@@ -192,8 +213,10 @@ def _on_terrain(scenario: Scenario, terrain: Any, clouds: Any, notes: list[str])
     notes.append(f"robot.lidar3d: mounted as the cloud's frame (x={m[0, 3]:.2f}, z={m[2, 3]:.2f} m, pitch "
                  f"{pitch:.1f} deg); " + (f"{rows} rings x {cols} beams from the organised cloud" if organised else
                                           "16 rings x 360 beams, -15..15 deg (a guess: the clouds are not organised)"))
-    notes.append("robot.body: wheeled (a guess: a bag does not say how the robot meets the ground; set robot.body)")
-    robot = dataclasses.replace(scenario.robot, body=WheeledBody(), lidar3d=lidar3d)
+    if not keep_body:
+        notes.append("robot.body: wheeled (a guess: a bag does not say how the robot meets the ground; set robot.body)")
+    robot = dataclasses.replace(robot, body=robot.body if keep_body else WheeledBody(),
+                                lidar3d=robot.lidar3d if keep and robot.lidar3d is not None else lidar3d)
     return dataclasses.replace(scenario, terrain=tuple(terrain.elements), robot=robot)
 
 

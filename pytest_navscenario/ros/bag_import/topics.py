@@ -20,12 +20,14 @@ GOAL_TYPE_SUFFIXES = ("MoveBaseActionGoal", "NavigateToPose_SendGoal_Event", "Na
 FOOTPRINT_TYPES = ("geometry_msgs/msg/PolygonStamped",)
 PARAM_EVENT_TYPES = ("rcl_interfaces/msg/ParameterEvent",)
 STRING_TYPES = ("std_msgs/msg/String",)
+RECORDED_SCENARIO = "/navscenario/scenario"   # the scenario a bag of ours ran (ros/bag_writer.py, --nav-bag)
 MAP_TYPES = ("nav_msgs/msg/OccupancyGrid",)
 
 
 def role(topic: str, msgtype: str) -> str | None:
     """The part a topic plays beyond odometry and laser (picked apart): tf, pose, goal, cmd,
-    description, footprint, params, map; None for a topic the importer does not read."""
+    description, footprint, params, map, recorded (the scenario a --nav-bag bag ran); None for a
+    topic the importer does not read."""
     name = topic.rstrip("/").lower()
     if msgtype in TF_TYPES and name in ("/tf", "/tf_static"):
         return name[1:]
@@ -39,6 +41,8 @@ def role(topic: str, msgtype: str) -> str | None:
         return "cmd"
     if msgtype in STRING_TYPES and name.endswith("robot_description"):
         return "description"
+    if msgtype in STRING_TYPES and name == RECORDED_SCENARIO:
+        return "recorded"
     if msgtype in FOOTPRINT_TYPES and "footprint" in name:
         return "footprint"
     if msgtype in PARAM_EVENT_TYPES:

@@ -24,7 +24,7 @@ from ...scenario.model import Scenario
 def check_body(scenario: Scenario) -> None:
     """ScenarioError when the body and the drive, or the body and the terrain, do not go together
     (scenario/ground.body_problem: the loader checks the same)."""
-    from ...scenario.ground import body_problem
+    from ...scenario.ground.surface import body_problem
 
     problem = body_problem(scenario)
     if problem is not None:

@@ -4,7 +4,7 @@ What it simulates. The robot is declared by what it can do (``LeggedBody``: ``ma
 ``max_slope``, ``max_gap``, ``clearance``) and its base follows the ground it can cross:
 
 * each control tick the planner's velocity command (after the drive's limits) gives the way the
-  base moves during the tick; the ground along that way is walked (``scenario/crossing.py``) from
+  base moves during the tick; the ground along that way is walked (``scenario/ground/crossing.py``) from
   each foot (one at each corner of the footprint) and from the centre;
 * a rise higher than ``max_step`` (a step, or a slope steeper than ``max_slope`` rising more than
   that) stops it, its feet at the face: the robot stands there while commanded on, which the
@@ -41,9 +41,9 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from ...scenario import ground
-from ...scenario.crossing import SPACING, Capability, look_ahead, steep_ground, walk
-from ..terrain import GEAR_BITS
+from ...scenario.ground import surface as ground
+from ...scenario.ground.crossing import SPACING, Capability, look_ahead, steep_ground, walk
+from ..ground.terrain import GEAR_BITS
 from ..world import steps_per_tick
 from .base import ROBOT_GROUP, FreeBase, quat_to_rpy, rpy_to_quat
 

@@ -21,11 +21,14 @@ bodies.
 
 The controller. ``robot.body.controller`` is ``package.module:Attribute`` (looked up as subjects
 are: sys.path, then the current folder and the scenario's folder), a class or zero-argument
-factory; one instance per episode. It may have ``reset(model, data)``, called once the robot is
+factory function of the user's own code (core/user_code.own_code: not a builtin, the standard
+library's or an installed package's); one instance per episode. It may have ``reset(model, data)``, called once the robot is
 placed; it must have ``control(command, model, data)``, called every control tick with the
 planner's command (vx, vy, wz: m/s and rad/s in the robot frame, after the drive's limits); it
 returns the actuator controls (``model.nu`` numbers) or None when it wrote ``data.ctrl`` itself.
 Loops faster than the control rate belong in MuJoCo's own actuators (velocity or position servos).
+``control()`` runs under the episode's tick limit; whatever goes wrong in the controller is a
+BodyControllerError, which the episode turns into a subject error (sim/episode.RidingEpisode).
 """
 from __future__ import annotations
 
@@ -89,6 +92,7 @@ def read_robot(scenario) -> tuple[mujoco.MjSpec, str]:
     file when it does not load or compile, or has no free base."""
     path = mjcf_path(scenario)
     field = "robot.body.file"
+    _same_files(scenario, path)
     try:
         child = mujoco.MjSpec.from_file(os.fspath(path))
         child.compile()
@@ -113,22 +117,38 @@ def read_robot(scenario) -> tuple[mujoco.MjSpec, str]:
     return child, free[0]
 
 
+def _same_files(scenario, path: Path) -> None:
+    """The robot's files checked again just before MuJoCo opens them (scenario/mjcf_files.py: inside
+    the scenario's folder, regular files) and hashed: ScenarioError when they changed since the
+    scenario was loaded, so an edited MJCF or included file never runs under the old content hash."""
+    from ...scenario.mjcf_files import MjcfFileError, robot_digest
+
+    folder = Path(scenario.source).parent if scenario.source else Path.cwd()
+    field, fix = "robot.body.file", "keep the robot's files in the scenario's folder, named by relative paths"
+    try:
+        now = robot_digest(path, folder)
+    except (MjcfFileError, OSError) as exc:
+        raise _fail(scenario, str(exc), field, fix) from None
+    loaded = scenario.robot.body.digest
+    if loaded and now != loaded:
+        raise _fail(scenario, f"{path} or a file it names changed after the scenario was loaded (content "
+                              f"{loaded}, now {now}): its results would carry the old content hash", field,
+                    "load the scenario again (run it again) once the robot's files are as you want them")
+
+
 def load_controller(scenario) -> Any:
     """The controller factory ``robot.body.controller`` names (ScenarioError when it cannot be had)."""
-    from ...core.user_code import load_object
+    from ...core.user_code import load_object, own_code
 
     spec = scenario.robot.body.controller
     project = [os.getcwd()]
     if scenario.source and Path(scenario.source).resolve().parent != Path.cwd().resolve():
         project.append(os.fspath(Path(scenario.source).resolve().parent))
     try:
-        factory = load_object(spec, what="body controller", project=project)
+        return own_code(load_object(spec, what="body controller", project=project), spec,
+                        what="body controller")
     except SubjectLoadError as exc:
         raise _fail(scenario, str(exc), "robot.body.controller", None) from None
-    if not callable(factory):
-        raise _fail(scenario, f"body controller {spec!r} is a {type(factory).__name__}, not a class or factory",
-                    "robot.body.controller", "name a class (one instance is made per episode)")
-    return factory
 
 
 class MjcfModel(FreeBase):
@@ -206,8 +226,10 @@ class MjcfControl:
         if self.control is None:
             raise BodyControllerError(f"body controller {spec!r} has no control(command, model, data) method")
 
+    deadline = None    # the episode's TickDeadline (sim/deadline.py): control() is bounded like act()
+
     def command(self, ctrl: np.ndarray, setpoint: tuple[float, float, float], state: Any) -> None:
-        out = _call(self.spec, self.control, setpoint, self.model, self.data)
+        out = _call(self.spec, self.control, setpoint, self.model, self.data, deadline=self.deadline)
         if out is None:
             return
         try:
@@ -225,12 +247,29 @@ class MjcfControl:
         ctrl[:] = values
 
 
-def _call(spec: str, fn: Any, *args: Any, when: str = "") -> Any:
+def _call(spec: str, fn: Any, *args: Any, when: str = "", deadline: Any = None) -> Any:
     """Call the user's controller code: whatever it raises, ``sys.exit()`` and its own
     ``KeyboardInterrupt`` included, is a BodyControllerError that ends the episode, not the run (as
-    for planners: ``sim/command.call_planner``); a user's Ctrl-C passes."""
+    for planners: ``sim/command.call_planner``); a user's Ctrl-C passes. Under ``deadline`` (the
+    episode's per-tick limit) a call that overruns is a BodyControllerError too."""
+    from ..deadline import PlannerTimeout
     try:
-        return fn(*args)
+        if deadline is None:
+            return fn(*args)
+        deadline.arm()
+        try:
+            out = fn(*args)
+        except BaseException:
+            try:
+                deadline.disarm()
+            except PlannerTimeout:
+                pass
+            raise
+        deadline.disarm()
+        return out
+    except PlannerTimeout as exc:
+        raise BodyControllerError(f"body controller {spec!r}: {str(exc).replace('planner', 'control()')} "
+                                  f"(--nav-tick-limit bounds the controller's tick as the planner's)") from None
     except (SystemExit, KeyboardInterrupt, GeneratorExit) as exc:
         if from_the_user(exc):
             raise
@@ -241,7 +280,7 @@ def _call(spec: str, fn: Any, *args: Any, when: str = "") -> Any:
 
 
 def _world_bit(robot_geoms: list) -> int:
-    """A collision bit that none of the robot's geoms uses and the world's scheme (sim/terrain.py:
+    """A collision bit that none of the robot's geoms uses and the world's scheme (sim/ground/terrain.py:
     1, 2, 4, 8) does not either: the world's geoms get it in ``contype``, each robot geom that
     would meet a default MuJoCo floor (contype 1, conaffinity 1) in ``conaffinity``. So the robot
     meets the ground and the obstacles whatever its own bits (MuJoCo Menagerie's robots have

@@ -1,7 +1,7 @@
 """The wheeled body: a chassis on a free joint riding the terrain under gravity on real wheel
 contacts, and its low-level controller (the planner's velocity command -> wheel speeds -> torques).
 
-Geometry (robot frame, the base's origin on the ground under the centre; ``scenario/chassis.py``
+Geometry (robot frame, the base's origin on the ground under the centre; ``scenario/ground/chassis.py``
 places the parts and the loader refuses a body that cannot stand within its limits):
 
 * the chassis: the footprint (a box, or a cylinder for a circle) from ``clearance`` above the
@@ -36,8 +36,8 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from ...scenario.chassis import G, wheeled_layout
-from ..terrain import CHASSIS_BITS, GEAR_BITS
+from ...scenario.ground.chassis import G, wheeled_layout
+from ..ground.terrain import CHASSIS_BITS, GEAR_BITS
 from ..world import steps_per_tick
 from .base import ROBOT_GROUP, FreeBase
 

@@ -1,4 +1,4 @@
-"""The CPU batch engine's loop (sim/batch.py): a batch's episodes, each an ``Episode`` with its own
+"""The CPU batch engine's loop (sim/batching/batch.py): a batch's episodes, each an ``Episode`` with its own
 MuJoCo data, lidar and records, advanced tick by tick together; one planner call a tick for the
 episodes still running.
 
@@ -16,13 +16,13 @@ from typing import AbstractSet, Any, Mapping, Sequence
 
 import mujoco
 
-from ..core.errors import SimulationDivergedError, SimulationFatalError
-from .command import call_planner, planner_traceback, validate_command
-from .deadline import PlannerTimeout, TickDeadline
-from .episode import Episode, EpisodeOver, SimResult
-from .profiler import profiler_off
-from .trajectory import SubjectFailure
-from .world import MUJOCO_WARNINGS, divergence_message, fatal_message
+from ...core.errors import SimulationDivergedError, SimulationFatalError
+from ..command import call_planner, planner_traceback, validate_command
+from ..deadline import PlannerTimeout, TickDeadline
+from ..episode import Episode, EpisodeOver, SimResult
+from ..profiler import profiler_off
+from ..trajectory import SubjectFailure
+from ..world import MUJOCO_WARNINGS, divergence_message, fatal_message
 
 
 def _tick_limit(requests: Sequence[Any]) -> float | None:

@@ -1,6 +1,6 @@
 """The GPU batch engine: a batch's episodes as the worlds of MuJoCo Warp models on an accelerator
 (or on the CPU, where Warp runs its kernels too), behind the ``BatchEngine`` interface of
-sim/batch.py. Optional: ``pip install "pytest-navscenario[gpu]"`` (mujoco-warp, warp-lang).
+sim/batching/batch.py. Optional: ``pip install "pytest-navscenario[gpu]"`` (mujoco-warp, warp-lang).
 
 What it runs (``unsupported`` refuses the rest, which then runs on the CPU, one episode at a
 time, with the reason in the summary's batching line):
@@ -23,9 +23,9 @@ from __future__ import annotations
 
 from typing import Any, Sequence
 
-from ..scenario.model import Scenario
-from .body_world import rides_the_ground
-from .episode import SimResult
+from ...scenario.model import Scenario
+from ..body_world import rides_the_ground
+from ..episode import SimResult
 
 INSTALL_HINT = 'pip install "pytest-navscenario[gpu]" (or pip install -e ".[gpu]" in a checkout)'
 

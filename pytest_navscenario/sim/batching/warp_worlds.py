@@ -1,4 +1,4 @@
-"""A batch's planar worlds on a MuJoCo Warp device (sim/warp_engine.py): one ``mujoco_warp`` model
+"""A batch's planar worlds on a MuJoCo Warp device (sim/batching/warp_engine.py): one ``mujoco_warp`` model
 and data holding many worlds, stepped a control tick at a time, with the contact checks, the
 recording of every physics step's state and the lidar's ray casts done on the device.
 

@@ -22,8 +22,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Protocol, Sequence
 
-from ..scenario.model import Scenario
-from .episode import SimResult
+from ...scenario.model import Scenario
+from ..episode import SimResult
 
 
 @dataclass(frozen=True)
@@ -56,7 +56,7 @@ class LockstepEngine:
     name = "cpu"
 
     def unsupported(self, scenario: Scenario) -> str | None:
-        from .body_world import rides_the_ground
+        from ..body_world import rides_the_ground
         if rides_the_ground(scenario):
             return f"its robot body ({scenario.robot.body.kind}) rides the ground, which the CPU batch engine does not step yet"
         return None
@@ -74,7 +74,7 @@ ENGINE_NAMES = ("cpu", "warp")
 
 def batch_engine(name: str = "cpu") -> BatchEngine:
     """The engine called ``name``: "cpu" (``LockstepEngine``) or "warp" (MuJoCo Warp on the default
-    Warp device, sim/warp_engine.py; ValueError saying how to install it when it is missing)."""
+    Warp device, sim/batching/warp_engine.py; ValueError saying how to install it when it is missing)."""
     engine = _ENGINES.get(name)
     if engine is None:
         if name == "cpu":

@@ -28,8 +28,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..core.files import data_file_size
-from .mesh import MeshError, resolve_mesh_path
+from ...core.files import data_file_size
+from ..mesh import MeshError, resolve_mesh_path
 
 MAX_HEIGHTFIELD_BYTES = 64_000_000   # a file larger than this is refused before it is read
 MAX_GRID_SIDE = 1024                 # samples along a side (a 1024 x 1024 grid is 8 MB of float64)
@@ -335,7 +335,7 @@ def height_grid(element: Any, scenario: Any = None) -> HeightGrid:
     """The HeightGrid of a rough or heightfield element (cached per process). A heightfield's file
     is resolved beside ``scenario.source`` and must still hash to the digest the loader read; a
     problem is a ScenarioError naming the scenario and the element's field."""
-    from ..core.errors import ScenarioError
+    from ...core.errors import ScenarioError
 
     try:
         return _element_grid(element, getattr(scenario, "source", None))

@@ -1,5 +1,5 @@
 """The ground as a pure function: the height under any (x, y) of a scenario's terrain, vectorised,
-and each element's outline and pieces. No MuJoCo: the world (sim/terrain.py) builds the same
+and each element's outline and pieces. No MuJoCo: the world (sim/ground/terrain.py) builds the same
 pieces as geoms, and the verdict, the loader's checks and the pictures read heights from here.
 
 What each element is (its own frame: +x along ``length``, the direction it rises or runs along):
@@ -22,7 +22,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .terrain import Heightfield, Pit, Platform, Ramp, Rough, Steps, TerrainElement
+from ..terrain import Heightfield, Pit, Platform, Ramp, Rough, Steps, TerrainElement
 
 FLOOR = 0.0
 
@@ -69,7 +69,7 @@ def to_local(element: TerrainElement, px: np.ndarray, py: np.ndarray) -> tuple[n
 
 def pieces(terrain: Sequence[TerrainElement]) -> tuple[Piece, ...]:
     """The convex blocks of every primitive element (ramps, steps, platforms, pits); rough ground
-    and heightfields are grids (scenario/heightmap.py) and have none. Cached per terrain (the ground
+    and heightfields are grids (scenario/ground/heightmap.py) and have none. Cached per terrain (the ground
     is asked for heights every tick)."""
     terrain = tuple(terrain)
     try:
@@ -117,7 +117,7 @@ def _piece_height(piece: Piece, u: np.ndarray) -> np.ndarray:
 
 def _grid_height(element: TerrainElement, scenario, u: np.ndarray, v: np.ndarray) -> np.ndarray:
     """Height of a grid element (rough, heightfield) at local (u, v) inside it, on the grid's
-    triangles as MuJoCo collides them (scenario/heightmap.py owns the grid)."""
+    triangles as MuJoCo collides them (scenario/ground/heightmap.py owns the grid)."""
     from .heightmap import height_grid
 
     return element.z + height_grid(element, scenario).sample(u, v)
@@ -265,7 +265,7 @@ def obstacle_problem(scenario) -> tuple[str, str, str] | None:
     safety layer would halt the robot with nothing in its way), entirely under the lowest, or
     anywhere but on the floor for the planar body, whose world puts every obstacle on it; None
     otherwise."""
-    from .geometry import obstacle_polygon
+    from ..geometry import obstacle_polygon
 
     planar = scenario.robot.body.kind == "planar" and not scenario.terrain
     for i, obs in enumerate(scenario.obstacles):
@@ -315,7 +315,7 @@ def mission_problem(scenario) -> tuple[str, str, str] | None:
     platform, half off), or a waypoint lies over a hole; None when the mission stands on the ground."""
     if not scenario.terrain:
         return None
-    from .geometry import footprint_polygon
+    from ..geometry import footprint_polygon
 
     m = scenario.mission
     checks = [("mission.start", m.start, True), ("mission.goal", m.goal, True)]

@@ -1,4 +1,4 @@
-"""The warp batch engine's loop (sim/warp_engine.py): the CPU lockstep loop (lockstep.py) with the
+"""The warp batch engine's loop (sim/batching/warp_engine.py): the CPU lockstep loop (lockstep.py) with the
 physics, the contact checks, the state recording and the lidar's ray casts of every episode done
 on a MuJoCo Warp device, a control tick at a time (warp_worlds.py).
 
@@ -15,10 +15,10 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .episode import EpisodeOver
+from ..episode import EpisodeOver
 from .lockstep import Lockstep
-from .moving import describe_collision
-from .trajectory import Collision
+from ..moving import describe_collision
+from ..trajectory import Collision
 from .warp_worlds import DeviceWorlds, group_key
 
 

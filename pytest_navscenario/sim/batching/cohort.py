@@ -1,4 +1,4 @@
-"""The observation step of a batch's episodes done for many at once (sim/lockstep.py): a cohort is
+"""The observation step of a batch's episodes done for many at once (sim/batching/lockstep.py): a cohort is
 the episodes of a batch that share the planar body, their physics steps per tick and timestep and
 their lidar's beam layout, in static worlds, without sensor faults or lidar noise.
 
@@ -26,11 +26,11 @@ from typing import Any, Callable
 import mujoco
 import numpy as np
 
-from ..core.errors import SimulationDivergedError
-from ..subjects.protocol import Observation
-from .episode import Episode, EpisodeOver
-from .lidar3d import LEVEL
-from .world import CONTACT_SENSOR, LIDAR_HEIGHT, MUJOCO_WARNINGS, TWO_PI, divergence_message
+from ...core.errors import SimulationDivergedError
+from ...subjects.protocol import Observation
+from ..episode import Episode, EpisodeOver
+from ..lidar3d import LEVEL
+from ..world import CONTACT_SENSOR, LIDAR_HEIGHT, MUJOCO_WARNINGS, TWO_PI, divergence_message
 
 _new = object.__new__
 USE_ROLLOUT = True     # step cohorts with mujoco.rollout (False: each episode's own step_physics)

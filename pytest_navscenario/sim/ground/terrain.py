@@ -5,7 +5,7 @@ the contact settings every body rides on.
 Ramps, steps and platforms are built from primitives, not heightfields: MuJoCo collides and
 ray-casts boxes and convex meshes fast (the design notes measured ``mj_multiRay`` with 5760 rays at
 ~1 ms against boxes and 9-240 ms against heightfields of 32-256 cells a side). Rough ground and
-heightfields are grids: ``sim/heightfield.py`` builds them. Shapes come from ``scenario/ground.py``
+heightfields are grids: ``sim/ground/heightfield.py`` builds them. Shapes come from ``scenario/ground/surface.py``
 (the same pieces the verdict reads heights from), so the world and the ground function agree.
 
 Geom names: ``terrain:<element index>/<piece>`` for an element's blocks, ``floor/<k>`` for the
@@ -18,8 +18,8 @@ import math
 import mujoco
 import numpy as np
 
-from ..scenario import ground
-from ..scenario.model import Scenario
+from ...scenario.ground import surface as ground
+from ...scenario.model import Scenario
 
 # collision bits (contype / conaffinity): the robot's chassis 1, obstacles 2, terrain 4, the robot's
 # running gear (wheels, casters, feet) 8. The chassis meets obstacles and terrain; the running gear
@@ -61,7 +61,7 @@ def add_terrain(spec: mujoco.MjSpec, scenario: Scenario) -> None:
     grids = ground.grid_elements(scenario.terrain)
     if grids:
         from .heightfield import add_heightfield   # rough ground and height files (their own module)
-        from ..scenario.heightmap import height_grid
+        from ...scenario.ground.heightmap import height_grid
         for i in grids:
             el = scenario.terrain[i]
             add_heightfield(spec, el, height_grid(el, scenario), name=f"terrain:{i}/0",
@@ -71,7 +71,7 @@ def add_terrain(spec: mujoco.MjSpec, scenario: Scenario) -> None:
 def _add_floor(spec: mujoco.MjSpec, scenario: Scenario, bottom: float, common: dict) -> None:
     holes = ground.holes(scenario)
     if not holes:
-        from .world import add_floor_plane     # on a body of its own: the lidars' rays see it
+        from ..world import add_floor_plane     # on a body of its own: the lidars' rays see it
         add_floor_plane(spec, name="floor/0", rgba=FLOOR_RGBA, **common)
         return
     for k, part in enumerate(_floor_parts(floor_extent(scenario), [h[0] for h in holes])):

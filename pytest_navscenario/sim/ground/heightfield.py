@@ -20,7 +20,7 @@ from typing import Any, NamedTuple
 import mujoco
 import numpy as np
 
-from ..scenario.heightmap import HeightGrid
+from ...scenario.ground.heightmap import HeightGrid
 
 HFIELD_GROUP = 2            # geom group of heightfields: mj_multiRay skips it (hfield_rays casts instead)
 BASE_BELOW_FLOOR = 0.1      # m: the solid base under a heightfield reaches this far below z = 0
@@ -87,7 +87,7 @@ def placed_grids(scenario: Any) -> tuple[PlacedGrid, ...]:
     elements = tuple(el for el in getattr(scenario, "terrain", ()) if el.kind in GRID_KINDS)
     if not elements:
         return ()
-    from ..scenario.heightmap import height_grid
+    from ...scenario.ground.heightmap import height_grid
 
     key = (elements, scenario.source if any(el.kind == "heightfield" for el in elements) else None)
     placed = _PLACED.get(key)

@@ -1,5 +1,5 @@
 """Where a wheeled body's parts sit and whether it can stand: the one layout that the MuJoCo model
-(sim/bodies/wheeled.py), the loader's checks and the crossing estimates (scenario/crossing.py) share.
+(sim/bodies/wheeled.py), the loader's checks and the crossing estimates (scenario/ground/crossing.py) share.
 
 Robot frame: x forward, y left, z up from the ground under the footprint's centre.
 
@@ -21,7 +21,7 @@ import math
 from dataclasses import dataclass
 
 G = 9.81
-FRICTION = 1.0            # the wheels' sliding friction (sim/terrain.py: rubber on concrete)
+FRICTION = 1.0            # the wheels' sliding friction (sim/ground/terrain.py: rubber on concrete)
 TIP_MARGIN = 0.8          # the share of the tipping acceleration a body may reach (dynamic overshoot)
 MIN_CASTER = 0.02         # m: the smallest ball caster
 FIT = 1e-6                # m: rounding allowed when checking that the wheels fit the footprint

@@ -10,9 +10,9 @@ from collections import deque
 
 import numpy as np
 
-from ..scenario import ground
-from ..scenario.crossing import SPACING, Capability, steep_ground, walk
-from .trajectory import TerrainEvent
+from ...scenario.ground import surface as ground
+from ...scenario.ground.crossing import SPACING, Capability, steep_ground, walk
+from ..trajectory import TerrainEvent
 
 ON_GROUND = 0.08          # m: a base this close above the ground under it stands on it
 STUCK_TIME = 3.0          # s of being driven without moving that make the robot stuck on terrain
@@ -44,7 +44,7 @@ class GroundProbe:
     same operations in the same order; tests/sim/test_ground_probe.py)."""
 
     def __init__(self, scenario):
-        from ..scenario.heightmap import height_grid
+        from ...scenario.ground.heightmap import height_grid
 
         self.scenario = scenario
         self.rows = []
@@ -220,7 +220,7 @@ class TerrainWatch:
 
     def _stuck(self, t, x, y, z, roll, pitch, yaw, setpoint, touching) -> None:
         """What holds the robot: the first step or slope along its way (the ground from under its
-        centre to LOOK_AHEAD past its front, walked with FEATURE: ``scenario/crossing.py``), the
+        centre to LOOK_AHEAD past its front, walked with FEATURE: ``scenario/ground/crossing.py``), the
         slope it is on, or its chassis resting on the ground (high-centred)."""
         ahead = 1.0 if setpoint[0] >= 0 else -1.0
         c, s = math.cos(yaw), math.sin(yaw)

@@ -31,8 +31,8 @@ import math
 from dataclasses import dataclass
 import numpy as np
 
-from ..scenario.model import Scenario
-from .safety import SAMPLE_SPACING, twist_poses
+from ...scenario.model import Scenario
+from ..safety import SAMPLE_SPACING, twist_poses
 
 CELL = 0.1                # m, the ground map's cells
 MARGIN_CELLS = 60         # cells of map beyond the scenario's extent (6 m) on every side
@@ -179,7 +179,7 @@ class GroundSafety:
     def _where(self, cell: int) -> str:
         """", at pit 'hole'": the terrain element under a map cell, for the message (the layer
         sees only points; the scenario names the place)."""
-        from ..scenario.ground import describe_element, element_at
+        from ...scenario.ground.surface import describe_element, element_at
 
         m = self.map
         x = m.x0 + (cell % m.nx + 0.5) * CELL

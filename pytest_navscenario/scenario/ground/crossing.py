@@ -121,20 +121,25 @@ def look_ahead(cap: Capability, move: float, spacing: float = SPACING) -> int:
 # ---------------------------------------------------------------- what each body can cross
 
 # The wheeled body's limits are estimates from its wheels, measured in MuJoCo with a straight
-# drive (benchmarks/measure_wheeled_limits.py; default body: 50 kg, 10 N m, wheels of 0.1 m): it
-# climbed steps of 0.036 m (diff: its ball casters, 0.05 m, meet a step first; 0.047 m with
-# 0.15 m wheels and 0.075 m casters) and 0.064 m (skid), slopes of 17.2 deg (diff: the casters
-# carry load, the driven wheels lose grip; 16.2 with 0.15 m wheels, where the torque binds) and
-# 34.4 deg (skid), and crossed gaps of 0.17-0.18 m. The estimates stay at or above those figures: the shortest path (the metrics' yardstick) and the feasibility check
-# must never rule out what the body really crosses (a path round a sill the robot drives over
-# would make its path efficiency exceed 1), so a step, slope or gap a little above them may pass
-# for crossable (tests/verdict/test_traversable.py checks both sides).
-WHEELED_CASTER_STEP = 0.8     # of the caster's radius (diff)
-WHEELED_WHEEL_STEP = 0.7      # of the wheel's radius (skid)
+# drive (benchmarks/measure_wheeled_limits.py; default body: 50 kg, 10 N m, wheels of 0.1 m). The
+# figures move between MuJoCo patch releases (the highest step the default diff body climbs: 0.036 m
+# under 4.0.0, 0.042 m under 4.0.1; skid 0.064 -> 0.081 m; the widest gap 0.18 -> 0.23 m), so the
+# estimates are bounds with room rather than fits: a step is at most the radius of what meets it
+# first (diff: its ball casters, 0.05 m; skid: its wheels), since a ball or a wheel cannot roll up
+# a step of its own radius (the edge pushes straight back), and at most the chassis' clearance;
+# slopes of 18 deg (diff: the casters carry load and the driven wheels lose grip; measured 17.2
+# under both releases, 16.2 with 0.15 m wheels, where the torque binds) and 35 deg (skid: 34.4);
+# gaps of 2.4 wheel radii. The estimates stay at or above what the body does under every supported
+# release (pyproject.toml pins the series): the shortest path (the metrics' yardstick) and the
+# feasibility check must never rule out what the body really crosses (a path round a sill the robot
+# drives over would make its path efficiency exceed 1), so a step, slope or gap a little above what
+# it does may pass for crossable (tests/verdict/test_traversable.py checks both sides).
+WHEELED_CASTER_STEP = 1.0     # of the caster's radius (diff)
+WHEELED_WHEEL_STEP = 1.0      # of the wheel's radius (skid)
 WHEELED_SLOPE = {"diff": 18.0, "skid": 35.0}   # degrees, at most the torque's limit
 WHEELED_TORQUE_SLOPE = 1.1    # the torque's limit (the slope whose weight it balances), over-estimated by this
-WHEELED_GAP = 1.9             # of the wheel's radius (0.19 m: the default body crossed 0.18 m and was stuck
-                              # in 0.22 m; 0.15 m wheels crossed a rough 0.45 m, not covered: see the measure)
+WHEELED_GAP = 2.4             # of the wheel's radius (0.24 m: the default body crossed 0.18 m under MuJoCo
+                              # 4.0.0, 0.23 m under 4.0.1; 0.15 m wheels crossed a rough 0.45 m, not covered)
 
 
 def body_capability(scenario) -> Capability | None:
@@ -216,7 +221,7 @@ def steep_areas(scenario, cap: Capability) -> tuple:
         return _STEEP[key]
     except KeyError:
         pass
-    from . import ground
+    from . import surface as ground
     from .heightmap import height_grid
 
     out = []
@@ -244,7 +249,7 @@ def steep_ground(scenario, cap: Capability, px, py) -> np.ndarray:
     areas = steep_areas(scenario, cap) if scenario.terrain else ()
     if not areas:
         return out
-    from . import ground
+    from . import surface as ground
     from .heightmap import height_grid
 
     for i, piece, cells in areas:
