@@ -5,7 +5,8 @@ Run from the repository root (not a timed test; CPU time, so a shared machine in
     nice python benchmarks/bench_search_cost.py                          # budget 100, 10 search seeds
     nice python benchmarks/bench_search_cost.py --budget 1000 --search-seeds 1
     nice python benchmarks/bench_search_cost.py --part fixed               # per-episode fixed cost
-    nice python benchmarks/bench_search_cost.py --search-seeds 2 --check 0.6   # the guard (exit 1 if over)
+    nice python benchmarks/bench_search_cost.py --search-seeds 1 --seeds boxes1 --variants insert0 \
+        --check evolve=1.2,random=0.25,hillclimb=0.25         # the guard (exit 1 if over)
 
 ``--part share`` (default): for each seed (boxes1, boxes2, cylinders) x variant (``insert0``: the
 seed's ``search: {insert: 0}``, only its own obstacles move; ``shipped``: its search section as
@@ -15,12 +16,13 @@ episodes), the rest (the search's own work: proposing, validity and ranking, rea
 bookkeeping), distinct failures and whether it found one. Per strategy and variant: the sums, the
 own work as a share of the episodes' CPU, failures found per CPU second, and evolve against random:
 searches with a failure (Fisher's exact test, two-sided) and paired by seed and search seed
-(McNemar's exact test on the discordant pairs). ``--check SHARE`` exits 1 when any strategy's own
-work exceeds SHARE of its episodes' CPU: the benchmark that keeps the own work from growing back.
+(McNemar's exact test on the discordant pairs). ``--check`` exits 1 when a strategy's own work
+exceeds its share of its episodes' CPU: the benchmark that keeps the own work from growing back.
 
 ``--part fixed``: each seed's own episode (no search) ``--repeats`` times: CPU of the whole
-``run_scenario`` and of its ticks (``Episode.run_ticks``), the compiled-model cache emptied before
-each (a search's candidate is a layout not built before); the rest is the fixed per-episode cost
+``run_scenario`` and of its ticks (``Episode.run_ticks``), the compiled models forgotten before
+each (a search's candidate is a layout not built before, of a structure built before: its MjData
+pool kept; ``--fresh-structure``: forgotten too); the rest is the fixed per-episode cost
 (building and compiling the MuJoCo model, the lidar, the planner's reset, metrics and verdict).
 """
 from __future__ import annotations
@@ -135,10 +137,11 @@ def summary(rows: list[dict]) -> tuple[list[str], dict]:
     return lines, shares
 
 
-def part_fixed(subject: str, repeats: int) -> list[str]:
+def part_fixed(subject: str, repeats: int, fresh_structure: bool = False) -> list[str]:
     """Each seed's own episode: CPU of run_scenario and of its ticks (the rest is the fixed cost)."""
     from pytest_navscenario.harness.runner import run_scenario
     from pytest_navscenario.sim import episode
+    from pytest_navscenario.sim import world
     from pytest_navscenario.sim.world import clear_model_cache
     from pytest_navscenario.subjects.loading import load_subject
 
@@ -160,7 +163,11 @@ def part_fixed(subject: str, repeats: int) -> list[str]:
             whole, tick = [], []
             for _ in range(repeats):
                 ticks[0] = 0.0
-                clear_model_cache()   # as for a search's candidate: a layout not built before
+                if fresh_structure:
+                    clear_model_cache()   # nothing built before
+                else:
+                    world._CACHE.clear()  # as for a search's candidate: a layout not built before, of a
+                                          # structure built before (its MjData pool kept)
                 c = time.process_time()
                 run_scenario(seed, factory())
                 whole.append(time.process_time() - c)
@@ -182,35 +189,66 @@ def main() -> None:
     ap.add_argument("--strategies", default=",".join(STRATEGIES))
     ap.add_argument("--variants", default=",".join(VARIANTS))
     ap.add_argument("--repeats", type=int, default=20, help="fixed: episodes per seed (median)")
+    ap.add_argument("--fresh-structure", action="store_true", help="fixed: empty the MjData pools too "
+                    "(a model of a structure never built before)")
     ap.add_argument("--jobs", type=int, default=1, help="processes (CPU time is per search, so any number)")
-    ap.add_argument("--check", type=float, default=None, help="exit 1 if a strategy's own work is over "
-                    "this share of its episodes' CPU")
+    ap.add_argument("--check", default=None, help="exit 1 if a strategy's own work is over this share of its "
+                    "episodes' CPU: one share for all (0.2) or per strategy (evolve=1.0,random=0.2,hillclimb=0.2)")
     ap.add_argument("--out", default=str(Path(__file__).parent / "out" / "bench_search_cost.json"))
+    ap.add_argument("--table", default=None, help="print the table of a rows file (.jsonl, also of a run "
+                    "cut short) and exit")
     a = ap.parse_args()
     print(f"load average before: {os.getloadavg()}")
     print("command:", " ".join(sys.argv))
+    if a.table:
+        rows = [json.loads(line) for line in Path(a.table).read_text().splitlines() if line.strip()]
+        lines, shares = summary(rows)
+        print("\n".join(lines))
+        _check(a.check, shares)
+        return
     if a.part == "fixed":
-        print("\n".join(part_fixed(a.subject, a.repeats)))
+        print("\n".join(part_fixed(a.subject, a.repeats, a.fresh_structure)))
         print(f"load average after: {os.getloadavg()}")
         return
-    tasks = [(s, v, strat, k, a.budget, a.subject) for v in a.variants.split(",") for s in a.seeds.split(",")
-             for strat in a.strategies.split(",") for k in range(a.search_seeds)]
-    with ProcessPoolExecutor(a.jobs) as pool:
-        rows = list(pool.map(one_search, tasks))
+    # search seed first: a run cut short has every cell of the table at about the same count
+    tasks = [(s, v, strat, k, a.budget, a.subject) for k in range(a.search_seeds) for v in a.variants.split(",")
+             for s in a.seeds.split(",") for strat in a.strategies.split(",")]
+    rows = []
+    Path(a.out).parent.mkdir(parents=True, exist_ok=True)
+    with ProcessPoolExecutor(a.jobs) as pool, open(a.out + "l", "w") as stream:   # rows as they come: .jsonl
+        for row in pool.map(one_search, tasks):
+            rows.append(row)
+            stream.write(json.dumps(row) + "\n")
+            stream.flush()
     lines, shares = summary(rows)
     print(f"budget {a.budget}, subject {a.subject}, seeds {a.seeds}, search seeds 0-{a.search_seeds - 1}, "
           f"no shrinking, CPU time")
     print("\n".join(lines))
     print(f"load average after: {os.getloadavg()}")
-    Path(a.out).parent.mkdir(parents=True, exist_ok=True)
     Path(a.out).write_text(json.dumps({"command": " ".join(sys.argv), "rows": rows}, indent=1))
-    if a.check is not None:
-        over = {k: v for k, v in shares.items() if v > a.check}
-        if over:
-            print(f"CHECK FAILED: own work over {a.check:.0%} of the episodes' CPU: "
-                  + ", ".join(f"{s} ({v}) {x:.0%}" for (v, s), x in over.items()))
-            sys.exit(1)
-        print(f"check: every strategy's own work within {a.check:.0%} of its episodes' CPU")
+    _check(a.check, shares)
+
+
+def _check(check: str | None, shares: dict) -> None:
+    """Exit 1 when a strategy's own work is over its limit (``--check``)."""
+    if check is None:
+        return
+    limits = _limits(check)
+    over = {k: v for k, v in shares.items() if v > limits.get(k[1], limits.get("*", math.inf))}
+    if over:
+        print(f"CHECK FAILED: own work over its limit ({check}) of the episodes' CPU: "
+              + ", ".join(f"{s} ({v}) {x:.0%}" for (v, s), x in over.items()))
+        sys.exit(1)
+    print(f"check: every strategy's own work within its limit ({check}) of its episodes' CPU")
+
+
+def _limits(text: str) -> dict[str, float]:
+    """``0.2`` (every strategy) or ``evolve=1.0,random=0.2``: strategy -> largest own/episodes."""
+    out = {}
+    for part in text.split(","):
+        name, _, value = part.rpartition("=")
+        out[name.strip() or "*"] = float(value)
+    return out
 
 
 if __name__ == "__main__":
