@@ -668,17 +668,3 @@ def test_where_tight_layouts_fail_the_first_candidate_fails_far_more_often_than_
               for strategy in ("evolve", "random")}
     evolve, rnd = (sum(f == 1 for f in firsts[s]) for s in ("evolve", "random"))
     assert evolve >= 9 and evolve >= rnd + 4, firsts
-
-
-def test_evolve_draws_its_proposals_without_running_hypothesiss_engine(monkeypatch):
-    """One candidate costs Hypothesis a draw, not an engine run (#35: an engine run per generation
-    was most of the strategy's own work); shrinking still runs Hypothesis's engine."""
-    from hypothesis.internal.conjecture.engine import ConjectureRunner
-
-    def no_engine(self, *a, **k):
-        raise AssertionError("a Hypothesis engine run while drawing proposals")
-
-    monkeypatch.setattr(ConjectureRunner, "run", no_engine)
-    lane = loads_scenario(OPEN_YAML, "lane.yaml", name="lane")
-    report = run_search(lane, Straight, budget=24, seed_value=3, strategy="evolve", shrink_budget=0)
-    assert report.sims_used == 24 and len({c.origin for c in report.candidates}) > 1
