@@ -44,6 +44,7 @@ PLACE_BINS = 4          # route quarters
 PATH_POINTS = 40        # path samples kept per candidate for the placement operators
 STALL_STEP = 0.25       # m along the route: gaining less than this is no progress (the stuck cell)
 PROGRESS_RATE = 10.0    # Hz: trajectory samples read for the stall
+FRACTIONS_KEPT = 100_000   # Route.fraction's remembered answers (then it starts afresh)
 
 
 @dataclass(frozen=True)
@@ -77,16 +78,24 @@ class Route:
         seg = np.hypot(*np.diff(self.points, axis=0).T) if len(self.points) > 1 else np.zeros(0)
         self.cum = np.concatenate([[0.0], np.cumsum(seg)])
         self.length = float(self.cum[-1]) or 1.0
+        self._fractions: dict[tuple[float, float], float] = {}   # fraction's answers: the aimed
+        # operators ask about the same path points again and again (a parent's 40 samples)
         # a seed obstacle's place is where the seed has it: part of its identity, so a nudge across
         # a quarter boundary (the paper seeds' obstacles sit on one) is not a new way of failing
         self.places = {o.name: _bin(self.fraction(o.x, o.y)) for o in seed.obstacles}
         self.places.update({f"terrain:{el.name}": _bin(self.fraction(el.x, el.y)) for el in seed.terrain})
 
     def fraction(self, x: float, y: float) -> float:
-        """Arc-length fraction (0..1) of the route point nearest to (x, y)."""
-        import numpy as np
+        """Arc-length fraction (0..1) of the route point nearest to (x, y) (remembered)."""
+        key = (x, y)
+        known = self._fractions.get(key)
+        if known is None:
+            import numpy as np
 
-        return float(self.fractions(np.array([[x, y]], dtype=float))[0])
+            if len(self._fractions) >= FRACTIONS_KEPT:
+                self._fractions.clear()
+            known = self._fractions[key] = float(self.fractions(np.array([[x, y]], dtype=float))[0])
+        return known
 
     def fractions(self, xy: Any) -> Any:
         """``fraction`` of each row of an (n, 2) array."""

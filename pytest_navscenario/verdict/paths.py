@@ -218,11 +218,13 @@ def passage_room(scenario: Scenario, margins: Sequence[float]) -> float:
                      dtype=float)
     obstacles, r = path_obstacles(scenario), inflation_radius(scenario.robot.footprint)
     for margin in sorted(margins, reverse=True):
-        keep = obstacles
+        keep, grown = obstacles, None
         if obstacles:
-            at_stop = _inside(stops, _grow(obstacles, r + margin)).any(axis=0)
-            keep = tuple(o for o, out in zip(obstacles, at_stop) if not out)
-        if _plan(stops, keep, r + margin) is not None:
+            grown = _grow(obstacles, r + margin)
+            at_stop = _inside(stops, grown).any(axis=0)
+            if at_stop.any():
+                keep, grown = tuple(o for o, out in zip(obstacles, at_stop) if not out), None
+        if _plan(stops, keep, r + margin, grown) is not None:   # grown: the same obstacles, not again
             return float(margin)
     return 0.0
 
@@ -233,10 +235,12 @@ def clear_caches() -> None:
     clear_gap_caches()
 
 
-def _plan(stops: np.ndarray, obstacles: Sequence[Obstacle], r: float) -> ShortestPath | None:
+def _plan(stops: np.ndarray, obstacles: Sequence[Obstacle], r: float, grown: _Grown | None = None
+          ) -> ShortestPath | None:
+    """Shortest path through ``stops`` among ``obstacles`` grown by ``r`` (``grown``: already so)."""
     if not obstacles:
         return _make_path(stops)
-    g = _grow(obstacles, r)
+    g = grown if grown is not None else _grow(obstacles, r)
     if _inside(stops, g).any():
         return None
     if _segments_free(stops[:-1], stops[1:], g).all():    # nothing in the way: straight legs
