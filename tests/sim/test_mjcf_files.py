@@ -103,3 +103,17 @@ def test_a_robot_whose_files_stay_inside_runs_and_a_lone_file_hashes_as_before(t
     shutil.rmtree(tmp_path / "scene")
     path = scene(tmp_path, '<include file="inc.xml"/>', {"scene/robot/inc.xml": OPTION})
     assert simulate(load_scenario(path), Straight(), 0).end in ("goal", "timeout")
+
+
+def test_the_robot_files_contact_options_survive_in_the_compiled_model(tmp_path):
+    """Issue #36 point 2: the file's <option cone impratio> concern the robot's contacts; they are
+    kept (a quadruped sagged 0.20 m without them), the scenario's timestep and gravity still rule."""
+    import mujoco
+    from pytest_navscenario.sim.body_world import compiled_body_world
+    path = scene(tmp_path, '<option cone="elliptic" impratio="100" timestep="0.01" gravity="0 0 -1"/>')
+    loaded = load_scenario(path)
+    model = compiled_body_world(loaded).model
+    assert model.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC
+    assert model.opt.impratio == 100
+    assert model.opt.timestep == loaded.simulation.timestep
+    assert model.opt.gravity[2] < -9

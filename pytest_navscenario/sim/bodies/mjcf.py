@@ -4,9 +4,9 @@ theirs, riding the terrain like the wheeled body.
 The model. ``robot.body.file`` (beside the scenario: the mesh path rules) is read by MuJoCo; its
 base (``robot.body.base``, else the first body with a free joint) and everything below it are
 attached to the scenario's world with their names, defaults, actuators, tendons and sensors kept;
-the rest of the file's world (its floor, lights, other bodies) and its options are not used: the
-scenario's timestep, gravity and other options are (quietly: the file's are replaced before it is
-attached). The robot's geoms are put in geom group 5 (the lidars skip the robot's own geoms) and keep
+the rest of the file's world (its floor, lights, other bodies) is not used; of its ``<option>``, the
+contact ones (``ROBOT_OPTIONS``: cone, impratio, noslip) are kept for the whole world, the scenario's
+timestep, gravity, integrator and the rest rule. The robot's geoms are put in geom group 5 (the lidars skip the robot's own geoms) and keep
 their contact bits among themselves; each that would meet a default MuJoCo floor (contype 1,
 conaffinity 1: MuJoCo Menagerie's robots have contype 0, conaffinity 1) meets the scenario's ground
 and obstacles, through a bit of its own (``_world_bit``). A contact of any of them with an obstacle is a
@@ -151,6 +151,11 @@ def load_controller(scenario) -> Any:
         raise _fail(scenario, str(exc), "robot.body.controller", None) from None
 
 
+# The file's <option> attributes that concern the robot's contacts (friction cone, impedance
+# ratio, no-slip passes): kept, since a legged robot tuned with them sags without them (issue #36).
+ROBOT_OPTIONS = ("cone", "impratio", "noslip_iterations", "noslip_tolerance")
+
+
 class MjcfModel(FreeBase):
     """A ``MjcfBody`` in MuJoCo (see the module docstring)."""
 
@@ -164,9 +169,11 @@ class MjcfModel(FreeBase):
     def build(self, spec: mujoco.MjSpec) -> None:
         child = self.child.copy()
         child.modelname = f"{spec.modelname}:robot"        # no attach conflict with the scenario's name
-        for name in dir(spec.option):                       # the scenario's options, kept quietly
+        for name in dir(spec.option):                       # the scenario's options in the child
             if not name.startswith("_"):
                 setattr(child.option, name, getattr(spec.option, name))
+        for name in ROBOT_OPTIONS:               # the file's contact options rule the world (#36)
+            setattr(spec.option, name, getattr(self.child.option, name))
         if self.child.memory > spec.memory:      # the file's <size memory> (attach would drop it)
             spec.memory = self.child.memory
         base = child.body(self.base_name)
