@@ -169,11 +169,11 @@ class MjcfModel(FreeBase):
     def build(self, spec: mujoco.MjSpec) -> None:
         child = self.child.copy()
         child.modelname = f"{spec.modelname}:robot"        # no attach conflict with the scenario's name
-        for name in dir(spec.option):                       # the scenario's options in the child
-            if not name.startswith("_"):
-                setattr(child.option, name, getattr(spec.option, name))
         for name in ROBOT_OPTIONS:               # the file's contact options rule the world (#36)
             setattr(spec.option, name, getattr(self.child.option, name))
+        for name in dir(spec.option):            # then the world's options in the child: no attach conflict
+            if not name.startswith("_"):
+                setattr(child.option, name, getattr(spec.option, name))
         if self.child.memory > spec.memory:      # the file's <size memory> (attach would drop it)
             spec.memory = self.child.memory
         base = child.body(self.base_name)
