@@ -30,6 +30,7 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from typing import Any, Sequence
 
+from ..core.interrupts import unmasked
 from .jobs import EpisodeError, EpisodeJob, Pending, run_job, worker_name
 from ..verdict.result import EpisodeResult
 
@@ -308,6 +309,10 @@ class ProcessExecutor:
                                         f"killed or ran out of memory); it was not run again",
                                         "", worker_name(), None)
                 continue
+            except RuntimeError as exc:      # after BrokenProcessPool, a RuntimeError too
+                if unmasked(exc) is not exc:    # the user's interrupt, surfaced as a lock error
+                    raise unmasked(exc) from None
+                raise
             self._open.pop(slot.key, None)
             return outcome
 
