@@ -13,7 +13,8 @@ The rule is the legged body's (``scenario/ground/crossing.py``), with the body's
 
 Ramps, steps, platforms and pits are exact (their faces are found along their edges, 5 cm apart,
 from ``scenario.ground.surface``'s heights on either side); rough ground and height files are checked on
-their grid (a cell where the ground jumps by more than ``max_step`` to a neighbour, and connected
+their grid (a cell where the ground jumps by more than ``max_step`` to a neighbour, steeper than
+``max_slope`` over the cell, and connected
 cells steeper than ``max_slope`` whose heights span more than ``max_step``).
 
 ``barriers(scenario)`` gives them as thin ``BoxObstacle``s named after the element and what it is
@@ -264,12 +265,17 @@ def _cells_box(scenario: Scenario, i: int, el, pose, run: tuple[int, int], r0: i
 
 
 def _blocked_cells(h: np.ndarray, dx: float, dy: float, cap: Capability) -> np.ndarray:
-    """Cells of a height grid the body cannot cross: a jump of more than max_step to a neighbour,
-    or steep ground (``crossing.steep_cells``: a connected patch steeper than max_slope whose
+    """Cells of a height grid the body cannot cross: a jump of more than max_step to a neighbour
+    that is also steeper than max_slope over the cell (on a coarse grid a rise between samples is
+    a slope: issue 36), or steep ground (``crossing.steep_cells``: a connected patch steeper than max_slope whose
     heights span more than max_step)."""
     blocked = np.zeros(h.shape, dtype=bool)
-    jx = np.abs(np.diff(h, axis=1)) > cap.max_step
-    jy = np.abs(np.diff(h, axis=0)) > cap.max_step
+    steep = math.tan(math.radians(min(cap.max_slope, 89.9)))
+    rise_x, rise_y = np.abs(np.diff(h, axis=1)), np.abs(np.diff(h, axis=0))
+    # A jump is a face only where it is steeper than the body climbs: MuJoCo's heightfield is a
+    # surface of triangles between the samples, so a rise over a coarse grid's cell is a slope.
+    jx = (rise_x > cap.max_step) & (rise_x > steep * dx)
+    jy = (rise_y > cap.max_step) & (rise_y > steep * dy)
     blocked[:, 1:] |= jx
     blocked[:, :-1] |= jx
     blocked[1:, :] |= jy

@@ -178,3 +178,40 @@ def test_an_mjcf_body_that_declares_its_limits_gets_the_same_barriers_as_a_legge
             "(0.85 m step); its limits: a 0.2 m step, a 30 deg slope, a 0.3 m gap") in reason
     no_gap = MjcfBody(file="robot.xml", controller="m:C", max_step=0.05, max_slope=15.0)
     assert body_capability(scene([], no_gap)).max_gap == 0.0               # none declared: it crosses none
+
+
+def _coarse_heightfield(tmp_path, heights, size=150.0):
+    """A 16-bit PNG heightfield over ``size`` metres, as Gazebo worlds import them (the issue's
+    Drøbak world: 129 x 129 samples over 150 m), under the default wheeled body."""
+    from PIL import Image
+    import numpy as np
+    from pytest_navscenario.scenario.loader import load_scenario
+    heights = np.asarray(heights, dtype=float)
+    low, high = float(heights.min()), float(heights.max())
+    grey = np.round((heights - low) / (high - low) * 65535).astype(np.uint16)
+    Image.fromarray(grey).save(tmp_path / "hill.png")
+    (tmp_path / "hill.yaml").write_text(
+        "version: 1\nrobot: {body: {type: wheeled}, drive: diff}\n"
+        "mission: {start: {x: -20, y: 0}, goal: {x: 20, y: 0}, timeout: 120}\n"
+        f"terrain:\n  - {{type: heightfield, name: hill, x: 0, y: 0, file: hill.png, length: {size}, "
+        f"width: {size}, min_height: 0, max_height: {high - low}}}\n")
+    return load_scenario(tmp_path / "hill.yaml")
+
+
+def test_a_coarse_heightfield_is_judged_by_its_slopes_not_by_the_rise_between_its_samples(tmp_path):
+    """Issue 36: a real heightmap (1.17 m between samples) rises 5-15 cm from sample to sample on
+    a 3-7 deg hillside; that is a slope the body climbs (MuJoCo's heightfield is triangles between
+    the samples), not a step. Only where the ground is steeper than the body's limit is it a wall."""
+    import numpy as np
+    n, size = 129, 150.0
+    x = np.linspace(-size / 2, size / 2, n)
+    gentle = np.tile(x * math.tan(math.radians(7.0)), (n, 1))          # 7 deg all the way along x
+    hill = _coarse_heightfield(tmp_path, gentle, size)
+    assert barriers(hill) == ()
+    path = shortest_path(hill)
+    assert path is not None and math.isfinite(path.length) and path.length == pytest.approx(40.0, abs=0.5)
+    cliff = gentle.copy()
+    cliff[:, 70:] += 3.0                     # a 3 m cliff across the route (x ~ 6 m): a wall
+    walls = barriers(_coarse_heightfield(tmp_path, cliff, size))
+    assert walls and all(w.name == "heightfield 'hill' (ground it cannot cross)" for w in walls)
+    assert all(abs(w.x - 6.4) < 1.5 for w in walls), [(w.x, w.y) for w in walls]
