@@ -25,7 +25,7 @@ MAX_SAMPLES = 320            # ground samples along the longer side of the map's
 TERRAIN_COLOURS = ((0.0, "#0d47a1"), (0.35, "#64b5f6"), (0.5, "#fafafa"), (0.62, "#c5e1a5"),
                    (0.8, "#bcaaa4"), (1.0, "#5d4037"))
 EVENT_MARKERS = {"fell": ("v", "#8d1b1b", "fell"), "tipped": ("*", "#8d1b1b", "tipped over"),
-                 "stuck": ("s", "#6a1b9a", "stuck")}
+                 "stuck": ("s", "#6a1b9a", "stuck"), "still": ("o", "#6a1b9a", "did not move")}
 PROFILE_HEIGHT = 2.1         # inches added under the map for the side profile
 
 

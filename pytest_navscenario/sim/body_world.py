@@ -122,6 +122,19 @@ class BodyWorld(World):
     def chassis_touches(self, d: mujoco.MjData) -> bool:
         return d.sensordata[self.chassis_sensor] > 0.0
 
+    def chassis_on_ground(self, d: mujoco.MjData) -> bool:
+        """Whether the chassis itself (``body.chassis_geoms``) touches anything outside the robot:
+        the sensor of a user's MJCF robot counts its whole subtree (wheels and feet on the floor
+        included), which is what the collision check needs but not what "high-centred" means."""
+        chassis, robot = self.body.chassis_geoms, self.body.robot_geoms
+        for k in range(d.ncon):
+            if float(d.contact.dist[k]) > 0.0:
+                continue
+            g1, g2 = int(d.contact.geom[k][0]), int(d.contact.geom[k][1])
+            if (g1 in chassis and g2 not in robot) or (g2 in chassis and g1 not in robot):
+                return True
+        return False
+
 
 def build_body_world(scenario: Scenario, body: Any) -> BodyWorld:
     spec = build_body_spec(scenario, body)

@@ -57,6 +57,7 @@ class RidingEpisode(Episode):
         self.mount = float(scenario.robot.lidar.mount_height) - self.offset
         self.probe = GroundProbe(scenario)
         self.watch = TerrainWatch(scenario, self.body, self.spt * self.dt, self.probe)
+        self.watch.chassis_on_ground = lambda: world.chassis_on_ground(self.data)
         self.sensordata, self.chassis_sensor = self.data.sensordata, world.chassis_sensor
         self.setpoint = (0.0, 0.0, 0.0)
         self.stepping = (self.model, self.data, self.ctrl, self.base_qpos, self.base_qvel, self.pose_buf,

@@ -36,7 +36,8 @@ class SafetyStop:
 class TerrainEvent:
     """The robot lost its footing or could not go on over the terrain: ``kind`` "fell" (off an edge
     or into a hole: ``drop`` metres), "tipped" (roll or pitch past the body's limit) or "stuck"
-    (driven but not moving: ``detail`` says what held it). ``element`` names the terrain element
+    (driven but not moving: ``detail`` says what held it) or "still" (driven on level ground
+    without moving at all: nothing of the terrain held it, its drive did not follow). ``element`` names the terrain element
     ("platform 'dock'"; "" on the plain floor); (x, y, z) is where the base was."""
     kind: str
     time: float

@@ -53,7 +53,7 @@ def classify(scenario: Scenario, trajectory: Trajectory, *, collision: Collision
     timeout = scenario.mission.timeout
     if goal_reached and duration <= timeout:
         return Outcome.SUCCESS, f"success in {duration:.1f} s"
-    if terrain_event is not None and terrain_event.kind == "stuck" and not goal_reached:
+    if terrain_event is not None and terrain_event.kind in ("stuck", "still") and not goal_reached:
         return Outcome.TIMEOUT, (f"timeout: {terrain_message(terrain_event)}; episode ended early at "
                                  f"{duration:.1f} s of {timeout:.1f} s")
     if stuck_after is not None and not goal_reached:
@@ -87,6 +87,8 @@ def terrain_message(event: TerrainEvent) -> str:
         angle = (f"roll {abs(event.roll):.0f} deg" if abs(event.roll) >= abs(event.pitch)
                  else f"pitch {abs(event.pitch):.0f} deg")
         return f"tipped over{on} at t={event.time:.1f} s ({angle}) {where}"
+    if event.kind == "still":
+        return f"did not move at t={event.time:.1f} s {where}: {event.detail}"
     of = f" of {event.element}" if event.element else ""
     return f"stuck on terrain at t={event.time:.1f} s {where}: {event.detail}{of}"
 

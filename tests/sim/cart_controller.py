@@ -19,6 +19,13 @@ class Cart:
         return self.controls
 
 
+class HoldsStill(Cart):
+    """Holds both wheels still whatever the planner asks (a drive that does not follow)."""
+
+    def control(self, command, model, data):
+        return super().control((0.0, 0.0, 0.0), model, data)
+
+
 class WritesCtrl(Cart):
     """Writes data.ctrl itself and returns None."""
 

@@ -188,9 +188,9 @@ def test_a_slope_steeper_than_max_slope_stops_it_across_its_way_as_the_path_sear
 
 
 def test_a_legged_body_held_on_the_plain_ground_is_not_said_to_slip_its_wheels():
-    """#36: a legged body driven and making no headway with no step, slope or gap ahead (what dwa
-    moving it back and forth on a flat floor looked like to the watch) is not 'its wheels slip': it
-    has none."""
+    """#36: a legged body driven and making no headway with no step, slope or gap ahead is not
+    'its wheels slip' (it has none) nor stuck on terrain: held still it did not move; moved back
+    and forth as dwa told it on a flat floor, nothing of the terrain holds it (no event)."""
     from pytest_navscenario.sim.bodies import body_model
     from pytest_navscenario.sim.ground.riding import GroundProbe, TerrainStop, TerrainWatch
 
@@ -201,4 +201,11 @@ def test_a_legged_body_held_on_the_plain_ground_is_not_said_to_slip_its_wheels()
         for tick in range(100):
             watch.check(tick * 0.1, still, (0.5, 0.0, 0.0), False)
     assert "wheel" not in watch.event.detail
-    assert watch.event.detail == "it makes no headway"
+    assert watch.event.kind == "still" and "covered 0.00 m of the 1.50 m asked" in watch.event.detail
+    # moved to and fro as it was told (dwa dithering): the terrain holds nothing, the watch says nothing
+    watch = TerrainWatch(sc, body_model(sc), 0.1, GroundProbe(sc))
+    for tick in range(100):
+        v = 0.5 if (tick // 5) % 2 == 0 else -0.5
+        x = 0.05 * (tick % 5) if (tick // 5) % 2 == 0 else 0.25 - 0.05 * (tick % 5)
+        watch.check(tick * 0.1, (x, *still[1:]), (v, 0.0, 0.0), False)
+    assert watch.event is None

@@ -264,3 +264,44 @@ def test_a_robot_using_a_name_of_the_worlds_own_or_of_an_obstacle_is_an_error_at
     assert err.value.field == "robot.body.file" and "has a geom named 'body', a name the scenario's world " \
                                                      "already gives obstacle 'body' (obstacles[0])" in str(err.value)
     assert err.value.hint == "rename obstacles[0] in the scenario, or the geom in the MJCF file"
+
+
+def test_a_cart_held_still_on_a_flat_floor_did_not_move_and_is_not_stuck_on_terrain(tmp_path):
+    """Issue 36.2a: its wheels and casters touch the floor, its chassis is 0.1 m up: only the
+    chassis (the base's own geoms) can be high-centred, and on a flat floor the terrain holds
+    nothing: the robot did not move (a timeout that says so), not "stuck on terrain"."""
+    from pytest_navscenario.harness.runner import run_scenario
+    held = load_scenario(write(tmp_path, '{type: mjcf, file: cart.xml, controller: "cart_controller:HoldsStill"}'))
+    res = run_scenario(held, Straight())
+    assert res.outcome.value == "timeout"
+    assert "high-centred" not in res.message and "stuck on terrain" not in res.message, res.message
+    assert "did not move" in res.message and re.search(r"at \(-?0.00, -?0.00\)", res.message), res.message
+    flat = run_scenario(load_scenario(write(tmp_path, CART_BODY)), Straight())
+    assert flat.outcome.value == "success", flat.message
+
+
+def test_a_chassis_resting_on_a_sill_is_high_centred(tmp_path):
+    """The other side of the rule: a cart whose chassis (0.1 m up) rests on a 0.15 m bar between
+    its wheels is high-centred on it, whatever its wheels touch."""
+    from pytest_navscenario.harness.runner import run_scenario
+    sill = write(tmp_path, CART_BODY, "terrain:\n  - {type: platform, name: sill, x: 0.0, y: 0, "
+                                      "length: 0.3, width: 0.3, height: 0.13}")
+    res = run_scenario(load_scenario(sill), Straight())
+    assert "high-centred" in res.message and "sill" in res.message, res.message
+
+
+def test_a_chassis_in_a_body_fixed_to_the_base_is_the_chassis_too(tmp_path):
+    """A model whose base holds no geom and whose chassis box hangs on a child body without a joint
+    (a common MJCF layout): that box is the chassis; the wheels on their hinges are not."""
+    from pytest_navscenario.harness.runner import run_scenario
+    sill = write(tmp_path, CART_BODY, "terrain:\n  - {type: platform, name: sill, x: 0.0, y: 0, "
+                                      "length: 0.3, width: 0.3, height: 0.13}")
+    xml = (tmp_path / "cart.xml").read_text()
+    box = '<geom name="body" type="box" size="0.45 0.25 0.1" mass="20" rgba="0.8 0.5 0.1 1"/>'
+    assert box in xml
+    (tmp_path / "cart.xml").write_text(xml.replace(box, f'<body name="deck">{box}</body>'))
+    res = run_scenario(load_scenario(sill), Straight())
+    assert "high-centred" in res.message and "sill" in res.message, res.message
+    held = write(tmp_path, '{type: mjcf, file: cart.xml, controller: "cart_controller:HoldsStill"}')
+    (tmp_path / "cart.xml").write_text(xml.replace(box, f'<body name="deck">{box}</body>'))
+    assert "did not move" in run_scenario(load_scenario(held), Straight()).message

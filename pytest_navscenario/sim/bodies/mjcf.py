@@ -205,7 +205,8 @@ class MjcfModel(FreeBase):
         self.vadr = int(model.jnt_dofadr[joint])
         subtree = {b for b in range(model.nbody) if _under(model, b, self.base_body)}
         self.robot_geoms = frozenset(g for g in range(model.ngeom) if model.geom_bodyid[g] in subtree)
-        self.chassis_geoms = frozenset(g for g in self.robot_geoms if model.geom_bodyid[g] == self.base_body)
+        rigid = {b for b in subtree if _welded(model, b, self.base_body)}
+        self.chassis_geoms = frozenset(g for g in self.robot_geoms if model.geom_bodyid[g] in rigid)
         self.model = model
 
     def start_height(self, ground_z: float) -> float:
@@ -312,6 +313,16 @@ def _under(model: mujoco.MjModel, b: int, root: int) -> bool:
             return True
         b = int(model.body_parentid[b])
     return False
+
+
+def _welded(model: mujoco.MjModel, b: int, root: int) -> bool:
+    """``b`` is ``root`` or fixed to it (no joint between them): part of the chassis, as a bumper or
+    a sensor mast of the base's own; wheels, casters and legs hang on joints."""
+    while b != root:
+        if model.body_jntnum[b] or b <= 0:
+            return False
+        b = int(model.body_parentid[b])
+    return True
 
 
 def _ground_offset(child: mujoco.MjSpec, base_name: str) -> float:

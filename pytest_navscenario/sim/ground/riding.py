@@ -154,7 +154,7 @@ class TerrainStop(Exception):
     def __init__(self, event: TerrainEvent):
         super().__init__(event.kind)
         self.event = event
-        self.reason = "stuck-terrain" if event.kind == "stuck" else event.kind
+        self.reason = "stuck-terrain" if event.kind in ("stuck", "still") else event.kind
 
 
 class TerrainWatch:
@@ -177,6 +177,9 @@ class TerrainWatch:
         self.trail: deque = deque(maxlen=self.stuck_ticks + 1)   # (x, y) of those ticks
         self.speeds: deque = deque(maxlen=self.stuck_ticks + 1)  # and their setpoint speeds
         self.event: TerrainEvent | None = None
+        # () -> whether the chassis itself touches the ground: set by the episode (the world's
+        # contacts); None: the ``touching`` that ``check`` is given (the chassis sensor)
+        self.chassis_on_ground = None
         fp = scenario.robot.footprint
         self.front = fp.length / 2 if fp.shape == "box" else fp.radius
 
@@ -259,10 +262,39 @@ class TerrainWatch:
             detail = f"cannot climb the {slope:.0f} deg slope"
         else:
             el = self.probe.element(x, y)
+            if self.chassis_on_ground is not None:     # the chassis's own contacts, not the wheels'
+                touching = self.chassis_on_ground()
+            if not touching and self._level_around(x, y, px, py):
+                self._not_held(t, x, y, z, roll, pitch)
+                return
             slips = "its wheels slip" if self.body.kind_name == "wheeled" else "it makes no headway"
             detail = "high-centred: its chassis rests on the ground" if touching else slips
         self._end(TerrainEvent("stuck", t, self._name(el), x, y, z, roll=math.degrees(roll),
                                pitch=math.degrees(pitch), detail=detail))
+
+    def _level_around(self, x: float, y: float, px: np.ndarray, py: np.ndarray) -> bool:
+        """The ground under the robot and along its way is level (within FEATURE's step): no
+        terrain there can hold it."""
+        h = ground.ground_height(self.scenario, np.append(px, x), np.append(py, y))
+        return float(np.ptp(h)) <= FEATURE.max_step
+
+    def _not_held(self, t, x, y, z, roll, pitch) -> None:
+        """Driven on level ground without getting anywhere: nothing of the terrain holds it. A
+        robot that went to and fro as it was told (a planner dithering) goes on, the episode's
+        timeout or the stuck check judges it; one that did not move at all ends as "still": its
+        drive or controller did not follow the setpoints (issue 36: not "stuck on terrain")."""
+        pts = np.asarray(self.trail, dtype=float)
+        travelled = float(np.hypot(*np.diff(pts, axis=0).T).sum()) if len(pts) > 1 else 0.0
+        asked = sum(self.speeds) * self.tick_dt
+        if travelled >= STUCK_MOVING * asked:
+            self.pushing = 0
+            self.trail.clear()
+            self.speeds.clear()
+            return
+        self._end(TerrainEvent("still", t, "", x, y, z, roll=math.degrees(roll), pitch=math.degrees(pitch),
+                               detail=f"driven for {STUCK_TIME:g} s on level ground, it covered {travelled:.2f} m "
+                                      f"of the {asked:.2f} m asked: its drive or controller did not follow the "
+                                      f"setpoints"))
 
     def _off_the_side(self, x, y, c, s, roll) -> tuple[str, int | None] | None:
         """(detail, element) when the robot rolls SIDE_TILT degrees more than the ground under its
