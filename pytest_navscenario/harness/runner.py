@@ -17,7 +17,7 @@ import numpy as np
 
 from ..core import processes
 from ..subjects.external import running_pids
-from ..subjects.loading import make_planner, subject_identity
+from ..subjects.loading import BUILTIN_SUBJECTS, DEFAULT_SUBJECT, make_planner, subject_identity
 from ..verdict.result import EpisodeResult
 from ..scenario.model import Scenario
 from ..scenario.perturb import perturbed
@@ -72,6 +72,20 @@ def effective_seed(scenario_seed: int, base_seed: int | None) -> int:
     return int(mixed.generate_state(1)[0])
 
 
+_BUILT_IN_MODULES = frozenset(target.partition(":")[0] for target in BUILTIN_SUBJECTS.values())
+
+
+def starts_no_process(planner: Any) -> bool:
+    """True for a built-in planner (None, its name, its class or an instance of it; not a
+    subclass nor a factory): it starts no process, so its episode skips the two scans of /proc
+    for the children a planner left running (~0.15 ms an episode, 1.3 % of a seed episode:
+    issue 35)."""
+    if planner is None or isinstance(planner, str):
+        return (planner or DEFAULT_SUBJECT).strip() in BUILTIN_SUBJECTS
+    kind = planner if isinstance(planner, type) else type(planner)
+    return getattr(kind, "__module__", None) in _BUILT_IN_MODULES
+
+
 def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = None,
                  tick_limit: float | None = None, reset_timeout: float | None = None,
                  stuck_after: float | None = None) -> EpisodeResult:
@@ -90,7 +104,8 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
     from ..sim.episode import simulate
 
     t0 = time.perf_counter()
-    before = processes.children()
+    watched = not starts_no_process(planner)
+    before = processes.children() if watched else set()
     instance, spec = make_planner(planner)
     if tick_limit and hasattr(instance, "tick_timeout"):  # adapters that enforce the limit themselves
         instance.tick_timeout = tick_limit
@@ -101,7 +116,7 @@ def run_scenario(scenario: Scenario, planner: Any = None, *, seed: int | None = 
     facts = simulate(ran, instance, ep_seed, tick_limit=tick_limit, stuck_after=stuck_after)
     name, version = subject_identity(instance, spec)  # after reset: a planner may name itself there
     del instance    # a planner that ends its helpers when it is dropped has done so before the check
-    left = processes.note_left_behind(before, scenario.name or "the episode", ours=running_pids())
+    left = processes.note_left_behind(before, scenario.name or "the episode", ours=running_pids()) if watched else ()
     return verdict(scenario, facts, ep_seed, name, version, stuck_after, t0, left, ran=ran)
 
 
