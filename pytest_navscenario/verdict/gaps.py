@@ -94,16 +94,21 @@ def box_box_distance(ax, ay, ac, as_, ahl, ahw, bx, by, bc, bs, bhl, bhw):
                  | (np.abs(dy * ac - dx * as_) > ahw + bhl * sab + bhw * cab)
                  | (np.abs(dx * bc + dy * bs) > bhl + ahl * cab + ahw * sab)
                  | (np.abs(dy * bc - dx * bs) > bhw + ahl * sab + ahw * cab))
-    best = None
-    for sx, sy in ((1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)):
-        avx = ax + sx * ahl * ac - sy * ahw * as_
-        avy = ay + sx * ahl * as_ + sy * ahw * ac
-        bvx = bx + sx * bhl * bc - sy * bhw * bs
-        bvy = by + sx * bhl * bs + sy * bhw * bc
-        d = np.minimum(point_box_distance(avx, avy, bx, by, bc, bs, bhl, bhw),
-                       point_box_distance(bvx, bvy, ax, ay, ac, as_, ahl, ahw))
-        best = d if best is None else np.minimum(best, d)
-    return np.where(separated, best, 0.0)
+    # the four corners of each box at once, on a leading axis (the same operations, element by
+    # element, as one corner at a time: a quarter of the numpy calls, issue 35)
+    lead = (4,) + (1,) * np.ndim(separated)
+    sx, sy = _CORNER_X.reshape(lead), _CORNER_Y.reshape(lead)
+    avx = ax + sx * ahl * ac - sy * ahw * as_
+    avy = ay + sx * ahl * as_ + sy * ahw * ac
+    bvx = bx + sx * bhl * bc - sy * bhw * bs
+    bvy = by + sx * bhl * bs + sy * bhw * bc
+    d = np.minimum(point_box_distance(avx, avy, bx, by, bc, bs, bhl, bhw),
+                   point_box_distance(bvx, bvy, ax, ay, ac, as_, ahl, ahw))
+    return np.where(separated, d.min(axis=0), 0.0)
+
+
+_CORNER_X = np.array([1.0, 1.0, -1.0, -1.0])    # the corners' signs along a box's length and width
+_CORNER_Y = np.array([1.0, -1.0, 1.0, -1.0])
 
 
 def shape_pair_distance(a: Shapes, ia, b: Shapes, ib) -> np.ndarray:

@@ -19,6 +19,7 @@ breadth-first search.
 """
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -30,6 +31,14 @@ _STEPS = ((-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1))
 def _disk(radius: int) -> list[tuple[int, int]]:
     return [(i, j) for i in range(-radius, radius + 1) for j in range(-radius, radius + 1)
             if i * i + j * j <= radius * radius + radius]
+
+
+@functools.lru_cache(maxsize=64)
+def _inflation_disk(radius: int) -> tuple[tuple[tuple[int, int], ...], tuple[tuple[int, int], ...]]:
+    """(the disk's cells, its rows) of a radius in cells: the same few radii every episode, so
+    remembered (twice an episode at reset, ~0.1 ms: issue 35)."""
+    disk = _disk(radius)
+    return tuple(disk), tuple(_disk_rows(disk))
 
 
 def _open_grid(i0: int, i1: int, j0: int, j1: int) -> tuple[np.ndarray, np.ndarray]:
@@ -164,8 +173,7 @@ class LidarGrid:
 
     def set_inflation(self, inflation: float) -> None:
         """Cells within ``inflation`` metres of a return are not on a route."""
-        self.inflate = _disk(max(1, int(round(inflation / self.res))))
-        self._inflate_rows = _disk_rows(self.inflate)
+        self.inflate, self._inflate_rows = _inflation_disk(max(1, int(round(inflation / self.res))))
 
     def cell(self, x: float, y: float) -> tuple[int, int]:
         return (int((y - self.origin[1]) / self.res + 0.5), int((x - self.origin[0]) / self.res + 0.5))
