@@ -6,6 +6,7 @@ inflates: compare runs made side by side):
     nice python benchmarks/bench_search_cost.py                          # budget 100, 10 search seeds
     nice python benchmarks/bench_search_cost.py --budget 1000 --search-seeds 1
     nice python benchmarks/bench_search_cost.py --part fixed               # per-episode fixed cost
+    nice python benchmarks/bench_search_cost.py --part split --budget 1000 --repeats 3   # the 1000-search's parts
     nice python benchmarks/bench_search_cost.py --search-seeds 1 --seeds boxes1,boxes2 --variants insert0 \
         --check evolve=1.4,random=0.25,hillclimb=0.25         # the guard (exit 1 if over)
 
@@ -19,6 +20,10 @@ own work as a share of the episodes' CPU, failures found per CPU second, and evo
 searches with a failure (Fisher's exact test, two-sided) and paired by seed and search seed
 (McNemar's exact test on the discordant pairs). ``--check`` exits 1 when a strategy's own work
 exceeds its share of its episodes' CPU: the benchmark that keeps the own work from growing back.
+
+``--part split --budget 1000 --repeats 3``: the search of ``bench_search.py --part speed`` (issue
+35.4), its CPU split into episodes (ticks: MuJoCo, lidar, planner, loop; fixed cost), the
+shrinker's own work and the strategy's own work.
 
 ``--part fixed``: each seed's own episode (no search) ``--repeats`` times: CPU of the whole
 ``run_scenario`` and of its ticks (``Episode.run_ticks``), the compiled models forgotten before
@@ -180,9 +185,106 @@ def part_fixed(subject: str, repeats: int, fresh_structure: bool = False) -> lis
     return lines
 
 
+def part_split(subject: str, budget: int, repeats: int) -> list[str]:
+    """The search of ``bench_search.py --part speed`` (boxes1, evolve, search seed 0, shrinking at
+    the default share, stuck_after as shipped, one process), its CPU split: the episodes (searching
+    and shrinking) into their ticks and their fixed cost, the ticks by the loop's own clocks
+    (MuJoCo's steps, the lidar's rays, the planner, the loop: wall clocks, so run it on a
+    free core; CPU clocks there would cost ~3 s), the shrinker's own work (the shrink
+    phase less its episodes) and the rest, the strategy's own work (issue 35.4)."""
+    import pytest_navscenario.harness.runner as runner
+    from pytest_navscenario.search import engine, shrinker
+    from pytest_navscenario.search.engine import DEFAULT_SHRINK_BUDGET, DEFAULT_STUCK_AFTER, run_search
+    from pytest_navscenario.sim import episode
+    from pytest_navscenario.subjects.loading import load_subject
+
+    acc: dict[str, float] = {}
+    shrinking = [False]
+
+    def add(key: str, value: float) -> None:
+        acc[key] = acc.get(key, 0.0) + value
+
+    def timed(inner, key, *, result=None):
+        def call(*a, **k):
+            c = time.process_time()
+            try:
+                out = inner(*a, **k)
+            finally:
+                add(key + (":shrink" if shrinking[0] and key != "shrink" else ""), time.process_time() - c)
+            if result is not None:
+                result(out)
+            return out
+        return call
+
+    def loop_clocks(res):   # the loop's own clocks (perf_counter: CPU time on a free core)
+        for k in ("physics", "rays", "planner", "safety"):
+            add(k, res.timings.get(k, 0.0))
+        add("episodes_n", 1)
+
+    def in_shrink(inner):
+        def call(*a, **k):
+            shrinking[0] = True
+            try:
+                return timed(inner, "shrink")(*a, **k)
+            finally:
+                shrinking[0] = False
+        return call
+
+    saved = (runner.run_scenario, episode.Episode.run_ticks, engine.shrink_failure, shrinker.shrink_failure)
+    runner.run_scenario = timed(saved[0], "episodes", result=loop_clocks)
+    episode.Episode.run_ticks = timed(saved[1], "ticks")
+    engine.shrink_failure = shrinker.shrink_failure = in_shrink(saved[2])
+    runs = []
+    try:
+        for _ in range(repeats):
+            acc.clear()
+            c0 = time.process_time()
+            r = run_search(_load("boxes1"), load_subject(subject), budget=budget, seed_value=0,
+                           shrink_budget=DEFAULT_SHRINK_BUDGET, stuck_after=DEFAULT_STUCK_AFTER)
+            acc["total"] = time.process_time() - c0
+            acc["sims"], acc["shrink_sims"], acc["failures"] = r.sims_used, r.shrink_sims, len(r.failures)
+            runs.append(dict(acc))
+    finally:
+        runner.run_scenario, episode.Episode.run_ticks, engine.shrink_failure, shrinker.shrink_failure = saved
+    return _split_lines(runs, budget, subject)
+
+
+def _split_lines(runs: list[dict], budget: int, subject: str) -> list[str]:
+    """The table of ``part_split``: medians over the runs, seconds of CPU."""
+    def med(f):
+        return statistics.median(f(r) for r in runs)
+    g = lambda r, k: r.get(k, 0.0)   # noqa: E731
+    episodes = lambda r: g(r, "episodes") + g(r, "episodes:shrink")   # noqa: E731
+    ticks = lambda r: g(r, "ticks") + g(r, "ticks:shrink")   # noqa: E731
+    rows = [("whole search (CPU)", lambda r: r["total"]),
+            ("episodes (run_scenario), search + shrink", episodes),
+            ("  of which the shrink phase's episodes", lambda r: g(r, "episodes:shrink")),
+            ("  ticks (Episode.run_ticks)", ticks),
+            ("    MuJoCo steps (loop clock 'physics')", lambda r: g(r, "physics")),
+            ("    lidar rays (loop clock 'rays')", lambda r: g(r, "rays")),
+            ("    planner reset + act (loop clock 'planner')", lambda r: g(r, "planner")),
+            ("    the loop's own (ticks less the three)", lambda r: ticks(r) - g(r, "physics") - g(r, "rays")
+             - g(r, "planner")),
+            ("  per-episode fixed cost (episodes less ticks)", lambda r: episodes(r) - ticks(r)),
+            ("shrinker's own work (shrink phase less its episodes)",
+             lambda r: g(r, "shrink") - g(r, "episodes:shrink")),
+            ("strategy's own work (the rest)", lambda r: r["total"] - episodes(r) - g(r, "shrink")
+             + g(r, "episodes:shrink"))]
+    total = med(lambda r: r["total"])
+    lines = [f"budget {budget} on boxes1 vs {subject} (evolve, search seed 0, default shrink, one process), "
+             f"{len(runs)} run(s), medians: {med(lambda r: r['sims']):.0f} search + "
+             f"{med(lambda r: r['shrink_sims']):.0f} shrink simulations, {med(lambda r: r['episodes_n']):.0f} "
+             f"episodes, {med(lambda r: r['failures']):.0f} distinct failures",
+             "| part | CPU s | share |", "|---|---|---|"]
+    lines += [f"| {name} | {med(f):.2f} | {med(f) / total:.0%} |" for name, f in rows]
+    return lines
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--part", choices=("share", "fixed"), default="share")
+    ap.add_argument("--part", choices=("share", "fixed", "split"), default="share",
+                    help="share: own work vs episodes per strategy; fixed: per-episode fixed cost; split: "
+                         "the budget-1000 search (--budget 1000) split into its parts")
     ap.add_argument("--subject", default="dwa", help="planner spec: dwa, potential-field, pkg.mod:Class")
     ap.add_argument("--budget", type=int, default=100)
     ap.add_argument("--search-seeds", type=int, default=10)
@@ -206,6 +308,10 @@ def main() -> None:
         lines, shares = summary(rows)
         print("\n".join(lines))
         _check(a.check, shares)
+        return
+    if a.part == "split":
+        print("\n".join(part_split(a.subject, a.budget, a.repeats)))
+        print(f"load average after: {os.getloadavg()}")
         return
     if a.part == "fixed":
         print("\n".join(part_fixed(a.subject, a.repeats, a.fresh_structure)))
