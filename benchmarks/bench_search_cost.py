@@ -5,7 +5,7 @@ inflates: compare runs made side by side):
 
     nice python benchmarks/bench_search_cost.py                          # budget 100, 10 search seeds
     nice python benchmarks/bench_search_cost.py --budget 1000 --search-seeds 1
-    nice python benchmarks/bench_search_cost.py --part fixed               # per-episode fixed cost
+    nice python benchmarks/bench_search_cost.py --part fixed --repeats 200 --steps   # per-episode fixed cost
     nice python benchmarks/bench_search_cost.py --part split --budget 1000 --repeats 3   # the 1000-search's parts
     nice python benchmarks/bench_search_cost.py --search-seeds 1 --seeds boxes1,boxes2 --variants insert0 \
         --check evolve=1.4,random=0.25,hillclimb=0.25         # the guard (exit 1 if over)
@@ -28,8 +28,9 @@ shrinker's own work and the strategy's own work.
 ``--part fixed``: each seed's own episode (no search) ``--repeats`` times: CPU of the whole
 ``run_scenario`` and of its ticks (``Episode.run_ticks``), the compiled models forgotten before
 each (a search's candidate is a layout not built before, of a structure built before: its MjData
-pool kept; ``--fresh-structure``: forgotten too); the rest is the fixed per-episode cost
-(building and compiling the MuJoCo model, the lidar, the planner's reset, metrics and verdict).
+pool and MjSpec kept; ``--fresh-structure``: forgotten too); the rest is the fixed per-episode cost
+(building and compiling the MuJoCo model, the lidar, the planner's reset, metrics and verdict);
+``--steps`` times those steps one by one.
 """
 from __future__ import annotations
 
@@ -143,8 +144,41 @@ def summary(rows: list[dict]) -> tuple[list[str], dict]:
     return lines, shares
 
 
-def part_fixed(subject: str, repeats: int, fresh_structure: bool = False) -> list[str]:
-    """Each seed's own episode: CPU of run_scenario and of its ticks (the rest is the fixed cost)."""
+# --part fixed --steps: the steps of an episode outside its ticks, timed one by one (owner, attribute, label)
+FIXED_STEPS = (("sim.loop:Episode", "world_of", "the compiled model (sim.world.compiled_world)"),
+               ("sim.world", "layout_spec", "  of it the MjSpec (layout_spec; the rest: compile, lookups)"),
+               ("sim.loop:Episode", "_reset_planner", "the planner's reset"),
+               ("sim.loop:Episode", "result", "the trajectory arrays (Episode.result)"),
+               ("harness.runner", "verdict", "outcome and metrics (harness.runner.verdict)"),
+               ("verdict.metrics", "compute_metrics", "  of it the metrics (compute_metrics)"))
+
+
+def _patch_steps(acc: dict) -> list:
+    """Time each of FIXED_STEPS into ``acc`` (CPU); returns what to put back."""
+    import importlib
+
+    saved = []
+    for where, attr, label in FIXED_STEPS:
+        module, _, cls = where.partition(":")
+        owner = importlib.import_module(f"pytest_navscenario.{module}")
+        owner = getattr(owner, cls) if cls else owner
+        inner = owner.__dict__[attr] if cls else getattr(owner, attr)
+        func = inner.__func__ if isinstance(inner, staticmethod) else inner
+
+        def timed(*a, _f=func, _label=label, **k):
+            c = time.process_time()
+            try:
+                return _f(*a, **k)
+            finally:
+                acc[_label] = acc.get(_label, 0.0) + time.process_time() - c
+        setattr(owner, attr, staticmethod(timed) if isinstance(inner, staticmethod) else timed)
+        saved.append((owner, attr, inner))
+    return saved
+
+
+def part_fixed(subject: str, repeats: int, fresh_structure: bool = False, steps: bool = False) -> list[str]:
+    """Each seed's own episode: CPU of run_scenario and of its ticks (the rest is the fixed cost);
+    ``steps``: also the steps of that rest, one by one (FIXED_STEPS; their timers add a little)."""
     from pytest_navscenario.harness.runner import run_scenario
     from pytest_navscenario.sim import episode
     from pytest_navscenario.sim import world
@@ -161,7 +195,10 @@ def part_fixed(subject: str, repeats: int, fresh_structure: bool = False) -> lis
             ticks[0] += time.process_time() - c
 
     episode.Episode.run_ticks = timed
+    acc: dict[str, float] = {}
+    saved = _patch_steps(acc) if steps else []
     lines = ["| seed | episode CPU ms (median) | ticks ms | fixed ms | fixed share |", "|---|---|---|---|---|"]
+    per_step: dict[str, list[float]] = {}
     try:
         for name in SEEDS:
             seed, factory = _load(name), load_subject(subject)
@@ -174,14 +211,23 @@ def part_fixed(subject: str, repeats: int, fresh_structure: bool = False) -> lis
                 else:
                     world._CACHE.clear()  # as for a search's candidate: a layout not built before, of a
                                           # structure built before (its MjData pool kept)
+                acc.clear()
                 c = time.process_time()
                 run_scenario(seed, factory())
                 whole.append(time.process_time() - c)
                 tick.append(ticks[0])
+                for label, value in acc.items():
+                    per_step.setdefault(f"{name}: {label}", []).append(value)
             w, t = statistics.median(whole), statistics.median(tick)
             lines.append(f"| {name} | {w * 1e3:.2f} | {t * 1e3:.2f} | {(w - t) * 1e3:.2f} | {(w - t) / w:.0%} |")
     finally:
         episode.Episode.run_ticks = inner
+        for owner, attr, value in saved:
+            setattr(owner, attr, value)
+    if steps:
+        lines += ["", "| seed: step outside the ticks | CPU ms (median) |", "|---|---|"]
+        lines += [f"| {name}: {label} | {statistics.median(per_step[f'{name}: {label}']) * 1e3:.3f} |"
+                  for name in SEEDS for _, _, label in FIXED_STEPS if f"{name}: {label}" in per_step]
     return lines
 
 
@@ -294,6 +340,8 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=20, help="fixed: episodes per seed (median)")
     ap.add_argument("--fresh-structure", action="store_true", help="fixed: empty the MjData pools too "
                     "(a model of a structure never built before)")
+    ap.add_argument("--steps", action="store_true", help="fixed: also time the steps outside the ticks one by "
+                    "one (the model, the planner's reset, the trajectory arrays, the verdict and metrics)")
     ap.add_argument("--jobs", type=int, default=1, help="processes (CPU time is per search, so any number)")
     ap.add_argument("--check", default=None, help="exit 1 if a strategy's own work is over this share of its "
                     "episodes' CPU: one share for all (0.2) or per strategy (evolve=1.0,random=0.2,hillclimb=0.2)")
@@ -314,7 +362,7 @@ def main() -> None:
         print(f"load average after: {os.getloadavg()}")
         return
     if a.part == "fixed":
-        print("\n".join(part_fixed(a.subject, a.repeats, a.fresh_structure)))
+        print("\n".join(part_fixed(a.subject, a.repeats, a.fresh_structure, a.steps)))
         print(f"load average after: {os.getloadavg()}")
         return
     # search seed first: a run cut short has every cell of the table at about the same count
