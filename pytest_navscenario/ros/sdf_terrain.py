@@ -47,7 +47,9 @@ def heightmap_terrain(path: Path, where: str, shape: ET.Element, pose: tuple[flo
     if found is None:
         model = uri[len("model://"):].split("/", 1)[0] if uri.startswith("model://") else ""
         hint = (f"; pass --model-path with the folder that holds the model '{model}' (e.g. a Gazebo models "
-                f"folder)" if model else "")
+                f"folder)" if model else "; pass --model-path with the folder that holds it, or copy it there")
+        if hasattr(out, "missing_heightmaps"):
+            out.missing_heightmaps.append(uri)
         out.warnings.append(f"{where}: heightmap {uri}: no such file beside the world, looked in {path.parent} "
                             f"and its models/ folder{hint} (not imported)")
         return

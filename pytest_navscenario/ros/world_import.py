@@ -127,6 +127,7 @@ class SdfWorld:
     terrain: list = field(default_factory=list)              # <heightmap>s as heightfields (sdf_terrain.py)
     # models that compiled plugins move, left out (plugin_motion.py): name -> (libraries, their obstacles)
     plugin_moved: dict = field(default_factory=dict)
+    missing_heightmaps: list[str] = field(default_factory=list)   # their warnings: the CLI fails on them
 
 
 def _pose6(elem: ET.Element | None, where: str, path: Path) -> tuple[float, ...]:
@@ -481,6 +482,10 @@ def run(args: argparse.Namespace) -> int:
         if world.warnings:
             print(f"navscenario import: warning: {len(world.warnings)} warning(s) about {src} (listed above)",
                   file=sys.stderr)
+        if world.missing_heightmaps:   # a flat seed would pass where the world has hills: fail (#36.5)
+            raise WorldImportError(f"{src}: heightmap(s) not found: {', '.join(world.missing_heightmaps)}; "
+                                   f"nothing written: pass --model-path DIR with the folder that holds them "
+                                   f"(a Gazebo models folder, as GAZEBO_MODEL_PATH), or copy them beside the world")
     terrain = tuple(world.terrain) if args.format == "sdf" else ()
     scenario = Scenario(mission=Mission(start=start, goal=goal, waypoints=waypoints),
                         obstacles=tuple(obstacles), robot=robot, name=args.name, terrain=terrain,

@@ -148,3 +148,17 @@ def test_a_heightmap_from_outside_the_worlds_folder_is_refused_as_a_mesh_is(tmp_
                 (world / "h.stl").symlink_to(outside / "h.stl")
         with pytest.raises(WorldImportError, match=f"{what} .* outside the world's folder"):
             sdf_obstacles(_world(world, models))
+
+
+@pytest.mark.parametrize("uri", ["model://hills/materials/textures/hills.png", "media/hills.png"])
+def test_a_heightmap_not_found_fails_the_import_and_names_model_path(tmp_path, capsys, uri):
+    """#36 point 5: a heightmap that is not found must not give a flat seed with exit status 0:
+    the import fails (non-zero), writes nothing, and names --model-path, for any uri form."""
+    from pytest_navscenario.cli import main
+
+    src = _world(tmp_path, _heightmap(uri, pose="0 0 0 0 0 0"))
+    out = tmp_path / "s.yaml"
+    assert main(["import", "sdf", str(src), "--start=0,0,0", "--goal=4,0,0", "-o", str(out)]) != 0
+    err = capsys.readouterr().err
+    assert uri in err and "--model-path" in err and "not found" in err
+    assert not out.exists()
