@@ -354,7 +354,7 @@ def layout_spec(scenario: Scenario) -> mujoco.MjSpec:
     (``_pool_key`` and the geom names), its static boxes' and cylinders' geoms moved and resized to
     this layout with the values ``build_spec`` writes, else a new one (``build_spec``, ~0.3 ms in an
     episode). MuJoCo compiles an edited spec to the model a new spec of the layout compiles to
-    (every MjModel array compared: tests/sim/test_world_reuse.py)."""
+    (every MjModel array compared: tests/sim/test_model_reuse.py)."""
     key = (_pool_key(scenario), tuple(_geom_names(scenario)))
     held = _SPECS.pop(key, None)
     if held is None:
