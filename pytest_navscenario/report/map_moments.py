@@ -34,9 +34,8 @@ def _draw_min_clearance(ax: "Axes", result: EpisodeResult, labels: LabelPlacer |
     p = _pose_at(result, m.min_clearance_time)
     if p is None:
         p = np.array([m.min_clearance_x, m.min_clearance_y, math.radians(s.mission.start.yaw)])
-    try:
-        obstacle = obstacle_polygon_at(s.obstacle(m.min_clearance_obstacle), m.min_clearance_time)
-    except KeyError:
+    obstacle = clearance_shape(s, m.min_clearance_obstacle, m.min_clearance_time)
+    if obstacle is None:
         return
     footprint = footprint_polygon(s.robot.footprint, *p)
     a, b = nearest_points(footprint, obstacle)
@@ -59,6 +58,30 @@ def _draw_min_clearance(ax: "Axes", result: EpisodeResult, labels: LabelPlacer |
     free = [tuple(r * d) for r in (28.0, 44.0)]     # on the free side first, then anywhere near
     labels.add(text, (a.x, a.y), priority=1, offsets=free + ring((28.0, 44.0, 64.0)),
                leader=dict(color="#d50000", lw=0.6, zorder=10), **style)
+
+
+def clearance_shape(scenario: Any, name: str, t: float) -> Any:
+    """The shapely shape a clearance was measured to: the obstacle ``name`` where it was at ``t``,
+    or the terrain's faces of that name (lines) and steep areas (``gaps.clearance_obstacles``);
+    None if there is none."""
+    try:
+        return obstacle_polygon_at(scenario.obstacle(name), t)
+    except KeyError:
+        pass
+    import shapely
+
+    from ..verdict.gaps import clearance_obstacles
+
+    parts = []
+    for o in clearance_obstacles(scenario):
+        if o.name != name:
+            continue
+        if getattr(o, "width", None) == 0.0:     # a face: the line it stands on
+            c, sn = math.cos(math.radians(o.yaw)) * o.length / 2, math.sin(math.radians(o.yaw)) * o.length / 2
+            parts.append(shapely.LineString([(o.x - c, o.y - sn), (o.x + c, o.y + sn)]))
+        else:
+            parts.append(obstacle_polygon(o))
+    return shapely.union_all(parts) if parts else None
 
 
 def _draw_culprit_clearance(ax: "Axes", result: EpisodeResult, labels: LabelPlacer | None = None) -> None:

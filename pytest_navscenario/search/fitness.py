@@ -135,14 +135,22 @@ def culprit_of(res: Any) -> str:
     if res.safety_stop is not None:
         return res.safety_stop.obstacle
     if res.outcome.value == "timeout" and len(res.trajectory.pose):
+        from ..verdict.gaps import is_terrain_face
         from ..verdict.metrics import min_clearance
         pose = res.trajectory.pose
         name = min_clearance(res.scenario, res.trajectory.t[-1:], pose[-1:])[1]
+        if name and is_terrain_face(res.scenario, name):   # a face it cannot cross: its element
+            return terrain_culprit(res.scenario, name, float(pose[-1, 0]), float(pose[-1, 1]))
         if name:
             return name
         if res.scenario.terrain:       # no obstacle near: the terrain element it ended beside
             return terrain_culprit(res.scenario, "", float(pose[-1, 0]), float(pose[-1, 1]), margin=1.0)
-    return res.metrics.min_clearance_obstacle
+    name = res.metrics.min_clearance_obstacle
+    if name and res.scenario.terrain:
+        from ..verdict.gaps import is_terrain_face
+        if is_terrain_face(res.scenario, name):
+            return terrain_culprit(res.scenario, name, res.metrics.min_clearance_x, res.metrics.min_clearance_y)
+    return name
 
 
 def terrain_culprit(scenario: Any, label: str, x: float, y: float, margin: float = 0.3) -> str:

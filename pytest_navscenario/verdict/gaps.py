@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 from collections import OrderedDict
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Sequence
 
 import numpy as np
@@ -143,6 +143,29 @@ def path_obstacles(scenario: Scenario) -> tuple[Obstacle, ...]:
     return statics + barriers(scenario)
 
 
+def clearance_obstacles(scenario: Scenario) -> tuple[Obstacle, ...]:
+    """What the footprint's clearance is measured to: the static obstacles, and on terrain what
+    the body cannot cross (``traversable.barriers``, issue 36): a face as the line it stands on (a
+    box of no width, so the distance is to the face, not to the path search's 2 cm wall), a steep
+    slope or patch as its area. A body without declared limits (an MJCF robot) adds nothing."""
+    statics = static_obstacles(scenario)
+    if not scenario.terrain:
+        return statics
+    from .traversable import WALL, barriers
+    walls = barriers(scenario)
+    faces = _FACES_CACHE.get(walls)
+    if faces is None:
+        faces = tuple(replace(b, width=0.0) if b.width == WALL else b for b in walls)
+        remember(_FACES_CACHE, walls, faces)
+    return statics + faces
+
+
+def is_terrain_face(scenario: Scenario, name: str) -> bool:
+    """True when ``name`` (a clearance's obstacle) is one of the terrain's faces or steep areas,
+    not an obstacle of the scenario."""
+    return bool(name) and bool(scenario.terrain) and all(o.name != name for o in scenario.obstacles)
+
+
 def min_obstacle_gap(scenario: Scenario) -> tuple[float, str, str]:
     """The narrowest gap between two static obstacles: ``(distance m, name a, name b)``, 0 when
     they touch or overlap; ``(inf, "", "")`` with fewer than two. Exact (true circles)."""
@@ -196,12 +219,14 @@ def _min_gap(shapes: Shapes) -> tuple[float, str, str]:
 
 _GAP_CACHE: OrderedDict[Any, tuple[float, str, str]] = OrderedDict()
 _SHAPES_CACHE: OrderedDict[Any, Shapes] = OrderedDict()
+_FACES_CACHE: OrderedDict[Any, tuple] = OrderedDict()    # a terrain's barriers -> their faces as lines
 
 
 def clear_gap_caches() -> None:
-    """Forget every remembered gap and shape table."""
+    """Forget every remembered gap, shape table and terrain face."""
     _GAP_CACHE.clear()
     _SHAPES_CACHE.clear()
+    _FACES_CACHE.clear()
 
 
 def remember(cache: OrderedDict, key: Any, value: Any) -> None:

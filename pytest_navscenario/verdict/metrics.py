@@ -48,7 +48,8 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..core.errors import ScenarioError
-from .gaps import box_box_distance, footprint_core, is_outlined, min_obstacle_gap, obstacle_shapes, static_obstacles
+from .gaps import (box_box_distance, clearance_obstacles, footprint_core, is_outlined, min_obstacle_gap,
+                   obstacle_shapes)
 from .paths import path_through, reference_path, shortest_path
 from ..scenario.motion import displacement, tracks
 from ..sim.trajectory import Collision, Trajectory
@@ -144,7 +145,8 @@ def min_clearance(scenario: Scenario, t: np.ndarray, pose: np.ndarray
                   ) -> tuple[float, str, float, float, float]:
     """``(distance, obstacle, time, x, y)`` of the closest approach of the footprint to any
     obstacle over the poses; the earliest one on ties; ``(inf, "", nan, nan, nan)`` with no
-    obstacles or no poses.
+    obstacles or no poses. On terrain, a face or a steep slope the body cannot cross counts as an
+    obstacle, named after its element ("steps 'stairs' (0.17 m step)": ``gaps.clearance_obstacles``).
 
     Exact at every pose but cheap: the distance of the robot centre to an obstacle bounds the
     footprint's (within the footprint's outer and inner radius). A pass over every
@@ -158,10 +160,10 @@ def min_clearance(scenario: Scenario, t: np.ndarray, pose: np.ndarray
     """
     pose = np.asarray(pose, dtype=float).reshape(-1, 3)
     t = np.asarray(t, dtype=float)
-    if not len(pose) or not scenario.obstacles:
+    if not len(pose) or not (scenario.obstacles or scenario.terrain):
         return math.inf, "", NAN, NAN, NAN
     footprint = scenario.robot.footprint
-    best = closest_approach(static_obstacles(scenario), footprint, pose)
+    best = closest_approach(clearance_obstacles(scenario), footprint, pose)
     for j, track in tracks(scenario.obstacles).items():
         rel = pose.copy()
         rel[:, :2] -= displacement(track, t)

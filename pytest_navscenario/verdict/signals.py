@@ -22,7 +22,7 @@ from ..scenario.model import Scenario
 from ..scenario.motion import displacement, tracks
 from ..scenario.requirements import BUILTIN_SIGNALS, WAYPOINT_SIGNAL, Signal
 from ..sim.trajectory import Trajectory
-from .gaps import box_box_distance, footprint_core, is_outlined, obstacle_shapes
+from .gaps import box_box_distance, clearance_obstacles, footprint_core, is_outlined, obstacle_shapes, static_obstacles
 
 
 @dataclass(frozen=True, eq=False)
@@ -88,7 +88,30 @@ def _lidar_min(s: Samples) -> np.ndarray:
 
 
 def _clearance(s: Samples) -> np.ndarray:
-    return footprint_distance(s, range(len(s.scenario.obstacles)))
+    """To the nearest obstacle, and on terrain to the nearest face or steep slope the body cannot
+    cross (``gaps.clearance_obstacles``, as the ``min_clearance`` metric)."""
+    best = footprint_distance(s, range(len(s.scenario.obstacles)))
+    if s.scenario.terrain and len(s.times):
+        terrain = clearance_obstacles(s.scenario)[len(static_obstacles(s.scenario)):]
+        if terrain:
+            best = np.minimum(best, _static_distance(s, terrain))
+    return best
+
+
+def _static_distance(s: Samples, boxes: tuple) -> np.ndarray:
+    """The footprint's least distance (n,) to static boxes, all at once (terrain faces: up to
+    ``traversable.MAX_BARRIERS``)."""
+    hl, hw, rho = footprint_core(s.scenario.robot.footprint)
+    sh = obstacle_shapes(boxes)
+    out = np.empty(len(s.pose))
+    step = max(1, 100_000 // len(sh))          # samples per pass: bounded temporaries
+    for a in range(0, len(s.pose), step):
+        pose = s.pose[a:a + step]
+        c, sn = np.cos(pose[:, 2:3]), np.sin(pose[:, 2:3])
+        d = box_box_distance(pose[:, 0:1], pose[:, 1:2], c, sn, hl, hw, sh.x[None], sh.y[None], sh.cos[None],
+                             sh.sin[None], sh.hl[None], sh.hw[None])
+        out[a:a + step] = np.maximum(d - rho - sh.rho[None], 0.0).min(axis=1)
+    return out
 
 
 def _to_point(x: float, y: float) -> Callable[[Samples], np.ndarray]:
