@@ -33,10 +33,10 @@ TERRAIN = {
     "ramp": """terrain:
   - {type: ramp, name: ramp, x: 1.0, y: 0, length: 0.6, width: 1.0, rise: 0.05}
   - {type: platform, name: upper, x: 2.3, y: 0, length: 2.0, width: 1.0, height: 0.05}""",
-    # the robot starts on a 0.2 m platform and drives off its edge at x = 1 (a fall is a drop of
+    # the robot starts on a 0.3 m platform and drives off its edge at x = 1 (a fall is a drop of
     # more than 0.1 m, the bodies' drop_limit)
     "edge": """terrain:
-  - {type: platform, name: upper, x: 0, y: 0, length: 2.0, width: 1.0, height: 0.2}""",
+  - {type: platform, name: upper, x: 0, y: 0, length: 2.0, width: 1.0, height: 0.3}""",
     # a 5 cm edge: under the drop limit, no fall for either
     "low edge": """terrain:
   - {type: platform, name: upper, x: 0, y: 0, length: 2.0, width: 1.0, height: 0.05}""",
@@ -59,7 +59,7 @@ robot:
 
 
 def kind(message: str) -> str:
-    """The verdict without its times and places: "fell off platform 'upper', 0.2 m drop"."""
+    """The verdict without its times and places: "fell off platform 'upper', 0.3 m drop"."""
     return re.sub(r" (at|in|after) (t=)?-?[\d.]+ s|,? at \(-?[\d.]+, -?[\d.]+\)", "", message)
 
 
@@ -78,7 +78,7 @@ def test_the_public_car_gets_the_verdict_the_built_in_body_gets(tmp_path, terrai
     car = run_scenario(scenario(tmp_path, CAR, terrain), Straight)
     ours = run_scenario(scenario(tmp_path, BUILT_IN[built_in], terrain), Straight)
     assert (car.outcome, kind(car.message)) == (ours.outcome, kind(ours.message)), (car.message, ours.message)
-    expected = {"flat": "success", "ramp": "success", "edge": "fell off platform 'upper', 0.2 m drop",
+    expected = {"flat": "success", "ramp": "success", "edge": "fell off platform 'upper', 0.3 m drop",
                 "low edge": "success"}[terrain]
     assert kind(car.message) == expected, car.message
 
@@ -88,5 +88,36 @@ def test_up_the_ramp_it_ends_on_the_upper_level_and_off_the_edge_it_lands_on_the
     assert up.end == "goal" and up.trajectory.z[-1] == pytest.approx(0.05, abs=0.005)
     off = simulate(scenario(tmp_path, CAR, "edge"), Straight(), 0)
     assert off.end == "fell" and off.terrain_event.element == "off platform 'upper'"
-    assert off.terrain_event.drop == pytest.approx(0.2)
+    assert off.terrain_event.drop == pytest.approx(0.3)
     assert off.terrain_event.x > 1.0                                    # its centre past the edge
+
+
+def test_the_watch_tells_a_tip_past_an_edge_from_one_on_its_ground_or_on_a_slope():
+    """The rule, tick by tick (the built-in body's watch, no physics): pitched past tip_angle with
+    its centre past the platform's edge (over the floor 0.3 m down) is a fall off the platform;
+    pitched past it with its centre still on the platform, or on a steep ramp whose ground under it
+    is as far below where it last stood (a slope, no edge), is a tip-over."""
+    from pytest_navscenario.scenario.bodies import WheeledBody
+    from pytest_navscenario.scenario.model import Mission, Pose, Robot, Scenario
+    from pytest_navscenario.scenario.terrain import Platform, Ramp
+    from pytest_navscenario.sim.bodies import body_model
+    from pytest_navscenario.sim.ground.riding import GroundProbe, TerrainStop, TerrainWatch
+
+    def end(terrain, x, z):
+        sc = Scenario(mission=Mission(start=Pose(0.0, 0.0, 0.0), goal=Pose(2.5, 0.0), timeout=20.0),
+                      terrain=(terrain,), robot=Robot(drive="diff", body=WheeledBody()))
+        watch = TerrainWatch(sc, body_model(sc), 0.1, GroundProbe(sc))
+        h0 = GroundProbe(sc).height(0.9, 0.0)
+        watch.check(0.0, (0.9, 0.0, h0, 0.0, 0.0, 0.0, 0.2, 0.0, 0.0, 0.0), (0.2, 0.0, 0.0), False)
+        with pytest.raises(TerrainStop):     # airborne (0.1 m up), pitched 60 deg nose down
+            watch.check(0.1, (x, 0.0, z, 0.0, 1.05, 0.0, 0.2, 0.0, 0.0, 0.0), (0.2, 0.0, 0.0), False)
+        return watch.event
+
+    platform = Platform("upper", 0.0, 0.0, length=2.0, width=1.0, height=0.3)
+    past = end(platform, 1.05, 0.25)
+    assert (past.kind, past.element, past.drop) == ("fell", "off platform 'upper'", pytest.approx(0.3))
+    on = end(platform, 0.95, 0.4)
+    assert (on.kind, on.element) == ("tipped", "platform 'upper'")
+    bank = Ramp("bank", 1.5, 0.0, length=2.0, width=1.0, rise=1.2, yaw=180.0)   # 31 deg down from x = 0.5
+    slope = end(bank, 1.15, 0.91)                                    # 0.15 m below, 0.1 m up
+    assert (slope.kind, slope.element) == ("tipped", "ramp 'bank'")

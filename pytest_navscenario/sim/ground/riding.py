@@ -193,6 +193,9 @@ class TerrainWatch:
             self._end(TerrainEvent("fell", t, self._fell_from(x, y), x, y, z, drop=self.level - g,
                                    roll=math.degrees(roll), pitch=math.degrees(pitch)))
         if abs(roll) > self.tip or abs(pitch) > self.tip:
+            if self._over_edge(x, y, g):       # pitching off an edge: the fall it is (issue 36)
+                self._end(TerrainEvent("fell", t, self._fell_from(x, y), x, y, z, drop=self.level - g,
+                                       roll=math.degrees(roll), pitch=math.degrees(pitch)))
             el = self.probe.element(x, y)
             self._end(TerrainEvent("tipped", t, self._name(el), x, y, z, roll=math.degrees(roll),
                                    pitch=math.degrees(pitch)))
@@ -213,6 +216,22 @@ class TerrainWatch:
 
     def _name(self, element: int | None) -> str:
         return "" if element is None else ground.describe_element(self.scenario.terrain[element])
+
+    def _over_edge(self, x: float, y: float, g: float) -> bool:
+        """Its centre is over ground more than ``drop_limit`` below the ground it last stood on,
+        past an edge (a drop steeper than its ``tip_angle`` on the line from where it stood): a
+        robot tipping there is going over the edge, a fall, whichever of its tilt or its drop
+        passes its limit first (a short robot pitches nose down before its base has dropped, a
+        long one drops first). Tipping on a slope, or on the ground it stands on, is a tip-over."""
+        if self.level - g <= self.drop_limit:
+            return False
+        x0, y0 = self.level_at
+        length = math.hypot(x - x0, y - y0)
+        n = int(length / SPACING) + 2
+        h = ground.ground_height(self.scenario, np.linspace(x0, x, n), np.linspace(y0, y, n)).tolist()
+        edge = Capability(max_step=self.drop_limit, max_slope=self.body.tip_angle, max_gap=0.0)
+        _, barrier = walk(h, length / (n - 1), self.level, edge)
+        return barrier is not None and barrier.kind == "drop"
 
     def _fell_from(self, x: float, y: float) -> str:
         """"off platform 'dock'" (the raised element it stood on), "into pit 'p'" (the hole it is
