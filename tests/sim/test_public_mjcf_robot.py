@@ -85,7 +85,7 @@ def test_the_public_car_gets_the_verdict_the_built_in_body_gets(tmp_path, terrai
     ours = run_scenario(scenario(tmp_path, BUILT_IN[built_in], terrain), Straight)
     assert (car.outcome, kind(car.message)) == (ours.outcome, kind(ours.message)), (car.message, ours.message)
     expected = {"flat": "success", "ramp": "success", "edge": "fell off platform 'upper', 0.3 m drop",
-                "short edge": "fell off platform 'upper', 0.1 m drop", "low edge": "success"}[terrain]
+                "short edge": "fell off platform 'upper', 0.15 m drop", "low edge": "success"}[terrain]
     assert kind(car.message) == expected, car.message
 
 
