@@ -116,7 +116,7 @@ def test_the_watch_tells_a_tip_past_an_edge_from_one_on_its_ground_or_on_a_slope
         watch = TerrainWatch(sc, body_model(sc), 0.1, GroundProbe(sc))
         h0 = GroundProbe(sc).height(0.9, 0.0)
         watch.check(0.0, (0.9, 0.0, h0, 0.0, 0.0, 0.0, 0.2, 0.0, 0.0, 0.0), (0.2, 0.0, 0.0), False)
-        with pytest.raises(TerrainStop):     # airborne (0.1 m up), pitched 60 deg nose down
+        with pytest.raises(TerrainStop):     # then at x, its base z above the floor, pitched 60 deg nose down
             watch.check(0.1, (x, 0.0, z, 0.0, 1.05, 0.0, 0.2, 0.0, 0.0, 0.0), (0.2, 0.0, 0.0), False)
         return watch.event
 
