@@ -81,7 +81,9 @@ def terrain_message(event: TerrainEvent) -> str:
     where = f"at ({event.x:.2f}, {event.y:.2f})"
     if event.kind == "fell":
         what = f"fell {event.element}" if event.element else "fell off an edge"
-        return f"{what} at t={event.time:.1f} s, {event.drop:.1f} m drop, {where}"
+        drop = f"{event.drop:.2f}"          # 0.15 and 0.25 m are not "0.1" and "0.2", 1.2 m still "1.2"
+        drop = drop[:-1] if drop.endswith("0") else drop
+        return f"{what} at t={event.time:.1f} s, {drop} m drop, {where}"
     if event.kind == "tipped":
         on = f" on {event.element}" if event.element else ""
         angle = (f"roll {abs(event.roll):.0f} deg" if abs(event.roll) >= abs(event.pitch)

@@ -193,6 +193,10 @@ class TerrainWatch:
             self._end(TerrainEvent("fell", t, self._fell_from(x, y), x, y, z, drop=self.level - g,
                                    roll=math.degrees(roll), pitch=math.degrees(pitch)))
         if abs(roll) > self.tip or abs(pitch) > self.tip:
+            edge = self._over_edge(x, y, g, yaw)
+            if edge is not None:               # pitching off an edge: the fall it is (issue 36)
+                self._end(TerrainEvent("fell", t, self._fell_from(x, y, edge[:2]), x, y, z, drop=edge[2] - g,
+                                       roll=math.degrees(roll), pitch=math.degrees(pitch)))
             el = self.probe.element(x, y)
             self._end(TerrainEvent("tipped", t, self._name(el), x, y, z, roll=math.degrees(roll),
                                    pitch=math.degrees(pitch)))
@@ -214,15 +218,37 @@ class TerrainWatch:
     def _name(self, element: int | None) -> str:
         return "" if element is None else ground.describe_element(self.scenario.terrain[element])
 
-    def _fell_from(self, x: float, y: float) -> str:
-        """"off platform 'dock'" (the raised element it stood on), "into pit 'p'" (the hole it is
-        over), or "" (an edge of the plain floor)."""
+    def _over_edge(self, x: float, y: float, g: float, yaw: float) -> tuple[float, float, float] | None:
+        """(x, y, ground height) of where the robot stood above an edge it is going over, or None:
+        its centre is over ground more than ``drop_limit`` below the ground it last stood on, or
+        below the ground under one end of its footprint (a short robot that noses down onto the
+        lower ground while its rear is still on the edge), past a drop steeper than its
+        ``tip_angle`` on the line from there. A robot tipping there is going over the edge: a fall,
+        whichever of its tilt or its drop passes its limit first (a short robot pitches nose down
+        before its base has dropped, a long one drops first). Tipping on a slope, or on the ground
+        it stands on, is a tip-over."""
+        c, s = math.cos(yaw), math.sin(yaw)
+        ends = [(x - c * self.front, y - s * self.front), (x + c * self.front, y + s * self.front)]
+        edge = Capability(max_step=self.drop_limit, max_slope=self.body.tip_angle, max_gap=0.0)
+        for x0, y0, h0 in [(*self.level_at, self.level)] + [(a, b, self.probe.height(a, b)) for a, b in ends]:
+            if h0 - g <= self.drop_limit:
+                continue
+            length = math.hypot(x - x0, y - y0)
+            n = int(length / SPACING) + 2
+            h = ground.ground_height(self.scenario, np.linspace(x0, x, n), np.linspace(y0, y, n)).tolist()
+            _, barrier = walk(h, length / (n - 1), h0, edge)
+            if barrier is not None and barrier.kind == "drop":
+                return x0, y0, h0
+        return None
+
+    def _fell_from(self, x: float, y: float, stood: tuple[float, float] | None = None) -> str:
+        """"off platform 'dock'" (the raised element it stood on, at ``stood`` or where it last
+        stood), "into pit 'p'" (the hole it is over), or "" (an edge of the plain floor)."""
         below = self.probe.element(x, y)
         if below is not None and self.probe.height(x, y) < 0.0:
             return "into " + self._name(below)
-        above = self.probe.element(*self.level_at)
+        above = self.probe.element(*(stood or self.level_at))
         return "off " + self._name(above) if above is not None else ""
-
     def _stuck(self, t, x, y, z, roll, pitch, yaw, setpoint, touching) -> None:
         """What holds the robot: the first step or slope along its way (the ground from under its
         centre to LOOK_AHEAD past its front, walked with FEATURE: ``scenario/ground/crossing.py``), the
