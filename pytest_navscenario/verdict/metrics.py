@@ -192,7 +192,7 @@ def culprit_clearance(result: Any) -> tuple[str, float, float] | None:
         obstacle = result.scenario.obstacle(name)
     except KeyError:
         return None
-    one = dataclasses.replace(result.scenario, obstacles=(obstacle,))
+    one = dataclasses.replace(result.scenario, obstacles=(obstacle,), terrain=())   # that obstacle alone
     dist, _, time, _, _ = min_clearance(one, result.trajectory.t, result.trajectory.pose)
     return (name, dist, time) if math.isfinite(dist) else None
 

@@ -2,6 +2,7 @@
 36.3): the minimum clearance, the requirements' ``clearance`` signal and a search's culprit count
 it; a face the body climbs, and a body that declares no limits, do not add one. Real MuJoCo
 episodes of the built-in wheeled body driven straight at stairs."""
+import dataclasses
 import math
 import sys
 from pathlib import Path
@@ -12,6 +13,7 @@ from pytest_navscenario.harness.runner import run_scenario
 from pytest_navscenario.scenario.bodies import LeggedBody, WheeledBody
 from pytest_navscenario.scenario.model import BoxObstacle, Footprint, Mission, Pose, Robot, Scenario
 from pytest_navscenario.scenario.terrain import Platform, Steps
+from pytest_navscenario.sim.trajectory import SafetyStop
 from pytest_navscenario.verdict.metrics import min_clearance
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "search"))
@@ -74,3 +76,15 @@ def test_the_requirement_signal_clearance_sees_the_face_too():
 def _poses(x: float):
     import numpy as np
     return np.array([0.0]), np.array([[x, 0.0, 0.0]])
+
+
+def test_the_clearance_to_the_obstacle_a_stop_was_for_is_to_that_obstacle_alone():
+    """A safety stop's clearance to its obstacle is not the nearer terrain face (the dock's edge
+    under the robot's corner): the search summary said "clearance to 'pallet_a' 0.000 m"."""
+    from pytest_navscenario.verdict.metrics import culprit_clearance
+
+    crate = BoxObstacle("crate", 3.0, 0.8, length=0.4, width=0.4, height=0.5)
+    res = run_scenario(scene([STAIRS], obstacles=[crate]), Straight(), seed=0)
+    stopped = dataclasses.replace(res, safety_stop=SafetyStop(1.0, "crate", 1.0))
+    name, dist, _ = culprit_clearance(stopped) or ("", math.nan, 0)
+    assert name == "crate" and dist == pytest.approx(0.8 - 0.2 - FP.width / 2, abs=1e-6)
