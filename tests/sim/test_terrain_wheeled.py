@@ -1,7 +1,9 @@
 """The wheeled body on real MuJoCo terrain: a straight-driving planner climbs a 10 degree ramp,
 crosses a low threshold, stalls at a step taller than it can climb, falls into a pit and off a
 loading dock, tips on a steep side slope; the planar world is untouched."""
+import dataclasses
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -239,3 +241,20 @@ def test_tilted_off_a_ramps_side_it_names_the_ramps_slope_and_the_tilt():
     event = res.terrain_event
     assert event.element == "ramp 'ramp'"
     assert re.fullmatch(r"tilted \d+ deg off the side of the 6\.2 deg slope", event.detail), event.detail
+
+
+@pytest.mark.parametrize("height", [0.15, 0.2])
+def test_hung_over_an_edge_it_names_the_edge_not_a_slope_it_cannot_climb(height):
+    """Driven slowly off a 0.15-0.2 m edge, the 0.9 m body stalls across it, nose down on flat
+    ground: it did not meet a slope it cannot climb (it said "cannot climb the 15 deg slope"), it
+    hangs over the edge of the platform it drove off (issue 36.3)."""
+    from pytest_navscenario.scenario.robot import Limits
+    sc = scene([Platform("upper", 0.0, 0.0, length=2.0, width=1.0, height=height)], body=WheeledBody(),
+               goal=(2.5, 0.0))
+    sc = dataclasses.replace(sc, robot=dataclasses.replace(sc.robot, limits=Limits(max_speed=0.3)))
+    res = simulate(sc, Straight(), 0)
+    assert res.end == "stuck-terrain"
+    event = res.terrain_event
+    assert "cannot climb" not in event.detail
+    assert re.fullmatch(rf"pitched \d+ deg over the {height:.2f} m edge", event.detail), event.detail
+    assert event.element == "platform 'upper'"

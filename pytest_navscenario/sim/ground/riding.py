@@ -19,6 +19,8 @@ STUCK_TIME = 3.0          # s of being driven without moving that make the robot
 STUCK_COMMAND = 0.1       # m/s: a setpoint at least this fast counts as driving
 STUCK_MOVING = 0.25       # of the setpoint's speed: slower than this counts as not moving
 LOOK_AHEAD = 0.3          # m beyond the footprint's front where a stuck robot's step is measured
+EDGE_REACH = 0.1          # m beyond the footprint's ends where an edge a tilted robot hangs on is looked for
+                          # (its casters, wheels or chassis may reach past the footprint)
 GAP_SPACING = 0.005       # m between the samples that measure a gap the robot is caught in
 SIDE_TILT = 6.0           # degrees of roll beyond the ground's own cross-slope: a wheel is off a side edge
 FEATURE = Capability(max_step=0.01, max_slope=5.0, max_gap=0.0)   # what counts as a step or a slope there
@@ -283,6 +285,9 @@ class TerrainWatch:
             else:
                 angle = math.degrees(math.atan2(barrier.height, barrier.width + SPACING))
                 detail = f"cannot climb the {angle:.0f} deg slope"
+        elif slope > 3.0 and (edge := self._edge_under(x, y, c, s)) is not None:
+            el, height = edge            # its own tilt over an edge, not a slope of the ground (issue 36)
+            detail = f"pitched {slope:.0f} deg over the {height:.2f} m edge"
         elif slope > 3.0:
             el = self.probe.element(x, y)
             detail = f"cannot climb the {slope:.0f} deg slope"
@@ -297,6 +302,21 @@ class TerrainWatch:
             detail = "high-centred: its chassis rests on the ground" if touching else slips
         self._end(TerrainEvent("stuck", t, self._name(el), x, y, z, roll=math.degrees(roll),
                                pitch=math.degrees(pitch), detail=detail))
+
+    def _edge_under(self, x: float, y: float, c: float, s: float) -> tuple[int | None, float] | None:
+        """(element, height) of an edge under the footprint, from EDGE_REACH behind its rear to
+        EDGE_REACH past its front end along its heading (a step or drop above FEATURE's): a robot tilted across one is hung over it,
+        its tilt its own, not the ground's slope. None where the ground under it has no edge."""
+        reach = self.front + EDGE_REACH
+        d = np.arange(-reach, reach + SPACING / 2, SPACING)
+        px, py = x + c * d, y + s * d
+        h = ground.ground_height(self.scenario, px, py).tolist()
+        _, barrier = walk(h, SPACING, h[0], FEATURE)
+        if barrier is None or barrier.kind not in ("step", "drop"):
+            return None
+        k = min(barrier.index + 1, len(h) - 1)
+        upper = k if h[k] >= h[barrier.index] else barrier.index    # the edge belongs to the higher side
+        return self.probe.element(float(px[upper]), float(py[upper])), float(barrier.height)
 
     def _level_around(self, x: float, y: float, px: np.ndarray, py: np.ndarray) -> bool:
         """The ground under the robot and along its way is level (within FEATURE's step): no
