@@ -2,7 +2,8 @@
 obstacle onto the robot's path at or a moment after its closest approach (place), insert a new one
 there (insert), squeeze one just beside the path (squeeze), wall the path off with two inserted
 boxes (barrier), retime a moving obstacle to reach the path when the robot was there (retime);
-carry a failure's inserted box along the route (shift) or crowd the start/goal footprint (crowd).
+carry a failure's inserted box along the route (shift) or crowd the start/goal footprint (crowd);
+nudge the obstacle the planner reacted to a few centimetres where the robot hesitated (nudge).
 Where they aim (which obstacle, which quarter of the route) is a novelty bandit, ``_Targets``.
 A mixin of ``evolve.Evolve``: the methods read the strategy's archive, route and bandits.
 """
@@ -21,6 +22,8 @@ RETIME_STARTS = 21             # retime: start offsets tried across their range 
 RETIME_SPEEDS = 5
 RETIME_LAG = (-1.0, 0.5)       # s: the obstacle is aimed at where the robot was this much later
 CROWD_GAP = 0.4                # m: crowd leaves at most this much between a box and the start/goal footprint
+SLOW_SHARE = 0.6               # nudge: a path step below this share of the median is a hesitation
+NUDGE_SD = 0.04                # m: nudge's step across and along the robot's way (sd)
 SHIFT_RADIUS = 2.0             # m: shift carries the inserted boxes this near the culprit along with it
 
 
@@ -160,6 +163,39 @@ class AimedOperators:
                       "x": px - uy * lateral - (x0 + x1) / 2, "y": py + ux * lateral - (y0 + y1) / 2}
             for i in group:
                 offsets[i] = values.get(space.params[i].attr, offsets[i])
+        return space.clip(offsets)
+
+    def _nudge(self, parent: Any, rnd: random.Random) -> tuple[float, ...]:
+        """Nudge the obstacle the parent's planner reacted to (its culprit, else the movable one
+        nearest its closest approach) a few centimetres (NUDGE_SD) across and along the robot's
+        way where the robot hesitated (its slowest moment, if it slowed: ``_hesitation``), else
+        where it came closest. A reactive planner's failures lie on knife edges between passing
+        at once and hesitating (``dwa`` at insert 0: a box whose face is 0.18 m from its way
+        times it out, at 0.14 m or 0.22 m it hesitates 17 s and passes): a near miss, kept by
+        the archive, is that close to one, far closer than a mutation's smallest step."""
+        space, offsets = self.space, list(parent.offsets)
+        route = self._route()
+        path = list(parent.path[1:]) or [p[:2] for p in _route_samples(route)]
+        slow = _hesitation(path)
+        if slow is not None:
+            (px, py), (ux, uy) = path[slow], _direction(path, slow)
+        elif parent.closest and all(math.isfinite(v) for v in parent.closest[1:]):
+            _, px, py = parent.closest
+            j = min(range(len(path)), key=lambda k: (path[k][0] - px) ** 2 + (path[k][1] - py) ** 2)
+            ux, uy = _direction(path, j)
+        else:
+            j = rnd.randrange(len(path))
+            (px, py), (ux, uy) = path[j], _direction(path, j)
+        names = {space.params[g[0]].part.split(":", 1)[1]: g for g in self.movable}
+        name = parent.culprit if parent.culprit in names else min(
+            names, key=lambda n: math.hypot(space.seed.obstacle(n).x - px, space.seed.obstacle(n).y - py))
+        arm = (name, _quarter(route.fraction(px, py)))
+        if arm in self._arms().arms:
+            self.aim, self.aim_bandit = arm, self.targets
+        across, along = rnd.gauss(0.0, NUDGE_SD), rnd.gauss(0.0, NUDGE_SD)
+        step = {"dx": ux * along - uy * across, "dy": uy * along + ux * across}
+        for i in names[name]:
+            offsets[i] += step.get(space.params[i].attr, 0.0)
         return space.clip(offsets)
 
     def _place(self, parent: Any, rnd: random.Random, squeeze: bool = False) -> tuple[float, ...]:
@@ -410,6 +446,25 @@ def _beside_within(path: Sequence[tuple[float, float]], k: int, lateral: float, 
     x0, x1, y0, y1 = box
     return any(x0 <= path[k][0] - dy / norm * s <= x1 and y0 <= path[k][1] + dx / norm * s <= y1
                for s in (lateral, -lateral, 0.0))
+
+
+def _hesitation(path: Sequence[tuple[float, float]]) -> int | None:
+    """The index of the path sample (evenly spaced in time) where the robot moved least, leaving
+    out its start and end, if it moved less than SLOW_SHARE of its median step there; else None."""
+    steps = [math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in zip(path, path[1:])]
+    inner = steps[3:-3]
+    if len(inner) < 3:
+        return None
+    median = sorted(inner)[len(inner) // 2]
+    k = min(range(len(inner)), key=inner.__getitem__)
+    return k + 3 if inner[k] < SLOW_SHARE * median else None
+
+
+def _direction(path: Sequence[tuple[float, float]], j: int) -> tuple[float, float]:
+    a, b = path[max(0, j - 1)], path[min(len(path) - 1, j + 1)]
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    norm = math.hypot(dx, dy)
+    return (dx / norm, dy / norm) if norm > 1e-9 else (1.0, 0.0)
 
 
 def _key(offsets: Sequence[float]) -> tuple:

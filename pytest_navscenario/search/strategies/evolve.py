@@ -2,11 +2,13 @@
 signature (fitness.py) keeps the closest-to-failing candidate of each behaviour; parents are
 picked from it with a penalty on cells picked often, so the budget spreads over ways of
 failing instead of one failure's neighbours. Operators: uniform exploration, Gaussian
-mutation, and five that use what the episode showed (PHYS-FUZZ style): move an obstacle onto
+mutation, and six that use what the episode showed (PHYS-FUZZ style): move an obstacle onto
 the robot's path at or a moment after its closest approach, insert a new obstacle there,
 squeeze one just beside the path (narrowing the passage to little more than the footprint),
 wall the path off with two inserted boxes (barrier), or retime a moving obstacle so that it
-reaches the robot's path when the robot was there (time-to-impact in time as well as space).
+reaches the robot's path when the robot was there (time-to-impact in time as well as space), or
+nudge the obstacle the planner reacted to a few centimetres where the robot hesitated (a near
+miss is that close to a knife edge: what finds failures where only the seed's obstacles move).
 Two more move toward cells of the signature space that are not filled yet: shift carries a
 failure's inserted box (its trap) along the route to a quarter where inserted boxes have failed
 least, crowd puts a box just beside the footprint at the start or goal pose (the least-failed
@@ -40,8 +42,8 @@ from .admission import Admission, uniform
 from .protocol import GENERATION, BaseStrategy
 
 MUTATION_SCALES = (0.05, 0.15, 0.3)   # Gaussian step sd as a fraction of the parameter's range
-OPERATORS = ("explore", "mutate", "place", "insert", "squeeze", "retime", "barrier", "shift", "crowd")
-PATH_OPERATORS = frozenset({"place", "insert", "squeeze", "retime", "barrier"})   # aim at the parent's path
+OPERATORS = ("explore", "mutate", "place", "insert", "squeeze", "retime", "barrier", "shift", "crowd", "nudge")
+PATH_OPERATORS = frozenset({"place", "insert", "squeeze", "retime", "barrier", "nudge"})   # aim at the parent's path
 MIN_SHARE = 0.04               # every usable operator keeps at least this share
 EXPLORE_SHARE = 0.2            # uniform exploration keeps at least this share: never far below random
 PICK_PENALTY = 0.03            # robustness added per earlier pick of an archive cell (novelty)
@@ -122,7 +124,8 @@ class Evolve(AimedOperators, BaseStrategy):
                   "squeeze": bool(self.cells.elites and (self.movable or self.slots)),
                   "retime": bool(self.cells.elites and self.moving),
                   "barrier": bool(self.cells.elites and len(self.slots) >= 2),
-                  "shift": bool(self._shiftable()), "crowd": bool(self.cells.elites and self.slots)}
+                  "shift": bool(self._shiftable()), "crowd": bool(self.cells.elites and self.slots),
+                  "nudge": bool(self.cells.elites and self.movable)}
         rates = {op: (self.stats[op][1] + 1.0) / (self.stats[op][0] + 2.0) for op in OPERATORS if usable[op]}
         total = sum(rates.values())
         return [max(EXPLORE_SHARE if op == "explore" else MIN_SHARE, rates[op] / total) if op in rates else 0.0
