@@ -7,8 +7,9 @@ the robot's path at or a moment after its closest approach, insert a new obstacl
 squeeze one just beside the path (narrowing the passage to little more than the footprint),
 wall the path off with two inserted boxes (barrier), or retime a moving obstacle so that it
 reaches the robot's path when the robot was there (time-to-impact in time as well as space), or
-nudge the obstacle the planner reacted to a few centimetres where the robot hesitated (a near
-miss is that close to a knife edge: what finds failures where only the seed's obstacles move).
+where no box can be inserted, nudge the obstacle the planner reacted to a few centimetres where
+the robot hesitated (a near miss is that close to a knife edge: what finds failures where only
+the seed's obstacles move; where boxes can be inserted it found fewer per CPU second).
 Two more move toward cells of the signature space that are not filled yet: shift carries a
 failure's inserted box (its trap) along the route to a quarter where inserted boxes have failed
 least, crowd puts a box just beside the footprint at the start or goal pose (the least-failed
@@ -125,7 +126,7 @@ class Evolve(AimedOperators, BaseStrategy):
                   "retime": bool(self.cells.elites and self.moving),
                   "barrier": bool(self.cells.elites and len(self.slots) >= 2),
                   "shift": bool(self._shiftable()), "crowd": bool(self.cells.elites and self.slots),
-                  "nudge": bool(self.cells.elites and self.movable)}
+                  "nudge": bool(self.cells.elites and self.movable and not self.slots)}
         rates = {op: (self.stats[op][1] + 1.0) / (self.stats[op][0] + 2.0) for op in OPERATORS if usable[op]}
         total = sum(rates.values())
         return [max(EXPLORE_SHARE if op == "explore" else MIN_SHARE, rates[op] / total) if op in rates else 0.0
