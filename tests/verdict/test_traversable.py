@@ -14,7 +14,7 @@ from pytest_navscenario.scenario.bodies import LeggedBody, MjcfBody, WheeledBody
 from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, Rough, Steps
 from pytest_navscenario.verdict.feasibility import impassable_reason
 from pytest_navscenario.verdict.paths import shortest_path
-from pytest_navscenario.verdict.traversable import barriers
+from pytest_navscenario.scenario.ground.traversable import barriers
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "search"))
 from straight_planner import Straight  # noqa: E402
