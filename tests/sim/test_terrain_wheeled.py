@@ -12,7 +12,7 @@ import pytest
 
 from pytest_navscenario.core.errors import ScenarioError
 from pytest_navscenario.scenario.ground import surface as ground
-from pytest_navscenario.scenario.model import BoxObstacle, Footprint, Mission, Pose, Robot, Scenario
+from pytest_navscenario.scenario.model import BoxObstacle, Footprint, Mission, Pose, Robot, Safety, Scenario
 from pytest_navscenario.scenario.bodies import WheeledBody
 from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, Steps
 from pytest_navscenario.sim.episode import simulate
@@ -22,10 +22,10 @@ from straight_planner import Straight  # noqa: E402
 
 
 def scene(terrain, *, body=WheeledBody(clearance=0.1), start=(0.0, 0.0, 0.0), goal=(12.0, 0.0),
-          footprint=Footprint(), obstacles=(), timeout=20.0):
+          footprint=Footprint(), obstacles=(), timeout=20.0, safety=True):
     return Scenario(mission=Mission(start=Pose(*start), goal=Pose(*goal), timeout=timeout),
                     terrain=tuple(terrain), obstacles=tuple(obstacles),
-                    robot=Robot(footprint=footprint, drive="diff", body=body))
+                    robot=Robot(footprint=footprint, drive="diff", body=body, safety=Safety(enabled=safety)))
 
 
 def ramp_to(deg: float, length: float = 4.0) -> tuple:
@@ -108,8 +108,9 @@ def test_the_chassis_hitting_an_obstacle_on_a_ramp_is_a_collision_and_the_obstac
 
 
 def test_the_chassis_driving_into_a_platform_face_is_a_collision_with_the_terrain():
+    # (the safety layer off: it would halt before the face, tests/sim/test_terrain_safety.py)
     res = simulate(scene([Platform("wall", 4.0, 0.0, length=1.0, width=3.0, height=0.6)],
-                         body=WheeledBody(clearance=0.1)), Straight(), 0)
+                         body=WheeledBody(clearance=0.1), safety=False), Straight(), 0)
     assert res.end == "collision" and res.collision.terrain and res.collision.obstacle == "platform 'wall'"
 
 
@@ -185,7 +186,8 @@ def test_the_verdict_names_what_happened_where_and_the_metrics_see_height():
     assert 8.0 < m.max_pitch < 20.0 and m.climb == pytest.approx(4.0 * math.tan(math.radians(10.0)), abs=0.03)
     xy = np.hypot(*np.diff(up.trajectory.pose[:, :2], axis=0).T).sum()
     assert m.path_length > xy                    # over the ground: the climb counts
-    wall = run_scenario(scene([Platform("wall", 4.0, 0.0, length=1.0, width=3.0, height=0.6)]), Straight)
+    wall = run_scenario(scene([Platform("wall", 4.0, 0.0, length=1.0, width=3.0, height=0.6)], safety=False),
+                        Straight)
     assert wall.outcome is Outcome.COLLISION and wall.message.startswith("collision with the face of platform 'wall'")
 
 

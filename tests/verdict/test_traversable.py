@@ -119,7 +119,7 @@ def test_the_legged_simulation_agrees_with_the_path_where_it_can_and_cannot_go()
     up = scene(upper_level(STAIRS, ramp(8.0)), LEGGED)
     assert simulate(up, Straight(), 0).end == "goal"
     blocked = scene(upper_level(), LEGGED)
-    assert simulate(blocked, Straight(), 0).end == "stuck-terrain"
+    assert simulate(blocked, Straight(), 0).end in ("stuck-terrain", "safety-stop")   # the layer sees the face
 
 
 @pytest.mark.parametrize("body", [WheeledBody(), WheeledBody(drive_wheels="skid"),
