@@ -58,11 +58,14 @@ def block_tops(corner: np.ndarray) -> np.ndarray:
 def cast(g, pnt: np.ndarray, dirs: np.ndarray, rmax: float, out: np.ndarray) -> None:
     """Lower ``out`` (n,) where a ray from ``pnt`` ((3,) or (n, 3)) along ``dirs`` (n, 3) meets the
     prepared grid ``g`` (``hfield_rays._Grid``) nearer, within ``rmax``."""
-    pnts = np.ascontiguousarray(np.broadcast_to(np.asarray(pnt, dtype=np.float64), dirs.shape))
-    params = np.array([g.cx, g.cy, g.base, g.c, g.s, g.half_x, g.half_y, g.dx, g.dy,
-                       g.zmax, g.zmin, g.zlow, rmax])
-    _kernel()(g.heights, g.cell_top, g.block_top, params, pnts,
-              np.ascontiguousarray(dirs, dtype=np.float64), out)
+    pnts = np.asarray(pnt, dtype=np.float64)
+    each = pnts.ndim == 2                      # one origin per ray, or one for all
+    params = g.march_params
+    if params is None:
+        params = g.march_params = np.array([g.cx, g.cy, g.base, g.c, g.s, g.half_x, g.half_y, g.dx,
+                                            g.dy, g.zmax, g.zmin, g.zlow])
+    _kernel()(g.heights, g.cell_top, g.block_top, params, float(rmax),
+              np.ascontiguousarray(pnts.reshape(-1, 3)), each, np.ascontiguousarray(dirs, dtype=np.float64), out)
 
 
 def _kernel():
@@ -81,21 +84,23 @@ def _kernel():
     return _KERNEL
 
 
-def _cast_all(h, cell_top, block_top, params, pnts, dirs, out):   # pragma: no cover - compiled
-    """Every ray: the nearest of its wall hit and triangle hits, lowering ``out``."""
-    cx, cy, base, c, s, half_x, half_y, dx, dy, zmax, zmin, zlow, rmax = (
+def _cast_all(h, cell_top, block_top, params, rmax, pnts, each, dirs, out):   # pragma: no cover
+    """Every ray: the nearest of its wall hit and triangle hits, lowering ``out`` (``pnts``: one
+    origin a ray when ``each``, else one for all)."""
+    cx, cy, base, c, s, half_x, half_y, dx, dy, zmax, zmin, zlow = (
         params[0], params[1], params[2], params[3], params[4], params[5], params[6], params[7],
-        params[8], params[9], params[10], params[11], params[12])
+        params[8], params[9], params[10], params[11])
     rows, cols = h.shape
     for i in range(dirs.shape[0]):
-        z0 = pnts[i, 2] - base
+        o = i if each else 0
+        z0 = pnts[o, 2] - base
         dz = dirs[i, 2]
         if z0 > zmax:                               # above the grid: only a ray coming down
             if not dz < 0:
                 continue
             if not (zmax - z0) / dz <= min(out[i], rmax):
                 continue
-        px, py = pnts[i, 0] - cx, pnts[i, 1] - cy
+        px, py = pnts[o, 0] - cx, pnts[o, 1] - cy
         u0 = (c * px + s * py + half_x) / dx
         v0 = (-s * px + c * py + half_y) / dy
         du = (c * dirs[i, 0] + s * dirs[i, 1]) / dx

@@ -71,6 +71,7 @@ class _Grid:
         # the compiled cast's view: heights (rows, cols), each cell's and block's highest point
         self.heights, self.cell_top = h, np.ascontiguousarray(corner)
         self.block_top = hfield_march.block_tops(corner)
+        self.march_params = None        # its constants, made on its first cast
 
 
 class _Level:
