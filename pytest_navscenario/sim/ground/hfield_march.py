@@ -180,6 +180,7 @@ def _walk(h, cell_top, block_top, rows, cols, u0, v0, z0, du, dv, dz, ta, we):  
         p0, dp, q0, dq, nf, no = v0, dv, u0, du, rows - 1, cols - 1
     sgn = 1.0 if dp >= 0 else -1.0
     P, D = sgn * p0, sgn * dp
+    iD = 1.0 / D if D > 1e-200 else 0.0
     xs, xe = P + D * ta, P + D * we
     # mirrored cell k covers x in [k, k + 1], the real cell sgn * k + (sgn - 1) / 2 (within 0..nf-1)
     if sgn > 0:
@@ -194,7 +195,7 @@ def _walk(h, cell_top, block_top, rows, cols, u0, v0, z0, du, dv, dz, ta, we):  
     kb = k0 // BLOCK
     while kb * BLOCK <= stop:
         ka, kz = max(kb * BLOCK, k0), min(kb * BLOCK + BLOCK - 1, stop)
-        t_lo, t_hi = _span(P, D, ta, we, ka, kz + 1)
+        t_lo, t_hi = _span(P, D, iD, ta, we, ka, kz + 1)
         za, zb = z0 + dz * t_lo, z0 + dz * t_hi
         zlo = min(za, zb) - SLOP
         qa, qb = q0 + dq * t_lo, q0 + dq * t_hi
@@ -211,7 +212,7 @@ def _walk(h, cell_top, block_top, rows, cols, u0, v0, z0, du, dv, dz, ta, we):  
             for k in range(ka, kz + 1):
                 if k > stop:
                     break
-                t = _column(h, cell_top, rows, cols, u0, v0, z0, du, dv, dz, ta, we, P, D, q0, dq,
+                t = _column(h, cell_top, rows, cols, u0, v0, z0, du, dv, dz, ta, we, P, D, iD, q0, dq,
                             int(sgn) * k + (int(sgn) - 1) // 2, no, k, along_u)
                 if t < best:
                     best = t
@@ -225,22 +226,24 @@ def _walk(h, cell_top, block_top, rows, cols, u0, v0, z0, du, dv, dz, ta, we):  
     return best
 
 
-def _span(P, D, ta, we, xa, xb):   # pragma: no cover - compiled
-    """The t range of the ray within x in [xa, xb], clamped to [ta, we]."""
-    if D > 0.0:
-        t_lo = max((xa - P) / D, ta)
-        t_hi = min((xb - P) / D, we)
+def _span(P, D, iD, ta, we, xa, xb):   # pragma: no cover - compiled
+    """The t range of the ray within x in [xa, xb], clamped to [ta, we] (``iD``: 1 / D; a product
+    is rounded differently from the quotient, which only widens or narrows the range by far less
+    than SLOP: it chooses what is tried, never a hit's distance)."""
+    if D > 1e-200:
+        t_lo = max((xa - P) * iD, ta)
+        t_hi = min((xb - P) * iD, we)
         if t_hi < t_lo:
             t_hi = t_lo
         return t_lo, t_hi
     return ta, we
 
 
-def _column(h, cell_top, rows, cols, u0, v0, z0, du, dv, dz, ta, we, P, D, q0, dq, j, no, k,
+def _column(h, cell_top, rows, cols, u0, v0, z0, du, dv, dz, ta, we, P, D, iD, q0, dq, j, no, k,
             along_u):   # pragma: no cover - compiled
     """The nearest triangle hit among the cells of column ``j`` (real index along the fast axis)
     that the ray may come down to."""
-    t_lo, t_hi = _span(P, D, ta, we, k, k + 1)
+    t_lo, t_hi = _span(P, D, iD, ta, we, k, k + 1)
     zlo = min(z0 + dz * t_lo, z0 + dz * t_hi) - SLOP
     qa, qb = q0 + dq * t_lo, q0 + dq * t_hi
     ia = max(int(math.floor(min(qa, qb) - SLOP)), 0)
