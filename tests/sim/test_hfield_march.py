@@ -198,3 +198,34 @@ def test_a_16_by_360_scan_over_a_256_cell_field_is_the_vectorised_scan_bit_for_b
         assert np.isfinite(mine).sum() > 500
         assert np.array_equal(mine, _vectorised(placed, pnt, d, 30.0))
         assert np.array_equal(mine, hfield_rays.cast_grids([placed], pnt, d, 30.0))   # the lidars' entry
+
+
+def test_without_numba_the_lidars_cast_with_numpy_and_read_the_same(tmp_path):
+    """Where numba cannot be imported (a Python it has no release for yet), ``cast_grids`` falls back
+    to the numpy cast: a process with numba blocked gives the same distances, bit for bit."""
+    import subprocess
+    import sys
+
+    field = Rough("yard", 0.5, -0.3, length=6.0, width=5.0, amplitude=0.2, wavelength=0.7, seed=4, yaw=25.0)
+    placed = placed_grid(field, height_grid(field))
+    dirs = sensor_directions(Lidar3D(rings=16, beams=90))
+    pnt = np.array([0.2, 0.1, 0.6])
+    np.save(tmp_path / "dirs.npy", dirs)
+    code = (
+        "import sys, numpy as np\n"
+        "sys.modules['numba'] = None\n"          # import numba now raises ImportError
+        "from pytest_navscenario.scenario.ground.heightmap import height_grid\n"
+        "from pytest_navscenario.scenario.terrain import Rough\n"
+        "from pytest_navscenario.sim.ground import hfield_march\n"
+        "from pytest_navscenario.sim.ground.heightfield import placed_grid\n"
+        "from pytest_navscenario.sim.ground.hfield_rays import cast_grids\n"
+        "f = Rough('yard', 0.5, -0.3, length=6.0, width=5.0, amplitude=0.2, wavelength=0.7, seed=4, yaw=25.0)\n"
+        f"d = cast_grids([placed_grid(f, height_grid(f))], np.array([0.2, 0.1, 0.6]), np.load(r'{tmp_path / 'dirs.npy'}'), 30.0)\n"
+        f"np.save(r'{tmp_path / 'numpy.npy'}', d)\n"
+        "print('compiled' if hfield_march.available() else 'numpy')\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert run.stdout.strip() == "numpy"
+    fallback = np.load(tmp_path / "numpy.npy")
+    mine = hfield_rays.cast_grids([placed], pnt, dirs, 30.0)
+    assert hfield_march.available() and np.isfinite(mine).sum() > 200
+    assert np.array_equal(fallback, mine)
