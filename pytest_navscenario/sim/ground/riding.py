@@ -357,6 +357,8 @@ class TerrainWatch:
         slope = getattr(self.scenario.terrain[el], "slope", None) if el is not None else None
         if slope is None:
             slope = math.degrees(math.atan(abs(h[2] - h[3]) / (2 * e)))
+        if slope < FEATURE.max_slope:          # level ground (a platform, a dock): its side edge, not a slope
+            return f"tilted {tilt:.0f} deg over the side edge", el
         return f"tilted {tilt:.0f} deg off the side of the {slope:.1f} deg slope", el
 
     def _gap_under(self, x, y, c, s) -> tuple[float, int | None] | None:
