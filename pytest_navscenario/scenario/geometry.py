@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections import OrderedDict
 
 import numpy as np
 import shapely
@@ -59,6 +60,36 @@ def obstacle_polygon(obs: Obstacle) -> Polygon:
     if isinstance(obs, (PolygonObstacle, MeshObstacle)):
         return Polygon(place(outline_points(obs), obs.x, obs.y, obs.yaw_rad))
     raise TypeError(f"unknown obstacle type {type(obs).__name__}")
+
+
+def obstacle_outline(obs: Obstacle) -> Polygon:
+    """``obstacle_polygon``, remembered per obstacle (a frozen value: equal obstacles, equal
+    outlines). The search checks and ranks hundreds of layouts in which most obstacles stand
+    where they stood in the last one; building each outline again was most of that check."""
+    try:
+        hit = _OUTLINES.get(obs)
+    except TypeError:   # a field that does not hash: not remembered
+        return obstacle_polygon(obs)
+    if hit is None:
+        hit = _OUTLINES[obs] = obstacle_polygon(obs)
+        if len(_OUTLINES) > OUTLINES_KEPT:
+            _OUTLINES.popitem(last=False)
+    return hit
+
+
+def footprint_outline(footprint: Footprint, x: float, y: float, yaw: float) -> Polygon:
+    """``footprint_polygon``, remembered (the start and goal poses of a search's layouts)."""
+    key = (footprint, x, y, yaw)
+    hit = _OUTLINES.get(key)
+    if hit is None:
+        hit = _OUTLINES[key] = footprint_polygon(footprint, x, y, yaw)
+        if len(_OUTLINES) > OUTLINES_KEPT:
+            _OUTLINES.popitem(last=False)
+    return hit
+
+
+OUTLINES_KEPT = 4096
+_OUTLINES: OrderedDict = OrderedDict()
 
 
 def outline_points(obs: Obstacle) -> tuple[tuple[float, float], ...]:

@@ -473,7 +473,7 @@ def _mutate_obstacle(obs, d: Mapping[str, float], min_size: float):
 
 
 # -- validity before simulation -------------------------------------------------------------
-def invalid_reason(scenario: Scenario) -> str | None:
+def invalid_reason(scenario: Scenario, way: Any = None) -> str | None:
     """Why a candidate is not a test (a broken scenario, not a planner failure), or None.
 
     A polygon whose corners were moved into a self-intersecting outline, obstacles covering the
@@ -483,18 +483,26 @@ def invalid_reason(scenario: Scenario) -> str | None:
     (``paths.path_exists``), a shortest way that cannot be driven within the timeout at the robot's
     top speed (``too-slow``), or a moving obstacle whose motion crosses a static one
     (``mover-through:<name>``): the same checks as a hand-written scenario's at setup
-    (verdict/feasibility.py). A candidate that passes loads again when frozen.
+    (verdict/feasibility.py). A candidate that passes loads again when frozen. ``way``: a function
+    of the scenario giving the length of a way known to be free, or None (``verdict.open_way``),
+    which answers the path checks without a path search.
     """
-    from ..scenario.geometry import footprint_polygon, obstacle_polygon, polygon_problem
+    from ..scenario.geometry import (bounding_radius, footprint_outline, footprint_radius, obstacle_outline,
+                                     polygon_problem)
 
     for obs in scenario.obstacles:          # corners moved across an edge: not a polygon any more
         if isinstance(obs, PolygonObstacle) and polygon_problem(obs.points) is not None:
             return f"polygon-invalid:{obs.name}"
     m, fp = scenario.mission, scenario.robot.footprint
-    start = footprint_polygon(fp, m.start.x, m.start.y, m.start.yaw_rad)
-    goal = footprint_polygon(fp, m.goal.x, m.goal.y, m.goal.yaw_rad)
+    start = footprint_outline(fp, m.start.x, m.start.y, m.start.yaw_rad)
+    goal = footprint_outline(fp, m.goal.x, m.goal.y, m.goal.yaw_rad)
+    reach = footprint_radius(fp) + 1e-6
     for obs in scenario.obstacles:
-        poly = obstacle_polygon(obs)
+        far = reach + bounding_radius(obs)   # their bounding circles apart: no outline needed
+        if math.hypot(obs.x - m.start.x, obs.y - m.start.y) > far and math.hypot(obs.x - m.goal.x,
+                                                                                  obs.y - m.goal.y) > far:
+            continue
+        poly = obstacle_outline(obs)
         if poly.intersects(start):
             return f"start-blocked:{obs.name}"
         if poly.intersects(goal) and getattr(obs, "motion", None) is None:
@@ -505,11 +513,18 @@ def invalid_reason(scenario: Scenario) -> str | None:
         check_scenario(scenario)
     except ScenarioError as exc:
         return f"loader-refuses:{exc.field}"
+    return path_reason(scenario, way(scenario) if way is not None else None)
+
+
+def path_reason(scenario: Scenario, known_length: float | None = None) -> str | None:
+    """The rest of ``invalid_reason``: no way for the footprint, too slow, a mover through a wall.
+    ``known_length``: the length of a way known to be free (``verdict.open_way``), which
+    answers the first and most often the second without a path search."""
     from ..verdict.paths import path_exists
-    if not path_exists(scenario):
+    if known_length is None and not path_exists(scenario):
         return "no-path"
     from ..verdict.feasibility import too_slow
-    if too_slow(scenario) is not None:     # no planner reaches the goal in time: not a failure to find
+    if too_slow(scenario, known_length) is not None:   # no planner reaches the goal in time: not a failure to find
         return "too-slow"
     from ..verdict.movers import mover_through
     crossing = mover_through(scenario)

@@ -95,17 +95,21 @@ def top_speed(scenario: Scenario) -> float:
     return math.hypot(limits.max_speed, limits.max_lateral_speed if scenario.robot.drive == "omni" else 0.0)
 
 
-def too_slow(scenario: Scenario) -> str | None:
+def too_slow(scenario: Scenario, known_length: float | None = None) -> str | None:
     """Why the shortest way cannot be driven within the timeout even at the robot's top speed, or
     None. The way is a lower bound of any planner's: the shortest collision-free path of the
     footprint's centre (obstacles grown by half its width), each waypoint counted as passed anywhere
-    within its tolerance, the goal reached at its tolerance's edge; acceleration is left out."""
+    within its tolerance, the goal reached at its tolerance's edge; acceleration is left out.
+    ``known_length``: the length of some collision-free way (open_way.py), an upper bound of the
+    shortest's: when it is short enough, no path search is needed."""
     m = scenario.mission
+    speed = top_speed(scenario)
+    slack = 2 * m.waypoint_tolerance * len(m.waypoints) + m.goal_tolerance.position
+    if known_length is not None and (known_length - slack) <= speed * m.timeout:
+        return None
     path = shortest_path(scenario)
     if path is None:
         return None
-    speed = top_speed(scenario)
-    slack = 2 * m.waypoint_tolerance * len(m.waypoints) + m.goal_tolerance.position
     if (path.length - slack) <= speed * m.timeout:     # the common case: one cached path, no more
         return None
     ref = reference_path(scenario)                    # through the waypoints' tolerance discs

@@ -6,6 +6,7 @@ from __future__ import annotations
 import random
 from typing import Any, Sequence
 
+from ...verdict.open_way import open_way
 from ..space import SearchSpace, invalid_reason
 from .protocol import GaveUp
 
@@ -15,17 +16,21 @@ MAX_INVALID_FACTOR = 50        # give up after budget * this many invalid or rep
 class Admission:
     """Validity check and repeat filter shared by the strategies (counts what it discards)."""
 
-    def __init__(self, space: SearchSpace, report: Any, budget: int):
+    def __init__(self, space: SearchSpace, report: Any, budget: int, margin: float = 0.0):
         self.space, self.report, self.budget = space, report, budget
         self.seen: set[tuple[float, ...]] = set()
         self.invalid_run = 0
+        self.margin = margin                  # the footprint's growth open_way is asked about
+        self.clear: dict[tuple, float] = {}   # admitted with an open way at ``margin``: key -> its length
+        self._last: float | None = None
 
     def admit(self, offsets: Sequence[float]) -> bool:
         key = tuple(round(v, 6) for v in offsets)
         if key in self.seen:
             self.report.skipped += 1
             return self._miss()
-        reason = invalid_reason(self.space.apply(offsets))
+        self._last = None
+        reason = invalid_reason(self.space.apply(offsets), self._way)
         if reason is not None:
             k = reason.split(":")[0]
             self.report.discarded[k] = self.report.discarded.get(k, 0) + 1
@@ -33,7 +38,14 @@ class Admission:
             return self._miss()
         self.invalid_run = 0
         self.seen.add(key)
+        if self._last is not None:
+            self.clear[key] = self._last
         return True
+
+    def _way(self, scenario: Any) -> float | None:
+        """``open_way`` at ``margin`` (the path checks' answer without a path search, or None)."""
+        self._last = open_way(scenario, self.margin)
+        return self._last
 
     def _miss(self) -> bool:
         self.invalid_run += 1

@@ -16,7 +16,9 @@ second can aim at the seed's episode. Until a failure is known, each generation 
 likeliest to fail of HUNT_DRAWS times as many proposals, those simulated first: likeliest by
 what is cheap to know before an episode, the room the narrowest passage leaves the footprint
 less how deep the obstacles cut into the robot's expected way (a uniform draw that fails at
-once where failures are common, a tight one where they are rare).
+once where failures are common, a tight one where they are rare). Those proposals' path checks
+(validity) and room are answered without a path search where the layout is open
+(verdict/open_way.py; the same answers).
 Operator shares follow which operator has been finding new failing signatures; where the
 aimed operators put an obstacle (which obstacle, which quarter of the route) is a second
 bandit rewarded for new failing signatures and divided down by re-created ones.
@@ -85,7 +87,7 @@ class Evolve(AimedOperators, BaseStrategy):
 
     def __init__(self, space: SearchSpace, report: Any, budget: int, seed_value: int):
         self.space, self.report, self.seed_value = space, report, seed_value
-        self.admission = Admission(space, report, budget)
+        self.admission = Admission(space, report, budget, margin=max(ROOM_LEVELS))   # open at it: room known
         self.cells = _Cells()
         self.generation = 0
         self.stats = {op: [0, 0.0] for op in OPERATORS}   # tries, credit
@@ -106,7 +108,7 @@ class Evolve(AimedOperators, BaseStrategy):
         self.told = 0                                   # generations told so far
         self.shifted: dict[tuple, int] = {}             # signature -> times its failure was shifted
         self.seed_episode: Any = None                   # the seed's own episode (generation 1)
-        self._way: tuple | None = None                  # (from the episode?, points, times): _expected_way
+        self._way: tuple | None = None   # (from the episode?, points, times, distances, points as shapely): _expected_way
 
     @property
     def lag(self) -> int:
@@ -138,6 +140,7 @@ class Evolve(AimedOperators, BaseStrategy):
         draw = size * HUNT_DRAWS if hunting else min(room, size)
         out: list[tuple[tuple[float, ...], str]] = []
         attempt = 0
+        self.admission.clear.clear()
         while len(out) < draw:   # ends: the admission gives up (GaveUp) after too many misses
             out.extend(self._hypothesis_batch(draw - len(out), attempt))
             attempt += 1
@@ -154,14 +157,17 @@ class Evolve(AimedOperators, BaseStrategy):
                          ) -> list[tuple[tuple[float, ...], str]]:
         """``proposals`` ordered by what is cheap to know before an episode about how likely
         each is to fail: the least room to spare first, room being how much the footprint could
-        grow and still find a way (``paths.passage_room``) less how deep the layout's obstacles
-        cut into the robot's expected way (``_intrusion``); ties keep the drawing order."""
+        grow and still find a way (``paths.passage_room``; at once for an open layout: ``open_way``)
+        less how deep the layout's obstacles cut into the robot's expected way (``_intrusion``);
+        ties keep the drawing order."""
         from ...verdict.paths import passage_room
 
         scored = []
         for k, (offsets, _) in enumerate(proposals):
             scenario = self.space.apply(offsets)
-            scored.append((passage_room(scenario, ROOM_LEVELS) - self._intrusion(scenario), k))
+            room = (max(ROOM_LEVELS) if _key(offsets) in self.admission.clear   # open at it: no path search
+                    else passage_room(scenario, ROOM_LEVELS))
+            scored.append((room - self._intrusion(scenario), k))
         return [proposals[k] for _, k in sorted(scored)]
 
     def _intrusion(self, scenario: Any) -> float:
@@ -172,7 +178,7 @@ class Evolve(AimedOperators, BaseStrategy):
         import numpy as np
         import shapely
 
-        from ...scenario.geometry import obstacle_polygon
+        from ...scenario.geometry import bounding_radius, obstacle_outline
         from ...scenario.motion import Track
         from ...verdict.gaps import footprint_core
 
@@ -180,12 +186,32 @@ class Evolve(AimedOperators, BaseStrategy):
         _, hw, rho = footprint_core(scenario.robot.footprint)
         half = hw + rho
         nearest = math.inf
+        near = self._way[3]   # obstacle -> its distance to the way (the same way: the same answer)
+        static = [o for o in scenario.obstacles if getattr(o, "motion", None) is None]
+        if static:   # a bounding circle at least ``half`` from the way: that obstacle cannot cut into it
+            c = np.array([(o.x, o.y) for o in static])
+            gap = np.sqrt(((c[:, None, :] - pts[None, :, :]) ** 2).sum(-1)).min(axis=1)
+            clear = {id(o) for o, g in zip(static, gap) if g - bounding_radius(o) >= half + 1e-9}
         for obs in scenario.obstacles:
-            at = pts
-            if getattr(obs, "motion", None) is not None:   # the way seen from where it is then
-                track = Track(obs)
-                at = pts - (track.positions(times) - track.positions(np.zeros(1)))
-            nearest = min(nearest, float(shapely.distance(obstacle_polygon(obs), shapely.points(at)).min()))
+            if static and id(obs) in clear:
+                continue
+            try:
+                d = near.get(obs)
+            except TypeError:   # a field that does not hash: measured each time
+                d = None
+            if d is None:
+                if getattr(obs, "motion", None) is not None:   # the way seen from where it is then
+                    track = Track(obs)
+                    at = shapely.points(pts - (track.positions(times) - track.positions(np.zeros(1))))
+                else:
+                    at = self._way[4]
+                d = float(shapely.distance(obstacle_outline(obs), at).min())
+                if len(near) < 4096:
+                    try:
+                        near[obs] = d
+                    except TypeError:
+                        pass
+            nearest = min(nearest, d)
         return max(0.0, half - nearest)
 
     def _expected_way(self) -> tuple[Any, Any]:
@@ -204,7 +230,8 @@ class Evolve(AimedOperators, BaseStrategy):
                 route = self._route()
                 pts = np.array([p[:2] for p in _route_samples(route)], dtype=float)
                 duration = route.length / max(seed.robot.limits.max_speed, 1e-6)
-            self._way = (recorded, pts, np.linspace(0.0, duration, len(pts)))
+            import shapely
+            self._way = (recorded, pts, np.linspace(0.0, duration, len(pts)), {}, shapely.points(pts))
         return self._way[1], self._way[2]
 
     def _hypothesis_batch(self, n: int, attempt: int) -> list[tuple[tuple[float, ...], str]]:
