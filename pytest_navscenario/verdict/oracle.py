@@ -92,7 +92,8 @@ def terrain_message(event: TerrainEvent) -> str:
         drop = drop[:-1] if drop.endswith("0") else drop
         return f"{what} at t={event.time:.1f} s, {drop} m drop, {where}"
     if event.kind == "tipped":
-        on = f" on {event.element}" if event.element else ""
+        on = ("" if not event.element else f" {event.element}" if event.element.startswith("off ")
+              else f" on {event.element}")
         angle = (f"roll {abs(event.roll):.0f} deg" if abs(event.roll) >= abs(event.pitch)
                  else f"pitch {abs(event.pitch):.0f} deg")
         return f"tipped over{on} at t={event.time:.1f} s ({angle}) {where}"

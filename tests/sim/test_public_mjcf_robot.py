@@ -151,3 +151,17 @@ def test_a_sill_a_small_robot_cannot_climb_is_named_as_a_step_at_its_scale(tmp_p
     res = run_scenario(scenario(tmp_path, CAR if body == "car" else BUILT_IN[body], "sill"), Straight)
     assert res.outcome.value == "timeout", res.message
     assert said in res.message, res.message
+
+
+@pytest.mark.parametrize("height", [0.10, 0.105, 0.11])
+def test_off_an_edge_of_its_drop_limit_the_car_goes_over_it_not_into_its_face(tmp_path, height):
+    """#36.3: off an edge of about its drop limit (0.1 m), the car's centre past it and its base 7 cm
+    above the floor counted as standing on the floor (a fixed 8 cm, a 0.9 m robot's), so the
+    chassis touching the edge's corner was "collision with the face of platform 'upper'". At its
+    scale it has not landed there: it goes over the edge, a fall or a tip-over off it."""
+    TERRAIN["drop"] = ("terrain:\n  - {type: platform, name: upper, x: 0, y: 0, length: 2.0, width: 1.0, "
+                       f"height: {height}}}")
+    res = run_scenario(scenario(tmp_path, CAR, "drop"), Straight)
+    assert res.outcome.value == "fall", res.message
+    assert ("fell off platform 'upper'" in res.message
+            or "tipped over off the edge of platform 'upper'" in res.message), res.message

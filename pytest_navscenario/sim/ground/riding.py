@@ -15,6 +15,7 @@ from ...scenario.ground.crossing import SPACING, Capability, steep_ground, walk
 from ..trajectory import TerrainEvent
 
 ON_GROUND = 0.08          # m: a base this close above the ground under it stands on it
+ON_GROUND_SHARE = 0.09    # of the footprint's length, for a smaller robot (a 0.2 m car: 1.8 cm)
 STUCK_TIME = 3.0          # s of being driven without moving that make the robot stuck on terrain
 STUCK_COMMAND = 0.1       # m/s: a setpoint at least this fast counts as driving
 STUCK_MOVING = 0.25       # of the setpoint's speed: slower than this counts as not moving
@@ -196,12 +197,13 @@ class TerrainWatch:
         self.feature = Capability(max_step=min(FEATURE.max_step, FEATURE_SHARE * 2 * self.front),
                                   max_slope=FEATURE.max_slope, max_gap=0.0)
         self.look_ahead = min(LOOK_AHEAD, self.front)
+        self.on_ground = min(ON_GROUND, ON_GROUND_SHARE * 2 * self.front)
 
     def check(self, t: float, state: tuple[float, ...], setpoint: tuple[float, float, float],
               touching: bool) -> None:
         x, y, z, roll, pitch, yaw, vx, vy, vz, wz = state
         g = self.probe.height(x, y)
-        if self.level is None or z - g < ON_GROUND:
+        if self.level is None or z - g < self.on_ground:
             self.level, self.level_at = g, (x, y)
         elif self.level - z > self.drop_limit:
             self._end(TerrainEvent("fell", t, self._fell_from(x, y), x, y, z, drop=self.level - g,
@@ -212,7 +214,11 @@ class TerrainWatch:
                 self._end(TerrainEvent("fell", t, self._fell_from(x, y, edge[:2]), x, y, z, drop=edge[2] - g,
                                        roll=math.degrees(roll), pitch=math.degrees(pitch)))
             el = self.probe.element(x, y)
-            self._end(TerrainEvent("tipped", t, self._name(el), x, y, z, roll=math.degrees(roll),
+            where = self._name(el)
+            if el is None and (edge := self._edge_under(x, y, math.cos(yaw), math.sin(yaw))) is not None \
+                    and edge[0] is not None:
+                where = "off the edge of " + self._name(edge[0])   # its centre just past it (a drop of its limit)
+            self._end(TerrainEvent("tipped", t, where, x, y, z, roll=math.degrees(roll),
                                    pitch=math.degrees(pitch)))
         speed = abs(setpoint[0]) + abs(setpoint[1])
         if speed < STUCK_COMMAND:
