@@ -1,7 +1,9 @@
 """Heightfield ray casting: a 16 x 360 lidar scan (5760 rays) against rough ground of 32, 64, 128
-and 256 cells a side, by MuJoCo's mj_multiRay and by the lidars' own cast (sim/ground/hfield_rays.py),
-alternated A B A B in one run; CPU time (time.process_time) medians and the median of the per-pair
-ratios, and the largest distance difference between the two.
+and 256 cells a side, by MuJoCo's mj_multiRay, by the lidars' own cast (``cast_grids``: compiled,
+sim/ground/hfield_march.py, where numba imports) and by its vectorised numpy form
+(sim/ground/hfield_rays.py), alternated A B C in one run; CPU time (time.process_time) medians and
+the median of the per-pair ratios mj_multiRay / own, and the largest distance difference between
+mj_multiRay and the own cast; ``numpy=`` whether the numpy cast gave the own cast's distances bit for bit.
 
     python benchmarks/bench_hfield_rays.py [--repeats 15] [--size 16] [--height 0.6]
 
@@ -25,6 +27,7 @@ import numpy as np
 from pytest_navscenario.scenario.ground.heightmap import height_grid
 from pytest_navscenario.scenario.terrain import Rough
 from pytest_navscenario.sim.ground.heightfield import add_heightfield, placed_grid
+from pytest_navscenario.sim.ground import hfield_rays
 from pytest_navscenario.sim.ground.hfield_rays import cast_grids
 
 
@@ -45,8 +48,8 @@ def main() -> None:
     flat = np.ascontiguousarray(dirs).ravel()
     n = len(dirs)
     pnt = np.array([0.013, 0.007, args.height])   # off the grid's vertices: see "edge" below
-    print(f"{'cells':>6} {'mj_multiRay ms':>15} {'own cast ms':>12} {'ratio':>7} {'hits':>6} {'max diff m':>11} "
-          f"{'differ':>6}")
+    print(f"{'cells':>6} {'mj_multiRay ms':>15} {'own cast ms':>12} {'ratio':>7} {'numpy ms':>9} {'hits':>6} "
+          f"{'max diff m':>11} {'differ':>6} numpy=")
     for cells in (32, 64, 128, 256):
         element = Rough("field", 0.0, 0.0, length=args.size, width=args.size, amplitude=0.3,
                         wavelength=args.size / cells * 8, seed=1)
@@ -60,7 +63,8 @@ def main() -> None:
         geom, dist = np.empty(n, dtype=np.int32), np.empty(n)
         own = cast_grids(placed, pnt, dirs, 30.0)                       # warm-up (grid prepared)
         mujoco.mj_multiRay(model, data, pnt, flat, None, 1, -1, geom, dist, None, n, 30.0)
-        a_times, b_times, ratios = [], [], []
+        a_times, b_times, c_times, ratios = [], [], [], []
+        prepared = hfield_rays._prepared(placed[0])
         for _ in range(args.repeats):
             t0 = time.process_time()
             mujoco.mj_multiRay(model, data, pnt, flat, None, 1, -1, geom, dist, None, n, 30.0)
@@ -68,6 +72,10 @@ def main() -> None:
             t0 = time.process_time()
             own = cast_grids(placed, pnt, dirs, 30.0)
             b = time.process_time() - t0
+            vec = np.full(n, np.inf)
+            t0 = time.process_time()
+            hfield_rays._cast_one(prepared, pnt, dirs, 30.0, vec)
+            c_times.append(time.process_time() - t0)
             a_times.append(a)
             b_times.append(b)
             ratios.append(a / b if b > 0 else float("nan"))
@@ -78,7 +86,8 @@ def main() -> None:
         diff = float(gap.max()) if same.any() else 0.0
         print(f"{grid.heights.shape[1] - 1:>6} {statistics.median(a_times) * 1e3:>15.2f} "
               f"{statistics.median(b_times) * 1e3:>12.2f} {statistics.median(ratios):>6.1f}x "
-              f"{int(np.isfinite(own).sum()):>6} {diff:>11.1e} {differ:>6}")
+              f"{statistics.median(c_times) * 1e3:>9.2f} {int(np.isfinite(own).sum()):>6} {diff:>11.1e} {differ:>6} "
+              f"{np.array_equal(vec, own)}")
 
 
 if __name__ == "__main__":

@@ -78,7 +78,7 @@ def child(path: str) -> None:
     from pytest_navscenario import ScenarioError, load_scenario
     from pytest_navscenario.verdict.feasibility import impassable_reason
     from pytest_navscenario.verdict.paths import shortest_path
-    from pytest_navscenario.verdict.traversable import barriers
+    from pytest_navscenario.scenario.ground.traversable import barriers
 
     t0 = time.perf_counter()
     try:

@@ -5,6 +5,12 @@ at or above them at every speed).
 
     python benchmarks/measure_wheeled_limits.py [--speeds 1.0,0.5,0.25,0.1] [--bodies default]
 
+Measured under MuJoCo 4.0.1 with the PI wheel-speed loop and the casters that give way at a ramp's
+foot (issue 36.1): default diff body at 1 / 0.5 / 0.25 / 0.1 m/s: steps 0.041 / 0.033 / 0.017 /
+0.014 m, slopes 24.4 / 23.1 / 20.3 / 20.6 deg, gaps 0.203 / 0.129 / 0.105 / 0.109 m; skid 0.080 ->
+0.053 m, 35.0 -> 33.8 deg, 0.191 -> 0.172 m (docs/benchmarks.md). The figures below are of the
+earlier bodies.
+
 Measured under MuJoCo 4.0.1 (PyPI's today): default diff body step 0.041 m, slope 17.2 deg, gap 0.230 m;
 30 kg: 0.045, 17.5, 0.227; 20 N m: 0.047, 17.5, 0.227; wheels 0.15 m: 0.055, 16.2, 0.477; skid: 0.081,
 34.4, 0.191. A patch release moves these by up to a quarter (the steps and gaps below, under 4.0.0):

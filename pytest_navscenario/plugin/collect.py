@@ -449,8 +449,10 @@ class ScenarioItem(pytest.Item):
                          f"({_fmt(c.x, '', 2)}, {_fmt(c.y, '', 2)}), depth {_fmt(c.depth, ' m', 4)}")
         if r.safety_stop is not None:
             s = r.safety_stop
+            from ..verdict.gaps import is_terrain_face
             from ..verdict.oracle import stop_motion
-            lines.append(f"  safety stop:   predicted hit of obstacle {s.obstacle!r} at t="
+            what = f"the face of {s.obstacle}" if is_terrain_face(r.scenario, s.obstacle) else f"obstacle {s.obstacle!r}"
+            lines.append(f"  safety stop:   predicted hit of {what} at t="
                          f"{_fmt(s.time, ' s', 2)}, "
                          + (f"speed {_fmt(s.speed, ' m/s', 2)}" if not s.speed < 0.005 else stop_motion(s)))
         if r.subject_failure is not None:

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..core.errors import ScenarioError
 from ..scenario.ground import surface as ground
+from ..scenario.ground.traversable import walls_from_below
 from ..scenario.model import Scenario
 from .bodies.base import ROBOT_GROUP
 from .safety import SafetyLayer
@@ -151,7 +152,8 @@ def build_body_world(scenario: Scenario, body: Any) -> BodyWorld:
     robot_geom = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "footprint")
     obstacle_of_geom = {mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, gname): i
                         for i, names in enumerate(obstacle_geom_names(scenario)) for gname in names}
-    safety = SafetyLayer(scenario) if scenario.robot.safety.enabled and scenario.obstacles else None
+    walls = walls_from_below(scenario) if scenario.robot.safety.enabled else ()
+    safety = SafetyLayer(scenario, walls) if scenario.robot.safety.enabled and (scenario.obstacles or walls) else None
     groups = np.ones(6, dtype=np.uint8)
     for g in (PARTS_GROUP, UNSEEN_GROUP, ROBOT_GROUP):
         if (model.geom_group == g).any():

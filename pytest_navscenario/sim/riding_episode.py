@@ -141,21 +141,24 @@ class RidingEpisode(Episode):
     def steps(self) -> tuple[Any, Any, Any]:
         """``Episode.steps``, with the ground layer's check where a 3D lidar feeds one."""
         safety_check, act, step_physics = super().steps()
-        if self.ground is not None:
+        if self.ground is not None or (self.safety is not None and self.safety.low_side):
             safety_check = self.safety_check_ground
         return safety_check, act, step_physics
 
     def safety_check_ground(self, state: tuple[float, ...]) -> None:
-        """The collision layer on the obstacles (as ``safety_check``), then the ground layer on the
-        ground the 3D lidar has seen: a halt before a drop or a slope the body cannot take."""
+        """The collision layer on the obstacles and the terrain's faces (as ``safety_check``, at
+        the base's height: a face is a wall from below), then the ground layer on the ground the
+        3D lidar has seen (if it has one): a halt before a drop or a slope the body cannot take."""
         t, x, y, yaw, vx, vy, wz = state
         if abs(vx) > STILL or abs(vy) > STILL or abs(wz) > STILL:
             t0 = perf_counter()
             hit = None
+            z = self.state3d[2]
             if self.safety is not None:
                 hit = self.safety.check(x, y, yaw, vx, vy, wz,
-                                        self.moving.now(self.i) if self.moving is not None else None)
-            ground = None if hit is not None else self.ground.check(x, y, self.state3d[2], yaw, vx, vy, wz)
+                                        self.moving.now(self.i) if self.moving is not None else None, z=z)
+            ground = (None if hit is not None or self.ground is None
+                      else self.ground.check(x, y, z, yaw, vx, vy, wz))
             self.t_safety += perf_counter() - t0
             if hit is not None:
                 self._halt(state, hit)

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from ..scenario.ground.surface import ground_height
 from ..scenario.geometry import bounding_radius, convex_parts, footprint_part_distance, footprint_radius
 from ..scenario.model import BoxObstacle, MeshObstacle, PolygonObstacle, Scenario
 from ..scenario.motion import moving_indices
@@ -58,7 +59,13 @@ def _rect_distance(px: np.ndarray, py: np.ndarray, hx: Any, hy: Any) -> np.ndarr
 class SafetyLayer:
     """Per-model safety geometry; ``check`` is called once per tick with the measured state."""
 
-    def __init__(self, scenario: Scenario):
+    def __init__(self, scenario: Scenario, walls: tuple = ()):
+        """``walls``: terrain faces the body cannot cross, each with the unit vector to its low
+        side, the height halfway up it and its top's (``scenario.ground.traversable.walls_from_below``):
+        obstacles for a robot on that side, standing below halfway up, whose lidar's scan plane
+        (``lidar.mount_height`` above the ground it stands on) is below the face's top: a real
+        layer works on the sensor's view, and a riser under the scan plane is not in it (as glass
+        is not)."""
         safety = scenario.robot.safety
         self.horizon = float(safety.horizon)
         self.margin = float(safety.margin)
@@ -69,7 +76,11 @@ class SafetyLayer:
         self.robot_corners = np.array([(self.hl, self.hw), (-self.hl, self.hw),
                                        (-self.hl, -self.hw), (self.hl, -self.hw)])
         self.robot_radius = footprint_radius(fp)
-        obstacles = scenario.obstacles
+        obstacles = tuple(scenario.obstacles) + tuple(face for face, _ in walls)
+        n_own = len(scenario.obstacles)
+        self.low_side = {n_own + k: (face.x, face.y, ux, uy, mid, top)
+                         for k, (face, (ux, uy, mid, top)) in enumerate(walls)}
+        self.scenario, self.plane = scenario, float(scenario.robot.lidar.mount_height)
         self.names = [o.name for o in obstacles]
         n = len(obstacles)
         self.is_box = np.array([isinstance(o, BoxObstacle) for o in obstacles], dtype=bool)
@@ -154,13 +165,14 @@ class SafetyLayer:
         return d
 
     def check(self, x: float, y: float, yaw: float, vx: float, vy: float, wz: float,
-              moving: list[list[float]] | None = None) -> str | None:
+              moving: list[list[float]] | None = None, z: float | None = None) -> str | None:
         """The name of the obstacle the predicted sweep would hit, or None (robot may go on).
 
         ``moving``: per moving obstacle (in scenario order) [dx, dy, vx, vy], its offset from its
         scenario position and its velocity now (MovingObstacles.now); each is predicted to hold its
         velocity over the horizon, like the robot its twist, and the sweep is checked relative to
-        it."""
+        it. ``z``: the height the robot stands at (its base's), for the terrain's faces (else the
+        ground's under its centre)."""
         speed = math.hypot(vx, vy)
         # No point of the footprint moves farther than this over the horizon.
         travel = (speed + abs(wz) * self.robot_radius) * self.horizon
@@ -173,6 +185,8 @@ class SafetyLayer:
         else:
             gap = np.hypot(self.centres[:, 0] - x, self.centres[:, 1] - y) - self.bound
             near = np.flatnonzero((gap < reach) & self.static).tolist()
+        if self.low_side and near:
+            near = self._walls_for(near, x, y, z)
         movers = self._near_movers(x, y, reach, moving) if moving is not None else []
         if not near and not movers:
             return None
@@ -226,6 +240,20 @@ class SafetyLayer:
         first = np.where(hit.any(axis=0), hit.argmax(axis=0), n + 1)  # earliest sample per obstacle
         order = np.lexsort((future.min(axis=0), first))
         return self.names[int(idx[order[0]])]
+
+    def _walls_for(self, near: list[int], x: float, y: float, z: float | None) -> list[int]:
+        """``near`` without the terrain faces that are no wall for a robot at (x, y), standing at
+        height ``z``: those it is not on the low side of, standing below halfway up the face (a
+        dock's edge seen from on top, a pit's rim from the floor: a 2D layer cannot see a drop, the
+        3D one's ground layer halts for it), and those whose top is under its scan plane."""
+        low = self.low_side
+        if not any(j in low for j in near):
+            return near
+        level = float(ground_height(self.scenario, x, y)) if z is None else z
+        seen = level + self.plane
+        return [j for j in near if j not in low
+                or ((x - low[j][0]) * low[j][2] + (y - low[j][1]) * low[j][3] > 0.0
+                    and level < low[j][4] and low[j][5] > seen)]
 
     def _columns(self, poses: np.ndarray, indices: list[int]) -> np.ndarray:
         """Distances (k, len(indices)) of the footprint at ``poses`` to the obstacles ``indices``:

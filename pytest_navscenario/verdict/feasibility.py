@@ -162,7 +162,7 @@ def _terrain(scenario: Scenario, stops, inflation: float) -> tuple:
         return ()
     from ..scenario.bodies import body_capability
     from .paths import inflated_polygon
-    from .traversable import barriers, lenient
+    from ..scenario.ground.traversable import barriers, lenient
 
     cap = body_capability(scenario)
     if cap is None:
@@ -186,7 +186,7 @@ def _terrain_words(scenario: Scenario, a, b) -> str | None:
         return None
     from ..scenario.bodies import body_capability
     from .paths import inflated_polygon, path_through_discs
-    from .traversable import barriers
+    from ..scenario.ground.traversable import barriers
 
     cap = body_capability(scenario)
     walls = barriers(scenario) if cap is not None else ()

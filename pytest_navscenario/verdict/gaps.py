@@ -139,7 +139,7 @@ def path_obstacles(scenario: Scenario) -> tuple[Obstacle, ...]:
     statics = static_obstacles(scenario)
     if not scenario.terrain:
         return statics
-    from .traversable import barriers
+    from ..scenario.ground.traversable import barriers
     return statics + barriers(scenario)
 
 
@@ -151,7 +151,7 @@ def clearance_obstacles(scenario: Scenario) -> tuple[Obstacle, ...]:
     statics = static_obstacles(scenario)
     if not scenario.terrain:
         return statics
-    from .traversable import WALL, barriers
+    from ..scenario.ground.traversable import WALL, barriers
     walls = barriers(scenario)
     faces = _FACES_CACHE.get(walls)
     if faces is None:

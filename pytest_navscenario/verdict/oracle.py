@@ -44,7 +44,7 @@ def classify(scenario: Scenario, trajectory: Trajectory, *, collision: Collision
                 f"{stop_motion(safety_stop)} (seen by the 3D lidar)")
         return Outcome.SAFETY_STOP, (
             f"safety stop at t={safety_stop.time:.2f} s: predicted to hit "
-            f"'{safety_stop.obstacle}' {stop_motion(safety_stop)}")
+            f"{stop_target(scenario, safety_stop.obstacle)} {stop_motion(safety_stop)}")
     violated = [r for r in requirements if r.violated]
     if violated:
         from .requirements import violation_message
@@ -63,6 +63,13 @@ def classify(scenario: Scenario, trajectory: Trajectory, *, collision: Collision
                                  f"{stuck_after:g} s; episode ended early at {duration:.1f} s of "
                                  f"{timeout:.1f} s")
     return Outcome.TIMEOUT, _timeout_message(scenario, trajectory, goal_reached)
+
+
+def stop_target(scenario, name: str) -> str:
+    """What a safety stop was predicted to hit: "'crate'" (an obstacle), or "the face of steps
+    'stairs' (0.17 m step)" (a terrain face the body cannot cross, named after its element)."""
+    from .gaps import is_terrain_face
+    return f"the face of {name}" if is_terrain_face(scenario, name) else f"'{name}'"
 
 
 def stop_motion(stop: SafetyStop) -> str:
@@ -85,7 +92,8 @@ def terrain_message(event: TerrainEvent) -> str:
         drop = drop[:-1] if drop.endswith("0") else drop
         return f"{what} at t={event.time:.1f} s, {drop} m drop, {where}"
     if event.kind == "tipped":
-        on = f" on {event.element}" if event.element else ""
+        on = ("" if not event.element else f" {event.element}" if event.element.startswith("off ")
+              else f" on {event.element}")
         angle = (f"roll {abs(event.roll):.0f} deg" if abs(event.roll) >= abs(event.pitch)
                  else f"pitch {abs(event.pitch):.0f} deg")
         return f"tipped over{on} at t={event.time:.1f} s ({angle}) {where}"

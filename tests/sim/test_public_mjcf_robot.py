@@ -132,3 +132,36 @@ def test_the_watch_tells_a_tip_past_an_edge_from_one_on_its_ground_or_on_a_slope
     bank = Ramp("bank", 1.5, 0.0, length=2.0, width=1.0, rise=1.2, yaw=180.0)   # 31 deg down from x = 0.5
     slope = end(bank, 1.15, 0.91)                                    # 0.15 m below, 0.1 m up
     assert (slope.kind, slope.element) == ("tipped", "ramp 'bank'")
+
+
+SILL = "terrain:\n  - {type: steps, name: sill, x: 1.0, y: 0, count: 1, rise: %s, run: 0.3, width: 1.0}"
+
+
+@pytest.mark.parametrize("rise,body,said", [
+    (0.01, "car-sized", "cannot climb the 0.01 m step of steps 'sill'"),     # "the 6 deg slope", no element
+    (0.015, "car-sized", "cannot climb the 0.015 m step of steps 'sill'"),   # "the 0.01 m step"
+    (0.015, "car", "cannot climb the 0.015 m step of steps 'sill'"),         # "pitched 5 deg over the 0.01 m edge"
+])
+def test_a_sill_a_small_robot_cannot_climb_is_named_as_a_step_at_its_scale(tmp_path, rise, body, said):
+    """#36: the stuck watch's sizes (a 1 cm step, 0.3 m ahead) were fixed, so a sill stopping a robot
+    on 3 cm wheels read as a slope of no element, or as its own tilt over an edge; its height was
+    rounded to the centimetre. They scale with the footprint now, and a robot held at a step it is
+    climbing (its rear wheels at the riser, its front on top) cannot climb that step."""
+    TERRAIN["sill"] = SILL % rise
+    res = run_scenario(scenario(tmp_path, CAR if body == "car" else BUILT_IN[body], "sill"), Straight)
+    assert res.outcome.value == "timeout", res.message
+    assert said in res.message, res.message
+
+
+@pytest.mark.parametrize("height", [0.10, 0.105, 0.11])
+def test_off_an_edge_of_its_drop_limit_the_car_goes_over_it_not_into_its_face(tmp_path, height):
+    """#36.3: off an edge of about its drop limit (0.1 m), the car's centre past it and its base 7 cm
+    above the floor counted as standing on the floor (a fixed 8 cm, a 0.9 m robot's), so the
+    chassis touching the edge's corner was "collision with the face of platform 'upper'". At its
+    scale it has not landed there: it goes over the edge, a fall or a tip-over off it."""
+    TERRAIN["drop"] = ("terrain:\n  - {type: platform, name: upper, x: 0, y: 0, length: 2.0, width: 1.0, "
+                       f"height: {height}}}")
+    res = run_scenario(scenario(tmp_path, CAR, "drop"), Straight)
+    assert res.outcome.value == "fall", res.message
+    assert ("fell off platform 'upper'" in res.message
+            or "tipped over off the edge of platform 'upper'" in res.message), res.message

@@ -12,7 +12,7 @@ import pytest
 
 from pytest_navscenario.core.errors import ScenarioError
 from pytest_navscenario.scenario.ground import surface as ground
-from pytest_navscenario.scenario.model import BoxObstacle, Footprint, Mission, Pose, Robot, Scenario
+from pytest_navscenario.scenario.model import BoxObstacle, Footprint, Mission, Pose, Robot, Safety, Scenario
 from pytest_navscenario.scenario.bodies import WheeledBody
 from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, Steps
 from pytest_navscenario.sim.episode import simulate
@@ -22,10 +22,10 @@ from straight_planner import Straight  # noqa: E402
 
 
 def scene(terrain, *, body=WheeledBody(clearance=0.1), start=(0.0, 0.0, 0.0), goal=(12.0, 0.0),
-          footprint=Footprint(), obstacles=(), timeout=20.0):
+          footprint=Footprint(), obstacles=(), timeout=20.0, safety=True):
     return Scenario(mission=Mission(start=Pose(*start), goal=Pose(*goal), timeout=timeout),
                     terrain=tuple(terrain), obstacles=tuple(obstacles),
-                    robot=Robot(footprint=footprint, drive="diff", body=body))
+                    robot=Robot(footprint=footprint, drive="diff", body=body, safety=Safety(enabled=safety)))
 
 
 def ramp_to(deg: float, length: float = 4.0) -> tuple:
@@ -108,8 +108,9 @@ def test_the_chassis_hitting_an_obstacle_on_a_ramp_is_a_collision_and_the_obstac
 
 
 def test_the_chassis_driving_into_a_platform_face_is_a_collision_with_the_terrain():
+    # (the safety layer off: it would halt before the face, tests/sim/test_terrain_safety.py)
     res = simulate(scene([Platform("wall", 4.0, 0.0, length=1.0, width=3.0, height=0.6)],
-                         body=WheeledBody(clearance=0.1)), Straight(), 0)
+                         body=WheeledBody(clearance=0.1), safety=False), Straight(), 0)
     assert res.end == "collision" and res.collision.terrain and res.collision.obstacle == "platform 'wall'"
 
 
@@ -131,16 +132,19 @@ terrain:
 """
 
 
-def test_rolling_over_the_edge_of_the_dock_it_drives_on_is_a_tip_over_not_a_collision_with_its_face():
+def test_going_over_the_side_edge_of_the_dock_it_drives_on_is_not_a_collision_with_its_face():
     """The edge of the ground the robot stands on is what it goes over, not terrain it drove into
-    (that rises above it, as the test above): the same verdict under every MuJoCo patch release."""
+    (that rises above it, as the test above): the same verdict under every MuJoCo patch release.
+    With the wheel-speed loop's integral action (issue 36.1) the robot hangs tilted over the edge
+    with a wheel off it (it rolled over it before): a level platform's side is named as an edge,
+    not "the 0.0 deg slope of platform 'dock'"."""
     from pytest_navscenario.harness.runner import run_scenario
     from pytest_navscenario.scenario.loader import loads_scenario
     from pytest_navscenario.verdict.result import Outcome
 
     res = run_scenario(loads_scenario(DOCK_EDGE), "dwa")
-    assert res.outcome is Outcome.FALL, res.message
-    assert res.message.startswith("tipped over on platform 'dock' at t=8.0 s"), res.message
+    assert res.outcome is not Outcome.COLLISION, res.message
+    assert re.search(r"tilted \d+ deg over the side edge of platform 'dock'", res.message), res.message
 
 
 def test_the_planar_body_refuses_terrain_and_a_wheeled_body_refuses_omni_drive():
@@ -182,7 +186,8 @@ def test_the_verdict_names_what_happened_where_and_the_metrics_see_height():
     assert 8.0 < m.max_pitch < 20.0 and m.climb == pytest.approx(4.0 * math.tan(math.radians(10.0)), abs=0.03)
     xy = np.hypot(*np.diff(up.trajectory.pose[:, :2], axis=0).T).sum()
     assert m.path_length > xy                    # over the ground: the climb counts
-    wall = run_scenario(scene([Platform("wall", 4.0, 0.0, length=1.0, width=3.0, height=0.6)]), Straight)
+    wall = run_scenario(scene([Platform("wall", 4.0, 0.0, length=1.0, width=3.0, height=0.6)], safety=False),
+                        Straight)
     assert wall.outcome is Outcome.COLLISION and wall.message.startswith("collision with the face of platform 'wall'")
 
 
@@ -227,27 +232,28 @@ def test_caught_in_a_trench_it_names_the_gap_and_the_pit():
     assert event.detail == "its wheels are caught in the 0.15 m gap"
 
 
-def test_tilted_off_a_ramps_side_it_names_the_ramps_slope_and_the_tilt():
-    """#36: driven 8 cm inside the side edge of a 6.2 deg ramp, a wheel drops off the side and the
-    robot stalls tilted; the verdict names the ramp's own slope and says it tilted off the side
-    (not 'cannot climb the 11 deg slope', the body's own tilt)."""
-    import re
-
+def test_off_a_ramps_side_it_names_the_ramp_not_a_slope_it_cannot_climb():
+    """#36: driven 8 cm inside the side edge of a 6.2 deg ramp, a wheel drops off the side. It said
+    'cannot climb the 11 deg slope' (the body's own tilt, stalled); with the wheel-speed loop's
+    integral action the robot slides off the ramp's side onto the floor and scrapes the side of the
+    upper level: the verdict names the terrain it met, never a slope the ramp does not have."""
     rise = 4.0 * math.tan(math.radians(6.2))
     terrain = (Ramp("ramp", 5.0, 0.0, length=4.0, width=2.0, rise=rise),
                Platform("top", 10.0, 0.0, length=6.0, width=2.0, height=rise))
     res = simulate(scene(terrain, start=(0.0, 0.92, 0.0), goal=(10.0, 0.92)), Straight(), 0)
-    assert res.end == "stuck-terrain", res.end
-    event = res.terrain_event
-    assert event.element == "ramp 'ramp'"
-    assert re.fullmatch(r"tilted \d+ deg off the side of the 6\.2 deg slope", event.detail), event.detail
+    assert res.end in ("collision", "fell"), res.end
+    assert res.trajectory.pose[-1, 1] > 1.0 + 0.2       # off the ramp's side (at y = 1), on the floor
+    named = res.collision.obstacle if res.end == "collision" else res.terrain_event.element
+    assert named in ("ramp 'ramp'", "platform 'top'")
 
 
-@pytest.mark.parametrize("height", [0.15, 0.2])
+@pytest.mark.parametrize("height", [0.15])
 def test_hung_over_an_edge_it_names_the_edge_not_a_slope_it_cannot_climb(height):
-    """Driven slowly off a 0.15-0.2 m edge, the 0.9 m body stalls across it, nose down on flat
+    """Driven slowly off a 0.15 m edge, the 0.9 m body stalls across it, nose down on flat
     ground: it did not meet a slope it cannot climb (it said "cannot climb the 15 deg slope"), it
-    hangs over the edge of the platform it drove off (issue 36.3)."""
+    hangs over the edge of the platform it drove off (issue 36.3). (Off a 0.2 m edge it stalled
+    too until the wheel-speed loop held its speed under load, issue 36.1: it now drives on and
+    falls off, the next test.)"""
     from pytest_navscenario.scenario.robot import Limits
     sc = scene([Platform("upper", 0.0, 0.0, length=2.0, width=1.0, height=height)], body=WheeledBody(),
                goal=(2.5, 0.0))
@@ -258,3 +264,16 @@ def test_hung_over_an_edge_it_names_the_edge_not_a_slope_it_cannot_climb(height)
     assert "cannot climb" not in event.detail
     assert re.fullmatch(rf"pitched \d+ deg over the {height:.2f} m edge", event.detail), event.detail
     assert event.element == "platform 'upper'"
+
+
+def test_driven_on_over_a_02_m_edge_it_falls_off_the_platform():
+    """The wheel-speed loop holds the commanded 0.3 m/s with the nose down over a 0.2 m edge, so the
+    body goes over it: a fall off the platform it drove off, named, with the drop."""
+    from pytest_navscenario.scenario.robot import Limits
+    sc = scene([Platform("upper", 0.0, 0.0, length=2.0, width=1.0, height=0.2)], body=WheeledBody(),
+               goal=(2.5, 0.0))
+    sc = dataclasses.replace(sc, robot=dataclasses.replace(sc.robot, limits=Limits(max_speed=0.3)))
+    res = simulate(sc, Straight(), 0)
+    assert res.end == "fell"
+    assert res.terrain_event.element == "off platform 'upper'"
+    assert res.terrain_event.drop == pytest.approx(0.2, abs=0.03)

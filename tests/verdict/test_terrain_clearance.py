@@ -11,7 +11,7 @@ import pytest
 
 from pytest_navscenario.harness.runner import run_scenario
 from pytest_navscenario.scenario.bodies import LeggedBody, WheeledBody
-from pytest_navscenario.scenario.model import BoxObstacle, Footprint, Mission, Pose, Robot, Scenario
+from pytest_navscenario.scenario.model import BoxObstacle, Footprint, Mission, Pose, Robot, Safety, Scenario
 from pytest_navscenario.scenario.terrain import Platform, Steps
 from pytest_navscenario.sim.trajectory import SafetyStop
 from pytest_navscenario.verdict.metrics import min_clearance
@@ -23,10 +23,10 @@ FP = Footprint(shape="box", length=0.9, width=0.5)
 STAIRS = Steps("stairs", 5.0, 0.0, count=5, rise=0.17, run=0.3, width=2.0)   # first riser at x = 4.25
 
 
-def scene(terrain, body=WheeledBody(clearance=0.1), goal=(3.74, 0.0), obstacles=()):
+def scene(terrain, body=WheeledBody(clearance=0.1), goal=(3.74, 0.0), obstacles=(), safety=True):
     return Scenario(mission=Mission(start=Pose(0, 0, 0), goal=Pose(*goal, 0.0), timeout=20),
                     terrain=tuple(terrain), obstacles=tuple(obstacles),
-                    robot=Robot(footprint=FP, drive="diff", body=body))
+                    robot=Robot(footprint=FP, drive="diff", body=body, safety=Safety(enabled=safety)))
 
 
 def test_stopping_short_of_a_stair_face_it_cannot_climb_is_its_minimum_clearance():
@@ -35,7 +35,9 @@ def test_stopping_short_of_a_stair_face_it_cannot_climb_is_its_minimum_clearance
     front = float(res.trajectory.pose[-1, 0]) + FP.length / 2
     m = res.metrics
     assert m.min_clearance == pytest.approx(4.25 - front, abs=2e-3)   # to the riser itself
-    assert 0.0 < m.min_clearance < 0.3
+    # it stops where the goal is first within its tolerance (0.3 m, a tick of 0.1 m at 1 m/s
+    # at most beyond): its front at most 0.4 m short of a goal 6 cm from the riser
+    assert 0.0 < m.min_clearance < 4.25 - (3.74 + FP.length / 2) + 0.4
     assert m.min_clearance_obstacle == "steps 'stairs' (0.17 m step)"
     assert m.min_clearance_time == pytest.approx(float(res.trajectory.t[-1]), abs=0.05)
 
@@ -57,8 +59,8 @@ def test_a_face_the_body_climbs_or_a_body_without_limits_adds_no_clearance():
 
 
 def test_driving_into_a_platform_face_is_zero_clearance_to_that_face():
-    res = run_scenario(scene([Platform("wall", 4.0, 0.0, length=1.0, width=3.0, height=0.6)], goal=(12.0, 0.0)),
-                       Straight(), seed=0)
+    res = run_scenario(scene([Platform("wall", 4.0, 0.0, length=1.0, width=3.0, height=0.6)], goal=(12.0, 0.0),
+                             safety=False), Straight(), seed=0)    # on, the safety layer halts before it
     assert res.outcome.value == "collision"
     assert res.metrics.min_clearance == pytest.approx(0.0, abs=5e-3)
     assert res.metrics.min_clearance_obstacle.startswith("platform 'wall'")

@@ -17,7 +17,7 @@ from pytest_navscenario.scenario.bodies import LeggedBody
 from pytest_navscenario.scenario.terrain import Platform
 from pytest_navscenario.verdict.feasibility import impassable_reason
 from pytest_navscenario.verdict.paths import shortest_path
-from pytest_navscenario.verdict.traversable import MAX_BARRIERS, TerrainTooFineWarning, barriers
+from pytest_navscenario.scenario.ground.traversable import MAX_BARRIERS, TerrainTooFineWarning, barriers
 
 LEGGED = LeggedBody(max_step=0.2, max_slope=30.0, max_gap=0.3)
 CAP = Capability(0.2, 30.0, 0.3)

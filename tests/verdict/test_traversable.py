@@ -14,7 +14,7 @@ from pytest_navscenario.scenario.bodies import LeggedBody, MjcfBody, WheeledBody
 from pytest_navscenario.scenario.terrain import Pit, Platform, Ramp, Rough, Steps
 from pytest_navscenario.verdict.feasibility import impassable_reason
 from pytest_navscenario.verdict.paths import shortest_path
-from pytest_navscenario.verdict.traversable import barriers
+from pytest_navscenario.scenario.ground.traversable import barriers
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "search"))
 from straight_planner import Straight  # noqa: E402
@@ -66,7 +66,7 @@ def test_stairs_are_a_wall_to_the_wheeled_body():
     reason = impassable_reason(scene(upper_level(Steps("stairs", 8.25, 0.0, count=5, rise=0.17, run=0.3,
                                                          width=20.0)), WheeledBody()))
     assert "the terrain the wheeled body cannot cross" in reason and "steps 'stairs' (0.17 m step)" in reason
-    assert "its estimated limits: a 0.05 m step, a 18 deg slope, a 0.24 m gap" in reason
+    assert "its estimated limits: a 0.05 m step, a 26.5 deg slope, a 0.24 m gap" in reason
 
 
 def test_a_pit_is_a_hole_and_a_narrow_trench_is_strode_over_by_the_legged_body():
@@ -119,7 +119,7 @@ def test_the_legged_simulation_agrees_with_the_path_where_it_can_and_cannot_go()
     up = scene(upper_level(STAIRS, ramp(8.0)), LEGGED)
     assert simulate(up, Straight(), 0).end == "goal"
     blocked = scene(upper_level(), LEGGED)
-    assert simulate(blocked, Straight(), 0).end == "stuck-terrain"
+    assert simulate(blocked, Straight(), 0).end in ("stuck-terrain", "safety-stop")   # the layer sees the face
 
 
 @pytest.mark.parametrize("body", [WheeledBody(), WheeledBody(drive_wheels="skid"),
@@ -146,8 +146,10 @@ def test_the_wheeled_bodys_estimates_never_rule_out_what_it_crosses(body):
                     Platform("t", 9.5, 0.0, length=6.0, width=3.0, height=rise)]) != "goal"
     # (with 0.15 m wheels a gap of about 0.45 m was measured, roughly: the bisection is not monotonic
     # there; the estimate, 0.36 m, does not cover it)
-    # step, slope, gap: 4.0.0 measured 0.036/17.2/0.18 (diff), 0.064/34.4/0.172 (skid), 0.047/16.2 (big)
-    measured = {"diff": (0.042, 17.2, 0.23), "skid": (0.081, 34.4, 0.191), "big-wheels": (0.055, 16.2, 0.0)}
+    # step, slope, gap at 1 m/s (the highest speed measured: momentum carries it furthest), MuJoCo
+    # 4.0.1, the body with a PI wheel-speed loop and caster travel for a ramp's foot (issue 36.1);
+    # before it, 4.0.0 measured 0.036/17.2/0.18 (diff), 0.064/34.4/0.172 (skid), 0.047/16.2 (big)
+    measured = {"diff": (0.044, 24.4, 0.23), "skid": (0.081, 35.0, 0.191), "big-wheels": (0.056, 16.6, 0.0)}
     key = "skid" if body.drive_wheels == "skid" else ("big-wheels" if body.wheel_radius == 0.15 else "diff")
     step, slope, gap = measured[key]
     # room for a patch release: each step estimate 10 % above the higher measured figure

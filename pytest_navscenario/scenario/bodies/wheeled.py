@@ -66,21 +66,24 @@ def climbs(body: WheeledBody) -> float:
 
 # The wheeled body's limits are estimates from its wheels, measured in MuJoCo with a straight
 # drive (benchmarks/measure_wheeled_limits.py; default body: 50 kg, 10 N m, wheels of 0.1 m). The
-# figures move between MuJoCo patch releases (the highest step the default diff body climbs: 0.036 m
-# under 4.0.0, 0.042 m under 4.0.1; skid 0.064 -> 0.081 m; the widest gap 0.18 -> 0.23 m), so the
-# estimates are bounds with room rather than fits: a step is at most the radius of what meets it
-# first (diff: its ball casters, 0.05 m; skid: its wheels), since a ball or a wheel cannot roll up
-# a step of its own radius (the edge pushes straight back), and at most the chassis' clearance;
-# slopes of 18 deg (diff: the casters carry load and the driven wheels lose grip; measured 17.2
-# under both releases, 16.2 with 0.15 m wheels, where the torque binds) and 35 deg (skid: 34.4);
-# gaps of 2.4 wheel radii. The estimates stay at or above what the body does under every supported
-# release (pyproject.toml pins the series): the shortest path (the metrics' yardstick) and the
-# feasibility check must never rule out what the body really crosses (a path round a sill the robot
-# drives over would make its path efficiency exceed 1), so a step, slope or gap a little above what
-# it does may pass for crossable (tests/verdict/test_traversable.py checks both sides).
+# figures move between MuJoCo patch releases (the highest step the default diff body climbs at 1 m/s:
+# 0.036 m under 4.0.0, 0.042 m under 4.0.1; skid 0.064 -> 0.081 m; the widest gap 0.18 -> 0.23 m), and
+# with speed (momentum carries a wheel over a step or a gap it cannot climb slowly: 0.014 m steps and
+# 0.11 m gaps at 0.1 m/s, docs/reference/terrain.md), so the estimates are upper bounds with room
+# rather than fits: a step is at most the radius of what meets it first (diff: its ball casters,
+# 0.05 m; skid: its wheels), since a ball or a wheel cannot roll up a step of its own radius (the
+# edge pushes straight back), and at most the chassis' clearance; a slope is at most the one whose
+# weight the driven wheels' torque balances, with 10 % room (24.4 deg measured for the default diff
+# body at 1 m/s, 20 deg at 0.1 m/s; the casters' springs leave the wheels their grip at a ramp's
+# foot), and at most 35 deg (skid: 34-35 at every speed); gaps of 2.4 wheel radii. The estimates
+# stay at or above what the body does at every speed under every supported release (pyproject.toml
+# pins the series): the shortest path (the metrics' yardstick) and the feasibility check must never
+# rule out what the body really crosses (a path round a sill the robot drives over would make its
+# path efficiency exceed 1), so a step, slope or gap a little above what it does may pass for
+# crossable (tests/verdict/test_traversable.py checks both sides).
 WHEELED_CASTER_STEP = 1.0     # of the caster's radius (diff)
 WHEELED_WHEEL_STEP = 1.0      # of the wheel's radius (skid)
-WHEELED_SLOPE = {"diff": 18.0, "skid": 35.0}   # degrees, at most the torque's limit
+WHEELED_SLOPE = {"diff": 35.0, "skid": 35.0}   # degrees, at most the torque's limit
 WHEELED_TORQUE_SLOPE = 1.1    # the torque's limit (the slope whose weight it balances), over-estimated by this
 WHEELED_GAP = 2.4             # of the wheel's radius (0.24 m: the default body crossed 0.18 m under MuJoCo
                               # 4.0.0, 0.23 m under 4.0.1; 0.15 m wheels crossed a rough 0.45 m, not covered)

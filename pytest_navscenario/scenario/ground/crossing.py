@@ -1,5 +1,5 @@
 """What a body can cross, as one rule over a ground profile: the legged body's capability model
-(sim/bodies/legged.py) walks it every tick, and the traversable grid (verdict/traversable.py)
+(sim/bodies/legged.py) walks it every tick, and the traversable grid (scenario/ground/traversable.py)
 applies it between neighbouring cells, so the simulation and the feasibility check agree.
 
 A *profile* is the ground's height at evenly spaced points along a line (``spacing`` metres
@@ -20,7 +20,7 @@ Distances are exact to the spacing (SPACING, 2 cm, in the simulation). No MuJoCo
 A profile sees the slope along its line only. *Steep ground* (``steep_ground``) is the slope in
 every direction: ground steeper than ``max_slope`` whose height spans more than ``max_step`` (a
 steep ramp's whole surface, a steep patch of a height grid). The path search makes it a wall
-(verdict/traversable.py) and the legged body does not walk onto it from level ground, whichever way
+(scenario/ground/traversable.py) and the legged body does not walk onto it from level ground, whichever way
 it comes (``walk``'s ``steep``): across a bank or up it diagonally, where the rise along its way is
 within ``max_slope``, as well as straight up.
 """

@@ -11,16 +11,23 @@ places the parts and the loader refuses a body that cannot stand within its limi
 * ``diff``: two driven wheels on one axle through the centre, ``track`` apart, and two sprung ball
   casters at the front and the back of the footprint (frictionless spheres on vertical springs with
   a small preload: they steady the chassis's pitch and carry little load, so the driven wheels keep
-  their traction); the springs are stiff enough that accelerating at 2 m/s² pitches a 0.3 m long
-  robot about 5 degrees and a 0.9 m one under 1, and soft enough that the wheels keep their load
-  where the ground bends by up to SUSPENSION_SLOPE (the foot and the top of a ramp);
+  their traction); the springs are soft enough that the wheels keep their load where the ground
+  bends by up to SUSPENSION_SLOPE (the foot and the top of a ramp), with the travel to follow half
+  of such a bend, and stiff enough that the drive's full acceleration pitches the chassis at most
+  ACCEL_PITCH standing (a short robot with a high mass centre gets the stiffer springs: issue 36.1,
+  stiffer casters took the chassis's weight off its wheels at a ramp's foot);
 * ``skid``: four driven wheels, ``wheelbase`` apart front to back, ``track`` apart side to side;
   it turns by skidding (the wheels' sideways friction resists, as on a real skid-steer).
 
 Wheels are cylinders of ``wheel_radius`` and ``wheel_width`` on hinge joints, friction 1 (rubber on
-concrete). Each is driven by a MuJoCo velocity actuator, the low-level controller: a proportional
-wheel-speed loop whose torque saturates at ``max_wheel_torque``; its gain gives the wheel the
-planar body's tracking time constant (TRACKING_TAU) for its share of the robot's inertia. Each
+concrete). Each is driven by the low-level controller, a proportional-integral wheel-speed loop
+whose torque saturates at ``max_wheel_torque`` (on the joint: ``actuatorfrcrange``): a MuJoCo
+velocity actuator (the proportional part: its gain gives the wheel the planar body's tracking time
+constant TRACKING_TAU for its share of the robot's inertia) and an integrator actuator pulling the
+wheel towards the integral of its target speed (critically damped with it, and held within the
+angle error that gives full torque: anti-windup). Real motor controllers hold speed under load;
+a proportional loop alone gave a slow target little torque (issue 36.1: the body climbed less
+slowly). Each
 control tick the planner's setpoint (vx, wz) becomes the wheel speeds (vx -+ wz track / 2) / r,
 scaled down together when one would pass ``max_wheel_speed``, and the loop's target ramps to them
 over the tick (an integrator in the actuator) rather than jumping: the drive's acceleration limit
@@ -46,7 +53,8 @@ WHEEL_MASS_SHARE = 0.04   # of the body's mass, per wheel
 CASTER_MASS_SHARE = 0.01  # of the body's mass, per caster
 DECK = 0.1                # m: the thickness of the slab the chassis's mass is spread over (its inertia)
 CASTER_PRELOAD = 0.05     # of the body's weight, carried by each caster standing on flat ground
-SUSPENSION_SLOPE = 15.0   # degrees: a bend of the ground under the casters that leaves the wheels loaded
+SUSPENSION_SLOPE = 30.0   # degrees: a bend of the ground under the casters that leaves the wheels loaded
+ACCEL_PITCH = 2.0         # degrees: the chassis's standing pitch on its casters at the drive's full acceleration
 # MuJoCo's contacts are soft in proportion to the mass behind them: a caster's own small mass would
 # make its contact softer than its spring (measured: a 0.3 kg caster sank 8 mm into the floor and let
 # a 0.3 m robot pitch 10 degrees accelerating at 2 m/s²). The slide's armature (inertia felt by the
@@ -107,10 +115,14 @@ class WheeledModel(FreeBase):
         robot.add_site(name="centre", pos=[0.0, 0.0, 0.0])
         gear = dict(contype=GEAR_BITS[0], conaffinity=GEAR_BITS[1], group=ROBOT_GROUP)
         # wheel speed loop: the wheel's share of the robot's inertia, reflected through its radius
-        kv = m / len(wheels) * r * r / TRACKING_TAU
+        inertia = m / len(wheels) * r * r
+        kv = inertia / TRACKING_TAU
         for k, (wx, wy) in enumerate(wheels):
             wheel = robot.add_body(name=f"wheel{k}", pos=[wx, wy, r])
-            wheel.add_joint(name=f"wheel{k}", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 1, 0])
+            joint = wheel.add_joint(name=f"wheel{k}", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 1, 0])
+            # the loop's sum (proportional + integral) saturates at the motor's torque
+            joint.actfrclimited = mujoco.mjtLimited.mjLIMITED_TRUE
+            joint.actfrcrange = [-b.max_wheel_torque, b.max_wheel_torque]
             wheel.add_geom(name=f"wheel{k}", type=mujoco.mjtGeom.mjGEOM_CYLINDER,
                            size=[r, b.wheel_width / 2, 0], quat=[math.sqrt(0.5), math.sqrt(0.5), 0, 0],
                            mass=wheel_mass, friction=[1.0, 0.005, 0.0001], rgba=[0.1, 0.1, 0.1, 1], **gear)
@@ -119,6 +131,17 @@ class WheeledModel(FreeBase):
             act.dyntype = mujoco.mjtDyn.mjDYN_INTEGRATOR    # the target (act) ramps at the rate ctrl
             act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
             act.forcerange = [-b.max_wheel_torque, b.max_wheel_torque]
+        self.ki = inertia / (4 * TRACKING_TAU * TRACKING_TAU)     # critically damped with kv
+        for k in range(len(wheels)):
+            # the loop's integral action: its target angle (act) integrates the wheel speed target
+            # (ctrl: the tick's mean target), and it pulls the wheel to that angle with ki
+            act = spec.add_actuator(name=f"wheel{k}_integral", trntype=mujoco.mjtTrn.mjTRN_JOINT,
+                                    target=f"wheel{k}")
+            act.dyntype = mujoco.mjtDyn.mjDYN_INTEGRATOR
+            act.gaintype = mujoco.mjtGain.mjGAIN_FIXED
+            act.gainprm[0] = self.ki
+            act.biastype = mujoco.mjtBias.mjBIAS_AFFINE
+            act.biasprm[:3] = [0.0, -self.ki, 0.0]
         if casters:
             self._add_casters(robot, chassis_mass, caster_mass, gear)
 
@@ -128,7 +151,12 @@ class WheeledModel(FreeBase):
         of CASTER_PRELOAD of the weight each, travel of the caster's radius either way."""
         lay, m = self.layout, float(self.spec_body.mass)
         rc, d = lay.caster_radius, lay.caster_x
-        stiffness = m * G / (d * math.tan(math.radians(SUSPENSION_SLOPE)))
+        # soft enough for the ground's bends, stiff enough that the drive's hardest acceleration
+        # (its torque's reaction and the mass centre's inertia, m a h about the axle) pitches the
+        # chassis at most ACCEL_PITCH standing (short robots with a high mass centre need the latter)
+        accel = float(self.scenario.robot.limits.max_accel)
+        stiffness = max(m * G / (d * math.tan(math.radians(SUSPENSION_SLOPE))),
+                        m * accel * lay.com_height / (2 * d * d * math.radians(ACCEL_PITCH)))
         pitch_inertia = chassis_mass / 12 * (lay.length ** 2 + DECK * DECK) + chassis_mass * (lay.com_height - lay.radius) ** 2
         damping = max(math.sqrt(stiffness * d * d * pitch_inertia) / (d * d),
                       stiffness * self.scenario.simulation.timestep)   # the latter: stable at any step
@@ -140,7 +168,7 @@ class WheeledModel(FreeBase):
             joint.springref = -CASTER_PRELOAD * m * G / stiffness
             joint.armature = CASTER_ARMATURE_SHARE * m
             joint.limited = mujoco.mjtLimited.mjLIMITED_TRUE
-            joint.range = [-rc, rc]
+            joint.range = [-rc, d * math.tan(math.radians(SUSPENSION_SLOPE)) / 2]
             # frictionless: a ball caster rolls any way (condim 1, and its priority makes the
             # contact take the caster's settings rather than the ground's)
             caster.add_geom(name=f"caster{k}", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[rc, 0, 0],
@@ -150,6 +178,7 @@ class WheeledModel(FreeBase):
         super().bind(model)
         self.n_wheels = len(self.layout.wheels)
         self.half = self.n_wheels // 2          # left wheels first
+        self.wheel_qpos = [int(model.jnt_qposadr[model.joint(f"wheel{k}").id]) for k in range(self.n_wheels)]
 
     def begin(self, d: mujoco.MjData) -> "WheelSpeeds":
         return WheelSpeeds(self, d)
@@ -175,12 +204,18 @@ class WheelSpeeds:
     speeds over exactly one control tick."""
 
     def __init__(self, body: WheeledModel, d: mujoco.MjData):
-        self.body, self.act = body, d.act
+        self.body, self.act, self.qpos = body, d.act, d.qpos
         self.half, self.n = body.half, body.n_wheels
         self.rate = 1.0 / body.tick_dt
+        self.angles = body.wheel_qpos           # the wheels' angles in qpos
+        self.wind = float(body.spec_body.max_wheel_torque) / body.ki   # anti-windup: the angle error at full torque
 
     def command(self, ctrl: np.ndarray, setpoint: tuple[float, float, float], state: Any = None) -> None:
         left, right = self.body.wheel_speeds(setpoint)
-        act, rate, half = self.act, self.rate, self.half
-        for k in range(self.n):
-            ctrl[k] = ((left if k < half else right) - act[k]) * rate
+        act, rate, n, qpos, wind = self.act, self.rate, self.n, self.qpos, self.wind
+        for k in range(n):
+            target = left if k < self.half else right
+            ctrl[n + k] = (target + act[k]) / 2        # the ramp's mean: the target angle's rate
+            ctrl[k] = (target - act[k]) * rate
+            angle = qpos[self.angles[k]]              # anti-windup: the integral holds at most full torque
+            act[n + k] = min(max(act[n + k], angle - wind), angle + wind)

@@ -32,6 +32,7 @@ from typing import Sequence
 
 import numpy as np
 
+from . import hfield_march
 from .heightfield import PlacedGrid, hfield_size
 
 LEVELS = (16, 4)      # coarser views of the grid, in cells a side (used where the grid is 2x larger)
@@ -67,6 +68,10 @@ class _Grid:
         # of units that are never met (it catches rounding at the edges), flat
         self.levels = {size: _Level(corner, size) for size in (1,) + LEVELS
                        if size == 1 or max(self.ncr, self.ncc) >= 4 * size}
+        # the compiled cast's view: heights (rows, cols), each cell's and block's highest point
+        self.heights, self.cell_top = h, np.ascontiguousarray(corner)
+        self.block_top = hfield_march.block_tops(corner)
+        self.march_params = None        # its constants, made on its first cast
 
 
 class _Level:
@@ -143,8 +148,12 @@ def cast_grids(grids: Sequence[PlacedGrid], pnt: np.ndarray, dirs: np.ndarray, r
         out.fill(np.inf)
     else:                         # out holds each ray's limit; a ray meeting nothing keeps inf
         np.copyto(out, within)
+    compiled = hfield_march.available()
     for placed in grids:
-        _cast_one(_prepared(placed), pnt, dirs, rmax, out)
+        if compiled:
+            hfield_march.cast(_prepared(placed), pnt, dirs, rmax, out)
+        else:
+            _cast_one(_prepared(placed), pnt, dirs, rmax, out)
     return out
 
 

@@ -15,6 +15,7 @@ from ...scenario.ground.crossing import SPACING, Capability, steep_ground, walk
 from ..trajectory import TerrainEvent
 
 ON_GROUND = 0.08          # m: a base this close above the ground under it stands on it
+ON_GROUND_SHARE = 0.09    # of the footprint's length, for a smaller robot (a 0.2 m car: 1.8 cm)
 STUCK_TIME = 3.0          # s of being driven without moving that make the robot stuck on terrain
 STUCK_COMMAND = 0.1       # m/s: a setpoint at least this fast counts as driving
 STUCK_MOVING = 0.25       # of the setpoint's speed: slower than this counts as not moving
@@ -24,6 +25,13 @@ EDGE_REACH = 0.1          # m beyond the footprint's ends where an edge a tilted
 GAP_SPACING = 0.005       # m between the samples that measure a gap the robot is caught in
 SIDE_TILT = 6.0           # degrees of roll beyond the ground's own cross-slope: a wheel is off a side edge
 FEATURE = Capability(max_step=0.01, max_slope=5.0, max_gap=0.0)   # what counts as a step or a slope there
+FEATURE_SHARE = 0.02      # of the footprint's length: a smaller robot's step (a 0.2 m car's: 4 mm)
+
+
+def _height(h: float) -> str:
+    """A step's or edge's height in metres, to the centimetre unless that misstates it by more than
+    a fifth (a 1.5 cm sill: "0.015", not "0.01")."""
+    return f"{h:.2f}" if abs(round(h, 2) - h) <= 0.2 * h else f"{h:.3f}"
 
 
 def resting_pose(scenario, x: float, y: float, yaw: float) -> tuple[float, float, float]:
@@ -184,12 +192,18 @@ class TerrainWatch:
         self.chassis_on_ground = None
         fp = scenario.robot.footprint
         self.front = fp.length / 2 if fp.shape == "box" else fp.radius
+        # at the robot's scale: a sill that holds a car on 3 cm wheels is under a centimetre, and a
+        # step 0.3 m ahead of a 0.2 m robot is not what holds it (a 0.9 m robot's: unchanged)
+        self.feature = Capability(max_step=min(FEATURE.max_step, FEATURE_SHARE * 2 * self.front),
+                                  max_slope=FEATURE.max_slope, max_gap=0.0)
+        self.look_ahead = min(LOOK_AHEAD, self.front)
+        self.on_ground = min(ON_GROUND, ON_GROUND_SHARE * 2 * self.front)
 
     def check(self, t: float, state: tuple[float, ...], setpoint: tuple[float, float, float],
               touching: bool) -> None:
         x, y, z, roll, pitch, yaw, vx, vy, vz, wz = state
         g = self.probe.height(x, y)
-        if self.level is None or z - g < ON_GROUND:
+        if self.level is None or z - g < self.on_ground:
             self.level, self.level_at = g, (x, y)
         elif self.level - z > self.drop_limit:
             self._end(TerrainEvent("fell", t, self._fell_from(x, y), x, y, z, drop=self.level - g,
@@ -200,7 +214,11 @@ class TerrainWatch:
                 self._end(TerrainEvent("fell", t, self._fell_from(x, y, edge[:2]), x, y, z, drop=edge[2] - g,
                                        roll=math.degrees(roll), pitch=math.degrees(pitch)))
             el = self.probe.element(x, y)
-            self._end(TerrainEvent("tipped", t, self._name(el), x, y, z, roll=math.degrees(roll),
+            where = self._name(el)
+            if el is None and (edge := self._edge_under(x, y, math.cos(yaw), math.sin(yaw))) is not None \
+                    and edge[0] is not None:
+                where = "off the edge of " + self._name(edge[0])   # its centre just past it (a drop of its limit)
+            self._end(TerrainEvent("tipped", t, where, x, y, z, roll=math.degrees(roll),
                                    pitch=math.degrees(pitch)))
         speed = abs(setpoint[0]) + abs(setpoint[1])
         if speed < STUCK_COMMAND:
@@ -253,11 +271,11 @@ class TerrainWatch:
         return "off " + self._name(above) if above is not None else ""
     def _stuck(self, t, x, y, z, roll, pitch, yaw, setpoint, touching) -> None:
         """What holds the robot: the first step or slope along its way (the ground from under its
-        centre to LOOK_AHEAD past its front, walked with FEATURE: ``scenario/ground/crossing.py``), the
+        centre to its look-ahead past its front, walked with its feature: ``scenario/ground/crossing.py``), the
         slope it is on, or its chassis resting on the ground (high-centred)."""
         ahead = 1.0 if setpoint[0] >= 0 else -1.0
         c, s = math.cos(yaw), math.sin(yaw)
-        d = ahead * np.arange(int((self.front + LOOK_AHEAD) / SPACING) + 1) * SPACING
+        d = ahead * np.arange(int((self.front + self.look_ahead) / SPACING) + 1) * SPACING
         px, py = x + c * d, y + s * d
         steep = self._steep_ahead(x, y, c, s, d)
         if steep is not None:
@@ -275,19 +293,20 @@ class TerrainWatch:
             self._end(TerrainEvent("stuck", t, self._name(side[1]), x, y, z, roll=math.degrees(roll),
                                    pitch=math.degrees(pitch), detail=side[0]))
         h = ground.ground_height(self.scenario, px, py).tolist()
-        _, barrier = walk(h, SPACING, h[0], FEATURE)
+        _, barrier = walk(h, SPACING, h[0], self.feature)
         slope = math.degrees(max(abs(pitch), abs(roll)))
         if barrier is not None and barrier.kind != "drop":
             k = min(barrier.index + 1, len(h) - 1)
             el = self.probe.element(float(px[k]), float(py[k]))
             if barrier.kind == "step":
-                detail = f"cannot climb the {barrier.height:.2f} m step"
+                detail = f"cannot climb the {_height(barrier.height)} m step"
             else:
                 angle = math.degrees(math.atan2(barrier.height, barrier.width + SPACING))
                 detail = f"cannot climb the {angle:.0f} deg slope"
-        elif slope > 3.0 and (edge := self._edge_under(x, y, c, s)) is not None:
-            el, height = edge            # its own tilt over an edge, not a slope of the ground (issue 36)
-            detail = f"pitched {slope:.0f} deg over the {height:.2f} m edge"
+        elif slope > 3.0 and (edge := self._edge_under(x, y, ahead * c, ahead * s)) is not None:
+            el, height, up = edge        # its own tilt over an edge, not a slope of the ground (issue 36)
+            detail = (f"cannot climb the {_height(height)} m step" if up     # its rear at the riser
+                      else f"pitched {slope:.0f} deg over the {_height(height)} m edge")
         elif slope > 3.0:
             el = self.probe.element(x, y)
             detail = f"cannot climb the {slope:.0f} deg slope"
@@ -303,26 +322,29 @@ class TerrainWatch:
         self._end(TerrainEvent("stuck", t, self._name(el), x, y, z, roll=math.degrees(roll),
                                pitch=math.degrees(pitch), detail=detail))
 
-    def _edge_under(self, x: float, y: float, c: float, s: float) -> tuple[int | None, float] | None:
-        """(element, height) of an edge under the footprint, from EDGE_REACH behind its rear to
-        EDGE_REACH past its front end along its heading (a step or drop above FEATURE's): a robot tilted across one is hung over it,
-        its tilt its own, not the ground's slope. None where the ground under it has no edge."""
+    def _edge_under(self, x: float, y: float, c: float, s: float) -> tuple[int | None, float, bool] | None:
+        """(element, height, up) of an edge under the footprint, from EDGE_REACH behind its rear to
+        EDGE_REACH past its front end along its way (c, s) (a step or drop above its feature's): a
+        robot tilted across one is hung over it, its tilt its own, not the ground's slope; ``up``
+        where the ground rises along its way there (its front on top, its rear at the riser: a step
+        it is climbing). None where the ground under it has no edge."""
         reach = self.front + EDGE_REACH
         d = np.arange(-reach, reach + SPACING / 2, SPACING)
         px, py = x + c * d, y + s * d
         h = ground.ground_height(self.scenario, px, py).tolist()
-        _, barrier = walk(h, SPACING, h[0], FEATURE)
+        _, barrier = walk(h, SPACING, h[0], self.feature)
         if barrier is None or barrier.kind not in ("step", "drop"):
             return None
         k = min(barrier.index + 1, len(h) - 1)
         upper = k if h[k] >= h[barrier.index] else barrier.index    # the edge belongs to the higher side
-        return self.probe.element(float(px[upper]), float(py[upper])), float(barrier.height)
+        return (self.probe.element(float(px[upper]), float(py[upper])), float(barrier.height),
+                barrier.kind == "step")
 
     def _level_around(self, x: float, y: float, px: np.ndarray, py: np.ndarray) -> bool:
-        """The ground under the robot and along its way is level (within FEATURE's step): no
+        """The ground under the robot and along its way is level (within its feature's step): no
         terrain there can hold it."""
         h = ground.ground_height(self.scenario, np.append(px, x), np.append(py, y))
-        return float(np.ptp(h)) <= FEATURE.max_step
+        return float(np.ptp(h)) <= self.feature.max_step
 
     def _not_held(self, t, x, y, z, roll, pitch) -> None:
         """Driven on level ground without getting anywhere: nothing of the terrain holds it. A
@@ -357,17 +379,19 @@ class TerrainWatch:
         slope = getattr(self.scenario.terrain[el], "slope", None) if el is not None else None
         if slope is None:
             slope = math.degrees(math.atan(abs(h[2] - h[3]) / (2 * e)))
+        if slope < FEATURE.max_slope:          # level ground (a platform, a dock): its side edge, not a slope
+            return f"tilted {tilt:.0f} deg over the side edge", el
         return f"tilted {tilt:.0f} deg off the side of the {slope:.1f} deg slope", el
 
     def _gap_under(self, x, y, c, s) -> tuple[float, int | None] | None:
         """(width along the heading, element) of a gap the robot's centre is over: ground lower by
         more than FEATURE's step than the ground on both sides within its reach (a trench, a
         narrow pit its wheels dropped into); None when there is ground on one side only (a drop)."""
-        reach = self.front + LOOK_AHEAD
+        reach = self.front + self.look_ahead
         d = np.arange(-round(reach / GAP_SPACING), round(reach / GAP_SPACING) + 1) * GAP_SPACING
         h = ground.ground_height(self.scenario, x + c * d, y + s * d)
         mid = len(d) // 2
-        low = h < min(h[0], h[-1]) - FEATURE.max_step
+        low = h < min(h[0], h[-1]) - self.feature.max_step
         if not low[mid]:
             return None
         lows = np.flatnonzero(~low)

@@ -20,7 +20,9 @@ cells steeper than ``max_slope`` whose heights span more than ``max_step``).
 ``barriers(scenario)`` gives them as thin ``BoxObstacle``s named after the element and what it is
 ("platform 'kerb' (0.30 m step)"): ``verdict/paths.py`` grows them by the footprint like any
 obstacle, so the shortest path goes round a step the body cannot climb and up a ramp it can, and
-the feasibility check says "no planner can pass this" when the terrain closes every way. A body
+the feasibility check says "no planner can pass this" when the terrain closes every way; the
+clearance metric (``verdict/gaps.py``) and the collision safety layer (``sim/safety.py``, a face
+from its low side) keep clear of them. A body
 that declares no limits (an MJCF robot) gets no barriers. Cached per terrain and body.
 """
 from __future__ import annotations
@@ -32,10 +34,10 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..scenario.ground import surface as ground
-from ..scenario.bodies import body_capability
-from ..scenario.ground.crossing import Capability, steep_cells, steep_piece
-from ..scenario.model import BoxObstacle, Scenario
+from ..bodies import body_capability
+from ..model import BoxObstacle, Scenario
+from . import surface as ground
+from .crossing import Capability, steep_cells, steep_piece
 
 EDGE_SPACING = 0.05     # m between the points along an element's edge where faces are measured
 PROBE = 0.01            # m either side of an edge where the two heights are read
@@ -87,6 +89,28 @@ def barriers(scenario: Scenario, capability: Capability | None = None) -> tuple[
 
 
 _CACHE: OrderedDict = OrderedDict()
+LOW_SIDE_PROBE = 0.05   # m beyond a face's barrier box where the heights on its two sides are read
+
+
+def walls_from_below(scenario: Scenario) -> tuple[tuple[BoxObstacle, tuple[float, float, float, float]], ...]:
+    """The faces among ``barriers`` (not the steep areas), each with (ux, uy, mid, top): the unit
+    vector across it to its lower side, the height halfway up it and its top's: from ground below
+    ``mid`` on its lower side it rises as a wall, from above it is an edge to go over (the collision
+    safety layer halts only for the former, and only where its scan plane meets it:
+    ``sim/safety.py``). () without faces."""
+    faces = [b for b in barriers(scenario) if b.width == WALL]
+    if not faces:
+        return ()
+    yaw = np.radians([b.yaw for b in faces])
+    nx, ny = -np.sin(yaw), np.cos(yaw)               # across the face (its box's width axis)
+    cx, cy = np.array([b.x for b in faces]), np.array([b.y for b in faces])
+    reach = WALL / 2 + LOW_SIDE_PROBE
+    plus = ground.ground_height(scenario, cx + nx * reach, cy + ny * reach)
+    minus = ground.ground_height(scenario, cx - nx * reach, cy - ny * reach)
+    sign = np.where(plus < minus, 1.0, -1.0)
+    mid, top = (plus + minus) / 2, np.maximum(plus, minus)
+    return tuple((b, (float(sign[k] * nx[k]), float(sign[k] * ny[k]), float(mid[k]), float(top[k])))
+                 for k, b in enumerate(faces))
 
 
 def _name(scenario: Scenario, element: int, what: str) -> str:
@@ -225,7 +249,7 @@ def _grid_barriers(scenario: Scenario, cap: Capability, budget: int) -> list[Box
     """Rough ground and height files: barrier cells on the element's own grid, as boxes (a run
     of cells along a row is one box); it stops once there are more than ``budget``."""
     out = []
-    from ..scenario.ground.heightmap import height_grid
+    from .heightmap import height_grid
 
     for i in ground.grid_elements(scenario.terrain):
         el = scenario.terrain[i]
