@@ -19,6 +19,7 @@ from __future__ import annotations
 import contextlib
 import signal
 import threading
+import types
 from typing import Any, Callable, Iterator
 
 
@@ -168,3 +169,26 @@ def unmasked(exc: BaseException) -> BaseException:
         return exc.__context__
     return exc
 
+
+def with_line_numbers(exc: BaseException) -> None:
+    """Give every frame of ``exc``'s traceback, and of the exceptions chained to it, a line number:
+    CPython 3.11 reports ``tb_lineno`` None for a frame interrupted on an instruction that has none
+    (a signal's handler raised there), on which pytest's report of the interruption fails ("unsupported
+    operand type(s) for -: 'NoneType' and 'int"), ending the run with status 1 and no summary. Such a
+    frame gets its function's first line."""
+    seen: set[int] = set()
+    while exc is not None and id(exc) not in seen:
+        seen.add(id(exc))
+        entries, tb = [], exc.__traceback__
+        while tb is not None:
+            entries.append(tb)
+            tb = tb.tb_next
+        if any(t.tb_lineno is None for t in entries):
+            numbered = None
+            for t in reversed(entries):
+                if t.tb_lineno is None:        # its instruction unknown too (-1: no column to show)
+                    numbered = types.TracebackType(numbered, t.tb_frame, -1, t.tb_frame.f_code.co_firstlineno)
+                else:
+                    numbered = types.TracebackType(numbered, t.tb_frame, t.tb_lasti, t.tb_lineno)
+            exc.__traceback__ = numbered
+        exc = exc.__cause__ or exc.__context__

@@ -79,6 +79,19 @@ def _stop_gracefully_on_sigterm(config: pytest.Config) -> None:
         config.add_cleanup(restore)
 
 
+@pytest.hookimpl(wrapper=True, tryfirst=True)
+def pytest_keyboard_interrupt(excinfo: pytest.ExceptionInfo) -> Any:
+    """Before pytest reports an interruption: every frame of it numbered
+    (``core.interrupts.with_line_numbers``), so that the report does not fail on a frame a signal
+    left without a line number and the run ends as interrupted (status 2) with its summary."""
+    from ..core.interrupts import with_line_numbers
+
+    with_line_numbers(excinfo.value)
+    if excinfo.value.__traceback__ is not None:
+        excinfo.traceback = type(excinfo.traceback)(excinfo.value.__traceback__)
+    return (yield)
+
+
 def _is_worker(config: pytest.Config) -> bool:
     return hasattr(config, "workerinput")
 
