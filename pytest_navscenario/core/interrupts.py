@@ -170,13 +170,14 @@ def unmasked(exc: BaseException) -> BaseException:
     return exc
 
 
-def with_line_numbers(exc: BaseException) -> None:
+def with_line_numbers(exc: BaseException) -> bool:
     """Give every frame of ``exc``'s traceback, and of the exceptions chained to it, a line number:
     CPython 3.11 reports ``tb_lineno`` None for a frame interrupted on an instruction that has none
     (a signal's handler raised there), on which pytest's report of the interruption fails ("unsupported
     operand type(s) for -: 'NoneType' and 'int"), ending the run with status 1 and no summary. Such a
-    frame gets its function's first line."""
+    frame gets its function's first line. True when one had none."""
     seen: set[int] = set()
+    renumbered = False
     while exc is not None and id(exc) not in seen:
         seen.add(id(exc))
         entries, tb = [], exc.__traceback__
@@ -191,4 +192,6 @@ def with_line_numbers(exc: BaseException) -> None:
                 else:
                     numbered = types.TracebackType(numbered, t.tb_frame, t.tb_lasti, t.tb_lineno)
             exc.__traceback__ = numbered
+            renumbered = True
         exc = exc.__cause__ or exc.__context__
+    return renumbered

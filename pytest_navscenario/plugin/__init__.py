@@ -86,8 +86,7 @@ def pytest_keyboard_interrupt(excinfo: pytest.ExceptionInfo) -> Any:
     left without a line number and the run ends as interrupted (status 2) with its summary."""
     from ..core.interrupts import with_line_numbers
 
-    with_line_numbers(excinfo.value)
-    if excinfo.value.__traceback__ is not None:
+    if with_line_numbers(excinfo.value) and excinfo.value.__traceback__ is not None:
         excinfo.traceback = type(excinfo.traceback)(excinfo.value.__traceback__)
     return (yield)
 

@@ -147,8 +147,9 @@ class WheeledModel(FreeBase):
 
     def _add_casters(self, robot, chassis_mass: float, caster_mass: float, gear: dict) -> None:
         """Two ball casters on vertical springs at the front and back (see the module docstring):
-        stiffness from SUSPENSION_SLOPE, damping critical for the chassis's pitch on them, a preload
-        of CASTER_PRELOAD of the weight each, travel of the caster's radius either way."""
+        stiffness from SUSPENSION_SLOPE (or ACCEL_PITCH, whichever is stiffer), damping critical for
+        the chassis's pitch on them, a preload of CASTER_PRELOAD of the weight each; travel of the
+        caster's radius down, and up half of what a SUSPENSION_SLOPE bend asks."""
         lay, m = self.layout, float(self.spec_body.mass)
         rc, d = lay.caster_radius, lay.caster_x
         # soft enough for the ground's bends, stiff enough that the drive's hardest acceleration
@@ -201,7 +202,8 @@ class WheeledModel(FreeBase):
 class WheelSpeeds:
     """One episode's low-level controller of a wheeled body: each tick, the rates (``ctrl``) that
     ramp the wheel-speed loops' targets (``act``) from where they are to the setpoint's wheel
-    speeds over exactly one control tick."""
+    speeds over exactly one control tick, the integral actuators' rates (the ramp's mean speed)
+    and their target angles held within full torque of the wheels' (anti-windup)."""
 
     def __init__(self, body: WheeledModel, d: mujoco.MjData):
         self.body, self.act, self.qpos = body, d.act, d.qpos
@@ -212,10 +214,11 @@ class WheelSpeeds:
 
     def command(self, ctrl: np.ndarray, setpoint: tuple[float, float, float], state: Any = None) -> None:
         left, right = self.body.wheel_speeds(setpoint)
-        act, rate, n, qpos, wind = self.act, self.rate, self.n, self.qpos, self.wind
+        act, rate, n, half = self.act, self.rate, self.n, self.half
+        qpos, angles, wind = self.qpos, self.angles, self.wind
         for k in range(n):
-            target = left if k < self.half else right
+            target = left if k < half else right
             ctrl[n + k] = (target + act[k]) / 2        # the ramp's mean: the target angle's rate
             ctrl[k] = (target - act[k]) * rate
-            angle = qpos[self.angles[k]]              # anti-windup: the integral holds at most full torque
+            angle = qpos[angles[k]]                   # anti-windup: the integral holds at most full torque
             act[n + k] = min(max(act[n + k], angle - wind), angle + wind)
