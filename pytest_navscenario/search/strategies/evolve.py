@@ -25,8 +25,8 @@ once where failures are common, a tight one where they are rare). Those proposal
 Operator shares follow which operator has been finding new failing signatures; where the
 aimed operators put an obstacle (which obstacle, which quarter of the route) is a second
 bandit rewarded for new failing signatures and divided down by re-created ones.
-Hypothesis draws each proposal (operator, parent, random stream) in one seeded Hypothesis run
-per generation.
+Hypothesis draws each proposal's random stream (which picks its operator, parent and values):
+one seeded ``ConjectureData`` draw per proposal (until #35, a whole engine run per generation).
 
 The operators that aim at the episode (place, insert, squeeze, barrier, retime, shift, crowd) and
 the bandit over where they aim are in aim.py.
@@ -52,6 +52,7 @@ FAILURE_CREDIT = 3.0           # an operator's credit for a new way of failing (
 NEAR_COPY = 0.5                # m: a failure's child whose culprit moved less (same quarter) is skipped
 FAILURE_FLOOR = -0.3           # failure cells compete for parenthood as if this robust
 STREAM_BITS = 32               # Hypothesis-drawn bits seeding each proposal's random stream
+TRIES_PER_PROPOSAL = 10        # draws per proposal wanted before a batch gives up (ask draws again)
 HUNT_DRAWS = 8                 # no failure known yet: proposals drawn per one simulated (the likeliest kept)
 ROOM_LEVELS = (0.05, 0.1, 0.15, 0.2, 0.3, 0.45, 0.6)   # m: footprint growth tried by paths.passage_room
 
@@ -86,7 +87,7 @@ class _Cells:
 
 
 class Evolve(AimedOperators, BaseStrategy):
-    """See the module docstring. Proposals come from one seeded Hypothesis run per generation."""
+    """See the module docstring. Each proposal's random stream is one seeded Hypothesis draw."""
 
     def __init__(self, space: SearchSpace, report: Any, budget: int, seed_value: int):
         self.space, self.report, self.seed_value = space, report, seed_value
@@ -239,38 +240,39 @@ class Evolve(AimedOperators, BaseStrategy):
         return self._way[1], self._way[2]
 
     def _hypothesis_batch(self, n: int, attempt: int) -> list[tuple[tuple[float, ...], str]]:
-        """Up to ``n`` valid proposals drawn in one seeded Hypothesis run."""
-        from hypothesis import HealthCheck, Phase, Verbosity, given, reject, settings
-        from hypothesis import seed as hseed
-        from hypothesis import strategies as st
+        """Up to ``n`` valid proposals, each from its own draw of Hypothesis's data: a
+        ``ConjectureData`` seeded by the search seed, the generation, the attempt and the try gives
+        STREAM_BITS booleans through Hypothesis's provider, which seed the proposal's random stream
+        (about 0.03 ms a proposal). Until #35 each generation was a whole seeded Hypothesis engine
+        run (``given(st.data())``), three quarters of the strategy's own work for the same thing: the
+        stream goes through a string-seeded ``random.Random``, so the engine's mutations of
+        earlier examples gave no streams nearer each other than fresh draws do. At most
+        TRIES_PER_PROPOSAL tries per proposal wanted, as the engine run stopped on too many
+        invalid examples (``ask`` then draws again with the next attempt)."""
+        from hypothesis.internal.conjecture.data import ConjectureData
 
         out: list[tuple[tuple[float, ...], str]] = []
         weights = self.weights() if self.told else [1.0 if op == "explore" else 0.0 for op in OPERATORS]
         total = sum(weights)
-
-        def body(data):
-            # 32 booleans, not an integer: Hypothesis mixes constants found in the loaded
-            # modules into integer draws, which would make the stream depend on what is imported
-            bits = data.draw(st.lists(st.booleans(), min_size=STREAM_BITS, max_size=STREAM_BITS), label="stream")
-            stream = sum(1 << i for i, b in enumerate(bits) if b)
+        for tried in range(TRIES_PER_PROPOSAL * n):
+            if len(out) >= n:
+                break
+            data = ConjectureData(random=random.Random(f"{self.seed_value}:{self.generation}:{attempt}:{tried}"))
+            # booleans, not an integer: Hypothesis mixes constants found in the loaded modules
+            # into integer (and bytes) draws, which would make the stream depend on what is imported
+            stream = sum(1 << i for i in range(STREAM_BITS) if data.draw_boolean())
             rnd = random.Random(f"{self.seed_value}:{self.generation}:{attempt}:{len(out)}:{stream}")
             # not a Hypothesis integer: those favour small values
             op = _weighted_pick(OPERATORS, weights, rnd.random() * total)
             offsets, parent = self.propose(op, rnd)
             if parent is not None and self._repeats(parent, offsets):
                 self.report.skipped += 1   # would most likely fail the same way again
-                reject()
-            if len(out) >= n or not self.admission.admit(offsets):
-                reject()
+                continue
+            if not self.admission.admit(offsets):
+                continue
             if self.aim is not None:
                 self.aims[_key(offsets)] = (self.aim_bandit, self.aim)
             out.append((offsets, op))
-
-        run = settings(max_examples=n, database=None, deadline=None, phases=[Phase.generate],
-                       suppress_health_check=list(HealthCheck), verbosity=Verbosity.quiet,
-                       derandomize=False, report_multiple_bugs=False, print_blob=False)(
-            hseed(self.seed_value * 1_000_003 + self.generation * 101 + attempt)(given(st.data())(body)))
-        run()
         return out
 
     def propose(self, op: str, rnd: random.Random) -> tuple[tuple[float, ...], Any]:
