@@ -82,6 +82,7 @@ SLOPE_RANGE = (1.0, 80.0)   # degrees a searched ramp's slope stays within
 ROBOT_PARAMS = ("lidar_noise_per_metre", "lidar_dropout_at_max", "lidar_spurious", "drift_per_metre",
                 "drift_per_second", "yaw_drift_per_metre")
 MIN_SPEED = 0.1         # m/s: a moving obstacle's speed never drops below this
+APPLY_MEMO = 512        # layouts SearchSpace.apply remembers (a generation's proposals and more)
 OTHER_KEYS = tuple(name for name in SEARCH.names if name not in DEFAULT_BOUNDS)
 DEFAULT_INSERT = SEARCH["insert"].default
 DEFAULT_INSERT_SIZE = SEARCH["insert_size"].default
@@ -126,6 +127,10 @@ class SearchSpace:
         self.params: tuple[Param, ...] = tuple(p for build in BUILDERS for p in build(self))
         self.index = {p.name: i for i, p in enumerate(self.params)}
         self.groups: tuple[tuple[int, ...], ...] = _groups(self.params)
+        self._applied: dict[tuple[float, ...], Scenario] = {}   # apply's recent answers
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {**self.__dict__, "_applied": {}}   # a worker's copy starts without the memo
 
     def range_of(self, key: str) -> tuple[float, float] | None:
         lo, hi = self.bounds[key]
@@ -160,13 +165,22 @@ class SearchSpace:
         return out
 
     def apply(self, offsets: Sequence[float]) -> Scenario:
-        """The seed with ``offsets`` applied (values rounded; sizes clamped to ``min_size``)."""
+        """The seed with ``offsets`` applied (values rounded; sizes clamped to ``min_size``). The
+        last APPLY_MEMO answers are remembered (scenarios are frozen: the same offsets, the same
+        scenario object)."""
         if len(offsets) != len(self.params):
             raise ValueError(f"expected {len(self.params)} offsets for this space, got {len(offsets)}")
+        key = tuple(offsets)
+        known = self._applied.get(key)
+        if known is not None:   # a proposal is applied by its checks, its ranking and its episode
+            return known
         parts = self.by_part(offsets)
         scenario = self.seed
         for applier in APPLIERS:
             scenario = applier(self, scenario, parts)
+        if len(self._applied) >= APPLY_MEMO:
+            self._applied.clear()
+        self._applied[key] = scenario
         return scenario
 
     def inserted_slots(self) -> list[int]:

@@ -22,6 +22,7 @@ RETIME_STARTS = 21             # retime: start offsets tried across their range 
 RETIME_SPEEDS = 5
 RETIME_LAG = (-1.0, 0.5)       # s: the obstacle is aimed at where the robot was this much later
 CROWD_GAP = 0.4                # m: crowd leaves at most this much between a box and the start/goal footprint
+TARGET_PATHS = 256             # (parent, quarter, box) anchor lists _target remembers
 SLOW_SHARE = 0.6               # nudge: a path step below this share of the median is a hesitation
 NUDGE_SD = 0.04                # m: nudge's step across and along the robot's way (sd)
 SHIFT_RADIUS = 2.0             # m: shift carries the inserted boxes this near the culprit along with it
@@ -103,19 +104,36 @@ class AimedOperators:
         half width plus ``half`` (overlapping the footprint: the robot must detour); with
         ``squeeze`` by 1.0-1.3 times that, so the obstacle just clears the recorded footprint and
         narrows the passage there. ``within`` (x0, x1, y0, y1): only path points in that box."""
+        fp = self.space.seed.robot.footprint
+        contact = (fp.radius if fp.shape == "circle" else fp.width / 2) + half
+        path = self._target_path(parent, quarter, None if within is None else (within, contact))
+        (px, py), (ux, uy) = self._anchor(parent, path, rnd)
+        lateral = rnd.uniform(*SQUEEZE_BAND) * rnd.choice((-1.0, 1.0)) if squeeze else rnd.uniform(-1.3, 1.3)
+        lateral *= contact
+        return px - uy * lateral, py + ux * lateral, px, py
+
+    def _target_path(self, parent: Any, quarter: int | None, within: tuple | None) -> list:
+        """The points of the parent's path ``_target`` anchors at: in route quarter ``quarter``
+        (the seed's route there where the parent never got), and with ``within`` (box, contact)
+        those from which the band beside the path is in the box. The same for every proposal from
+        one parent, so remembered (a parent's path is a tuple that never changes)."""
+        memo = self._target_paths
+        key = (id(parent.path), quarter, within)
+        known = memo.get(key)
+        if known is not None and known[0] is parent.path:
+            return known[1]
         route = self._route()
         path = [p for p in parent.path[1:]] or [p[:2] for p in _route_samples(route)]
         if quarter is not None:
             inq = [p for p in path if _quarter(route.fraction(*p)) == quarter]
             path = inq or [p[:2] for p in _route_samples(route) if _quarter(p[2]) == quarter] or path
-        fp = self.space.seed.robot.footprint
-        contact = (fp.radius if fp.shape == "circle" else fp.width / 2) + half
         if within is not None:   # path points from which the band beside the path is in the box
-            path = [p for k, p in enumerate(path) if _beside_within(path, k, 1.15 * contact, within)] or path
-        (px, py), (ux, uy) = self._anchor(parent, path, rnd)
-        lateral = rnd.uniform(*SQUEEZE_BAND) * rnd.choice((-1.0, 1.0)) if squeeze else rnd.uniform(-1.3, 1.3)
-        lateral *= contact
-        return px - uy * lateral, py + ux * lateral, px, py
+            box, contact = within
+            path = [p for k, p in enumerate(path) if _beside_within(path, k, 1.15 * contact, box)] or path
+        if len(memo) >= TARGET_PATHS:
+            memo.clear()
+        memo[key] = (parent.path, path)
+        return path
 
     def _anchor(self, parent: Any, path: Sequence[tuple[float, float]], rnd: random.Random
                 ) -> tuple[tuple[float, float], tuple[float, float]]:

@@ -107,6 +107,7 @@ class Evolve(AimedOperators, BaseStrategy):
         self.route: Any = None
         self.targets: _Targets | None = None
         self.aims: dict[tuple, tuple[Any, tuple[str, int]]] = {}   # proposal -> (bandit, arm) it aimed at
+        self._target_paths: dict[tuple, tuple] = {}       # aim.AimedOperators._target_path's memo
         self.aim: tuple[str, int] | None = None         # the arm of the proposal being drawn
         self.aim_bandit: _Targets | None = None          # and the bandit it belongs to
         self.told = 0                                   # generations told so far
