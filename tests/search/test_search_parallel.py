@@ -99,7 +99,7 @@ def test_a_search_under_noise_writes_the_same_files_serial_or_not_batched_or_not
     reads its noisy first scan; PickyBatch): the same runs, decisions and files on two processes,
     with each worker's share in lockstep batches or not, as one episode at a time."""
     args = ["-p", "no:cacheprovider", "--nav-subject=straight_planner:PickyBatch", "--navsearch", "crate",
-            "--budget", "40", "--navsearch-seed", "1", "--nav-sensor-model", "realistic"]
+            "--budget", "40", "--navsearch-seed", "2", "--nav-sensor-model", "realistic"]
     runs = {name: project.runpytest(*args, *extra, "--navsearch-out", name) for name, extra in [
         ("serial", ["--nav-batch", "off"]), ("batched", []), ("parallel", ["-n", "2", "--nav-batch", "off"]),
         ("parallel-batched", ["-n", "2"])]}
@@ -182,7 +182,7 @@ def test_failures_start_shrinking_while_the_search_goes_on_and_nothing_changes()
     assert log.index("ShrinkJob") < len(log) - 1 - log[::-1].index("CandidateJob")   # before the search ended
 
 
-@pytest.mark.parametrize("seed_yaml, search_seed", [("crate", 12), ("lane", 1)])
+@pytest.mark.parametrize("seed_yaml, search_seed", [("crate", 10), ("lane", 1)])
 def test_a_shrink_begun_during_the_search_with_a_smaller_cap_is_continued_not_rerun(seed_yaml, search_seed):
     """The shrink budget as a share is shared out after the search; a failure's shrinking starts
     when it is found with the smallest cap the plan can give, and afterwards is continued with its
