@@ -8,7 +8,7 @@ inflates: compare runs made side by side):
     nice python benchmarks/bench_search_cost.py --part fixed --repeats 200 --steps   # per-episode fixed cost
     nice python benchmarks/bench_search_cost.py --part split --budget 1000 --repeats 3   # the 1000-search's parts
     nice python benchmarks/bench_search_cost.py --search-seeds 1 --seeds boxes1,boxes2 --variants insert0 \
-        --check evolve=1.0,random=0.15,hillclimb=0.15         # the guard (exit 1 if over)
+        --check evolve=0.2,random=0.15,hillclimb=0.15         # the guard (exit 1 if over)
 
 ``--part share`` (default): for each seed (boxes1, boxes2, cylinders) x variant (``insert0``: the
 seed's ``search: {insert: 0}``, only its own obstacles move; ``shipped``: its search section as
