@@ -61,12 +61,18 @@ def test_batched_dwa_gives_every_shipped_seed_its_own_commands_bit_for_bit():
 @pytest.mark.heavy
 def test_batched_dwa_matches_alone_on_search_candidates():
     """The candidates a short search simulates (obstacles moved, inserted and removed), its
-    failures among them."""
+    failures among them, and a layout a squeeze once drew: a box touching the footprint at the
+    start beside another (a collision in the first tick; dwa's own searches rarely collide, so it is written out
+    rather than left to the search's draws)."""
+    from pytest_navscenario.scenario.model import BoxObstacle
     from pytest_navscenario.search.engine import run_search
 
     seed = load_scenario(os.path.join(ROOT, "scenarios", "cylinders.yaml"))
     report = run_search(seed, DynamicWindowPlanner, budget=24, seed_value=3, shrink_budget=0)
-    cands = [c.scenario for c in report.candidates]
+    touching = dataclasses.replace(seed, obstacles=(
+        *seed.obstacles, BoxObstacle(name="behind", x=-0.4947, y=0.0, length=0.4601, width=0.4601, height=1.0),
+        BoxObstacle(name="touching", x=0.3058, y=0.7303, length=0.4591, width=0.4591, yaw=42.6565, height=1.0)))
+    cands = [c.scenario for c in report.candidates] + [touching]
     alone, batched = alone_and_batched(cands, [0] * len(cands), stuck_after=15.0)
     assert [same_episode(a, b) for a, b in zip(alone, batched)] == [True] * len(cands)
     assert {"goal", "collision"} <= {a.end for a in alone}     # a collision: a tick stepped again alone
