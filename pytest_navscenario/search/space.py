@@ -82,7 +82,8 @@ SLOPE_RANGE = (1.0, 80.0)   # degrees a searched ramp's slope stays within
 ROBOT_PARAMS = ("lidar_noise_per_metre", "lidar_dropout_at_max", "lidar_spurious", "drift_per_metre",
                 "drift_per_second", "yaw_drift_per_metre")
 MIN_SPEED = 0.1         # m/s: a moving obstacle's speed never drops below this
-APPLY_MEMO = 512        # layouts SearchSpace.apply remembers (a generation's proposals and more)
+APPLY_MEMO = 512        # layouts SearchSpace.apply remembers (a generation's proposals and more) ...
+APPLY_MEMO_OBSTACLES = 20_000   # ... fewer for a large seed: at most about this many obstacles held
 OTHER_KEYS = tuple(name for name in SEARCH.names if name not in DEFAULT_BOUNDS)
 DEFAULT_INSERT = SEARCH["insert"].default
 DEFAULT_INSERT_SIZE = SEARCH["insert_size"].default
@@ -127,7 +128,8 @@ class SearchSpace:
         self.params: tuple[Param, ...] = tuple(p for build in BUILDERS for p in build(self))
         self.index = {p.name: i for i, p in enumerate(self.params)}
         self.groups: tuple[tuple[int, ...], ...] = _groups(self.params)
-        self._applied: dict[tuple[float, ...], Scenario] = {}   # apply's recent answers
+        self._applied: dict[tuple[float, ...], Scenario] = {}   # apply's recent answers, at most:
+        self._apply_memo = max(8, min(APPLY_MEMO, APPLY_MEMO_OBSTACLES // (len(seed.obstacles) + self.limits.insert + 1)))
 
     def __getstate__(self) -> dict[str, Any]:
         return {**self.__dict__, "_applied": {}}   # a worker's copy starts without the memo
@@ -178,7 +180,7 @@ class SearchSpace:
         scenario = self.seed
         for applier in APPLIERS:
             scenario = applier(self, scenario, parts)
-        if len(self._applied) >= APPLY_MEMO:
+        if len(self._applied) >= self._apply_memo:
             self._applied.clear()
         self._applied[key] = scenario
         return scenario
