@@ -29,6 +29,7 @@ start, waypoints, goal, obstacles): hashing those frozen dataclasses costs ~3 us
 """
 from __future__ import annotations
 
+import functools
 import heapq
 import math
 from collections import OrderedDict
@@ -85,18 +86,39 @@ class _Grown:
     radius: np.ndarray
 
 
+@functools.lru_cache(maxsize=64)
+def _box_corners(r: float, tol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(corner signs, arc offsets, edge normals) of a box grown by ``r``, its corners' quarter
+    arcs circumscribed within ``tol``: the same for every box at one ``r`` (a search grows boxes
+    by the same few radii thousands of times). Read-only arrays."""
+    q = 1 if r <= 0 else int(np.clip(math.ceil((math.pi / 2) / (2 * math.acos(r / (r + tol)))), 1, 8))
+    step = (math.pi / 2) / q
+    i = np.arange(4 * q)
+    corner = np.array([(1.0, -1.0), (1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0)])[i // q]    # (m, 2)
+    vang = -math.pi / 2 + (i + 0.5) * step
+    nang = -math.pi / 2 + (i + 1) * step
+    arc = (max(r, 0.0) / math.cos(step / 2)) * np.column_stack([np.cos(vang), np.sin(vang)])
+    lnorm = np.column_stack([np.cos(nang), np.sin(nang)])
+    for a in (corner, arc, lnorm):
+        a.flags.writeable = False
+    return corner, arc, lnorm
+
+
+@functools.lru_cache(maxsize=64)
+def _circle_directions(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(vertex directions, edge normals) of a circle drawn as ``n`` circumscribed edges. Read-only."""
+    j = np.arange(n)
+    vdir = np.column_stack([np.cos((j + 0.5) * 2 * math.pi / n), np.sin((j + 0.5) * 2 * math.pi / n)])
+    ndir = np.column_stack([np.cos((j + 1.0) * 2 * math.pi / n), np.sin((j + 1.0) * 2 * math.pi / n)])
+    vdir.flags.writeable = ndir.flags.writeable = False
+    return vdir, ndir
+
+
 def _grow(obstacles: Sequence[Obstacle], r: float, tol: float = INFLATION_TOLERANCE) -> _Grown:
     groups = []  # (verts (g, m, 2), normals (g, m, 2), offsets (g, m), centre (g, 2), radius (g,))
     boxes = [o for o in obstacles if isinstance(o, BoxObstacle)]
     if boxes:
-        q = 1 if r <= 0 else int(np.clip(math.ceil((math.pi / 2) / (2 * math.acos(r / (r + tol)))), 1, 8))
-        step = (math.pi / 2) / q
-        i = np.arange(4 * q)
-        corner = np.array([(1.0, -1.0), (1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0)])[i // q]    # (m, 2)
-        vang = -math.pi / 2 + (i + 0.5) * step
-        nang = -math.pi / 2 + (i + 1) * step
-        arc = (max(r, 0.0) / math.cos(step / 2)) * np.column_stack([np.cos(vang), np.sin(vang)])
-        lnorm = np.column_stack([np.cos(nang), np.sin(nang)])
+        corner, arc, lnorm = _box_corners(r, tol)
         b = np.array([(o.x, o.y, o.length / 2, o.width / 2, math.radians(o.yaw)) for o in boxes])
         local = corner[None] * b[:, None, 2:4] + arc[None]                               # (g, m, 2)
         c, s_ = np.cos(b[:, 4])[:, None], np.sin(b[:, 4])[:, None]
@@ -117,9 +139,7 @@ def _grow(obstacles: Sequence[Obstacle], r: float, tol: float = INFLATION_TOLERA
         by_count.setdefault(n, []).append(o)
     for n, group in by_count.items():
         cb = np.array([(o.x, o.y, o.radius + r) for o in group])
-        j = np.arange(n)
-        vdir = np.column_stack([np.cos((j + 0.5) * 2 * math.pi / n), np.sin((j + 0.5) * 2 * math.pi / n)])
-        ndir = np.column_stack([np.cos((j + 1.0) * 2 * math.pi / n), np.sin((j + 1.0) * 2 * math.pi / n)])
+        vdir, ndir = _circle_directions(n)
         rad = cb[:, 2] / math.cos(math.pi / n)
         verts = cb[:, None, :2] + rad[:, None, None] * vdir[None]
         normals = np.broadcast_to(ndir, (len(group), n, 2))
