@@ -67,22 +67,21 @@ def obstacle_outline(obs: Obstacle) -> Polygon:
     outlines). The search checks and ranks hundreds of layouts in which most obstacles stand
     where they stood in the last one; building each outline again was most of that check."""
     try:
-        hit = _OUTLINES.get(obs)
+        return _remembered(obs, lambda: obstacle_polygon(obs))
     except TypeError:   # a field that does not hash: not remembered
         return obstacle_polygon(obs)
-    if hit is None:
-        hit = _OUTLINES[obs] = obstacle_polygon(obs)
-        if len(_OUTLINES) > OUTLINES_KEPT:
-            _OUTLINES.popitem(last=False)
-    return hit
 
 
 def footprint_outline(footprint: Footprint, x: float, y: float, yaw: float) -> Polygon:
     """``footprint_polygon``, remembered (the start and goal poses of a search's layouts)."""
-    key = (footprint, x, y, yaw)
+    return _remembered((footprint, x, y, yaw), lambda: footprint_polygon(footprint, x, y, yaw))
+
+
+def _remembered(key, make) -> Polygon:
+    """The outline kept for ``key``, made and kept (the oldest of OUTLINES_KEPT dropped) if none."""
     hit = _OUTLINES.get(key)
     if hit is None:
-        hit = _OUTLINES[key] = footprint_polygon(footprint, x, y, yaw)
+        hit = _OUTLINES[key] = make()
         if len(_OUTLINES) > OUTLINES_KEPT:
             _OUTLINES.popitem(last=False)
     return hit

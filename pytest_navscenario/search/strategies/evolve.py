@@ -58,6 +58,7 @@ HUNT_DRAWS = 4                 # no failure known yet: proposals drawn per one s
                                # 8 found as many failures per CPU s (32 vs 28 in 90 searches at insert 0, p = 0.71)
                                # for 17 % own work against 12 % (#35)
 ROOM_LEVELS = (0.05, 0.1, 0.15, 0.2, 0.3, 0.45, 0.6)   # m: footprint growth tried by paths.passage_room
+WAY_DISTANCES_KEPT = 4096      # obstacles whose distance to the expected way _intrusion remembers
 
 
 class _Cells:
@@ -215,7 +216,7 @@ class Evolve(AimedOperators, BaseStrategy):
                 else:
                     at = self._way[4]
                 d = float(shapely.distance(obstacle_outline(obs), at).min())
-                if len(near) < 4096:
+                if len(near) < WAY_DISTANCES_KEPT:
                     try:
                         near[obs] = d
                     except TypeError:
