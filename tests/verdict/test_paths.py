@@ -217,3 +217,78 @@ def test_segment_visibility_agrees_with_shapely():
                 for a, b in zip(p, q)]
     assert free.tolist() == expected
     assert 20 < free.sum() < len(free) - 20
+
+
+def _random_layout(rng, n):
+    """Boxes, cylinders and non-convex polygons in a 12 x 6 m field, overlapping at times (so
+    some grown polygons' vertices lie inside others)."""
+    from pytest_navscenario.scenario.obstacles import PolygonObstacle
+
+    shapes = [((0, 0), (1, 0), (1, 1), (0.5, 0.3), (0, 1)), ((0, 0), (0.8, 0.1), (0.2, 0.9))]
+    out = []
+    for i in range(n):
+        x, y, kind = rng.uniform(-1, 11), rng.uniform(-3, 3), rng.integers(3)
+        if kind == 0:
+            out.append(BoxObstacle(f"b{i}", x, y, rng.uniform(0.1, 1.5), rng.uniform(0.1, 1.5),
+                                   rng.uniform(-180, 180)))
+        elif kind == 1:
+            out.append(CylinderObstacle(f"c{i}", x, y, rng.uniform(0.05, 0.6)))
+        else:
+            out.append(PolygonObstacle(f"p{i}", x, y, shapes[int(rng.integers(2))], yaw=rng.uniform(-180, 180)))
+    return out
+
+
+def test_a_graph_built_a_node_at_a_time_has_the_whole_builds_edges():
+    # the path search asks for a node's edges as it reaches it; each list must be the one the
+    # whole build gives, in the same order and with the same lengths bit for bit, or the search
+    # would take other steps (and a tie another way) than before
+    rng = np.random.default_rng(7)
+    compared = 0
+    for n in (2, 6, 15, 40):
+        for _ in range(3):
+            obstacles = _random_layout(rng, n)
+            g = paths._grow(obstacles, 0.25)
+            stops = np.array([(0.0, 0.0), (5.0, rng.uniform(-2, 2)), (10.0, 0.0)])
+            nodes, lazy = paths._graph(stops, g)
+            again, whole = paths._graph(stops, g, whole=True)
+            np.testing.assert_array_equal(nodes, again)
+            for u in rng.permutation(len(nodes)).tolist():     # in any order, as a search asks
+                assert lazy[u] == whole[u]
+                compared += len(whole[u])
+    assert compared > 1000
+
+
+def test_buried_vertices_are_those_inside_another_grown_polygon():
+    rng = np.random.default_rng(11)
+    buried_seen = 0
+    for n in (1, 5, 30, 80):
+        g = paths._grow(_random_layout(rng, n), 0.3)
+        k, m = g.offsets.shape
+        valid = np.arange(m)[None, :] < g.sizes[:, None]
+        owner = np.broadcast_to(np.arange(k)[:, None], valid.shape)[valid]
+        verts = g.verts[valid]
+        every = paths._inside(verts, g)                 # every vertex against every polygon
+        every[np.arange(len(verts)), owner] = False
+        np.testing.assert_array_equal(paths._buried(verts, owner, g), every.any(axis=1))
+        buried_seen += int(every.any(axis=1).sum())
+    assert buried_seen > 50
+
+
+def test_a_path_through_the_barn_worlds_209_cylinders():
+    # a real world (BARN world 0, by others): the path is clear of every cylinder and the one
+    # a search over the whole graph finds
+    from pathlib import Path
+
+    from pytest_navscenario.ros.world_import import sdf_obstacles
+
+    world = sdf_obstacles(Path(__file__).resolve().parents[1] / "data" / "barn_world_0.world")
+    assert len(world.obstacles) == 209
+    s = scenario(*world.obstacles, footprint=Footprint(length=0.5, width=0.43), start=(-2.25, 3), goal=(-2.25, 13))
+    sp = shortest_path(s)
+    assert sp is not None and 10.0 <= sp.length <= 10.5
+    assert clearance(sp, s) >= 0.215 - 1e-3
+    stops = np.array([(-2.25, 3.0), (-2.25, 13.0)])
+    nodes, whole = paths._graph(stops, paths._grow(world.obstacles, paths.inflation_radius(s.robot.footprint)),
+                                whole=True)
+    hops = paths._astar(whole, nodes, 0, 1)
+    np.testing.assert_array_equal(sp.points, nodes[hops])
