@@ -86,6 +86,15 @@ class _Grown:
     centre: np.ndarray
     radius: np.ndarray
 
+    @functools.cached_property
+    def along(self) -> tuple[int, np.ndarray, np.ndarray, float]:
+        """(axis, the polygons in the order of their centres along it, those centres' coordinates,
+        the largest radius): the index of the broad phases among many polygons, along the axis
+        the centres spread most on."""
+        axis = 0 if np.ptp(self.centre[:, 0]) >= np.ptp(self.centre[:, 1]) else 1
+        order = np.argsort(self.centre[:, axis], kind="stable")
+        return axis, order, self.centre[order, axis], float(self.radius.max())
+
 
 @functools.lru_cache(maxsize=64)
 def _box_corners(r: float, tol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -285,24 +294,41 @@ def _inside(points: np.ndarray, g: _Grown) -> np.ndarray:
 def _buried(points: np.ndarray, owner: np.ndarray, g: _Grown) -> np.ndarray:
     """(n,): point i strictly inside a grown polygon other than ``owner[i]`` (``_inside``'s test,
     the same arithmetic), tried only against the polygons whose bounding circle holds it: those
-    within the largest radius along x, found in the polygons sorted by their centre's x. Every
-    vertex against every polygon was most of a crowded world's path search (BARN world 0: 3300
-    vertices x 209 polygons x 16 edges a graph)."""
+    within the largest radius along x, found in the polygons sorted by their centre's x, a chunk
+    of at most ``PAIRS_AT_ONCE`` pairs at a time. Every vertex against every polygon was most of a
+    crowded world's path search (BARN world 0: 3300 vertices x 209 polygons x 16 edges a graph)."""
     order = np.argsort(g.centre[:, 0], kind="stable")
     cx = g.centre[order, 0]
     reach = float(g.radius.max()) + 1e-6
     lo = np.searchsorted(cx, points[:, 0] - reach, side="left")
     counts = np.searchsorted(cx, points[:, 0] + reach, side="right") - lo
-    ii = np.repeat(np.arange(len(points)), counts)
-    jj = order[np.repeat(lo - np.cumsum(counts) + counts, counts) + np.arange(int(counts.sum()))]
-    dx, dy = points[ii, 0] - g.centre[jj, 0], points[ii, 1] - g.centre[jj, 1]
-    near = (dx * dx + dy * dy <= (g.radius[jj] + 1e-6) ** 2) & (jj != owner[ii])
-    ii, jj = ii[near], jj[near]
-    nrm = g.normals[jj]                                                     # (c, m, 2)
-    proj = nrm[..., 0] * points[ii, 0:1] + nrm[..., 1] * points[ii, 1:2]    # as _inside's einsum
-    inside = (proj < g.offsets[jj] - 1e-7).all(axis=1)
     out = np.zeros(len(points), dtype=bool)
-    out[ii[inside]] = True
+    for part in _chunks(counts):
+        c = counts[part]
+        ii = np.repeat(np.arange(part.start, part.stop), c)
+        jj = order[np.repeat(lo[part] - np.cumsum(c) + c, c) + np.arange(int(c.sum()))]
+        dx, dy = points[ii, 0] - g.centre[jj, 0], points[ii, 1] - g.centre[jj, 1]
+        near = (dx * dx + dy * dy <= (g.radius[jj] + 1e-6) ** 2) & (jj != owner[ii])
+        ii, jj = ii[near], jj[near]
+        nrm = g.normals[jj]                                                     # (c, m, 2)
+        proj = nrm[..., 0] * points[ii, 0:1] + nrm[..., 1] * points[ii, 1:2]    # as _inside's einsum
+        out[ii[(proj < g.offsets[jj] - 1e-7).all(axis=1)]] = True
+    return out
+
+
+PAIRS_AT_ONCE = 1 << 20   # (point, polygon) pairs a broad phase holds at once: ~40 MB of arrays
+
+
+def _chunks(counts: np.ndarray) -> list[slice]:
+    """Consecutive slices of the items whose ``counts`` add up to at most PAIRS_AT_ONCE each (an
+    item over it alone)."""
+    ends = np.cumsum(counts)
+    out, start = [], 0
+    while start < len(counts):
+        before = int(ends[start - 1]) if start else 0
+        stop = max(start + 1, int(np.searchsorted(ends, before + PAIRS_AT_ONCE, side="right")))
+        out.append(slice(start, stop))
+        start = stop
     return out
 
 
@@ -318,7 +344,10 @@ def _graph(stops: np.ndarray, g: _Grown, whole: bool = False) -> tuple[np.ndarra
     nodes = np.concatenate([stops, allv[keep]])
     prev = np.concatenate([stops, g.prev[valid][keep]])
     after = np.concatenate([stops, g.after[valid][keep]])
-    return nodes, _Adjacency(nodes, prev, after, g, whole)
+    return nodes, _Adjacency(nodes, prev, after, g, whole or len(nodes) <= WHOLE_NODES)
+
+
+WHOLE_NODES = 160   # a graph of at most this many nodes is built whole (see _Adjacency)
 
 
 class _Adjacency:
@@ -530,24 +559,62 @@ def _segments_free(p: np.ndarray, q: np.ndarray, g: _Grown) -> np.ndarray:
     """For each segment p->q: does it stay out of the interior of every grown polygon?
     Broad phase on bounding circles, then the separating-axis test (polygon edge normals and
     the segment's own normal): first against the circle each segment cuts deepest (which
-    blocks most blocked segments), then the survivors against all their candidates."""
+    blocks most blocked segments), then the survivors against all their candidates.
+
+    Few pairs: every segment against every circle at once. Many (a crowded world): each segment
+    only against the polygons whose centre lies within the largest radius of its extent along
+    ``g.along``'s axis, at most ``PAIRS_AT_ONCE`` pairs at a time, so memory stays bounded. The
+    same tests on every pair that can be blocked, so the same answer."""
     d = q - p
     seg2 = np.maximum((d * d).sum(1), 1e-300)
-    rx = g.centre[None, :, 0] - p[:, 0:1]                                  # (e, k)
-    ry = g.centre[None, :, 1] - p[:, 1:2]
-    t = np.clip((rx * d[:, 0:1] + ry * d[:, 1:2]) / seg2[:, None], 0.0, 1.0)
-    gx, gy = rx - t * d[:, 0:1], ry - t * d[:, 1:2]
-    depth = (g.radius[None, :] - 1e-7) ** 2 - (gx * gx + gy * gy)         # > 0: may be blocked
     free = np.ones(len(p), dtype=bool)
-    if len(p) > 64 and g.radius.size > 1:
-        first = np.argmax(depth, axis=1)
-        e = np.nonzero(depth[np.arange(len(p)), first] > 0)[0]
-        free[e[_blocked(p[e], q[e], d[e], seg2[e], g, first[e])]] = False
-        depth[~free] = -1.0
-    e, jj = np.nonzero(depth > 0)
+    if len(p) * len(g.radius) <= DENSE_PAIRS:
+        rx = g.centre[None, :, 0] - p[:, 0:1]                              # (e, k)
+        ry = g.centre[None, :, 1] - p[:, 1:2]
+        t = np.clip((rx * d[:, 0:1] + ry * d[:, 1:2]) / seg2[:, None], 0.0, 1.0)
+        gx, gy = rx - t * d[:, 0:1], ry - t * d[:, 1:2]
+        depth = (g.radius[None, :] - 1e-7) ** 2 - (gx * gx + gy * gy)     # > 0: may be blocked
+        if len(p) > 64 and g.radius.size > 1:
+            first = np.argmax(depth, axis=1)
+            e = np.nonzero(depth[np.arange(len(p)), first] > 0)[0]
+            free[e[_blocked(p[e], q[e], d[e], seg2[e], g, first[e])]] = False
+            depth[~free] = -1.0
+        e, jj = np.nonzero(depth > 0)
+        if len(e):
+            free[e[_blocked(p[e], q[e], d[e], seg2[e], g, jj)]] = False
+        return free
+    axis, order, along, reach = g.along
+    lo = np.searchsorted(along, np.minimum(p[:, axis], q[:, axis]) - reach, side="left")
+    counts = np.searchsorted(along, np.maximum(p[:, axis], q[:, axis]) + reach, side="right") - lo
+    for part in _chunks(counts):
+        c = counts[part]
+        e = np.repeat(np.arange(part.start, part.stop), c)
+        _cut(p, q, d, seg2, g, e, order[np.repeat(lo[part] - np.cumsum(c) + c, c) + np.arange(int(c.sum()))], free)
+    return free
+
+
+DENSE_PAIRS = 1 << 16   # segment-polygon pairs up to which every segment meets every polygon at once
+
+
+def _cut(p, q, d, seg2, g: _Grown, e: np.ndarray, jj: np.ndarray, free: np.ndarray) -> None:
+    """Mark in ``free`` the segments ``e`` that cut the interior of polygon ``jj`` (pairs)."""
+    rx = g.centre[jj, 0] - p[e, 0]
+    ry = g.centre[jj, 1] - p[e, 1]
+    t = np.clip((rx * d[e, 0] + ry * d[e, 1]) / seg2[e], 0.0, 1.0)
+    gx, gy = rx - t * d[e, 0], ry - t * d[e, 1]
+    depth = (g.radius[jj] - 1e-7) ** 2 - (gx * gx + gy * gy)               # > 0: may be blocked
+    near = depth > 0
+    e, jj, depth = e[near], jj[near], depth[near]
+    if len(e) > 64:
+        deepest = np.lexsort((-depth, e))                                    # each segment's first
+        first = deepest[np.concatenate([[True], e[deepest][1:] != e[deepest][:-1]])]
+        free[e[first][_blocked(p[e[first]], q[e[first]], d[e[first]], seg2[e[first]], g, jj[first])]] = False
+        tried = np.zeros(len(e), dtype=bool)
+        tried[first] = True
+        rest = free[e] & ~tried
+        e, jj = e[rest], jj[rest]
     if len(e):
         free[e[_blocked(p[e], q[e], d[e], seg2[e], g, jj)]] = False
-    return free
 
 
 def _blocked(pp, qq, dd, seg2, g: _Grown, jj) -> np.ndarray:

@@ -238,10 +238,11 @@ def _random_layout(rng, n):
     return out
 
 
-def test_a_graph_built_a_node_at_a_time_has_the_whole_builds_edges():
-    # the path search asks for a node's edges as it reaches it; each list must be the one the
-    # whole build gives, in the same order and with the same lengths bit for bit, or the search
-    # would take other steps (and a tie another way) than before
+def test_a_graph_built_a_node_at_a_time_has_the_whole_builds_edges(monkeypatch):
+    # the path search asks for a large graph's edges as it reaches a node; each list must be the
+    # one the whole build gives, in the same order and with the same lengths bit for bit, or the
+    # search would take other steps (and a tie another way) than before
+    monkeypatch.setattr(paths, "WHOLE_NODES", 0)        # every graph a node at a time
     rng = np.random.default_rng(7)
     compared = 0
     for n in (2, 6, 15, 40):
@@ -292,3 +293,19 @@ def test_a_path_through_the_barn_worlds_209_cylinders():
                                 whole=True)
     hops = paths._astar(whole, nodes, 0, 1)
     np.testing.assert_array_equal(sp.points, nodes[hops])
+
+
+def test_segments_among_many_polygons_are_judged_as_against_every_polygon(monkeypatch):
+    # a crowded world's segments meet only the polygons near their extent, a bounded chunk at a
+    # time; the answer must be the one every segment against every polygon gives
+    rng = np.random.default_rng(3)
+    g = paths._grow(_random_layout(rng, 120), 0.25)
+    p = rng.uniform([-2, -4], [12, 4], size=(900, 2))
+    q = p + rng.normal(0, 3, size=(900, 2))
+    q[::7] = p[::7]                                   # some of no length
+    monkeypatch.setattr(paths, "PAIRS_AT_ONCE", 5000)   # many chunks
+    sparse = paths._segments_free(p, q, g)
+    monkeypatch.setattr(paths, "DENSE_PAIRS", 10**9)
+    every = paths._segments_free(p, q, g)
+    np.testing.assert_array_equal(sparse, every)
+    assert 100 < int(every.sum()) < 800               # both answers common
