@@ -373,7 +373,8 @@ class _Adjacency:
         self.scale = np.sqrt((ea * ea).sum(1) * (eb * eb).sum(1))
         n = len(nodes)
         self.rows: list[list[tuple[int, float]] | None] = [None] * n
-        self.free: dict[tuple[int, int], tuple[bool, float]] = {}   # (low, high) -> free, length
+        self.reached = np.zeros(n, dtype=bool)                     # nodes whose edges are found
+        self.lookup: dict[int, dict[int, float]] = {}              # such a node: neighbour -> length
         if whole:
             self._build_whole()
 
@@ -415,21 +416,23 @@ class _Adjacency:
         mutual = at_u & at_j
         mutual[u] = False
         cand = np.flatnonzero(mutual)
-        known = self.free
-        fresh = [j for j in cand.tolist() if (min(u, j), max(u, j)) not in known]
-        if fresh:
-            f = np.array(fresh)
-            low, high = np.minimum(f, u), np.maximum(f, u)
+        seen = self.reached[cand]       # a pair with a node reached before was tested then: its
+        fresh = cand[~seen]             # row lists the pair if it is free
+        found: dict[int, float] = {}
+        if len(fresh):
+            low, high = np.minimum(fresh, u), np.maximum(fresh, u)
             ok = _segments_free(self.nodes[low], self.nodes[high], self.g)
             dx, dy = x[high] - x[low], y[high] - y[low]
             length = np.sqrt(dx ** 2 + dy ** 2)                 # d2[low, high], as the whole build
-            for a, b, free, w in zip(low.tolist(), high.tolist(), ok.tolist(), length.tolist()):
-                known[(a, b)] = (free, w)
+            found = dict(zip(fresh[ok].tolist(), length[ok].tolist()))
+        lookup = self.lookup
         row = []
-        for j in cand.tolist():
-            free, w = known[(min(u, j), max(u, j))]
-            if free:
+        for j, before in zip(cand.tolist(), seen.tolist()):
+            w = lookup[j].get(u) if before else found.get(j)
+            if w is not None:
                 row.append((j, w))
+        self.reached[u] = True
+        lookup[u] = dict(row)
         return row
 
 
