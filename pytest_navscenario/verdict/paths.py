@@ -587,13 +587,31 @@ def _segments_free(p: np.ndarray, q: np.ndarray, g: _Grown) -> np.ndarray:
             free[e[_blocked(p[e], q[e], d[e], seg2[e], g, jj)]] = False
         return free
     axis, order, along, reach = g.along
-    lo = np.searchsorted(along, np.minimum(p[:, axis], q[:, axis]) - reach, side="left")
-    counts = np.searchsorted(along, np.maximum(p[:, axis], q[:, axis]) + reach, side="right") - lo
+    # first the polygons near each end (a blocked segment is mostly blocked by the obstacle beside
+    # the vertex it leaves), then what is still free against every polygon near its extent
+    for end in (p, q):
+        _cut_within(p, q, d, seg2, g, np.arange(len(p)), end[:, axis] - NEAR_ENDS * reach,
+                    end[:, axis] + NEAR_ENDS * reach, free)
+    live = np.flatnonzero(free)
+    _cut_within(p, q, d, seg2, g, live, np.minimum(p[live, axis], q[live, axis]) - reach,
+                np.maximum(p[live, axis], q[live, axis]) + reach, free)
+    return free
+
+
+NEAR_ENDS = 2.0   # largest radii either side of a segment's end within which it is tried first
+
+
+def _cut_within(p, q, d, seg2, g: _Grown, segs: np.ndarray, low: np.ndarray, high: np.ndarray,
+                free: np.ndarray) -> None:
+    """``_cut`` of segments ``segs`` against the polygons whose centre lies in [low, high] along
+    ``g.along``'s axis, a chunk of at most PAIRS_AT_ONCE pairs at a time."""
+    _, order, along, _ = g.along
+    lo = np.searchsorted(along, low, side="left")
+    counts = np.searchsorted(along, high, side="right") - lo
     for part in _chunks(counts):
         c = counts[part]
-        e = np.repeat(np.arange(part.start, part.stop), c)
+        e = np.repeat(segs[part], c)
         _cut(p, q, d, seg2, g, e, order[np.repeat(lo[part] - np.cumsum(c) + c, c) + np.arange(int(c.sum()))], free)
-    return free
 
 
 DENSE_PAIRS = 1 << 16   # segment-polygon pairs up to which every segment meets every polygon at once
