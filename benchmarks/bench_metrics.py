@@ -11,7 +11,11 @@ less disturbed by other processes on a shared machine):
 2. compute_metrics on a synthetic 10 s, 10-obstacle episode (1001 poses following the
    shortest path around ten random boxes), the issue's budget case (~1.5 ms);
 3. paths.shortest_path / path_exists on new random 10-obstacle layouts (the search's
-   validity check), and a cache hit.
+   validity check), and a cache hit;
+4. shortest_path scaling with the number of boxes;
+5. crowded worlds: BARN world 0 (209 cylinders, a real world by others: tests/data), its
+   shortest path and evolve's passage_room at ROOM_LEVELS; a weaving layout of ``--weave`` boxes
+   (a path that winds through every column), its shortest path and this process's peak memory.
 """
 from __future__ import annotations
 
@@ -71,6 +75,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=200)
     ap.add_argument("--json", type=Path, help="also write the figures here")
+    ap.add_argument("--weave", type=int, default=250, help="part 5: boxes in the weaving layout")
     args = ap.parse_args()
     n = args.repeats
     out: dict[str, object] = {"repeats": n}
@@ -127,8 +132,43 @@ def main() -> None:
         scaling[k] = statistics.median(cpu) * 1e3
         print(f"   {k:3d} boxes: {scaling[k]:.1f} ms cpu")
     out["shortest_path_scaling_cpu_ms"] = scaling
+    out["crowded"] = crowded(args.weave)
     if args.json:
         args.json.write_text(json.dumps(out, indent=2))
+
+
+def crowded(weave: int) -> dict[str, float]:
+    """Part 5: path searches in crowded worlds (CPU ms, each on a cleared cache)."""
+    import math
+    import resource
+
+    from pytest_navscenario.ros.world_import import sdf_obstacles
+    from pytest_navscenario.scenario.model import Footprint, Robot
+    from pytest_navscenario.search.strategies.evolve import ROOM_LEVELS
+
+    print("5. crowded worlds")
+    world = sdf_obstacles(ROOT / "tests" / "data" / "barn_world_0.world").obstacles
+    barn = Scenario(mission=Mission(start=Pose(-2.25, 3, 90), goal=Pose(-2.25, 13, 90)), obstacles=tuple(world),
+                    robot=Robot(footprint=Footprint(length=0.5, width=0.43)))
+    out = {"barn_shortest_path_cpu_ms": timed(lambda: paths.shortest_path(barn), 5, before=paths.clear_caches)["cpu_ms"],
+           "barn_passage_room_cpu_ms": timed(lambda: paths.passage_room(barn, ROOM_LEVELS), 5,
+                                             before=paths.clear_caches)["cpu_ms"]}
+    print(f"   BARN world 0 ({len(world)} cylinders): shortest path {out['barn_shortest_path_cpu_ms']:.1f} ms cpu, "
+          f"passage_room {out['barn_passage_room_cpu_ms']:.1f} ms cpu")
+    side = int(math.ceil(math.sqrt(weave)))
+    boxes = tuple(BoxObstacle(f"b{i}", (i % side) * 1.2 + 0.3, (i // side) * 1.2 + (0.3 if (i % side) % 2 else 0.6),
+                              0.5, 0.5) for i in range(weave))
+    woven = Scenario(mission=Mission(start=Pose(-2, -2, 0), goal=Pose(side * 1.2 + 1, side * 1.2 + 1, 0)),
+                     obstacles=boxes)
+    paths.clear_caches()
+    c0 = time.thread_time()
+    sp = paths.shortest_path(woven)
+    out["weave_boxes"] = weave
+    out["weave_shortest_path_cpu_ms"] = (time.thread_time() - c0) * 1e3
+    out["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(f"   weaving layout of {weave} boxes: shortest path {out['weave_shortest_path_cpu_ms']:.0f} ms cpu "
+          f"({'none' if sp is None else f'{sp.length:.2f} m'}); this process's peak memory {out['peak_mb']:.0f} MB")
+    return out
 
 
 if __name__ == "__main__":

@@ -35,7 +35,7 @@ import heapq
 import math
 from collections import OrderedDict
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any, Iterator, Sequence
 
 import numpy as np
 
@@ -293,20 +293,13 @@ def _inside(points: np.ndarray, g: _Grown) -> np.ndarray:
 
 def _buried(points: np.ndarray, owner: np.ndarray, g: _Grown) -> np.ndarray:
     """(n,): point i strictly inside a grown polygon other than ``owner[i]`` (``_inside``'s test,
-    the same arithmetic), tried only against the polygons whose bounding circle holds it: those
-    within the largest radius along x, found in the polygons sorted by their centre's x, a chunk
-    of at most ``PAIRS_AT_ONCE`` pairs at a time. Every vertex against every polygon was most of a
-    crowded world's path search (BARN world 0: 3300 vertices x 209 polygons x 16 edges a graph)."""
-    order = np.argsort(g.centre[:, 0], kind="stable")
-    cx = g.centre[order, 0]
-    reach = float(g.radius.max()) + 1e-6
-    lo = np.searchsorted(cx, points[:, 0] - reach, side="left")
-    counts = np.searchsorted(cx, points[:, 0] + reach, side="right") - lo
+    the same arithmetic), tried only against the polygons whose bounding circle holds it (found
+    by ``_pairs_within``). Every vertex against every polygon was most of a crowded world's path
+    search (BARN world 0: 3300 vertices x 209 polygons x 16 edges a graph)."""
+    axis, _, _, reach = g.along
+    reach += 1e-6
     out = np.zeros(len(points), dtype=bool)
-    for part in _chunks(counts):
-        c = counts[part]
-        ii = np.repeat(np.arange(part.start, part.stop), c)
-        jj = order[np.repeat(lo[part] - np.cumsum(c) + c, c) + np.arange(int(c.sum()))]
+    for ii, jj in _pairs_within(np.arange(len(points)), points[:, axis] - reach, points[:, axis] + reach, g):
         dx, dy = points[ii, 0] - g.centre[jj, 0], points[ii, 1] - g.centre[jj, 1]
         near = (dx * dx + dy * dy <= (g.radius[jj] + 1e-6) ** 2) & (jj != owner[ii])
         ii, jj = ii[near], jj[near]
@@ -316,20 +309,26 @@ def _buried(points: np.ndarray, owner: np.ndarray, g: _Grown) -> np.ndarray:
     return out
 
 
-PAIRS_AT_ONCE = 1 << 20   # (point, polygon) pairs a broad phase holds at once: ~40 MB of arrays
+PAIRS_AT_ONCE = 1 << 20   # (item, polygon) pairs a broad phase holds at once: ~40 MB of arrays
 
 
-def _chunks(counts: np.ndarray) -> list[slice]:
-    """Consecutive slices of the items whose ``counts`` add up to at most PAIRS_AT_ONCE each (an
-    item over it alone)."""
+def _pairs_within(items: np.ndarray, low: np.ndarray, high: np.ndarray, g: _Grown
+                  ) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+    """(item, polygon) index pairs: each of ``items`` with the polygons whose centre lies in its
+    [low, high] along ``g.along``'s axis (found in the sorted centres), at most PAIRS_AT_ONCE pairs
+    a chunk (an item with more alone), so a crowded world's broad phase stays in bounded memory."""
+    _, order, along, _ = g.along
+    lo = np.searchsorted(along, low, side="left")
+    counts = np.searchsorted(along, high, side="right") - lo
     ends = np.cumsum(counts)
-    out, start = [], 0
+    start = 0
     while start < len(counts):
         before = int(ends[start - 1]) if start else 0
         stop = max(start + 1, int(np.searchsorted(ends, before + PAIRS_AT_ONCE, side="right")))
-        out.append(slice(start, stop))
+        c = counts[start:stop]
+        yield (np.repeat(items[start:stop], c),
+               order[np.repeat(lo[start:stop] - np.cumsum(c) + c, c) + np.arange(int(c.sum()))])
         start = stop
-    return out
 
 
 def _graph(stops: np.ndarray, g: _Grown, whole: bool = False) -> tuple[np.ndarray, "_Adjacency"]:
@@ -565,9 +564,9 @@ def _segments_free(p: np.ndarray, q: np.ndarray, g: _Grown) -> np.ndarray:
     blocks most blocked segments), then the survivors against all their candidates.
 
     Few pairs: every segment against every circle at once. Many (a crowded world): each segment
-    only against the polygons whose centre lies within the largest radius of its extent along
-    ``g.along``'s axis, at most ``PAIRS_AT_ONCE`` pairs at a time, so memory stays bounded. The
-    same tests on every pair that can be blocked, so the same answer."""
+    first against the polygons near its two ends, then, still free, against those whose centre
+    lies within the largest radius of its extent along ``g.along``'s axis (``_pairs_within``,
+    bounded chunks). The same tests on every pair that can be blocked, so the same answer."""
     d = q - p
     seg2 = np.maximum((d * d).sum(1), 1e-300)
     free = np.ones(len(p), dtype=bool)
@@ -586,32 +585,21 @@ def _segments_free(p: np.ndarray, q: np.ndarray, g: _Grown) -> np.ndarray:
         if len(e):
             free[e[_blocked(p[e], q[e], d[e], seg2[e], g, jj)]] = False
         return free
-    axis, order, along, reach = g.along
+    axis, _, _, reach = g.along
     # first the polygons near each end (a blocked segment is mostly blocked by the obstacle beside
     # the vertex it leaves), then what is still free against every polygon near its extent
+    every = np.arange(len(p))
     for end in (p, q):
-        _cut_within(p, q, d, seg2, g, np.arange(len(p)), end[:, axis] - NEAR_ENDS * reach,
-                    end[:, axis] + NEAR_ENDS * reach, free)
+        for e, jj in _pairs_within(every, end[:, axis] - NEAR_ENDS * reach, end[:, axis] + NEAR_ENDS * reach, g):
+            _cut(p, q, d, seg2, g, e, jj, free)
     live = np.flatnonzero(free)
-    _cut_within(p, q, d, seg2, g, live, np.minimum(p[live, axis], q[live, axis]) - reach,
-                np.maximum(p[live, axis], q[live, axis]) + reach, free)
+    for e, jj in _pairs_within(live, np.minimum(p[live, axis], q[live, axis]) - reach,
+                               np.maximum(p[live, axis], q[live, axis]) + reach, g):
+        _cut(p, q, d, seg2, g, e, jj, free)
     return free
 
 
 NEAR_ENDS = 2.0   # largest radii either side of a segment's end within which it is tried first
-
-
-def _cut_within(p, q, d, seg2, g: _Grown, segs: np.ndarray, low: np.ndarray, high: np.ndarray,
-                free: np.ndarray) -> None:
-    """``_cut`` of segments ``segs`` against the polygons whose centre lies in [low, high] along
-    ``g.along``'s axis, a chunk of at most PAIRS_AT_ONCE pairs at a time."""
-    _, order, along, _ = g.along
-    lo = np.searchsorted(along, low, side="left")
-    counts = np.searchsorted(along, high, side="right") - lo
-    for part in _chunks(counts):
-        c = counts[part]
-        e = np.repeat(segs[part], c)
-        _cut(p, q, d, seg2, g, e, order[np.repeat(lo[part] - np.cumsum(c) + c, c) + np.arange(int(c.sum()))], free)
 
 
 DENSE_PAIRS = 1 << 16   # segment-polygon pairs up to which every segment meets every polygon at once

@@ -259,7 +259,8 @@ def test_a_graph_built_a_node_at_a_time_has_the_whole_builds_edges(monkeypatch):
     assert compared > 1000
 
 
-def test_buried_vertices_are_those_inside_another_grown_polygon():
+def test_buried_vertices_are_those_inside_another_grown_polygon(monkeypatch):
+    monkeypatch.setattr(paths, "PAIRS_AT_ONCE", 500)    # many chunks of pairs
     rng = np.random.default_rng(11)
     buried_seen = 0
     for n in (1, 5, 30, 80):
