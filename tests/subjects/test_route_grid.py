@@ -71,3 +71,21 @@ def test_the_carrot_follows_the_route_downhill_round_a_wall():
     ri, rj = grid.cell(0.0, 0.0)
     i0, j0 = grid.box
     assert 0 <= f[i - i0, j - j0] < f[ri - i0, rj - j0]
+
+
+@pytest.mark.parametrize("trial", range(4))
+def test_a_robot_off_the_route_heads_for_the_nearest_route_cell(trial):
+    # in a gap too narrow for the route, the carrot is the nearest reached cell (the first in
+    # row-major order on ties), looked for in a growing window: the answer the whole field gives
+    from pytest_navscenario.subjects.planners._route import _closest_reached
+
+    rng = np.random.default_rng(trial)
+    for _ in range(2000):
+        h, w = (int(v) for v in rng.integers(1, 50, size=2))
+        field = np.full((h, w), -1, dtype=np.int32)
+        field[rng.random((h, w)) < rng.choice([0.0, 0.002, 0.02, 0.3])] = 5
+        ri, rj = int(rng.integers(-20, h + 20)), int(rng.integers(-20, w + 20))   # inside or beyond it
+        reached = np.argwhere(field >= 0)
+        want = (tuple(int(v) for v in reached[np.argmin(((reached - (ri, rj)) ** 2).sum(axis=1))])
+                if len(reached) else None)
+        assert _closest_reached(field, ri, rj, int(rng.integers(1, 10))) == want

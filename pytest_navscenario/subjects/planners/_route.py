@@ -41,6 +41,30 @@ def _inflation_disk(radius: int) -> tuple[tuple[tuple[int, int], ...], tuple[tup
     return tuple(disk), tuple(_disk_rows(disk))
 
 
+
+def _closest_reached(f: np.ndarray, ri: int, rj: int, r: int) -> tuple[int, int] | None:
+    """(row, column) of the reached cell (``f >= 0``) nearest to (ri, rj), the first in row-major
+    order on ties; None when none is. Looked for in a window of half side ``r`` around it, doubled
+    until the nearest found lies within it (then no cell outside is as near, and the window's
+    row-major order is the field's), else over the whole field: in a crowded world the robot is
+    often in a gap too narrow for the route, and the whole field a tick cost 0.3 ms."""
+    rows, cols = f.shape
+    while True:
+        a0, a1 = min(max(ri - r, 0), rows), min(max(ri + r + 1, 0), rows)
+        b0, b1 = min(max(rj - r, 0), cols), min(max(rj + r + 1, 0), cols)
+        whole = a0 == 0 and b0 == 0 and a1 == rows and b1 == cols
+        reached = np.argwhere(f[a0:a1, b0:b1] >= 0)
+        if len(reached):
+            reached += (a0, b0)
+            d2 = ((reached - (ri, rj)) ** 2).sum(axis=1)
+            k = int(np.argmin(d2))
+            if whole or int(d2[k]) <= r * r:
+                return int(reached[k, 0]), int(reached[k, 1])
+        elif whole:
+            return None
+        r *= 2
+
+
 def _open_grid(i0: int, i1: int, j0: int, j1: int) -> tuple[np.ndarray, np.ndarray]:
     """``np.ogrid[i0:i1, j0:j1]`` (the same arrays) without its generic indexing machinery."""
     return np.arange(i0, i1)[:, None], np.arange(j0, j1)[None, :]
@@ -241,10 +265,10 @@ class LidarGrid:
             ci, cj = a0 + flat // sub.shape[1], b0 + flat % sub.shape[1]
         else:
             # the robot is in a gap too narrow for the route: head for the closest route cell
-            reached = np.argwhere(f >= 0)
-            if not len(reached):
+            closest = _closest_reached(f, ri, rj, 4 * r)
+            if closest is None:
                 return None
-            ci, cj = (int(v) for v in reached[np.argmin(((reached - (ri, rj)) ** 2).sum(axis=1))])
+            ci, cj = closest
             return (self.origin[0] + (cj + self.box[1]) * res, self.origin[1] + (ci + self.box[0]) * res)
         # downhill on the field with its border of -1 (no bounds checks), read through a
         # memoryview: a Python int per cell read, much cheaper than f[i, j], and no copy; the
