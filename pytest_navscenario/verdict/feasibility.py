@@ -27,7 +27,8 @@ import numpy as np
 
 from ..scenario.model import Scenario
 from .gaps import static_obstacles
-from .paths import INFLATION_TOLERANCE, inflation_radius, path_through_discs, reference_path, shortest_path
+from .grown import INFLATION_TOLERANCE, inflated_polygon, inflation_radius
+from .paths import path_through_discs, reference_path, shortest_path
 
 
 def trivially_passed(scenario: Scenario) -> str | None:
@@ -161,7 +162,6 @@ def _terrain(scenario: Scenario, stops, inflation: float) -> tuple:
     if not scenario.terrain:
         return ()
     from ..scenario.bodies import body_capability
-    from .paths import inflated_polygon
     from ..scenario.ground.traversable import barriers, lenient
 
     cap = body_capability(scenario)
@@ -185,7 +185,6 @@ def _terrain_words(scenario: Scenario, a, b) -> str | None:
     if not scenario.terrain:
         return None
     from ..scenario.bodies import body_capability
-    from .paths import inflated_polygon, path_through_discs
     from ..scenario.ground.traversable import barriers
 
     cap = body_capability(scenario)

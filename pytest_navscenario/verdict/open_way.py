@@ -18,7 +18,7 @@ import math
 
 from ..scenario.model import Scenario
 from .gaps import path_obstacles
-from .paths import INFLATION_TOLERANCE, inflation_radius
+from .grown import INFLATION_TOLERANCE, inflation_radius
 
 BULGE = 1.0 / math.cos(math.pi / 32) - 1.0   # paths' polygons bulge past tol at most this share of r
 

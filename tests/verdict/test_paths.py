@@ -7,7 +7,7 @@ import pytest
 import shapely
 from shapely.geometry import LineString, Polygon
 
-from pytest_navscenario.verdict import paths
+from pytest_navscenario.verdict import grown, paths, visibility
 from pytest_navscenario.scenario.geometry import obstacle_polygons
 from pytest_navscenario.verdict.gaps import min_obstacle_gap
 from pytest_navscenario.verdict.paths import path_exists, shortest_path
@@ -207,12 +207,12 @@ def test_segment_visibility_agrees_with_shapely():
     rng = np.random.default_rng(8)
     obstacles = [BoxObstacle(f"b{i}", *rng.uniform(-4, 4, 2), *rng.uniform(0.2, 2, 2), rng.uniform(-180, 180))
                  for i in range(6)] + [CylinderObstacle(f"c{i}", *rng.uniform(-4, 4, 2), 0.4) for i in range(3)]
-    grown = paths._grow(obstacles, 0.25)
+    g = grown.grow(obstacles, 0.25)
     polys = [Polygon(paths.inflated_polygon(o, 0.25)) for o in obstacles]
     vertices = np.concatenate([np.asarray(p.exterior.coords[:-1]) for p in polys])
     p = np.concatenate([rng.uniform(-5, 5, (150, 2)), vertices[rng.integers(len(vertices), size=100)]])
     q = np.concatenate([rng.uniform(-5, 5, (150, 2)), vertices[rng.integers(len(vertices), size=100)]])
-    free = paths._segments_free(p, q, grown)
+    free = grown.segments_free(p, q, g)
     expected = [not any(LineString([a, b]).relate_pattern(poly, "T********") for poly in polys)
                 for a, b in zip(p, q)]
     assert free.tolist() == expected
@@ -242,16 +242,16 @@ def test_a_graph_built_a_node_at_a_time_has_the_whole_builds_edges(monkeypatch):
     # the path search asks for a large graph's edges as it reaches a node; each list must be the
     # one the whole build gives, in the same order and with the same lengths bit for bit, or the
     # search would take other steps (and a tie another way) than before
-    monkeypatch.setattr(paths, "WHOLE_NODES", 0)        # every graph a node at a time
+    monkeypatch.setattr(visibility, "WHOLE_NODES", 0)        # every graph a node at a time
     rng = np.random.default_rng(7)
     compared = 0
     for n in (2, 6, 15, 40):
         for _ in range(3):
             obstacles = _random_layout(rng, n)
-            g = paths._grow(obstacles, 0.25)
+            g = grown.grow(obstacles, 0.25)
             stops = np.array([(0.0, 0.0), (5.0, rng.uniform(-2, 2)), (10.0, 0.0)])
-            nodes, lazy = paths._graph(stops, g)
-            again, whole = paths._graph(stops, g, whole=True)
+            nodes, lazy = visibility.graph(stops, g)
+            again, whole = visibility.graph(stops, g, whole=True)
             np.testing.assert_array_equal(nodes, again)
             for u in rng.permutation(len(nodes)).tolist():     # in any order, as a search asks
                 assert lazy[u] == whole[u]
@@ -260,18 +260,18 @@ def test_a_graph_built_a_node_at_a_time_has_the_whole_builds_edges(monkeypatch):
 
 
 def test_buried_vertices_are_those_inside_another_grown_polygon(monkeypatch):
-    monkeypatch.setattr(paths, "PAIRS_AT_ONCE", 500)    # many chunks of pairs
+    monkeypatch.setattr(grown, "PAIRS_AT_ONCE", 500)    # many chunks of pairs
     rng = np.random.default_rng(11)
     buried_seen = 0
     for n in (1, 5, 30, 80):
-        g = paths._grow(_random_layout(rng, n), 0.3)
+        g = grown.grow(_random_layout(rng, n), 0.3)
         k, m = g.offsets.shape
         valid = np.arange(m)[None, :] < g.sizes[:, None]
         owner = np.broadcast_to(np.arange(k)[:, None], valid.shape)[valid]
         verts = g.verts[valid]
-        every = paths._inside(verts, g)                 # every vertex against every polygon
+        every = grown.inside(verts, g)                 # every vertex against every polygon
         every[np.arange(len(verts)), owner] = False
-        np.testing.assert_array_equal(paths._buried(verts, owner, g), every.any(axis=1))
+        np.testing.assert_array_equal(grown.buried(verts, owner, g), every.any(axis=1))
         buried_seen += int(every.any(axis=1).sum())
     assert buried_seen > 50
 
@@ -290,9 +290,9 @@ def test_a_path_through_the_barn_worlds_209_cylinders():
     assert sp is not None and 10.0 <= sp.length <= 10.5
     assert clearance(sp, s) >= 0.215 - 1e-3
     stops = np.array([(-2.25, 3.0), (-2.25, 13.0)])
-    nodes, whole = paths._graph(stops, paths._grow(world.obstacles, paths.inflation_radius(s.robot.footprint)),
+    nodes, whole = visibility.graph(stops, grown.grow(world.obstacles, paths.inflation_radius(s.robot.footprint)),
                                 whole=True)
-    hops = paths._astar(whole, nodes, 0, 1)
+    hops = visibility.astar(whole, nodes, 0, 1)
     np.testing.assert_array_equal(sp.points, nodes[hops])
 
 
@@ -300,13 +300,13 @@ def test_segments_among_many_polygons_are_judged_as_against_every_polygon(monkey
     # a crowded world's segments meet only the polygons near their extent, a bounded chunk at a
     # time; the answer must be the one every segment against every polygon gives
     rng = np.random.default_rng(3)
-    g = paths._grow(_random_layout(rng, 120), 0.25)
+    g = grown.grow(_random_layout(rng, 120), 0.25)
     p = rng.uniform([-2, -4], [12, 4], size=(900, 2))
     q = p + rng.normal(0, 3, size=(900, 2))
     q[::7] = p[::7]                                   # some of no length
-    monkeypatch.setattr(paths, "PAIRS_AT_ONCE", 5000)   # many chunks
-    sparse = paths._segments_free(p, q, g)
-    monkeypatch.setattr(paths, "DENSE_PAIRS", 10**9)
-    every = paths._segments_free(p, q, g)
+    monkeypatch.setattr(grown, "PAIRS_AT_ONCE", 5000)   # many chunks
+    sparse = grown.segments_free(p, q, g)
+    monkeypatch.setattr(grown, "DENSE_PAIRS", 10**9)
+    every = grown.segments_free(p, q, g)
     np.testing.assert_array_equal(sparse, every)
     assert 100 < int(every.sum()) < 800               # both answers common

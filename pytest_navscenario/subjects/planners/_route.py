@@ -41,7 +41,6 @@ def _inflation_disk(radius: int) -> tuple[tuple[tuple[int, int], ...], tuple[tup
     return tuple(disk), tuple(_disk_rows(disk))
 
 
-
 def _closest_reached(f: np.ndarray, ri: int, rj: int, r: int) -> tuple[int, int] | None:
     """(row, column) of the reached cell (``f >= 0``) nearest to (ri, rj), the first in row-major
     order on ties; None when none is. Looked for in a window of half side ``r`` around it, doubled
